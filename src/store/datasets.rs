@@ -1,0 +1,144 @@
+//! Datasets and their item counts.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+use sqlx::{Row, SqliteConnection};
+
+use crate::dataset::{Direction, StepLength};
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Dataset {
+    pub id: i64,
+    pub name: String,
+    pub created_at: String,
+    pub source: String,
+}
+
+/// Item counts of one dataset by direction and step length.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct ItemCounts {
+    pub total: i64,
+    pub forward: i64,
+    pub inverse: i64,
+    /// `[direction][step length] -> count`; absent cells are 0.
+    pub by_kind: BTreeMap<Direction, BTreeMap<StepLength, i64>>,
+}
+
+impl ItemCounts {
+    pub fn get(&self, direction: Direction, step_length: StepLength) -> i64 {
+        self.by_kind
+            .get(&direction)
+            .and_then(|m| m.get(&step_length))
+            .copied()
+            .unwrap_or(0)
+    }
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct DatasetOverview {
+    #[serde(flatten)]
+    pub dataset: Dataset,
+    pub items: ItemCounts,
+    pub tasks: i64,
+}
+
+fn dataset_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<Dataset, sqlx::Error> {
+    Ok(Dataset {
+        id: row.try_get("id")?,
+        name: row.try_get("name")?,
+        created_at: row.try_get("created_at")?,
+        source: row.try_get("source")?,
+    })
+}
+
+pub async fn by_name(
+    conn: &mut SqliteConnection,
+    name: &str,
+) -> Result<Option<Dataset>, sqlx::Error> {
+    let row = sqlx::query("SELECT id, name, created_at, source FROM datasets WHERE name = ?")
+        .bind(name)
+        .fetch_optional(conn)
+        .await?;
+    row.as_ref().map(dataset_from_row).transpose()
+}
+
+/// Returns the dataset's id, creating it if needed, and records where it was imported from.
+pub async fn ensure(
+    conn: &mut SqliteConnection,
+    name: &str,
+    source: &str,
+) -> Result<i64, sqlx::Error> {
+    sqlx::query(
+        "INSERT INTO datasets (name, source) VALUES (?, ?) \
+         ON CONFLICT (name) DO UPDATE SET source = excluded.source",
+    )
+    .bind(name)
+    .bind(source)
+    .execute(&mut *conn)
+    .await?;
+    sqlx::query_scalar("SELECT id FROM datasets WHERE name = ?")
+        .bind(name)
+        .fetch_one(conn)
+        .await
+}
+
+/// Every dataset with its item counts, by name.
+pub async fn overview(conn: &mut SqliteConnection) -> Result<Vec<DatasetOverview>, sqlx::Error> {
+    let rows = sqlx::query("SELECT id, name, created_at, source FROM datasets ORDER BY name")
+        .fetch_all(&mut *conn)
+        .await?;
+    let mut out = Vec::with_capacity(rows.len());
+    for row in &rows {
+        let dataset = dataset_from_row(row)?;
+        let items = counts(conn, dataset.id).await?;
+        let tasks: i64 =
+            sqlx::query_scalar("SELECT count(DISTINCT task_name) FROM items WHERE dataset_id = ?")
+                .bind(dataset.id)
+                .fetch_one(&mut *conn)
+                .await?;
+        out.push(DatasetOverview {
+            dataset,
+            items,
+            tasks,
+        });
+    }
+    Ok(out)
+}
+
+pub async fn counts(
+    conn: &mut SqliteConnection,
+    dataset_id: i64,
+) -> Result<ItemCounts, sqlx::Error> {
+    let rows = sqlx::query(
+        "SELECT direction, step_length, count(*) AS n FROM items WHERE dataset_id = ? \
+         GROUP BY direction, step_length",
+    )
+    .bind(dataset_id)
+    .fetch_all(conn)
+    .await?;
+    let mut counts = ItemCounts::default();
+    for row in rows {
+        let direction: String = row.try_get("direction")?;
+        let step_length: i64 = row.try_get("step_length")?;
+        let n: i64 = row.try_get("n")?;
+        let (Some(direction), Some(step_length)) = (
+            Direction::parse(&direction),
+            usize::try_from(step_length).ok().and_then(StepLength::new),
+        ) else {
+            // The CHECK constraints make this unreachable for rows written by this program.
+            continue;
+        };
+        counts.total += n;
+        match direction {
+            Direction::Forward => counts.forward += n,
+            Direction::Inverse => counts.inverse += n,
+        }
+        counts
+            .by_kind
+            .entry(direction)
+            .or_default()
+            .insert(step_length, n);
+    }
+    Ok(counts)
+}

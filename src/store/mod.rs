@@ -1,0 +1,53 @@
+//! SQLite storage: connection setup, migrations, and the queries the rest of the app runs.
+//!
+//! Functions take a `&mut SqliteConnection` (a pooled connection or an open transaction), so a
+//! caller that writes several rows decides where the transaction begins and ends.
+
+pub mod datasets;
+pub mod frames;
+pub mod items;
+
+use std::path::Path;
+use std::str::FromStr;
+use std::time::Duration;
+
+use sqlx::SqlitePool;
+use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
+
+/// Opens (creating if missing) the database at `path` and applies the embedded migrations.
+pub async fn open(path: &Path) -> Result<SqlitePool, sqlx::Error> {
+    let options = SqliteConnectOptions::from_str("sqlite://")?
+        .filename(path)
+        .create_if_missing(true)
+        .journal_mode(SqliteJournalMode::Wal)
+        // WAL + NORMAL is durable across application crashes; only an OS crash can lose the
+        // last transactions, never corrupt the file.
+        .synchronous(SqliteSynchronous::Normal)
+        .foreign_keys(true)
+        .busy_timeout(Duration::from_secs(10))
+        .pragma("cache_size", "-65536")
+        .pragma("temp_store", "memory");
+    let pool = SqlitePoolOptions::new()
+        .max_connections(8)
+        .min_connections(1)
+        .acquire_timeout(Duration::from_secs(15))
+        .connect_with(options)
+        .await?;
+    sqlx::migrate!("./migrations").run(&pool).await?;
+    Ok(pool)
+}
+
+/// The content generation: changes whenever stored items change.
+pub async fn content_generation(conn: &mut sqlx::SqliteConnection) -> Result<i64, sqlx::Error> {
+    sqlx::query_scalar("SELECT value FROM content_generation WHERE id = 1")
+        .fetch_one(conn)
+        .await
+}
+
+/// Marks stored items as changed; call inside the transaction that changes them.
+pub async fn bump_content_generation(conn: &mut sqlx::SqliteConnection) -> Result<(), sqlx::Error> {
+    sqlx::query("UPDATE content_generation SET value = value + 1 WHERE id = 1")
+        .execute(conn)
+        .await?;
+    Ok(())
+}

@@ -1,0 +1,428 @@
+//! The JSON read API under `/api/v1`. Ground truth never appears in these responses.
+
+use std::collections::BTreeMap;
+
+use axum::Json;
+use axum::Router;
+use axum::body::{Body, Bytes};
+use axum::extract::{Path, Query, State};
+use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use axum::routing::get;
+use serde::{Deserialize, Serialize};
+
+use super::{AppError, AppState, dataset_or_404};
+use crate::dataset::{Direction, StepLength};
+use crate::store;
+use crate::store::datasets::DatasetOverview;
+use crate::store::items::{ItemFilter, StoredItem};
+
+pub fn router() -> Router<AppState> {
+    Router::new()
+        .route("/datasets", get(list_datasets))
+        .route("/datasets/{dataset}", get(get_dataset))
+        .route("/datasets/{dataset}/items", get(list_items))
+        .route("/datasets/{dataset}/items/{item_id}", get(get_item))
+        .route("/frames/{sha256}", get(get_frame))
+}
+
+pub fn frame_url(sha256: &str) -> String {
+    format!("/api/v1/frames/{sha256}")
+}
+
+#[derive(Serialize)]
+struct DatasetView {
+    name: String,
+    created_at: String,
+    items: i64,
+    forward: i64,
+    inverse: i64,
+    tasks: i64,
+    /// `direction -> step length -> count`.
+    by_step_length: BTreeMap<Direction, BTreeMap<StepLength, i64>>,
+    items_url: String,
+}
+
+impl From<DatasetOverview> for DatasetView {
+    fn from(o: DatasetOverview) -> Self {
+        DatasetView {
+            items_url: format!("/api/v1/datasets/{}/items", o.dataset.name),
+            name: o.dataset.name,
+            created_at: o.dataset.created_at,
+            items: o.items.total,
+            forward: o.items.forward,
+            inverse: o.items.inverse,
+            tasks: o.tasks,
+            by_step_length: o.items.by_kind,
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct DatasetList {
+    datasets: Vec<DatasetView>,
+}
+
+async fn list_datasets(State(state): State<AppState>) -> Result<Json<DatasetList>, AppError> {
+    let mut conn = state.pool.acquire().await?;
+    let datasets = store::datasets::overview(&mut conn).await?;
+    Ok(Json(DatasetList {
+        datasets: datasets.into_iter().map(DatasetView::from).collect(),
+    }))
+}
+
+async fn get_dataset(
+    State(state): State<AppState>,
+    Path(name): Path<String>,
+) -> Result<Json<DatasetView>, AppError> {
+    let dataset = dataset_or_404(&state.pool, &name).await?;
+    let mut conn = state.pool.acquire().await?;
+    let overview = store::datasets::overview(&mut conn)
+        .await?
+        .into_iter()
+        .find(|o| o.dataset.id == dataset.id)
+        .ok_or_else(|| AppError::NotFound(format!("no dataset named '{name}'")))?;
+    Ok(Json(overview.into()))
+}
+
+/// Query parameters of item lists, as typed by people: parsed by hand for clear messages.
+#[derive(Debug, Default, Deserialize)]
+pub struct ItemQuery {
+    pub direction: Option<String>,
+    pub step_length: Option<String>,
+    pub task: Option<String>,
+    pub page: Option<String>,
+    pub per_page: Option<String>,
+}
+
+pub const DEFAULT_PER_PAGE: u32 = 50;
+pub const MAX_PER_PAGE: u32 = 500;
+
+/// A validated item-list query.
+pub struct ItemSelection {
+    pub filter: ItemFilter,
+    pub page: u32,
+    pub per_page: u32,
+}
+
+impl ItemQuery {
+    pub fn selection(&self) -> Result<ItemSelection, AppError> {
+        let blank = |v: &Option<String>| {
+            v.as_deref()
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+                .map(str::to_owned)
+        };
+        let direction = match blank(&self.direction) {
+            None => None,
+            Some(d) => Some(Direction::parse(&d.to_ascii_lowercase()).ok_or_else(|| {
+                AppError::BadRequest(format!(
+                    "direction must be 'forward' or 'inverse', not {d:?}"
+                ))
+            })?),
+        };
+        let step_length = match blank(&self.step_length) {
+            None => None,
+            Some(s) => Some(
+                s.parse::<usize>()
+                    .ok()
+                    .and_then(StepLength::new)
+                    .ok_or_else(|| {
+                        AppError::BadRequest(format!(
+                            "step_length must be a whole number from 3 to 10, not {s:?}"
+                        ))
+                    })?,
+            ),
+        };
+        let number = |name: &str, v: &Option<String>, default: u32, max: u32| match blank(v) {
+            None => Ok(default),
+            Some(s) => s
+                .parse::<u32>()
+                .ok()
+                .filter(|n| (1..=max).contains(n))
+                .ok_or_else(|| {
+                    AppError::BadRequest(format!(
+                        "{name} must be a whole number from 1 to {max}, not {s:?}"
+                    ))
+                }),
+        };
+        Ok(ItemSelection {
+            filter: ItemFilter {
+                direction,
+                step_length,
+                task: blank(&self.task),
+            },
+            page: number("page", &self.page, 1, 1_000_000)?,
+            per_page: number("per_page", &self.per_page, DEFAULT_PER_PAGE, MAX_PER_PAGE)?,
+        })
+    }
+}
+
+#[derive(Serialize)]
+struct ItemListEntry {
+    id: String,
+    #[serde(rename = "type")]
+    item_type: String,
+    direction: Direction,
+    step_length: StepLength,
+    task_name: String,
+    url: String,
+}
+
+#[derive(Serialize)]
+struct ItemList {
+    dataset: String,
+    total: i64,
+    page: u32,
+    per_page: u32,
+    items: Vec<ItemListEntry>,
+    /// URL of the next page, if there is one.
+    next: Option<String>,
+}
+
+async fn list_items(
+    State(state): State<AppState>,
+    Path(name): Path<String>,
+    Query(query): Query<ItemQuery>,
+) -> Result<Json<ItemList>, AppError> {
+    let selection = query.selection()?;
+    let dataset = dataset_or_404(&state.pool, &name).await?;
+    let mut conn = state.pool.acquire().await?;
+    let offset = (selection.page - 1).saturating_mul(selection.per_page);
+    let (items, total) = store::items::list(
+        &mut conn,
+        dataset.id,
+        &selection.filter,
+        selection.per_page,
+        offset,
+    )
+    .await?;
+    let shown = i64::from(offset) + items.len() as i64;
+    let next = (shown < total).then(|| {
+        let mut url = format!(
+            "/api/v1/datasets/{name}/items?page={}&per_page={}",
+            selection.page + 1,
+            selection.per_page
+        );
+        if let Some(d) = selection.filter.direction {
+            url.push_str(&format!("&direction={d}"));
+        }
+        if let Some(l) = selection.filter.step_length {
+            url.push_str(&format!("&step_length={l}"));
+        }
+        if let Some(t) = &selection.filter.task {
+            url.push_str(&format!("&task={t}"));
+        }
+        url
+    });
+    Ok(Json(ItemList {
+        items: items
+            .into_iter()
+            .map(|i| ItemListEntry {
+                url: format!("/api/v1/datasets/{name}/items/{}", i.item_id),
+                id: i.item_id,
+                item_type: i.item_type,
+                direction: i.direction,
+                step_length: i.step_length,
+                task_name: i.task_name,
+            })
+            .collect(),
+        dataset: name,
+        total,
+        page: selection.page,
+        per_page: selection.per_page,
+        next,
+    }))
+}
+
+#[derive(Serialize)]
+struct ActionView {
+    label: usize,
+    text: String,
+}
+
+#[derive(Serialize)]
+struct ImageView {
+    position: usize,
+    label: String,
+    url: String,
+}
+
+/// What a model or a person is shown of an item: never its ground truth.
+#[derive(Serialize)]
+struct ItemView {
+    id: String,
+    dataset: String,
+    #[serde(rename = "type")]
+    item_type: String,
+    direction: Direction,
+    step_length: StepLength,
+    task_name: String,
+    question: String,
+    actions: Vec<ActionView>,
+    images: Vec<ImageView>,
+}
+
+impl ItemView {
+    fn new(dataset: String, item: StoredItem) -> Self {
+        ItemView {
+            id: item.summary.item_id,
+            dataset,
+            item_type: item.summary.item_type,
+            direction: item.summary.direction,
+            step_length: item.summary.step_length,
+            task_name: item.summary.task_name,
+            question: item.question,
+            actions: item
+                .actions
+                .into_iter()
+                .enumerate()
+                .map(|(i, text)| ActionView { label: i + 1, text })
+                .collect(),
+            images: item
+                .images
+                .iter()
+                .map(|img| ImageView {
+                    position: img.position,
+                    label: img.label(),
+                    url: frame_url(&img.sha256),
+                })
+                .collect(),
+        }
+    }
+}
+
+async fn get_item(
+    State(state): State<AppState>,
+    Path((name, item_id)): Path<(String, String)>,
+) -> Result<Response, AppError> {
+    let json = match state.items.get(&name, &item_id) {
+        Some(json) => json,
+        None => {
+            let dataset = dataset_or_404(&state.pool, &name).await?;
+            let mut conn = state.pool.acquire().await?;
+            let item = store::items::get(&mut conn, dataset.id, &item_id)
+                .await?
+                .ok_or_else(|| {
+                    AppError::NotFound(format!("no item '{item_id}' in dataset '{name}'"))
+                })?;
+            let json = Bytes::from(
+                serde_json::to_vec(&ItemView::new(name.clone(), item))
+                    .map_err(|e| AppError::Internal(e.into()))?,
+            );
+            state.items.insert(&name, &item_id, json.clone());
+            json
+        }
+    };
+    Ok((
+        [(
+            header::CONTENT_TYPE,
+            HeaderValue::from_static("application/json"),
+        )],
+        json,
+    )
+        .into_response())
+}
+
+fn is_sha256_hex(s: &str) -> bool {
+    s.len() == 64
+        && s.bytes()
+            .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b))
+}
+
+/// True when an `If-None-Match` header names this entity tag (or is `*`).
+fn matches_etag(headers: &HeaderMap, etag: &str) -> bool {
+    headers
+        .get_all(header::IF_NONE_MATCH)
+        .iter()
+        .filter_map(|v| v.to_str().ok())
+        .flat_map(|v| v.split(','))
+        .map(str::trim)
+        .any(|tag| tag == "*" || tag == etag || tag.strip_prefix("W/") == Some(etag))
+}
+
+/// A frame as PNG. Frames are addressed by content hash, so the response never changes:
+/// a strong ETag and `immutable` let clients skip the request entirely.
+async fn get_frame(
+    State(state): State<AppState>,
+    Path(sha256): Path<String>,
+    headers: HeaderMap,
+) -> Result<Response, AppError> {
+    let not_found = || AppError::NotFound(format!("no frame with hash '{sha256}'"));
+    if !is_sha256_hex(&sha256) {
+        return Err(not_found());
+    }
+    let png = match state.frames.get(&sha256) {
+        Some(png) => png,
+        None => {
+            let mut conn = state.pool.acquire().await?;
+            let png = Bytes::from(
+                store::frames::png(&mut conn, &sha256)
+                    .await?
+                    .ok_or_else(not_found)?,
+            );
+            state.frames.insert(&sha256, png.clone());
+            png
+        }
+    };
+    let etag = format!("\"{sha256}\"");
+    let mut response = if matches_etag(&headers, &etag) {
+        StatusCode::NOT_MODIFIED.into_response()
+    } else {
+        let mut r = Response::new(Body::from(png));
+        r.headers_mut()
+            .insert(header::CONTENT_TYPE, HeaderValue::from_static("image/png"));
+        r
+    };
+    let h = response.headers_mut();
+    if let Ok(v) = HeaderValue::from_str(&etag) {
+        h.insert(header::ETAG, v);
+    }
+    h.insert(
+        header::CACHE_CONTROL,
+        HeaderValue::from_static("public, max-age=31536000, immutable"),
+    );
+    Ok(response)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn etag_matching_follows_if_none_match_rules() {
+        let mut h = HeaderMap::new();
+        h.insert(
+            header::IF_NONE_MATCH,
+            HeaderValue::from_static("\"a\", \"b\""),
+        );
+        assert!(matches_etag(&h, "\"b\""));
+        assert!(!matches_etag(&h, "\"c\""));
+        h.insert(header::IF_NONE_MATCH, HeaderValue::from_static("W/\"c\""));
+        assert!(matches_etag(&h, "\"c\""));
+        h.insert(header::IF_NONE_MATCH, HeaderValue::from_static("*"));
+        assert!(matches_etag(&h, "\"z\""));
+    }
+
+    #[test]
+    fn item_query_rejects_bad_values_with_their_name() {
+        let q = ItemQuery {
+            direction: Some("sideways".into()),
+            ..ItemQuery::default()
+        };
+        let Err(AppError::BadRequest(m)) = q.selection() else {
+            panic!("expected a bad request");
+        };
+        assert!(m.contains("direction"), "{m}");
+        let q = ItemQuery {
+            step_length: Some("11".into()),
+            ..ItemQuery::default()
+        };
+        assert!(matches!(q.selection(), Err(AppError::BadRequest(m)) if m.contains("step_length")));
+        let q = ItemQuery {
+            per_page: Some("0".into()),
+            ..ItemQuery::default()
+        };
+        assert!(matches!(q.selection(), Err(AppError::BadRequest(m)) if m.contains("per_page")));
+    }
+}

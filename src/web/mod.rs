@@ -1,0 +1,185 @@
+//! The HTTP service: application state, the router, and the server's life cycle.
+//!
+//! `api` serves JSON under `/api/v1`, `pages` serves the HTML site, `assets` the embedded CSS.
+//! Each exposes one `router()`; they are merged once in [`router`].
+
+mod api;
+mod assets;
+pub mod error;
+mod frame_cache;
+mod item_cache;
+mod pages;
+
+use std::future::Future;
+use std::net::SocketAddr;
+use std::sync::Arc;
+use std::time::Duration;
+
+use axum::Router;
+use axum::extract::{DefaultBodyLimit, MatchedPath, Request};
+use axum::http::StatusCode;
+use sqlx::SqlitePool;
+use tokio::net::TcpListener;
+use tower_http::timeout::TimeoutLayer;
+use tower_http::trace::TraceLayer;
+
+pub use error::AppError;
+use frame_cache::FrameCache;
+use item_cache::ItemCache;
+
+use crate::store;
+
+/// Settings of a running server that handlers may need.
+#[derive(Debug, Clone)]
+pub struct WebConfig {
+    /// Largest request body accepted, in bytes.
+    pub body_limit: usize,
+    /// A request taking longer than this is answered with 408.
+    pub request_timeout: Duration,
+    /// Memory the frame cache may use, in bytes.
+    pub frame_cache_bytes: usize,
+}
+
+impl Default for WebConfig {
+    fn default() -> Self {
+        WebConfig {
+            body_limit: 2 * 1024 * 1024,
+            request_timeout: Duration::from_secs(30),
+            frame_cache_bytes: 256 * 1024 * 1024,
+        }
+    }
+}
+
+#[derive(Clone)]
+pub struct AppState {
+    pub pool: SqlitePool,
+    frames: Arc<FrameCache>,
+    items: Arc<ItemCache>,
+}
+
+impl AppState {
+    pub fn new(pool: SqlitePool, config: &WebConfig) -> Self {
+        AppState {
+            pool,
+            frames: Arc::new(FrameCache::new(config.frame_cache_bytes)),
+            items: Arc::new(ItemCache::default()),
+        }
+    }
+}
+
+/// Looks up a dataset by name, or says which name was not found.
+async fn dataset_or_404(
+    pool: &SqlitePool,
+    name: &str,
+) -> Result<store::datasets::Dataset, AppError> {
+    let mut conn = pool.acquire().await?;
+    store::datasets::by_name(&mut conn, name)
+        .await?
+        .ok_or_else(|| AppError::NotFound(format!("no dataset named '{name}'")))
+}
+
+async fn healthz(axum::extract::State(state): axum::extract::State<AppState>) -> StatusCode {
+    match sqlx::query("SELECT 1").execute(&state.pool).await {
+        Ok(_) => StatusCode::OK,
+        Err(e) => {
+            tracing::error!(error = %e, "health check: database unavailable");
+            StatusCode::SERVICE_UNAVAILABLE
+        }
+    }
+}
+
+/// The whole application with its middleware.
+pub fn router(state: AppState, config: &WebConfig) -> Router {
+    let trace = TraceLayer::new_for_http().make_span_with(|request: &Request| {
+        let route = request
+            .extensions()
+            .get::<MatchedPath>()
+            .map(MatchedPath::as_str)
+            .unwrap_or("unmatched");
+        tracing::info_span!("request", method = %request.method(), route, uri = %request.uri())
+    });
+    Router::new()
+        .route("/healthz", axum::routing::get(healthz))
+        .merge(pages::router())
+        .merge(assets::router())
+        .nest("/api/v1", api::router())
+        .with_state(state)
+        .layer(DefaultBodyLimit::max(config.body_limit))
+        .layer(TimeoutLayer::with_status_code(
+            StatusCode::REQUEST_TIMEOUT,
+            config.request_timeout,
+        ))
+        .layer(trace)
+}
+
+/// A bound server, ready to run. Binding is separate from running so tests can ask for port 0
+/// and learn the address.
+pub struct Server {
+    listener: TcpListener,
+    app: Router,
+    state: AppState,
+}
+
+impl Server {
+    pub async fn bind(
+        addr: SocketAddr,
+        state: AppState,
+        config: &WebConfig,
+    ) -> std::io::Result<Server> {
+        let listener = TcpListener::bind(addr).await?;
+        Ok(Server {
+            listener,
+            app: router(state.clone(), config),
+            state,
+        })
+    }
+
+    pub fn local_addr(&self) -> std::io::Result<SocketAddr> {
+        self.listener.local_addr()
+    }
+
+    /// Serves until `shutdown` completes, then finishes the requests in flight.
+    pub async fn run(
+        self,
+        shutdown: impl Future<Output = ()> + Send + 'static,
+    ) -> std::io::Result<()> {
+        let watcher = tokio::spawn(item_cache::watch_generation(
+            self.state.pool.clone(),
+            self.state.items.clone(),
+        ));
+        let result = axum::serve(self.listener, self.app)
+            .with_graceful_shutdown(shutdown)
+            .await;
+        watcher.abort();
+        result
+    }
+}
+
+/// Completes on SIGINT (Ctrl-C) or SIGTERM.
+pub async fn shutdown_signal() {
+    let ctrl_c = async {
+        if let Err(e) = tokio::signal::ctrl_c().await {
+            tracing::error!(error = %e, "cannot listen for Ctrl-C");
+            std::future::pending::<()>().await;
+        }
+    };
+    #[cfg(unix)]
+    let terminate = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut signal) => {
+                signal.recv().await;
+            }
+            Err(e) => {
+                tracing::error!(error = %e, "cannot listen for SIGTERM");
+                std::future::pending::<()>().await;
+            }
+        }
+    };
+    #[cfg(not(unix))]
+    let terminate = std::future::pending::<()>();
+    tokio::select! {
+        () = ctrl_c => {},
+        () = terminate => {},
+    }
+    tracing::info!("shutting down: finishing requests in flight");
+}

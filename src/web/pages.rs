@@ -1,0 +1,261 @@
+//! The HTML site: datasets on the home page, a browsable item list, and a read-only item view.
+
+use askama::Template;
+use axum::Router;
+use axum::extract::{Path, Query, State};
+use axum::response::Html;
+use axum::routing::get;
+
+use super::api::{ItemQuery, frame_url};
+use super::error::PageError;
+use super::{AppError, AppState, dataset_or_404};
+use crate::dataset::{Direction, StepLength};
+use crate::store;
+
+pub fn router() -> Router<AppState> {
+    Router::new()
+        .route("/", get(home))
+        .route("/datasets/{dataset}", get(browse))
+        .route("/datasets/{dataset}/items/{item_id}", get(item))
+}
+
+/// One cell of a direction × step-length count table, with the link that lists those items.
+struct CountCell {
+    count: i64,
+    href: String,
+}
+
+struct CountRow {
+    direction: &'static str,
+    cells: Vec<CountCell>,
+    total: i64,
+    href: String,
+}
+
+struct DatasetCard {
+    name: String,
+    created_at: String,
+    total: i64,
+    tasks: i64,
+    href: String,
+    rows: Vec<CountRow>,
+}
+
+#[derive(Template)]
+#[template(path = "home.html")]
+struct HomePage {
+    datasets: Vec<DatasetCard>,
+    step_lengths: Vec<u8>,
+}
+
+async fn home(State(state): State<AppState>) -> Result<Html<String>, PageError> {
+    let mut conn = state.pool.acquire().await?;
+    let overview = store::datasets::overview(&mut conn).await?;
+    let datasets = overview
+        .into_iter()
+        .map(|o| {
+            let base = format!("/datasets/{}", o.dataset.name);
+            let rows = Direction::ALL
+                .into_iter()
+                .map(|d| CountRow {
+                    direction: d.as_str(),
+                    cells: StepLength::all()
+                        .map(|l| CountCell {
+                            count: o.items.get(d, l),
+                            href: format!("{base}?direction={d}&step_length={l}"),
+                        })
+                        .collect(),
+                    total: match d {
+                        Direction::Forward => o.items.forward,
+                        Direction::Inverse => o.items.inverse,
+                    },
+                    href: format!("{base}?direction={d}"),
+                })
+                .collect();
+            DatasetCard {
+                name: o.dataset.name,
+                created_at: o.dataset.created_at,
+                total: o.items.total,
+                tasks: o.tasks,
+                href: base,
+                rows,
+            }
+        })
+        .collect();
+    let page = HomePage {
+        datasets,
+        step_lengths: StepLength::all().map(StepLength::get).collect(),
+    };
+    Ok(Html(page.render()?))
+}
+
+struct ItemRow {
+    id: String,
+    direction: &'static str,
+    step_length: u8,
+    task_name: String,
+    href: String,
+}
+
+struct Choice {
+    value: String,
+    selected: bool,
+}
+
+#[derive(Template)]
+#[template(path = "dataset.html")]
+struct BrowsePage {
+    dataset: String,
+    items: Vec<ItemRow>,
+    total: i64,
+    first_shown: i64,
+    last_shown: i64,
+    directions: Vec<Choice>,
+    step_lengths: Vec<Choice>,
+    tasks: Vec<Choice>,
+    previous: Option<String>,
+    next: Option<String>,
+}
+
+async fn browse(
+    State(state): State<AppState>,
+    Path(name): Path<String>,
+    Query(query): Query<ItemQuery>,
+) -> Result<Html<String>, PageError> {
+    let selection = query.selection()?;
+    let dataset = dataset_or_404(&state.pool, &name).await?;
+    let mut conn = state.pool.acquire().await?;
+    let offset = (selection.page - 1).saturating_mul(selection.per_page);
+    let (items, total) = store::items::list(
+        &mut conn,
+        dataset.id,
+        &selection.filter,
+        selection.per_page,
+        offset,
+    )
+    .await?;
+    let task_names = store::items::task_names(&mut conn, dataset.id).await?;
+    let filter = &selection.filter;
+
+    let page_href = |page: u32| {
+        let mut href = format!("/datasets/{name}?page={page}");
+        if let Some(d) = filter.direction {
+            href.push_str(&format!("&direction={d}"));
+        }
+        if let Some(l) = filter.step_length {
+            href.push_str(&format!("&step_length={l}"));
+        }
+        if let Some(t) = &filter.task {
+            href.push_str(&format!("&task={t}"));
+        }
+        href
+    };
+    let shown_to = i64::from(offset) + items.len() as i64;
+    let page = BrowsePage {
+        items: items
+            .into_iter()
+            .map(|i| ItemRow {
+                href: format!("/datasets/{name}/items/{}", i.item_id),
+                id: i.item_id,
+                direction: i.direction.as_str(),
+                step_length: i.step_length.get(),
+                task_name: i.task_name,
+            })
+            .collect(),
+        total,
+        first_shown: if shown_to == 0 {
+            0
+        } else {
+            i64::from(offset) + 1
+        },
+        last_shown: shown_to,
+        directions: Direction::ALL
+            .into_iter()
+            .map(|d| Choice {
+                value: d.as_str().to_owned(),
+                selected: filter.direction == Some(d),
+            })
+            .collect(),
+        step_lengths: StepLength::all()
+            .map(|l| Choice {
+                value: l.to_string(),
+                selected: filter.step_length == Some(l),
+            })
+            .collect(),
+        tasks: task_names
+            .into_iter()
+            .map(|t| Choice {
+                selected: filter.task.as_deref() == Some(t.as_str()),
+                value: t,
+            })
+            .collect(),
+        previous: (selection.page > 1).then(|| page_href(selection.page - 1)),
+        next: (shown_to < total).then(|| page_href(selection.page + 1)),
+        dataset: name,
+    };
+    Ok(Html(page.render()?))
+}
+
+struct ImageCard {
+    label: String,
+    src: String,
+}
+
+struct ActionLine {
+    label: usize,
+    text: String,
+}
+
+#[derive(Template)]
+#[template(path = "item.html")]
+struct ItemPage {
+    dataset: String,
+    id: String,
+    item_type: String,
+    direction: &'static str,
+    step_length: u8,
+    task_name: String,
+    question: String,
+    actions: Vec<ActionLine>,
+    images: Vec<ImageCard>,
+    dataset_href: String,
+}
+
+async fn item(
+    State(state): State<AppState>,
+    Path((name, item_id)): Path<(String, String)>,
+) -> Result<Html<String>, PageError> {
+    let dataset = dataset_or_404(&state.pool, &name).await?;
+    let mut conn = state.pool.acquire().await?;
+    let item = store::items::get(&mut conn, dataset.id, &item_id)
+        .await?
+        .ok_or_else(|| AppError::NotFound(format!("no item '{item_id}' in dataset '{name}'")))?;
+    let page = ItemPage {
+        dataset_href: format!(
+            "/datasets/{name}?direction={}&step_length={}",
+            item.summary.direction, item.summary.step_length
+        ),
+        dataset: name,
+        id: item.summary.item_id,
+        item_type: item.summary.item_type,
+        direction: item.summary.direction.as_str(),
+        step_length: item.summary.step_length.get(),
+        task_name: item.summary.task_name,
+        question: item.question,
+        actions: item
+            .actions
+            .into_iter()
+            .enumerate()
+            .map(|(i, text)| ActionLine { label: i + 1, text })
+            .collect(),
+        images: item
+            .images
+            .iter()
+            .map(|img| ImageCard {
+                label: img.label(),
+                src: frame_url(&img.sha256),
+            })
+            .collect(),
+    };
+    Ok(Html(page.render()?))
+}

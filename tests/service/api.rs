@@ -1,0 +1,246 @@
+//! The JSON read API: datasets, item lists with filters and pages, items, frames with ETags.
+
+use reqwest::StatusCode;
+use reqwest::header::{CACHE_CONTROL, CONTENT_TYPE, ETAG, IF_NONE_MATCH};
+use serde_json::Value;
+
+use crate::helpers::*;
+
+#[tokio::test]
+async fn healthz_is_ok() {
+    let server = spawn_app_with(|_, _| async {}).await;
+    assert_eq!(server.get("/healthz").await.status(), StatusCode::OK);
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn datasets_list_counts_by_direction_and_step_length() {
+    let (server, _) = spawn_app_with_release().await;
+    let (status, body) = server.get_json("/api/v1/datasets").await;
+    assert_eq!(status, StatusCode::OK);
+    let d = &body["datasets"][0];
+    assert_eq!(d["name"], "mini");
+    assert_eq!(d["items"], 4);
+    assert_eq!(d["forward"], 2);
+    assert_eq!(d["by_step_length"]["inverse"]["4"], 1);
+    let (status, one) = server.get_json("/api/v1/datasets/mini").await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(one["tasks"], 1);
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn item_list_filters_and_paginates() {
+    let (server, _) = spawn_app_with_release().await;
+    let (_, all) = server.get_json("/api/v1/datasets/mini/items").await;
+    assert_eq!(all["total"], 4);
+    assert!(all["next"].is_null());
+
+    let (_, fwd) = server
+        .get_json("/api/v1/datasets/mini/items?direction=forward&step_length=4")
+        .await;
+    assert_eq!(fwd["total"], 1);
+    assert_eq!(fwd["items"][0]["direction"], "forward");
+    assert_eq!(fwd["items"][0]["step_length"], 4);
+
+    let (_, page1) = server
+        .get_json("/api/v1/datasets/mini/items?per_page=3")
+        .await;
+    assert_eq!(page1["items"].as_array().map(Vec::len), Some(3));
+    let next = page1["next"].as_str().expect("a next page").to_owned();
+    let (_, page2) = server.get_json(&next).await;
+    assert_eq!(page2["items"].as_array().map(Vec::len), Some(1));
+    assert!(page2["next"].is_null());
+
+    let (_, task) = server
+        .get_json("/api/v1/datasets/mini/items?task=nope")
+        .await;
+    assert_eq!(task["total"], 0);
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn bad_queries_and_unknown_names_get_clear_errors() {
+    let (server, _) = spawn_app_with_release().await;
+    let (status, body) = server
+        .get_json("/api/v1/datasets/mini/items?step_length=12")
+        .await;
+    assert_eq!(status, StatusCode::BAD_REQUEST);
+    assert!(
+        body["error"]
+            .as_str()
+            .expect("message")
+            .contains("step_length"),
+        "{body}"
+    );
+    let (status, body) = server.get_json("/api/v1/datasets/nope/items").await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
+    assert!(
+        body["error"].as_str().expect("message").contains("nope"),
+        "{body}"
+    );
+    let (status, _) = server.get_json("/api/v1/datasets/mini/items/nope").await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn item_shows_prompt_actions_and_images_in_order() {
+    let (server, records) = spawn_app_with_release().await;
+    let rec = &records[3]; // inverse, L = 4
+    let id = rec["id"].as_str().expect("id");
+    let (status, item) = server
+        .get_json(&format!("/api/v1/datasets/mini/items/{id}"))
+        .await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(item["direction"], "inverse");
+    assert_eq!(item["question"], rec["question"]);
+    assert_eq!(item["actions"].as_array().map(Vec::len), Some(3));
+    assert_eq!(item["actions"][0]["label"], 1);
+    let images = item["images"].as_array().expect("images");
+    assert_eq!(images.len(), 4);
+    assert_eq!(images[0]["label"], "Current State");
+    assert_eq!(images[3]["label"], "Next State 3");
+    server.stop().await;
+}
+
+/// Walks a JSON value and fails if any key names ground truth.
+fn assert_no_ground_truth(value: &Value, path: &str) {
+    match value {
+        Value::Object(map) => {
+            for (k, v) in map {
+                assert!(
+                    !["gt_answer", "ground_truth", "answer", "key_frame_ids"].contains(&k.as_str()),
+                    "{path}.{k} must not be served"
+                );
+                assert_no_ground_truth(v, &format!("{path}.{k}"));
+            }
+        }
+        Value::Array(list) => list.iter().for_each(|v| assert_no_ground_truth(v, path)),
+        _ => {}
+    }
+}
+
+#[tokio::test]
+async fn no_read_endpoint_returns_ground_truth() {
+    let (server, records) = spawn_app_with_release().await;
+    let mut paths = vec![
+        "/api/v1/datasets".to_owned(),
+        "/api/v1/datasets/mini".to_owned(),
+        "/api/v1/datasets/mini/items".to_owned(),
+    ];
+    for r in &records {
+        paths.push(format!(
+            "/api/v1/datasets/mini/items/{}",
+            r["id"].as_str().expect("id")
+        ));
+    }
+    for path in paths {
+        let text = server.get(&path).await.text().await.expect("body");
+        let value: Value = serde_json::from_str(&text).expect("json");
+        assert_no_ground_truth(&value, &path);
+        assert!(!text.contains("gt_answer"), "{path} mentions gt_answer");
+    }
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn frames_are_png_with_strong_etag_immutable_and_304() {
+    let (server, records) = spawn_app_with_release().await;
+    let id = records[0]["id"].as_str().expect("id");
+    let (_, item) = server
+        .get_json(&format!("/api/v1/datasets/mini/items/{id}"))
+        .await;
+    let url = item["images"][1]["url"].as_str().expect("url").to_owned();
+
+    let r = server.get(&url).await;
+    assert_eq!(r.status(), StatusCode::OK);
+    assert_eq!(r.headers()[CONTENT_TYPE], "image/png");
+    let etag = r.headers()[ETAG].to_str().expect("etag").to_owned();
+    assert!(
+        etag.starts_with('"') && !etag.starts_with("W/"),
+        "strong ETag: {etag}"
+    );
+    assert!(
+        r.headers()[CACHE_CONTROL]
+            .to_str()
+            .expect("cc")
+            .contains("immutable")
+    );
+    let bytes = r.bytes().await.expect("body");
+    // records[0] is item n = 1; its image 1 shows key frame 1000 + 211 (see write_record).
+    assert_eq!(bytes.as_ref(), png_bytes(1211, 1).as_slice());
+
+    let r = server
+        .client
+        .get(server.url(&url))
+        .header(IF_NONE_MATCH, &etag)
+        .send()
+        .await
+        .expect("conditional GET");
+    assert_eq!(r.status(), StatusCode::NOT_MODIFIED);
+    assert_eq!(r.headers()[ETAG].to_str().expect("etag"), etag);
+    assert!(r.bytes().await.expect("body").is_empty());
+
+    let r = server
+        .client
+        .get(server.url(&url))
+        .header(IF_NONE_MATCH, "\"something-else\"")
+        .send()
+        .await
+        .expect("conditional GET");
+    assert_eq!(r.status(), StatusCode::OK);
+
+    let missing = format!("/api/v1/frames/{}", "0".repeat(64));
+    assert_eq!(server.get(&missing).await.status(), StatusCode::NOT_FOUND);
+    assert_eq!(
+        server.get("/api/v1/frames/xyz").await.status(),
+        StatusCode::NOT_FOUND
+    );
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn item_json_follows_a_replacing_import_made_while_serving() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let mut records = write_release(&root, &[3]);
+    let server = {
+        let root = root.clone();
+        spawn_app_with(|pool, _| async move {
+            import(&pool, &root, &options("mini")).await;
+        })
+        .await
+    };
+    let id = records[0]["id"].as_str().expect("id").to_owned();
+    let path = format!("/api/v1/datasets/mini/items/{id}");
+    let (_, before) = server.get_json(&path).await;
+    assert!(before["question"].as_str().expect("q").contains("object 1"));
+
+    let q = records[0]["question"]
+        .as_str()
+        .expect("q")
+        .replace("object 1", "object one");
+    records[0]["question"] = Value::String(q);
+    write_qa_file(
+        &root,
+        &records.iter().map(Value::to_string).collect::<Vec<_>>(),
+    );
+    let mut replace = options("mini");
+    replace.replace = true;
+    let report = import(&server.pool, &root, &replace).await;
+    assert_eq!(report.replaced_items, 1);
+
+    // The cache is dropped within one poll interval of the content generation changing.
+    let mut updated = false;
+    for _ in 0..40 {
+        let (_, now) = server.get_json(&path).await;
+        if now["question"].as_str().expect("q").contains("object one") {
+            updated = true;
+            break;
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+    }
+    assert!(updated, "item JSON still stale after 4 s");
+    server.stop().await;
+}

@@ -1,0 +1,97 @@
+//! The command line as users run it: exit codes and what it prints.
+
+use std::process::Command;
+
+use crate::helpers::*;
+
+fn enact_hub() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_enact-hub"))
+}
+
+#[test]
+fn import_prints_a_summary_and_reports_nothing_changed_the_second_time() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    write_release(&root, &[3, 5]);
+    let db = dir.path().join("cli.db");
+    let run = || {
+        enact_hub()
+            .arg("import")
+            .arg(&root)
+            .arg("--db")
+            .arg(&db)
+            .output()
+            .expect("run enact-hub import")
+    };
+    let first = run();
+    let stderr = String::from_utf8_lossy(&first.stderr);
+    assert!(first.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("imported 4 items into dataset 'release'"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("frames: 16 (16 new, 0 reused)"), "{stderr}");
+    let second = run();
+    let stderr = String::from_utf8_lossy(&second.stderr);
+    assert!(second.status.success());
+    assert!(stderr.contains("nothing changed"), "{stderr}");
+}
+
+#[test]
+fn invalid_rows_fail_the_import_with_line_numbers() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let good = write_record(&root, "t", true, 3, 1);
+    write_qa_file(&root, &[good.to_string(), "{broken".to_owned()]);
+    let out = enact_hub()
+        .arg("import")
+        .arg(&root)
+        .arg("--db")
+        .arg(dir.path().join("cli.db"))
+        .output()
+        .expect("run");
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("line 2: invalid JSON"), "{stderr}");
+    assert!(
+        stderr.contains("1 invalid rows of 2; nothing was imported"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn enact_sample_cli_counts() {
+    let Some(fixtures) = shared_fixtures() else {
+        eprintln!("shared fixtures not present, skipping");
+        return;
+    };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("cli.db");
+    let no_images = fixtures.join("enact-sample/QA/enact_ordering_320_no_images.jsonl");
+    let out = enact_hub()
+        .arg("import")
+        .arg(&no_images)
+        .arg("--db")
+        .arg(&db)
+        .output()
+        .expect("run");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(stderr.contains("304 invalid rows of 320"), "{stderr}");
+    assert_eq!(
+        stderr.lines().filter(|l| l.starts_with("line ")).count(),
+        304
+    );
+    let out = enact_hub()
+        .arg("import")
+        .arg(&no_images)
+        .arg("--db")
+        .arg(&db)
+        .arg("--skip-invalid")
+        .output()
+        .expect("run");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("imported 16 items"), "{stderr}");
+    assert!(stderr.contains("304 invalid rows skipped"), "{stderr}");
+}

@@ -1,0 +1,246 @@
+//! Shared test set-up: fresh databases, releases written on the fly, a running server.
+
+#![allow(dead_code)]
+
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+
+use enact_hub::import::{ImportOptions, ImportReport, import_release};
+use enact_hub::store;
+use enact_hub::web::{AppState, Server, WebConfig};
+use serde_json::{Value, json};
+use sqlx::SqlitePool;
+use tempfile::TempDir;
+use tokio::sync::oneshot;
+
+/// `../shared/fixtures` when the checkout sits beside it (or `$ENACT_FIXTURES`).
+pub fn shared_fixtures() -> Option<PathBuf> {
+    if let Ok(dir) = std::env::var("ENACT_FIXTURES") {
+        let dir = PathBuf::from(dir);
+        return dir.is_dir().then_some(dir);
+    }
+    let mut dir = Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf();
+    for _ in 0..3 {
+        let candidate = dir.join("shared").join("fixtures");
+        if candidate.is_dir() {
+            return Some(candidate);
+        }
+        if !dir.pop() {
+            break;
+        }
+    }
+    None
+}
+
+pub async fn fresh_db(dir: &TempDir) -> SqlitePool {
+    store::open(&dir.path().join("test.db"))
+        .await
+        .expect("open a fresh database")
+}
+
+pub fn options(dataset: &str) -> ImportOptions {
+    ImportOptions {
+        dataset: dataset.to_owned(),
+        skip_invalid: false,
+        replace: false,
+        progress: false,
+        scene_graphs: None,
+    }
+}
+
+pub async fn import(pool: &SqlitePool, path: &Path, options: &ImportOptions) -> ImportReport {
+    import_release(pool, path, options)
+        .await
+        .unwrap_or_else(|e| {
+            panic!(
+                "import of {} failed: {e}: {:?}",
+                path.display(),
+                e.details()
+            )
+        })
+}
+
+/// A tiny, distinct PNG for key frame `frame` with label `label` "drawn" as a colour.
+pub fn png_bytes(frame: u32, label: usize) -> Vec<u8> {
+    let img = image::RgbImage::from_fn(8, 8, |x, y| {
+        image::Rgb([
+            (frame % 251) as u8,
+            (label * 20) as u8,
+            ((x + y) * 10) as u8,
+        ])
+    });
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png)
+        .expect("encode png");
+    out.into_inner()
+}
+
+/// One valid QA record of an ENACT release, as a JSON object, with its image files written
+/// under `root`. `n` makes ids and frames distinct.
+pub fn write_record(root: &Path, task: &str, forward: bool, l: usize, n: u32) -> Value {
+    let kind = if forward { "forward" } else { "inverse" };
+    let item_type = format!("{kind}_world_modeling_ordering_{l}_steps");
+    let id = format!("{task}_{item_type}_{n:08x}");
+    let key_frame_ids: Vec<String> = (0..l)
+        .map(|i| (n * 1000 + i as u32 * 211).to_string())
+        .collect();
+    let dir = format!("QA/images/{item_type}/{task}");
+    std::fs::create_dir_all(root.join(&dir)).expect("create image dir");
+    let mut images = Vec::new();
+    for i in 0..l {
+        let name = if i == 0 {
+            format!("{dir}/{id}_cur_state.png")
+        } else {
+            format!("{dir}/{id}_next_state_{i}.png")
+        };
+        std::fs::write(root.join(&name), png_bytes(n * 1000 + i as u32 * 211, i))
+            .expect("write png");
+        images.push(name);
+    }
+    let heading = if forward {
+        "## Actions in Order"
+    } else {
+        "## Shuffled Actions"
+    };
+    let mut question = format!("You are a capable agent.\n\n{heading}\n");
+    for k in 1..l {
+        question.push_str(&format!(
+            "[Action {k}] The robot r1 becomes touching the object {k}.\n"
+        ));
+    }
+    question.push_str("\nNow please provide your answer in the requested format.\n");
+    let gt: Vec<usize> = (1..l).rev().collect();
+    json!({
+        "id": id,
+        "type": item_type,
+        "task_name": task,
+        "key_frame_ids": key_frame_ids,
+        "images": images,
+        "question": question,
+        "options": [],
+        "gt_answer": gt,
+    })
+}
+
+/// Writes `records` as `root/QA/enact_ordering.jsonl` (one raw line each) and returns its path.
+pub fn write_qa_file(root: &Path, lines: &[String]) -> PathBuf {
+    std::fs::create_dir_all(root.join("QA")).expect("create QA dir");
+    let path = root.join("QA").join("enact_ordering.jsonl");
+    std::fs::write(&path, lines.join("\n") + "\n").expect("write jsonl");
+    path
+}
+
+/// A valid release with one forward and one inverse item for each L in `lengths`.
+pub fn write_release(root: &Path, lengths: &[usize]) -> Vec<Value> {
+    let mut records = Vec::new();
+    let mut n = 1;
+    for &l in lengths {
+        for forward in [true, false] {
+            records.push(write_record(
+                root,
+                "cook_bacon_1749678308264596",
+                forward,
+                l,
+                n,
+            ));
+            n += 1;
+        }
+    }
+    let lines: Vec<String> = records.iter().map(Value::to_string).collect();
+    write_qa_file(root, &lines);
+    records
+}
+
+pub struct TestServer {
+    pub addr: SocketAddr,
+    pub pool: SqlitePool,
+    pub client: reqwest::Client,
+    shutdown: Option<oneshot::Sender<()>>,
+    handle: Option<tokio::task::JoinHandle<()>>,
+    _dir: TempDir,
+}
+
+impl TestServer {
+    pub fn url(&self, path: &str) -> String {
+        format!("http://{}{}", self.addr, path)
+    }
+
+    pub async fn get(&self, path: &str) -> reqwest::Response {
+        self.client
+            .get(self.url(path))
+            .send()
+            .await
+            .unwrap_or_else(|e| panic!("GET {path}: {e}"))
+    }
+
+    pub async fn get_json(&self, path: &str) -> (reqwest::StatusCode, Value) {
+        let r = self.get(path).await;
+        let status = r.status();
+        let body = r
+            .json::<Value>()
+            .await
+            .unwrap_or_else(|e| panic!("GET {path}: not JSON: {e}"));
+        (status, body)
+    }
+
+    pub async fn stop(mut self) {
+        if let Some(tx) = self.shutdown.take() {
+            let _ = tx.send(());
+        }
+        if let Some(h) = self.handle.take() {
+            h.await.expect("server task");
+        }
+    }
+}
+
+/// A server on 127.0.0.1:0 over a fresh database, with `setup` run on the database first.
+pub async fn spawn_app_with<F, Fut>(setup: F) -> TestServer
+where
+    F: FnOnce(SqlitePool, PathBuf) -> Fut,
+    Fut: std::future::Future<Output = ()>,
+{
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pool = fresh_db(&dir).await;
+    setup(pool.clone(), dir.path().to_path_buf()).await;
+    let config = WebConfig::default();
+    let server = Server::bind(
+        "127.0.0.1:0".parse().expect("addr"),
+        AppState::new(pool.clone(), &config),
+        &config,
+    )
+    .await
+    .expect("bind");
+    let addr = server.local_addr().expect("local addr");
+    let (tx, rx) = oneshot::channel();
+    let handle = tokio::spawn(async move {
+        server
+            .run(async {
+                let _ = rx.await;
+            })
+            .await
+            .expect("server run");
+    });
+    TestServer {
+        addr,
+        pool,
+        client: reqwest::Client::new(),
+        shutdown: Some(tx),
+        handle: Some(handle),
+        _dir: dir,
+    }
+}
+
+/// A server whose database holds a small generated release as dataset "mini" (L = 3 and 4).
+pub async fn spawn_app_with_release() -> (TestServer, Vec<Value>) {
+    let records = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let shared = records.clone();
+    let server = spawn_app_with(|pool, dir| async move {
+        let root = dir.join("release");
+        let written = write_release(&root, &[3, 4]);
+        import(&pool, &root, &options("mini")).await;
+        *shared.lock().expect("lock") = written;
+    })
+    .await;
+    let records = records.lock().expect("lock").clone();
+    (server, records)
+}

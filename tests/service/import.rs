@@ -1,0 +1,354 @@
+//! The importer: validation of every invalid-row class, all-or-nothing writes, re-imports.
+
+use enact_hub::import::{ImportError, import_release};
+use enact_hub::store;
+use serde_json::{Value, json};
+use sqlx::SqlitePool;
+
+use crate::helpers::*;
+
+async fn item_count(pool: &SqlitePool) -> i64 {
+    sqlx::query_scalar("SELECT count(*) FROM items")
+        .fetch_one(pool)
+        .await
+        .expect("count")
+}
+
+async fn frame_count(pool: &SqlitePool) -> i64 {
+    sqlx::query_scalar("SELECT count(*) FROM frames")
+        .fetch_one(pool)
+        .await
+        .expect("count")
+}
+
+/// Writes a release of two valid items plus `bad` (built from a third valid record) and returns
+/// the problems the importer reports, all on line 3; asserts nothing was written.
+async fn problems_for(
+    bad: impl FnOnce(&mut serde_json::Map<String, Value>, &std::path::Path) -> Option<String>,
+) -> Vec<String> {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let a = write_record(&root, "task_1", true, 3, 1);
+    let b = write_record(&root, "task_1", false, 4, 2);
+    let mut c = write_record(&root, "task_1", true, 5, 3)
+        .as_object()
+        .cloned()
+        .expect("object");
+    let raw = bad(&mut c, &root).unwrap_or_else(|| Value::Object(c).to_string());
+    write_qa_file(&root, &[a.to_string(), b.to_string(), raw]);
+    let pool = fresh_db(&dir).await;
+    let err = import_release(&pool, &root, &options("d"))
+        .await
+        .expect_err("the bad row must be rejected");
+    let ImportError::Invalid { lines, rows, .. } = &err else {
+        panic!("expected Invalid, got {err}");
+    };
+    assert_eq!(*rows, 3);
+    assert_eq!(lines.len(), 1, "{:?}", err.details());
+    assert_eq!(lines[0].line, 3);
+    assert_eq!(item_count(&pool).await, 0, "nothing may be written");
+    assert_eq!(frame_count(&pool).await, 0, "nothing may be written");
+    err.details()
+}
+
+fn assert_mentions(problems: &[String], needles: &[&str]) {
+    for needle in needles {
+        assert!(
+            problems.iter().any(|p| p.contains(needle)),
+            "expected a problem mentioning {needle:?}, got {problems:#?}"
+        );
+    }
+    assert!(
+        problems.iter().all(|p| p.starts_with("line 3")),
+        "{problems:#?}"
+    );
+}
+
+#[tokio::test]
+async fn valid_release_imports_with_counts_and_deduplicated_frames() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let records = write_release(&root, &[3, 4, 10]);
+    // A second item that shows the same key frames (same bytes) as the first one.
+    let mut twin = records[0].clone();
+    twin["id"] = json!("twin_item");
+    write_qa_file(
+        &root,
+        &records
+            .iter()
+            .chain([&twin])
+            .map(Value::to_string)
+            .collect::<Vec<_>>(),
+    );
+    let pool = fresh_db(&dir).await;
+    let report = import(&pool, &root, &options("mini")).await;
+    assert_eq!(report.new_items, 7);
+    assert_eq!(report.frames, 3 + 3 + 4 + 4 + 10 + 10);
+    assert_eq!(report.new_frames, report.frames);
+    assert_eq!(item_count(&pool).await, 7);
+    assert_eq!(frame_count(&pool).await, 34);
+    let mut conn = pool.acquire().await.expect("conn");
+    let d = store::datasets::by_name(&mut conn, "mini")
+        .await
+        .expect("query")
+        .expect("dataset");
+    let item = store::items::get(&mut conn, d.id, "twin_item")
+        .await
+        .expect("query")
+        .expect("item");
+    assert_eq!(item.actions.len(), 2);
+    assert_eq!(item.images.len(), 3);
+    assert_eq!(item.gt_answer, vec![2, 1]);
+    assert_eq!(item.images[1].label(), "Next State 1");
+}
+
+#[tokio::test]
+async fn reimporting_the_same_file_changes_nothing_and_says_so() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    write_release(&root, &[3, 6]);
+    let pool = fresh_db(&dir).await;
+    let first = import(&pool, &root, &options("mini")).await;
+    assert!(first.changed_anything());
+    let second = import(&pool, &root, &options("mini")).await;
+    assert!(!second.changed_anything());
+    assert_eq!(second.unchanged_items, 4);
+    assert_eq!(second.new_frames, 0);
+    assert!(
+        second.summary_line().starts_with("nothing changed"),
+        "{}",
+        second.summary_line()
+    );
+    assert_eq!(item_count(&pool).await, 4);
+}
+
+#[tokio::test]
+async fn changed_item_is_a_conflict_unless_replace() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let mut records = write_release(&root, &[3, 4]);
+    let pool = fresh_db(&dir).await;
+    import(&pool, &root, &options("mini")).await;
+
+    records[1]["gt_answer"] = json!([1, 2]);
+    write_qa_file(
+        &root,
+        &records.iter().map(Value::to_string).collect::<Vec<_>>(),
+    );
+    let err = import_release(&pool, &root, &options("mini"))
+        .await
+        .expect_err("conflict");
+    assert!(matches!(err, ImportError::Conflict { .. }), "{err}");
+    assert!(
+        err.details()[0].starts_with("line 2"),
+        "{:?}",
+        err.details()
+    );
+
+    let mut replace = options("mini");
+    replace.replace = true;
+    let report = import(&pool, &root, &replace).await;
+    assert_eq!(report.replaced_items, 1);
+    assert_eq!(report.unchanged_items, 3);
+    let gt: String = sqlx::query_scalar("SELECT gt_answer FROM items WHERE item_id = ?")
+        .bind(records[1]["id"].as_str().expect("id"))
+        .fetch_one(&pool)
+        .await
+        .expect("gt");
+    assert_eq!(gt, "[1,2]");
+}
+
+#[tokio::test]
+async fn bad_json_is_rejected_with_its_line() {
+    let p = problems_for(|_, _| Some("{\"id\": \"x\", ".to_owned())).await;
+    assert_mentions(&p, &["invalid JSON"]);
+}
+
+#[tokio::test]
+async fn missing_fields_are_rejected_by_name() {
+    let p = problems_for(|r, _| {
+        r.remove("question");
+        r.remove("key_frame_ids");
+        None
+    })
+    .await;
+    assert_mentions(&p, &["`question`: missing", "`key_frame_ids`: missing"]);
+}
+
+#[tokio::test]
+async fn step_length_outside_3_to_10_is_rejected() {
+    let p = problems_for(|r, _| {
+        r.insert(
+            "type".into(),
+            json!("forward_world_modeling_ordering_2_steps"),
+        );
+        None
+    })
+    .await;
+    assert_mentions(&p, &["`type`: step length 2 is outside 3..10"]);
+}
+
+#[tokio::test]
+async fn ground_truth_that_is_not_a_permutation_is_rejected() {
+    let p = problems_for(|r, _| {
+        r.insert("gt_answer".into(), json!([1, 2, 2, 4]));
+        None
+    })
+    .await;
+    assert_mentions(
+        &p,
+        &["`gt_answer`: [1, 2, 2, 4] is not a permutation of 1..4"],
+    );
+}
+
+#[tokio::test]
+async fn image_count_other_than_l_is_rejected() {
+    let p = problems_for(|r, _| {
+        let images = r["images"].as_array().expect("images")[..4].to_vec();
+        r.insert("images".into(), Value::Array(images));
+        None
+    })
+    .await;
+    assert_mentions(&p, &["`images`: has 4 images, the type says L = 5"]);
+}
+
+#[tokio::test]
+async fn missing_image_file_is_rejected_with_its_index() {
+    let p = problems_for(|r, root| {
+        let path = r["images"][2].as_str().expect("path").to_owned();
+        std::fs::remove_file(root.join(path)).expect("remove");
+        None
+    })
+    .await;
+    assert_mentions(&p, &["`images[2]`: image file not found"]);
+}
+
+#[tokio::test]
+async fn undecodable_image_is_rejected() {
+    let p = problems_for(|r, root| {
+        let path = r["images"][0].as_str().expect("path").to_owned();
+        std::fs::write(root.join(path), b"definitely not a png").expect("overwrite");
+        None
+    })
+    .await;
+    assert_mentions(&p, &["`images[0]`: not a decodable image"]);
+}
+
+#[tokio::test]
+async fn image_path_leaving_the_release_is_rejected() {
+    let p = problems_for(|r, _| {
+        r["images"][1] = json!("../outside.png");
+        None
+    })
+    .await;
+    assert_mentions(
+        &p,
+        &["`images[1]`", "relative path inside the release folder"],
+    );
+}
+
+#[tokio::test]
+async fn question_without_one_line_per_action_is_rejected() {
+    let p = problems_for(|r, _| {
+        let q = r["question"]
+            .as_str()
+            .expect("question")
+            .replace("[Action 3] ", "");
+        r.insert("question".into(), json!(q));
+        None
+    })
+    .await;
+    assert_mentions(
+        &p,
+        &["`question`: expected 4 lines [Action 1]..[Action 4], found 3"],
+    );
+}
+
+#[tokio::test]
+async fn duplicate_ids_are_rejected_on_the_later_line() {
+    let p = problems_for(|r, _| {
+        r.insert(
+            "id".into(),
+            json!("task_1_forward_world_modeling_ordering_3_steps_00000001"),
+        );
+        None
+    })
+    .await;
+    assert_mentions(&p, &["duplicate id", "first seen on line 1"]);
+}
+
+#[tokio::test]
+async fn skip_invalid_imports_the_valid_rows_and_lists_the_rest() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let good = write_record(&root, "t", true, 3, 1);
+    let mut bad = write_record(&root, "t", false, 3, 2);
+    bad["gt_answer"] = json!([3, 1]);
+    write_qa_file(
+        &root,
+        &[good.to_string(), "not json".to_owned(), bad.to_string()],
+    );
+    let pool = fresh_db(&dir).await;
+    let mut opts = options("d");
+    opts.skip_invalid = true;
+    let report = import(&pool, &root, &opts).await;
+    assert_eq!(report.new_items, 1);
+    let lines: Vec<usize> = report.skipped.iter().map(|s| s.line).collect();
+    assert_eq!(lines, vec![2, 3]);
+    assert_eq!(item_count(&pool).await, 1);
+}
+
+#[tokio::test]
+async fn a_jsonl_path_resolves_images_against_the_parent_of_qa() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    write_release(&root, &[3]);
+    let file = root.join("QA").join("enact_ordering.jsonl");
+    let pool = fresh_db(&dir).await;
+    let report = import(&pool, &file, &options("d")).await;
+    assert_eq!(report.new_items, 2);
+}
+
+#[tokio::test]
+async fn enact_sample_imports_16_items_and_rejects_rows_without_images() {
+    let Some(fixtures) = shared_fixtures() else {
+        eprintln!("shared fixtures not present, skipping");
+        return;
+    };
+    let sample = fixtures.join("enact-sample");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pool = fresh_db(&dir).await;
+
+    let report = import(&pool, &sample, &options("sample")).await;
+    assert_eq!(report.new_items, 16);
+    let again = import(&pool, &sample, &options("sample")).await;
+    assert!(!again.changed_anything());
+    assert_eq!(item_count(&pool).await, 16);
+
+    let no_images = sample.join("QA").join("enact_ordering_320_no_images.jsonl");
+    let fresh_dir = tempfile::tempdir().expect("tempdir");
+    let fresh = fresh_db(&fresh_dir).await;
+    let err = import_release(&fresh, &no_images, &options("sample"))
+        .await
+        .expect_err("rows without images");
+    let ImportError::Invalid { lines, rows, .. } = &err else {
+        panic!("expected Invalid, got {err}");
+    };
+    assert_eq!(*rows, 320);
+    assert_eq!(lines.len(), 304);
+    assert!(lines.iter().all(|l| {
+        l.problems
+            .iter()
+            .all(|p| p.message.starts_with("image file not found"))
+    }));
+    assert_eq!(item_count(&fresh).await, 0);
+
+    let mut skip = options("sample");
+    skip.skip_invalid = true;
+    for _ in 0..2 {
+        let report = import(&fresh, &no_images, &skip).await;
+        assert_eq!(report.skipped.len(), 304);
+        assert_eq!(report.new_items + report.unchanged_items, 16);
+        assert_eq!(item_count(&fresh).await, 16);
+    }
+}

@@ -1,0 +1,102 @@
+//! The HTML site: home page, dataset browsing, item view, error pages.
+
+use reqwest::StatusCode;
+
+use crate::helpers::*;
+
+#[tokio::test]
+async fn empty_home_page_says_how_to_import() {
+    let server = spawn_app_with(|_, _| async {}).await;
+    let r = server.get("/").await;
+    assert_eq!(r.status(), StatusCode::OK);
+    let html = r.text().await.expect("body");
+    assert!(html.contains("enact-hub import DATA_DIR"), "{html}");
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn home_lists_datasets_with_counts_and_links() {
+    let (server, _) = spawn_app_with_release().await;
+    let html = server.get("/").await.text().await.expect("body");
+    assert!(html.contains("href=\"/datasets/mini\""));
+    assert!(
+        html.contains("href=\"/datasets/mini?direction=inverse&#38;step_length=4\""),
+        "{html}"
+    );
+    assert!(html.contains("4 items from 1 tasks"));
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn browse_page_filters_items() {
+    let (server, records) = spawn_app_with_release().await;
+    let html = server
+        .get("/datasets/mini?direction=forward")
+        .await
+        .text()
+        .await
+        .expect("body");
+    assert!(html.contains(records[0]["id"].as_str().expect("id")));
+    assert!(
+        !html.contains(records[1]["id"].as_str().expect("id")),
+        "inverse item shown"
+    );
+    assert!(html.contains("Items 1–2 of 2"));
+    let r = server.get("/datasets/mini?step_length=zero").await;
+    assert_eq!(r.status(), StatusCode::BAD_REQUEST);
+    assert!(
+        r.text()
+            .await
+            .expect("body")
+            .contains("step_length must be")
+    );
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn item_page_shows_images_in_order_actions_and_question() {
+    let (server, records) = spawn_app_with_release().await;
+    let id = records[2]["id"].as_str().expect("id"); // forward, L = 4
+    let html = server
+        .get(&format!("/datasets/mini/items/{id}"))
+        .await
+        .text()
+        .await
+        .expect("body");
+    let positions: Vec<usize> = [
+        "alt=\"Current State\"",
+        "alt=\"Next State 1\"",
+        "alt=\"Next State 2\"",
+        "alt=\"Next State 3\"",
+    ]
+    .iter()
+    .map(|needle| {
+        html.find(needle)
+            .unwrap_or_else(|| panic!("{needle} missing"))
+    })
+    .collect();
+    assert!(
+        positions.windows(2).all(|w| w[0] < w[1]),
+        "images out of order"
+    );
+    assert!(html.contains("[Action 3]"));
+    assert!(html.contains("Now please provide your answer"));
+    let (_, item) = server
+        .get_json(&format!("/api/v1/datasets/mini/items/{id}"))
+        .await;
+    for img in item["images"].as_array().expect("images") {
+        let src = img["url"].as_str().expect("url");
+        assert!(html.contains(src), "page lacks {src}");
+        assert_eq!(server.get(src).await.status(), StatusCode::OK);
+    }
+    let missing = server.get("/datasets/mini/items/nope").await;
+    assert_eq!(missing.status(), StatusCode::NOT_FOUND);
+    assert!(
+        missing
+            .text()
+            .await
+            .expect("body")
+            .contains("no item &#39;nope&#39; in dataset &#39;mini&#39;")
+    );
+    server.stop().await;
+}
