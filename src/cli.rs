@@ -34,6 +34,27 @@ enum Command {
     Import(ImportArgs),
     /// Score a prediction file (ENACT model-output JSONL, or compact {"id", "answer"} lines).
     Score(ScoreArgs),
+    /// Krippendorff's alpha of reliability data, with an optional bootstrap interval.
+    Agreement(AgreementArgs),
+}
+
+#[derive(Args)]
+struct AgreementArgs {
+    /// `{"data": [[...], ...]}`: one list per coder, numbers or null for a missing value.
+    #[arg(long, value_name = "FILE.json")]
+    input: PathBuf,
+    /// Level of measurement: nominal, ordinal, interval or ratio.
+    #[arg(long)]
+    level: crate::agreement::MeasurementLevel,
+    /// Number of bootstrap replicates (units resampled with replacement); 0 for none.
+    #[arg(long, default_value_t = 0)]
+    bootstrap: usize,
+    /// Seed of the bootstrap, recorded in the output.
+    #[arg(long, default_value_t = crate::agreement::DEFAULT_BOOTSTRAP_SEED)]
+    seed: u64,
+    /// Coverage of the bootstrap interval.
+    #[arg(long, default_value_t = crate::agreement::DEFAULT_CONFIDENCE_LEVEL)]
+    confidence: f64,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -159,6 +180,7 @@ pub fn main() -> ExitCode {
             Command::Serve(args) => serve(args).await,
             Command::Import(args) => import(args).await,
             Command::Score(args) => score(args).await,
+            Command::Agreement(args) => agreement(&args),
         }
     });
     match result {
@@ -574,4 +596,43 @@ async fn score(args: ScoreArgs) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
     }
+}
+
+/// Prints alpha (null when undefined, with the reason) and, when asked, its bootstrap interval.
+fn agreement(args: &AgreementArgs) -> anyhow::Result<ExitCode> {
+    use crate::agreement::{BootstrapConfig, PreparedAlpha, UnitItems, read_reliability_json};
+    let data = read_reliability_json(&args.input)?;
+    let prepared =
+        PreparedAlpha::with_items(&data, args.level, &UnitItems::one_per_unit(data.units()))?;
+    let estimate = prepared.estimate();
+    let mut out = serde_json::json!({
+        "input": args.input.display().to_string(),
+        "level": args.level.to_string(),
+        "alpha": estimate.alpha,
+        "reason": estimate.reason.as_ref().map(ToString::to_string),
+        "coders": estimate.coders,
+        "units": estimate.units,
+        "units_used": estimate.units_used,
+        "pairable_values": estimate.pairable_values,
+    });
+    if args.bootstrap > 0 {
+        let config = BootstrapConfig {
+            replicates: args.bootstrap,
+            confidence_level: args.confidence,
+            seed: args.seed,
+        };
+        let b = prepared.bootstrap(&config)?;
+        out["bootstrap"] = serde_json::json!({
+            "resampled": "units",
+            "replicates": b.replicates,
+            "undefined_replicates": b.undefined_replicates,
+            "confidence_level": b.confidence_level,
+            "ci_low": b.ci_low,
+            "ci_high": b.ci_high,
+            "seed": b.seed,
+            "rng": b.rng,
+        });
+    }
+    println!("{}", serde_json::to_string_pretty(&out)?);
+    Ok(ExitCode::SUCCESS)
 }

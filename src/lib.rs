@@ -9,6 +9,7 @@
 //! - [`demo`]: the built-in demo dataset, generated at start by `serve --demo`.
 //! - [`cli`]: the command line; `src/main.rs` only calls [`cli::main`].
 
+pub mod agreement;
 pub mod cli;
 pub mod dataset;
 pub mod demo;

@@ -95,3 +95,69 @@ fn enact_sample_cli_counts() {
     assert!(stderr.contains("imported 16 items"), "{stderr}");
     assert!(stderr.contains("304 invalid rows skipped"), "{stderr}");
 }
+
+fn agreement_json(data: &str, args: &[&str]) -> (bool, serde_json::Value, String) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let input = dir.path().join("data.json");
+    std::fs::write(&input, data).expect("write");
+    let out = enact_hub()
+        .arg("agreement")
+        .arg("--input")
+        .arg(&input)
+        .args(args)
+        .output()
+        .expect("run");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    let json = serde_json::from_slice(&out.stdout).unwrap_or(serde_json::Value::Null);
+    (out.status.success(), json, stderr)
+}
+
+#[test]
+fn agreement_prints_alpha_with_a_seeded_interval() {
+    // Krippendorff (2011), 4 observers x 12 units, nominal: alpha = 113/152.
+    let data = r#"{"data": [[1,2,3,3,2,1,4,1,2,null,null,null],[1,2,3,3,2,2,4,1,2,5,null,3],
+                             [null,3,3,3,2,3,4,2,2,5,1,null],[1,2,3,3,2,4,4,1,2,5,1,null]]}"#;
+    let (ok, json, stderr) = agreement_json(
+        data,
+        &["--level", "nominal", "--bootstrap", "200", "--seed", "9"],
+    );
+    assert!(ok, "{stderr}");
+    let alpha = json["alpha"].as_f64().expect("alpha");
+    assert!((alpha - 113.0 / 152.0).abs() < 1e-12, "{alpha}");
+    assert_eq!(json["units_used"], 11);
+    assert_eq!(json["bootstrap"]["seed"], 9);
+    let (lo, hi) = (
+        json["bootstrap"]["ci_low"].as_f64().expect("low"),
+        json["bootstrap"]["ci_high"].as_f64().expect("high"),
+    );
+    assert!(lo < alpha && alpha <= hi, "{lo} {alpha} {hi}");
+    let (_, again, _) = agreement_json(
+        data,
+        &["--level", "nominal", "--bootstrap", "200", "--seed", "9"],
+    );
+    assert_eq!(
+        json["bootstrap"], again["bootstrap"],
+        "same seed, same interval"
+    );
+}
+
+#[test]
+fn agreement_without_variation_is_null_with_a_reason() {
+    let (ok, json, _) = agreement_json(r#"{"data": [[1, 1], [1, 1]]}"#, &["--level", "ordinal"]);
+    assert!(ok);
+    assert!(json["alpha"].is_null());
+    assert!(
+        json["reason"]
+            .as_str()
+            .expect("reason")
+            .contains("expected disagreement is zero")
+    );
+}
+
+#[test]
+fn agreement_input_errors_name_coder_and_unit() {
+    let (ok, _, stderr) =
+        agreement_json(r#"{"data": [[1, "x"], [1, 1]]}"#, &["--level", "ordinal"]);
+    assert!(!ok);
+    assert!(stderr.contains("data[0][1]"), "{stderr}");
+}

@@ -352,3 +352,91 @@ async fn enact_sample_imports_16_items_and_rejects_rows_without_images() {
         assert_eq!(item_count(&fresh).await, 16);
     }
 }
+
+#[tokio::test]
+async fn inverse_items_without_scene_graphs_get_action_text_signatures() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    write_release(&root, &[3, 4]);
+    let pool = fresh_db(&dir).await;
+    let report = import(&pool, &root, &options("mini")).await;
+    assert_eq!(report.scene_graph_items, 0);
+    assert_eq!(report.action_text_items, 2, "{}", report.summary_line());
+    assert_eq!(report.exact_only_items, 2);
+    let sources: Vec<String> = sqlx::query_scalar("SELECT source FROM item_signatures")
+        .fetch_all(&pool)
+        .await
+        .expect("sources");
+    assert_eq!(sources, vec!["action_text", "action_text"]);
+}
+
+#[tokio::test]
+async fn scene_graph_import_stores_enacts_transition_signatures_and_upgrades_on_reimport() {
+    let Some(fixtures) = shared_fixtures() else {
+        eprintln!("shared fixtures not present, skipping");
+        return;
+    };
+    let parity = fixtures.join("enact-parity");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pool = fresh_db(&dir).await;
+    // First without scene graphs: forward items are exact-only.
+    let plain = import(&pool, &parity, &options("parity")).await;
+    assert_eq!(plain.exact_only_items, 48);
+    let mut with_graphs = options("parity");
+    with_graphs.scene_graphs = Some(parity.join("replayed_activities"));
+    let report = import(&pool, &parity, &with_graphs).await;
+    assert_eq!(report.new_items, 0);
+    assert_eq!(report.signatures_updated, 96);
+    assert_eq!(report.scene_graph_items, 96);
+    let again = import(&pool, &parity, &with_graphs).await;
+    assert!(!again.changed_anything(), "{}", again.summary_line());
+
+    // The stored tables hold ENACT's visible and full sets of every chronological transition.
+    let reference = std::fs::read_to_string(parity.join("reference/transition_signatures.jsonl"))
+        .expect("reference");
+    let mut conn = pool.acquire().await.expect("conn");
+    let dataset = store::datasets::by_name(&mut conn, "parity")
+        .await
+        .expect("q")
+        .expect("dataset");
+    let mut compared = 0;
+    for line in reference.lines() {
+        let r: Value = serde_json::from_str(line).expect("json");
+        let id = r["id"].as_str().expect("id");
+        let (source, json) = store::items::semantics_json(&mut conn, dataset.id, id)
+            .await
+            .expect("q")
+            .expect("stored");
+        assert_eq!(source, "scene_graph");
+        let table: enact_hub::verifier::ItemSignatures =
+            serde_json::from_str(&json).expect("table");
+        for (i, t) in r["transitions"]
+            .as_array()
+            .expect("transitions")
+            .iter()
+            .enumerate()
+        {
+            for (view, key) in [
+                (enact_hub::scene_graph::View::Visible, "visible"),
+                (enact_hub::scene_graph::View::Full, "full"),
+            ] {
+                let expected: std::collections::BTreeSet<String> = t[key]
+                    .as_array()
+                    .expect("set")
+                    .iter()
+                    .map(|s| s.as_str().expect("str").to_owned())
+                    .collect();
+                let ours: std::collections::BTreeSet<String> = table
+                    .signature_set(view, i, i + 1)
+                    .unwrap_or_else(|| panic!("{id} {i} {key}: not covered"))
+                    .unwrap_or_else(|e| panic!("{id} {i} {key}: {e}"))
+                    .into_iter()
+                    .map(str::to_owned)
+                    .collect();
+                assert_eq!(ours, expected, "{id} transition {i} {key}");
+                compared += 1;
+            }
+        }
+    }
+    assert_eq!(compared, 1056);
+}

@@ -321,3 +321,67 @@ fn malformed_scene_graph_json_is_named_with_its_place() {
     );
     assert!(stderr.contains("line 1"), "{stderr}");
 }
+
+#[test]
+fn strict_scores_agree_between_a_stored_dataset_and_the_release_on_disk() {
+    let Some(fixtures) = shared_fixtures() else {
+        eprintln!("shared fixtures not present, skipping");
+        return;
+    };
+    let parity = fixtures.join("enact-parity");
+    let replayed = parity.join("replayed_activities");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("s.db");
+    let (ok, _, stderr) = run(&[
+        &"import",
+        &parity,
+        &"--db",
+        &db,
+        &"--dataset",
+        &"parity",
+        &"--scene-graphs",
+        &replayed,
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stderr.contains("96 from scene graphs"), "{stderr}");
+    for model in ["random", "adjswap", "semequiv", "prose"] {
+        let file = parity.join(format!("predictions/enact_ordering_{model}.jsonl"));
+        let from_db = dir.path().join(format!("db-{model}"));
+        let from_disk = dir.path().join(format!("disk-{model}"));
+        let (ok, table_db, stderr) = run(&[
+            &"score",
+            &file,
+            &"--db",
+            &db,
+            &"--dataset",
+            &"parity",
+            &"--out",
+            &from_db,
+        ]);
+        assert!(ok, "{stderr}");
+        let (ok, table_disk, stderr) = run(&[
+            &"score",
+            &file,
+            &"--data",
+            &parity,
+            &"--scene-graphs",
+            &replayed,
+            &"--out",
+            &from_disk,
+        ]);
+        assert!(ok, "{stderr}");
+        assert_eq!(table_db, table_disk, "{model}");
+        assert!(
+            table_db.contains("96 items from scene graphs"),
+            "{table_db}"
+        );
+        for sub in [
+            format!("detailed_eval/enact_ordering_{model}.jsonl"),
+            format!("meta_performance/enact_ordering_{model}.json"),
+        ] {
+            let a = std::fs::read_to_string(from_db.join(&sub)).expect("db output");
+            let b = std::fs::read_to_string(from_disk.join(&sub)).expect("disk output");
+            assert_eq!(a, b, "{model} {sub}");
+        }
+    }
+}
