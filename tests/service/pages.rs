@@ -100,3 +100,52 @@ async fn item_page_shows_images_in_order_actions_and_question() {
     );
     server.stop().await;
 }
+
+#[tokio::test]
+async fn every_demo_item_page_shows_its_images() {
+    let server = spawn_app_with(|pool, _| async move {
+        enact_hub::cli::load_demo(&pool).await.expect("demo loads");
+    })
+    .await;
+    let (_, list) = server
+        .get_json("/api/v1/datasets/demo/items?per_page=500")
+        .await;
+    let items = list["items"].as_array().expect("items");
+    let mut kinds = std::collections::BTreeSet::new();
+    for item in items {
+        kinds.insert((
+            item["direction"].as_str().expect("dir").to_owned(),
+            item["step_length"].as_u64().expect("L"),
+        ));
+        let id = item["id"].as_str().expect("id");
+        let html = server
+            .get(&format!("/datasets/demo/items/{id}"))
+            .await
+            .text()
+            .await
+            .expect("page");
+        let (_, json) = server
+            .get_json(&format!("/api/v1/datasets/demo/items/{id}"))
+            .await;
+        let images = json["images"].as_array().expect("images");
+        assert_eq!(
+            images.len() as u64,
+            item["step_length"].as_u64().expect("L")
+        );
+        for img in images {
+            let src = img["url"].as_str().expect("url");
+            assert!(
+                html.contains(&format!("src=\"{src}\"")),
+                "{id}: page lacks {src}"
+            );
+            let r = server.get(src).await;
+            assert_eq!(r.status(), StatusCode::OK);
+            let png = r.bytes().await.expect("png");
+            let decoded = image::load_from_memory(&png).expect("a PNG");
+            assert_eq!((decoded.width(), decoded.height()), (512, 512));
+        }
+    }
+    // Both directions at every step length 3..10.
+    assert_eq!(kinds.len(), 16, "{kinds:?}");
+    server.stop().await;
+}
