@@ -3,7 +3,7 @@
 //! were timed on), otherwise they are generated deterministically here.
 
 use std::hint::black_box;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use enact_hub::agreement::{
@@ -12,19 +12,11 @@ use enact_hub::agreement::{
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+#[path = "../tests/support/fixtures.rs"]
+mod fixtures;
+
 fn fixtures_dir() -> Option<PathBuf> {
-    if let Some(dir) = std::env::var_os("ENACT_FIXTURES") {
-        return Some(PathBuf::from(dir));
-    }
-    let mut dir = Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf();
-    for _ in 0..=3 {
-        let candidate = dir.join("shared").join("fixtures");
-        if candidate.is_dir() {
-            return Some(candidate);
-        }
-        dir = dir.parent()?.to_path_buf();
-    }
-    None
+    fixtures::shared_fixtures()
 }
 
 /// The named vector's data from the shared fixtures, if they are there.

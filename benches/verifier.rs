@@ -28,24 +28,14 @@ struct BenchItem {
     answer_text: String,
 }
 
+#[path = "../tests/support/fixtures.rs"]
+mod fixtures;
+
 fn fixtures_dir() -> Option<PathBuf> {
-    if let Ok(dir) = std::env::var("ENACT_FIXTURES") {
-        let dir = PathBuf::from(dir);
-        if dir.join("enact-parity").is_dir() {
-            return Some(dir.join("enact-parity"));
-        }
-    }
-    let mut dir = Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf();
-    for _ in 0..=3 {
-        let candidate = dir.join("shared/fixtures/enact-parity");
-        if candidate.join("reference/pair_signatures.jsonl").is_file() {
-            return Some(candidate);
-        }
-        if !dir.pop() {
-            break;
-        }
-    }
-    None
+    let dir = fixtures::shared_fixtures()?.join("enact-parity");
+    dir.join("reference/pair_signatures.jsonl")
+        .is_file()
+        .then_some(dir)
 }
 
 type PairSets =

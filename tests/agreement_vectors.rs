@@ -4,7 +4,7 @@
 //! encodings of the permutation example.
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use enact_hub::agreement::{
     AlphaUndefined, AnnotatedOrdering, BootstrapConfig, MeasurementLevel, OrderingAnnotations,
@@ -13,20 +13,11 @@ use enact_hub::agreement::{
 };
 use serde_json::Value;
 
-/// `$ENACT_FIXTURES`, else the first `shared/fixtures` found walking up from the crate.
+#[path = "support/fixtures.rs"]
+mod fixtures;
+
 fn fixtures_dir() -> Option<PathBuf> {
-    if let Some(dir) = std::env::var_os("ENACT_FIXTURES") {
-        return Some(PathBuf::from(dir));
-    }
-    let mut dir = Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf();
-    for _ in 0..=3 {
-        let candidate = dir.join("shared").join("fixtures");
-        if candidate.is_dir() {
-            return Some(candidate);
-        }
-        dir = dir.parent()?.to_path_buf();
-    }
-    None
+    fixtures::shared_fixtures()
 }
 
 fn vectors() -> Option<Vec<Value>> {

@@ -26,24 +26,11 @@ const KEY_ORDER: [&str; 8] = [
 /// Height of the band at the top of a frame where the state label is drawn.
 const LABEL_BAND: u32 = 80;
 
+#[path = "support/fixtures.rs"]
+mod fixtures;
+
 fn fixtures_dir() -> Option<PathBuf> {
-    if let Ok(dir) = std::env::var("ENACT_FIXTURES") {
-        let dir = PathBuf::from(dir);
-        if dir.is_dir() {
-            return Some(dir);
-        }
-    }
-    let mut dir = Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf();
-    for _ in 0..=3 {
-        let candidate = dir.join("shared/fixtures");
-        if candidate.is_dir() {
-            return Some(candidate);
-        }
-        if !dir.pop() {
-            break;
-        }
-    }
-    None
+    fixtures::shared_fixtures()
 }
 
 fn write(seed: u64) -> (tempfile::TempDir, DemoSummary) {

@@ -13,29 +13,11 @@ use enact_hub::verifier::{
 };
 use serde_json::Value;
 
-/// `$ENACT_FIXTURES` (the `fixtures` directory or the parity set itself), else the first
-/// `shared/fixtures` found walking up from the crate (at most three levels).
+#[path = "support/fixtures.rs"]
+mod fixtures;
+
 fn fixtures_dir() -> Option<PathBuf> {
-    if let Ok(dir) = std::env::var("ENACT_FIXTURES") {
-        let dir = PathBuf::from(dir);
-        if dir.join("enact-parity").is_dir() {
-            return Some(dir);
-        }
-        if dir.join("predictions").is_dir() {
-            return dir.parent().map(Path::to_path_buf);
-        }
-    }
-    let mut dir = Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf();
-    for _ in 0..=3 {
-        let candidate = dir.join("shared/fixtures");
-        if candidate.is_dir() {
-            return Some(candidate);
-        }
-        if !dir.pop() {
-            break;
-        }
-    }
-    None
+    fixtures::shared_fixtures()
 }
 
 fn parity_dir() -> Option<PathBuf> {

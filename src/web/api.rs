@@ -105,6 +105,46 @@ pub struct ItemSelection {
     pub per_page: u32,
 }
 
+impl ItemSelection {
+    /// Rows to skip before this page.
+    pub fn offset(&self) -> u32 {
+        (self.page - 1).saturating_mul(self.per_page)
+    }
+
+    /// The query string that selects `page` with the same filters.
+    pub fn query_string(&self, page: u32) -> String {
+        let mut q = format!("page={page}&per_page={}", self.per_page);
+        if let Some(d) = self.filter.direction {
+            q.push_str(&format!("&direction={d}"));
+        }
+        if let Some(l) = self.filter.step_length {
+            q.push_str(&format!("&step_length={l}"));
+        }
+        if let Some(t) = &self.filter.task {
+            q.push_str(&format!("&task={t}"));
+        }
+        q
+    }
+
+    /// The page of items this selection names, and how many items match in all.
+    pub async fn fetch(
+        &self,
+        state: &AppState,
+        dataset: &str,
+    ) -> Result<(Vec<store::items::ItemSummary>, i64), AppError> {
+        let dataset = dataset_or_404(&state.pool, dataset).await?;
+        let mut conn = state.pool.acquire().await?;
+        Ok(store::items::list(
+            &mut conn,
+            dataset.id,
+            &self.filter,
+            self.per_page,
+            self.offset(),
+        )
+        .await?)
+    }
+}
+
 impl ItemQuery {
     pub fn selection(&self) -> Result<ItemSelection, AppError> {
         let blank = |v: &Option<String>| {
@@ -186,34 +226,13 @@ async fn list_items(
     Query(query): Query<ItemQuery>,
 ) -> Result<Json<ItemList>, AppError> {
     let selection = query.selection()?;
-    let dataset = dataset_or_404(&state.pool, &name).await?;
-    let mut conn = state.pool.acquire().await?;
-    let offset = (selection.page - 1).saturating_mul(selection.per_page);
-    let (items, total) = store::items::list(
-        &mut conn,
-        dataset.id,
-        &selection.filter,
-        selection.per_page,
-        offset,
-    )
-    .await?;
-    let shown = i64::from(offset) + items.len() as i64;
+    let (items, total) = selection.fetch(&state, &name).await?;
+    let shown = i64::from(selection.offset()) + items.len() as i64;
     let next = (shown < total).then(|| {
-        let mut url = format!(
-            "/api/v1/datasets/{name}/items?page={}&per_page={}",
-            selection.page + 1,
-            selection.per_page
-        );
-        if let Some(d) = selection.filter.direction {
-            url.push_str(&format!("&direction={d}"));
-        }
-        if let Some(l) = selection.filter.step_length {
-            url.push_str(&format!("&step_length={l}"));
-        }
-        if let Some(t) = &selection.filter.task {
-            url.push_str(&format!("&task={t}"));
-        }
-        url
+        format!(
+            "/api/v1/datasets/{name}/items?{}",
+            selection.query_string(selection.page + 1)
+        )
     });
     Ok(Json(ItemList {
         items: items

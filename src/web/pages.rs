@@ -123,33 +123,13 @@ async fn browse(
     Query(query): Query<ItemQuery>,
 ) -> Result<Html<String>, PageError> {
     let selection = query.selection()?;
+    let (items, total) = selection.fetch(&state, &name).await?;
     let dataset = dataset_or_404(&state.pool, &name).await?;
     let mut conn = state.pool.acquire().await?;
-    let offset = (selection.page - 1).saturating_mul(selection.per_page);
-    let (items, total) = store::items::list(
-        &mut conn,
-        dataset.id,
-        &selection.filter,
-        selection.per_page,
-        offset,
-    )
-    .await?;
     let task_names = store::items::task_names(&mut conn, dataset.id).await?;
     let filter = &selection.filter;
-
-    let page_href = |page: u32| {
-        let mut href = format!("/datasets/{name}?page={page}");
-        if let Some(d) = filter.direction {
-            href.push_str(&format!("&direction={d}"));
-        }
-        if let Some(l) = filter.step_length {
-            href.push_str(&format!("&step_length={l}"));
-        }
-        if let Some(t) = &filter.task {
-            href.push_str(&format!("&task={t}"));
-        }
-        href
-    };
+    let offset = selection.offset();
+    let page_href = |page: u32| format!("/datasets/{name}?{}", selection.query_string(page));
     let shown_to = i64::from(offset) + items.len() as i64;
     let page = BrowsePage {
         items: items

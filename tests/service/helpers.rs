@@ -13,24 +13,7 @@ use sqlx::SqlitePool;
 use tempfile::TempDir;
 use tokio::sync::oneshot;
 
-/// `../shared/fixtures` when the checkout sits beside it (or `$ENACT_FIXTURES`).
-pub fn shared_fixtures() -> Option<PathBuf> {
-    if let Ok(dir) = std::env::var("ENACT_FIXTURES") {
-        let dir = PathBuf::from(dir);
-        return dir.is_dir().then_some(dir);
-    }
-    let mut dir = Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf();
-    for _ in 0..3 {
-        let candidate = dir.join("shared").join("fixtures");
-        if candidate.is_dir() {
-            return Some(candidate);
-        }
-        if !dir.pop() {
-            break;
-        }
-    }
-    None
-}
+pub use crate::fixtures::shared_fixtures;
 
 pub async fn fresh_db(dir: &TempDir) -> SqlitePool {
     store::open(&dir.path().join("test.db"))

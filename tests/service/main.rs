@@ -3,6 +3,8 @@
 
 mod api;
 mod cli;
+#[path = "../support/fixtures.rs"]
+mod fixtures;
 mod helpers;
 mod import;
 mod pages;
