@@ -482,24 +482,37 @@ async fn score(args: ScoreArgs) -> anyhow::Result<ExitCode> {
 
     match args.policy {
         PolicyArg::Enact => {
-            let Some(replayed) = args.scene_graphs.clone() else {
-                anyhow::bail!(
-                    "the enact policy scores as ENACT's evaluator does, which reads scene graphs: \
-                     give --scene-graphs REPLAYED_DIR"
-                );
+            let source: Box<dyn crate::verifier::EnactSignatureSource + Send> = match (
+                &args.scene_graphs,
+                &args.db,
+                &args.dataset,
+            ) {
+                (Some(replayed), _, _) => {
+                    let replayed = replayed.clone();
+                    let text = text.clone();
+                    Box::new(
+                        tokio::task::spawn_blocking(move || {
+                            scoring::SceneGraphSignatures::for_predictions(
+                                &replayed,
+                                crate::verifier::python_text_lines(&text).map(|(_, l)| l),
+                            )
+                        })
+                        .await
+                        .context("loading scene graphs failed")??,
+                    )
+                }
+                (None, Some(db), Some(dataset)) => Box::new(stored_signatures(db, dataset).await?),
+                _ => anyhow::bail!(
+                    "the enact policy scores as ENACT's evaluator does, which needs scene \
+                         graphs: give --scene-graphs REPLAYED_DIR, or a --db dataset imported with them"
+                ),
             };
             let evaluation = tokio::task::spawn_blocking(move || {
                 let lines: Vec<(usize, &str)> = crate::verifier::python_text_lines(&text).collect();
-                let source = scoring::SceneGraphSignatures::for_predictions(
-                    &replayed,
-                    lines.iter().map(|(_, l)| *l),
-                )?;
-                anyhow::Ok(crate::verifier::score_enact_predictions(
-                    lines, &model, &source,
-                ))
+                crate::verifier::score_enact_predictions(lines, &model, source.as_ref())
             })
             .await
-            .context("scoring task failed")??;
+            .context("scoring task failed")?;
             let evaluation = match evaluation {
                 Ok(e) => e,
                 Err(e) => {
@@ -635,4 +648,29 @@ fn agreement(args: &AgreementArgs) -> anyhow::Result<ExitCode> {
     }
     println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(ExitCode::SUCCESS)
+}
+
+/// The scene-graph signatures stored for a dataset's items, for the enact policy.
+async fn stored_signatures(db: &Path, dataset: &str) -> anyhow::Result<scoring::StoredSignatures> {
+    let pool = open_db(db).await?;
+    let mut conn = pool.acquire().await?;
+    let stored = store::datasets::by_name(&mut conn, dataset)
+        .await?
+        .with_context(|| format!("no dataset named '{dataset}' in {}", db.display()))?;
+    let rows = store::items::scoring_items(&mut conn, stored.id).await?;
+    drop(conn);
+    pool.close().await;
+    let mut tables = Vec::new();
+    for row in rows {
+        let Some((source, json)) = row.semantics else {
+            continue;
+        };
+        if source != crate::semantics::SignatureSource::SceneGraph.as_str() {
+            continue;
+        }
+        let table = serde_json::from_str(&json)
+            .with_context(|| format!("item {}: stored signatures are unreadable", row.item_id))?;
+        tables.push((row.task_name, row.key_frame_ids, table));
+    }
+    Ok(scoring::StoredSignatures::new(tables))
 }

@@ -91,6 +91,50 @@ impl EnactSignatureSource for SceneGraphSignatures {
     }
 }
 
+/// ENACT's evaluator over a stored dataset: signatures computed at import, looked up by the
+/// record's task and key frames. A record whose key frames are not those of a stored item (or
+/// whose ground truth needs pairs a stored table does not cover) gets a table of errors, so it
+/// scores as ENACT scores an item whose diffs raise: exact match only. Against a release on
+/// disk with `--scene-graphs`, every pair is computed instead.
+pub struct StoredSignatures {
+    tables: HashMap<(String, Vec<String>), ItemSignatures>,
+    tasks: BTreeSet<String>,
+}
+
+impl StoredSignatures {
+    /// From `(task, key frames, table)` of the stored items that have scene-graph signatures.
+    pub fn new(items: impl IntoIterator<Item = (String, Vec<String>, ItemSignatures)>) -> Self {
+        let mut tables = HashMap::new();
+        let mut tasks = BTreeSet::new();
+        for (task, frames, table) in items {
+            tasks.insert(task.clone());
+            tables.insert((task, frames), table);
+        }
+        StoredSignatures { tables, tasks }
+    }
+}
+
+impl EnactSignatureSource for StoredSignatures {
+    fn has_task(&self, task_name: &str) -> bool {
+        self.tasks.contains(task_name)
+    }
+
+    fn item_signatures(
+        &self,
+        task_name: &str,
+        key_frame_ids: &[String],
+        coverage: VisibleCoverage,
+    ) -> ItemSignatures {
+        let key = (task_name.to_owned(), key_frame_ids.to_vec());
+        match (self.tables.get(&key), coverage) {
+            (Some(table), VisibleCoverage::Chronological) => table.clone(),
+            _ => ItemSignatures::build(key_frame_ids, coverage, |_, _, _| {
+                Err("these key frames are not a stored item of the dataset".to_owned())
+            }),
+        }
+    }
+}
+
 /// One dataset item as the strict policy scores it.
 #[derive(Debug, Clone)]
 pub struct ScoringTarget {

@@ -383,5 +383,32 @@ fn strict_scores_agree_between_a_stored_dataset_and_the_release_on_disk() {
             let b = std::fs::read_to_string(from_disk.join(&sub)).expect("disk output");
             assert_eq!(a, b, "{model} {sub}");
         }
+        // The enact policy reads the signatures stored at import just as well.
+        let enact_db = dir.path().join(format!("enact-db-{model}"));
+        let (ok, _, stderr) = run(&[
+            &"score",
+            &file,
+            &"--db",
+            &db,
+            &"--dataset",
+            &"parity",
+            &"--policy",
+            &"enact",
+            &"--out",
+            &enact_db,
+        ]);
+        assert!(ok, "{stderr}");
+        let ours = std::fs::read_to_string(
+            enact_db.join(format!("detailed_eval/enact_ordering_{model}.jsonl")),
+        )
+        .expect("ours");
+        let reference = std::fs::read_to_string(parity.join(format!(
+            "reference/eval_plain/detailed_eval/enact_ordering_{model}.jsonl"
+        )))
+        .expect("reference");
+        assert_eq!(
+            ours, reference,
+            "{model}: enact policy from stored signatures"
+        );
     }
 }
