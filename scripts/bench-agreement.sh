@@ -11,7 +11,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 echo "## enact-hub (cargo bench --bench agreement)"
-cargo bench --locked --bench agreement 2>&1 | grep -E "^agreement|time:" || true
+cargo bench --locked --bench agreement 2>&1 | grep -B1 "time:" | grep -v "^--" || true
 
 VECTORS=${ENACT_FIXTURES:-../shared/fixtures}/kalpha/vectors.json
 if [ ! -f "$VECTORS" ]; then
