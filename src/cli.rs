@@ -36,6 +36,45 @@ enum Command {
     Score(ScoreArgs),
     /// Krippendorff's alpha of reliability data, with an optional bootstrap interval.
     Agreement(AgreementArgs),
+    /// Run ENACT's data pipeline on BEHAVIOR-format replays: key-frame segmentation, then
+    /// forward and inverse QA items in the ENACT release layout.
+    Generate(GenerateArgs),
+}
+
+#[derive(Args)]
+struct GenerateArgs {
+    /// Folder of replays: {task}/scene_graph_0.json and {task}/external_sensor1/{frame:05d}.png.
+    replayed: PathBuf,
+    /// Where to write the release (QA/, segmented_activities/, replayed_activities/,
+    /// generation_summary.json).
+    #[arg(long, value_name = "DATA_DIR")]
+    out: PathBuf,
+    /// Seed of path sampling, shuffles and sentence templates.
+    #[arg(long, default_value_t = 42)]
+    seed: u64,
+    /// Paths sampled per task, step length and direction.
+    #[arg(long, default_value_t = 5)]
+    num_to_sample: usize,
+    /// Step lengths, as a range `3..10` or a list `3,5,7`.
+    #[arg(long, default_value = "3..10")]
+    steps: String,
+    /// Segmentation constants: `enact-code` (ENACT's code: cosine 0.98, stability 10) or
+    /// `paper` (the paper's text: cosine 0.97, stability 40).
+    #[arg(long, default_value = "enact-code")]
+    preset: String,
+    /// Override the preset's cosine-similarity threshold.
+    #[arg(long)]
+    cosine_threshold: Option<f64>,
+    /// Override the preset's minimum gap in frames between key frames.
+    #[arg(long)]
+    min_gap: Option<u64>,
+    /// Override the preset's stability interval in frames.
+    #[arg(long)]
+    stability_frames: Option<u64>,
+    /// Write type names as the released dataset does (`*_world_modeling_ordering_{L}_steps`)
+    /// instead of ENACT's code (`*_world_modeling_{L}_steps`).
+    #[arg(long)]
+    ordering_type_names: bool,
 }
 
 #[derive(Args)]
@@ -181,6 +220,7 @@ pub fn main() -> ExitCode {
             Command::Import(args) => import(args).await,
             Command::Score(args) => score(args).await,
             Command::Agreement(args) => agreement(&args),
+            Command::Generate(args) => generate(args).await,
         }
     });
     match result {
@@ -673,4 +713,100 @@ async fn stored_signatures(db: &Path, dataset: &str) -> anyhow::Result<scoring::
         tables.push((row.task_name, row.key_frame_ids, table));
     }
     Ok(scoring::StoredSignatures::new(tables))
+}
+
+/// `3..10`, `3..=10` or `3,5,7` into step lengths, each checked to lie in 3..10.
+fn parse_steps(text: &str) -> anyhow::Result<Vec<usize>> {
+    let number = |s: &str| -> anyhow::Result<usize> {
+        let n: usize = s
+            .trim()
+            .parse()
+            .with_context(|| format!("--steps: {s:?} is not a whole number"))?;
+        anyhow::ensure!(
+            (3..=10).contains(&n),
+            "--steps: step length {n} is outside 3..10"
+        );
+        Ok(n)
+    };
+    let steps: Vec<usize> = match text.split_once("..") {
+        Some((a, b)) => {
+            let (a, b) = (number(a)?, number(b.trim_start_matches('='))?);
+            anyhow::ensure!(a <= b, "--steps: empty range {text:?}");
+            (a..=b).collect()
+        }
+        None => text.split(',').map(number).collect::<anyhow::Result<_>>()?,
+    };
+    Ok(steps)
+}
+
+async fn generate(args: GenerateArgs) -> anyhow::Result<ExitCode> {
+    use crate::pipeline::{GenerateOptions, GenerateProgress, SegmentationParams, TypeNaming};
+    let mut segmentation = SegmentationParams::preset(&args.preset).with_context(|| {
+        format!(
+            "--preset: unknown preset {:?} (use enact-code or paper)",
+            args.preset
+        )
+    })?;
+    if let Some(v) = args.cosine_threshold {
+        segmentation.cosine_threshold = v;
+    }
+    if let Some(v) = args.min_gap {
+        segmentation.min_gap = v;
+    }
+    if let Some(v) = args.stability_frames {
+        segmentation.stability_frames = v;
+    }
+    let options = GenerateOptions {
+        seed: args.seed,
+        num_to_sample: args.num_to_sample,
+        step_lengths: parse_steps(&args.steps)?,
+        segmentation,
+        type_naming: if args.ordering_type_names {
+            TypeNaming::Ordering
+        } else {
+            TypeNaming::Code
+        },
+    };
+    let bar = if std::io::stderr().is_terminal() {
+        indicatif::ProgressBar::new(0)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{msg:>24} [{bar:40}] {pos}/{len} tasks")
+    {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    let (replayed, out) = (args.replayed.clone(), args.out.clone());
+    let started = std::time::Instant::now();
+    let summary = tokio::task::spawn_blocking(move || {
+        crate::pipeline::generate(&replayed, &out, &options, &|event| match event {
+            GenerateProgress::Started { tasks } => bar.set_length(tasks as u64 * 3),
+            GenerateProgress::Segmented { task, .. }
+            | GenerateProgress::TransitionsBuilt { task, .. }
+            | GenerateProgress::ImagesWritten { task, .. } => {
+                bar.set_message(task);
+                bar.inc(1);
+            }
+            GenerateProgress::Finished { .. } => bar.finish_and_clear(),
+        })
+    })
+    .await
+    .context("generation task failed")??;
+    eprintln!(
+        "generated {} items ({} forward, {} inverse) and {} images from {} tasks into {} in {:.1} s",
+        summary.items,
+        summary.forward_items,
+        summary.inverse_items,
+        summary.images,
+        summary.tasks.len(),
+        args.out.display(),
+        started.elapsed().as_secs_f64()
+    );
+    eprintln!(
+        "import it with: enact-hub import {} --scene-graphs {}",
+        args.out.display(),
+        args.out.join("replayed_activities").display()
+    );
+    Ok(ExitCode::SUCCESS)
 }

@@ -14,6 +14,7 @@ pub mod cli;
 pub mod dataset;
 pub mod demo;
 pub mod import;
+pub mod pipeline;
 pub mod scene_graph;
 pub mod scoring;
 pub mod semantics;

@@ -11,10 +11,10 @@
 
 mod diff;
 mod kitchen;
-mod label;
+pub(crate) mod label;
 mod narration;
 mod paint;
-mod prompt;
+pub(crate) mod prompt;
 mod release;
 mod world;
 

@@ -161,3 +161,67 @@ fn agreement_input_errors_name_coder_and_unit() {
     assert!(!ok);
     assert!(stderr.contains("data[0][1]"), "{stderr}");
 }
+
+#[test]
+fn generate_writes_a_release_that_imports_with_semantic_scoring() {
+    let Some(fixtures) = shared_fixtures() else {
+        eprintln!("shared fixtures not present, skipping");
+        return;
+    };
+    let replayed = fixtures.join("enact-parity/replayed_activities");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("generated");
+    let run = enact_hub()
+        .args(["generate"])
+        .arg(&replayed)
+        .arg("--out")
+        .arg(&out)
+        .args(["--steps", "3,4", "--num-to-sample", "1"])
+        .output()
+        .expect("run generate");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    // Three tasks, two step lengths, both directions, one path each.
+    assert!(
+        stderr.contains("generated 12 items (6 forward, 6 inverse)"),
+        "{stderr}"
+    );
+    assert!(out.join("generation_summary.json").is_file());
+    let import = enact_hub()
+        .arg("import")
+        .arg(&out)
+        .arg("--db")
+        .arg(dir.path().join("g.db"))
+        .arg("--scene-graphs")
+        .arg(out.join("replayed_activities"))
+        .output()
+        .expect("run import");
+    let stderr = String::from_utf8_lossy(&import.stderr);
+    assert!(import.status.success(), "{stderr}");
+    assert!(stderr.contains("imported 12 items"), "{stderr}");
+    assert!(stderr.contains("12 from scene graphs"), "{stderr}");
+}
+
+#[test]
+fn generate_names_a_missing_replay_folder_and_bad_steps() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = enact_hub()
+        .arg("generate")
+        .arg(dir.path().join("nope"))
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .output()
+        .expect("run");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nope"));
+    let out = enact_hub()
+        .arg("generate")
+        .arg(dir.path())
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .args(["--steps", "2..5"])
+        .output()
+        .expect("run");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("step length 2 is outside 3..10"));
+}

@@ -1,0 +1,99 @@
+//! Benchmarks of the data pipeline: counting and sampling a million length-10 paths from a
+//! long synthetic trajectory, and (once, printed) segmentation and generation on the parity
+//! replays next to ENACT's timings.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use criterion::{Criterion, criterion_group};
+use enact_hub::pipeline::{
+    GenerateOptions, PathTable, TransitionGraph, sample_paths, segment_task, task_names,
+};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+/// 300 key frames; frame i has a valid transition to each of the next 120 frames (28,740
+/// edges), giving about 1.3·10^18 length-10 paths (close to u64::MAX).
+fn long_trajectory() -> TransitionGraph {
+    let n = 300;
+    let frames = (0..n).map(|i| (59 + 211 * i).to_string()).collect();
+    let edges = (0..n).flat_map(move |i| (i + 1..n.min(i + 121)).map(move |j| (i, j)));
+    TransitionGraph::from_edges(frames, edges).expect("forward edges")
+}
+
+fn sampling(c: &mut Criterion) {
+    let graph = long_trajectory();
+    let table = PathTable::count(&graph, 10).expect("no overflow");
+    println!(
+        "synthetic DAG: {} frames, {} edges, {} length-10 paths",
+        graph.frames().len(),
+        graph.edge_count(),
+        table.total()
+    );
+    let mut group = c.benchmark_group("kfts");
+    group.sample_size(10);
+    group.bench_function("count_300_frames_L10", |b| {
+        b.iter(|| PathTable::count(&graph, 10).expect("no overflow").total())
+    });
+    group.bench_function("count_and_sample_1M_paths_L10", |b| {
+        b.iter(|| {
+            let table = PathTable::count(&graph, 10).expect("no overflow");
+            let mut rng = ChaCha8Rng::seed_from_u64(42);
+            let paths = sample_paths(&graph, &table, 1_000_000, &mut rng);
+            assert_eq!(paths.len(), 1_000_000);
+            paths.len()
+        })
+    });
+    group.finish();
+}
+
+#[path = "../tests/support/fixtures.rs"]
+mod fixtures;
+
+fn fixtures_dir() -> Option<PathBuf> {
+    fixtures::shared_fixtures()
+}
+
+/// One timed run of segmentation alone and of the whole generation (`--num-to-sample 2`, as
+/// ENACT's reference run), printed beside ENACT's medians (177.85 s segment, 176.24 s qa).
+fn parity_timings() {
+    let Some(replayed) = fixtures_dir()
+        .map(|d| d.join("enact-parity/replayed_activities"))
+        .filter(|d| d.is_dir())
+    else {
+        println!("fixtures not present, skipping the parity timings");
+        return;
+    };
+    let tasks = task_names(&replayed).expect("task folders");
+    let started = Instant::now();
+    tasks.par_iter().for_each(|task| {
+        segment_task(&replayed, task, &Default::default()).expect("segmentation");
+    });
+    let segment = started.elapsed();
+    let out = tempfile::tempdir().expect("temp dir");
+    let options = GenerateOptions {
+        num_to_sample: 2,
+        ..GenerateOptions::default()
+    };
+    let started = Instant::now();
+    let summary =
+        enact_hub::pipeline::generate(&replayed, out.path(), &options, &|_| {}).expect("generate");
+    let generate = started.elapsed();
+    println!(
+        "parity replays ({} tasks): segmentation {:.2?}; segmentation + KFTS + {} items + {} images {:.2?} (ENACT: segment 177.85 s + qa 176.24 s)",
+        tasks.len(),
+        segment,
+        summary.items,
+        summary.images,
+        generate
+    );
+}
+
+criterion_group!(benches, sampling);
+
+fn main() {
+    benches();
+    parity_timings();
+    Criterion::default().configure_from_args().final_summary();
+}
