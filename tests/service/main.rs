@@ -7,3 +7,4 @@ mod helpers;
 mod import;
 mod pages;
 mod score;
+mod submissions;
