@@ -10,6 +10,7 @@ use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
 use sqlx::SqlitePool;
 
+use crate::accounts::{NewToken, Role};
 use crate::import::{ImportError, ImportOptions, ImportReport, SkippedLine, import_release};
 use crate::scoring::{self, ScoringTarget, SemanticCoverage};
 use crate::web::{AppState, Server, WebConfig, shutdown_signal};
@@ -39,6 +40,9 @@ enum Command {
     /// Run ENACT's data pipeline on BEHAVIOR-format replays: key-frame segmentation, then
     /// forward and inverse QA items in the ENACT release layout.
     Generate(GenerateArgs),
+    /// Manage API tokens: create, list, revoke.
+    #[command(subcommand)]
+    Token(TokenCommand),
 }
 
 #[derive(Args)]
@@ -94,6 +98,40 @@ struct AgreementArgs {
     /// Coverage of the bootstrap interval.
     #[arg(long, default_value_t = crate::agreement::DEFAULT_CONFIDENCE_LEVEL)]
     confidence: f64,
+}
+
+#[derive(Subcommand)]
+enum TokenCommand {
+    /// Create an account's token (the account is created if missing). The token is printed
+    /// once, alone on the last line of standard output.
+    Create {
+        #[command(flatten)]
+        db: DbArg,
+        /// submitter: submit and read own results; admin: everything.
+        #[arg(long, value_enum, default_value = "submitter")]
+        role: Role,
+        /// The account's name (a person or team).
+        #[arg(long)]
+        name: String,
+        /// Submissions per UTC day (default: the server's --daily-quota).
+        #[arg(long)]
+        daily_quota: Option<u32>,
+        /// Submissions in total (default: the server's --total-quota).
+        #[arg(long)]
+        total_quota: Option<u32>,
+    },
+    /// List tokens (never their secrets).
+    List {
+        #[command(flatten)]
+        db: DbArg,
+    },
+    /// Revoke a token by id or prefix; it stops working at once.
+    Revoke {
+        #[command(flatten)]
+        db: DbArg,
+        /// The token's id or prefix, as `token list` shows them.
+        token: String,
+    },
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -159,6 +197,15 @@ struct ServeArgs {
     /// Memory for caching frame images, in MiB.
     #[arg(long, default_value_t = 256)]
     frame_cache_mib: usize,
+    /// Largest submission body accepted, in bytes.
+    #[arg(long, default_value_t = WebConfig::default().submission_body_limit)]
+    submission_body_limit: usize,
+    /// Submissions a token may make per UTC day (rejected ones count too).
+    #[arg(long, default_value_t = WebConfig::default().daily_quota)]
+    daily_quota: i64,
+    /// Submissions a token may make in total (rejected ones count too).
+    #[arg(long, default_value_t = WebConfig::default().total_quota)]
+    total_quota: i64,
 }
 
 #[derive(Args)]
@@ -221,6 +268,7 @@ pub fn main() -> ExitCode {
             Command::Score(args) => score(args).await,
             Command::Agreement(args) => agreement(&args),
             Command::Generate(args) => generate(args).await,
+            Command::Token(command) => token(command).await,
         }
     });
     match result {
@@ -255,10 +303,14 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     if args.demo {
         load_demo(&pool).await?;
     }
+    ensure_admin_token(&pool).await?;
     let config = WebConfig {
         body_limit: args.body_limit,
         request_timeout: Duration::from_secs(args.request_timeout),
         frame_cache_bytes: args.frame_cache_mib * 1024 * 1024,
+        submission_body_limit: args.submission_body_limit,
+        daily_quota: args.daily_quota,
+        total_quota: args.total_quota,
     };
     let server = Server::bind(args.addr, AppState::new(pool.clone(), &config), &config)
         .await
@@ -268,6 +320,133 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     server.run(shutdown_signal()).await?;
     pool.close().await;
     Ok(ExitCode::SUCCESS)
+}
+
+/// The admin token: ENACT_HUB_ADMIN_TOKEN if set (stored hashed on first sight), otherwise one
+/// generated at the first start and printed once on standard output.
+async fn ensure_admin_token(pool: &SqlitePool) -> anyhow::Result<()> {
+    let mut tx = pool.begin().await?;
+    let from_env = std::env::var("ENACT_HUB_ADMIN_TOKEN")
+        .ok()
+        .filter(|t| !t.is_empty());
+    let token = match from_env {
+        Some(text) => {
+            let token = NewToken::from_operator(&text)
+                .map_err(|e| anyhow::anyhow!("ENACT_HUB_ADMIN_TOKEN: {e}"))?;
+            if store::accounts::token_hash_exists(&mut tx, &token.hash).await? {
+                return Ok(());
+            }
+            Some((token, false))
+        }
+        None if store::accounts::has_admin_token(&mut tx).await? => None,
+        None => Some((NewToken::generate(), true)),
+    };
+    let Some((token, generated)) = token else {
+        return Ok(());
+    };
+    let account = store::accounts::ensure_account(&mut tx, "admin", Role::Admin)
+        .await?
+        .map_err(anyhow::Error::msg)?;
+    store::accounts::insert_token(&mut tx, account, Role::Admin, &token, None, None).await?;
+    tx.commit().await?;
+    if generated {
+        eprintln!(
+            "created the admin API token (shown only this once; set ENACT_HUB_ADMIN_TOKEN to \
+             choose your own):"
+        );
+        println!("{}", token.token);
+    } else {
+        tracing::info!(prefix = %token.prefix, "admin token from ENACT_HUB_ADMIN_TOKEN stored");
+    }
+    Ok(())
+}
+
+async fn token(command: TokenCommand) -> anyhow::Result<ExitCode> {
+    match command {
+        TokenCommand::Create {
+            db,
+            role,
+            name,
+            daily_quota,
+            total_quota,
+        } => {
+            let name = name.trim();
+            anyhow::ensure!(
+                !name.is_empty() && name.chars().count() <= 100,
+                "--name must be 1 to 100 characters"
+            );
+            let pool = open_db(&db.db).await?;
+            let token = NewToken::generate();
+            let mut tx = pool.begin().await?;
+            let account = match store::accounts::ensure_account(&mut tx, name, role).await? {
+                Ok(id) => id,
+                Err(message) => {
+                    eprintln!("error: {message}");
+                    return Ok(ExitCode::FAILURE);
+                }
+            };
+            let id = store::accounts::insert_token(
+                &mut tx,
+                account,
+                role,
+                &token,
+                daily_quota.map(i64::from),
+                total_quota.map(i64::from),
+            )
+            .await?;
+            tx.commit().await?;
+            pool.close().await;
+            println!(
+                "created token {id} (prefix {}) for {} account '{name}'; it is shown only once:",
+                token.prefix,
+                role.as_str()
+            );
+            println!("{}", token.token);
+            Ok(ExitCode::SUCCESS)
+        }
+        TokenCommand::List { db } => {
+            let pool = open_db(&db.db).await?;
+            let mut conn = pool.acquire().await?;
+            let tokens = store::accounts::list_tokens(&mut conn).await?;
+            drop(conn);
+            pool.close().await;
+            println!(
+                "{:>4}  {:<14} {:<20} {:<9} {:<20} {:<21} status",
+                "id", "prefix", "account", "role", "quota (day/total)", "created"
+            );
+            for t in tokens {
+                let quota = format!(
+                    "{}/{}",
+                    t.daily_quota
+                        .map_or("default".to_owned(), |q| q.to_string()),
+                    t.total_quota
+                        .map_or("default".to_owned(), |q| q.to_string())
+                );
+                let status = t
+                    .revoked_at
+                    .map_or_else(|| "live".to_owned(), |at| format!("revoked {at}"));
+                println!(
+                    "{:>4}  {:<14} {:<20} {:<9} {:<20} {:<21} {status}",
+                    t.id, t.prefix, t.account, t.role, quota, t.created_at
+                );
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        TokenCommand::Revoke { db, token } => {
+            let pool = open_db(&db.db).await?;
+            let mut conn = pool.acquire().await?;
+            let revoked = store::accounts::revoke_token(&mut conn, &token).await?;
+            drop(conn);
+            pool.close().await;
+            if revoked {
+                println!("revoked token {token}");
+                Ok(ExitCode::SUCCESS)
+            } else {
+                eprintln!("error: no live token with id or prefix {token:?}");
+                Ok(ExitCode::FAILURE)
+            }
+        }
+    }
 }
 
 /// Writes the demo release to a temporary folder and imports it as dataset "demo".
@@ -417,33 +596,7 @@ async fn scoring_targets(
         let rows = store::items::scoring_items(&mut conn, stored.id).await?;
         drop(conn);
         pool.close().await;
-        let mut targets = Vec::with_capacity(rows.len());
-        for row in rows {
-            let semantics = match &row.semantics {
-                None => None,
-                Some((source, json)) => Some(crate::semantics::ItemSemantics {
-                    source: crate::semantics::SignatureSource::parse(source).with_context(
-                        || format!("item {}: unknown signature source {source:?}", row.item_id),
-                    )?,
-                    signatures: serde_json::from_str(json).with_context(|| {
-                        format!("item {}: stored signatures are unreadable", row.item_id)
-                    })?,
-                }),
-            };
-            let item = crate::dataset::QaItem {
-                id: row.item_id,
-                item_type: row.item_type,
-                direction: row.direction,
-                step_length: row.step_length,
-                task_name: row.task_name,
-                key_frame_ids: row.key_frame_ids,
-                images: Vec::new(),
-                question: String::new(),
-                actions: Vec::new(),
-                gt_answer: row.gt_answer,
-            };
-            targets.push(ScoringTarget::from_item(&item, semantics).map_err(anyhow::Error::msg)?);
-        }
+        let targets = scoring::targets_from_stored(rows).map_err(anyhow::Error::msg)?;
         return Ok(Ok(targets));
     }
     let data = args

@@ -303,3 +303,40 @@ fn failed_metrics() -> Value {
         "pairwise_accuracy": 0.0,
     })
 }
+
+/// Scoring targets from stored items (`store::items::scoring_items`), in dataset order.
+pub fn targets_from_stored(
+    rows: Vec<crate::store::items::ScoringItem>,
+) -> Result<Vec<ScoringTarget>, String> {
+    let mut targets = Vec::with_capacity(rows.len());
+    for row in rows {
+        let semantics = match &row.semantics {
+            None => None,
+            Some((source, json)) => Some(ItemSemantics {
+                source: SignatureSource::parse(source).ok_or_else(|| {
+                    format!("item {}: unknown signature source {source:?}", row.item_id)
+                })?,
+                signatures: serde_json::from_str(json).map_err(|e| {
+                    format!(
+                        "item {}: stored signatures are unreadable: {e}",
+                        row.item_id
+                    )
+                })?,
+            }),
+        };
+        let item = QaItem {
+            id: row.item_id,
+            item_type: row.item_type,
+            direction: row.direction,
+            step_length: row.step_length,
+            task_name: row.task_name,
+            key_frame_ids: row.key_frame_ids,
+            images: Vec::new(),
+            question: String::new(),
+            actions: Vec::new(),
+            gt_answer: row.gt_answer,
+        };
+        targets.push(ScoringTarget::from_item(&item, semantics)?);
+    }
+    Ok(targets)
+}

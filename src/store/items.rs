@@ -291,6 +291,8 @@ pub async fn set_semantics(
 /// Everything scoring needs of every item of a dataset, in import order.
 #[derive(Debug, Clone)]
 pub struct ScoringItem {
+    /// The row id in `items`.
+    pub row_id: i64,
     pub item_id: String,
     pub item_type: String,
     pub direction: Direction,
@@ -307,7 +309,7 @@ pub async fn scoring_items(
     dataset_id: i64,
 ) -> Result<Vec<ScoringItem>, sqlx::Error> {
     let rows = sqlx::query(
-        "SELECT i.item_id, i.item_type, i.direction, i.step_length, i.task_name, \
+        "SELECT i.id AS row_id, i.item_id, i.item_type, i.direction, i.step_length, i.task_name, \
          i.key_frame_ids, i.gt_answer, s.source, s.signatures \
          FROM items i LEFT JOIN item_signatures s ON s.item = i.id \
          WHERE i.dataset_id = ? ORDER BY i.id",
@@ -321,6 +323,7 @@ pub async fn scoring_items(
             let source: Option<String> = row.try_get("source")?;
             let signatures: Option<String> = row.try_get("signatures")?;
             Ok(ScoringItem {
+                row_id: row.try_get("row_id")?,
                 item_id: summary.item_id,
                 item_type: summary.item_type,
                 direction: summary.direction,

@@ -3,9 +3,11 @@
 //! Functions take a `&mut SqliteConnection` (a pooled connection or an open transaction), so a
 //! caller that writes several rows decides where the transaction begins and ends.
 
+pub mod accounts;
 pub mod datasets;
 pub mod frames;
 pub mod items;
+pub mod submissions;
 
 use std::path::Path;
 use std::str::FromStr;

@@ -8,6 +8,7 @@
 //!   answer readers: ENACT's lenient one and the strict one.
 //! - [`signatures`]: per-item signature tables interned to bitsets.
 //! - [`verify`]: ENACT's forward/inverse verifiers with their Python semantics → [`Verdict`].
+//! - [`bootstrap`]: percentile bootstrap intervals for the leaderboard.
 //! - [`report`]: aggregation into ENACT's report and `meta_performance` file.
 //! - [`enact_policy`]: ENACT's evaluator loop over a file, its skips and output files.
 //! - [`strict_policy`]: the leaderboard policy over a dataset.
@@ -17,6 +18,7 @@
 //! Every ENACT quirk lives in one function or constant whose doc comment starts "ENACT quirk:".
 
 pub mod answer;
+pub mod bootstrap;
 pub mod enact_policy;
 pub mod pyint;
 pub mod pyjson;
@@ -30,6 +32,9 @@ pub use answer::{
     Direction, ParsedAnswer, Permutation, PermutationError, StepLength, StrictParseFailure,
     enact_report_group, enact_verifier_direction, parse_answer_enact, parse_answer_strict,
     parse_answer_text_strict,
+};
+pub use bootstrap::{
+    BOOTSTRAP_LEVEL, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, ConfidenceInterval, bootstrap_mean_ci,
 };
 pub use enact_policy::{
     EnactEvaluation, EnactRunError, EnactSignatureSource, EvaluatedRecord, SkipReason, SkippedLine,

@@ -5,10 +5,13 @@
 
 mod api;
 mod assets;
+mod auth;
 pub mod error;
 mod frame_cache;
 mod item_cache;
+mod leaderboard;
 mod pages;
+mod submissions;
 
 use std::future::Future;
 use std::net::SocketAddr;
@@ -38,6 +41,12 @@ pub struct WebConfig {
     pub request_timeout: Duration,
     /// Memory the frame cache may use, in bytes.
     pub frame_cache_bytes: usize,
+    /// Largest submission body accepted, in bytes (other routes use `body_limit`).
+    pub submission_body_limit: usize,
+    /// Submission attempts a token may make per UTC day, unless the token sets its own.
+    pub daily_quota: i64,
+    /// Submission attempts a token may make in total, unless the token sets its own.
+    pub total_quota: i64,
 }
 
 impl Default for WebConfig {
@@ -46,6 +55,10 @@ impl Default for WebConfig {
             body_limit: 2 * 1024 * 1024,
             request_timeout: Duration::from_secs(30),
             frame_cache_bytes: 256 * 1024 * 1024,
+            // A full ENACT-format file (8,972 QA records with answers) is about 27 MB.
+            submission_body_limit: 64 * 1024 * 1024,
+            daily_quota: 20,
+            total_quota: 1000,
         }
     }
 }
@@ -55,6 +68,10 @@ pub struct AppState {
     pub pool: SqlitePool,
     frames: Arc<FrameCache>,
     items: Arc<ItemCache>,
+    targets: Arc<submissions::TargetCache>,
+    submission_body_limit: usize,
+    daily_quota: i64,
+    total_quota: i64,
 }
 
 impl AppState {
@@ -63,6 +80,10 @@ impl AppState {
             pool,
             frames: Arc::new(FrameCache::new(config.frame_cache_bytes)),
             items: Arc::new(ItemCache::default()),
+            targets: Arc::new(submissions::TargetCache::default()),
+            submission_body_limit: config.submission_body_limit,
+            daily_quota: config.daily_quota,
+            total_quota: config.total_quota,
         }
     }
 }
@@ -101,8 +122,14 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
     Router::new()
         .route("/healthz", axum::routing::get(healthz))
         .merge(pages::router())
+        .merge(leaderboard::page_router())
         .merge(assets::router())
-        .nest("/api/v1", api::router())
+        .nest(
+            "/api/v1",
+            api::router()
+                .merge(submissions::router())
+                .merge(leaderboard::api_router()),
+        )
         .with_state(state)
         .layer(DefaultBodyLimit::max(config.body_limit))
         .layer(TimeoutLayer::with_status_code(

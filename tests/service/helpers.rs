@@ -144,6 +144,11 @@ pub struct TestServer {
 }
 
 impl TestServer {
+    /// The database file the server runs on (for the command line).
+    pub fn db_path(&self) -> PathBuf {
+        self._dir.path().join("test.db")
+    }
+
     pub fn url(&self, path: &str) -> String {
         format!("http://{}{}", self.addr, path)
     }
@@ -182,10 +187,18 @@ where
     F: FnOnce(SqlitePool, PathBuf) -> Fut,
     Fut: std::future::Future<Output = ()>,
 {
+    spawn_app_configured(WebConfig::default(), setup).await
+}
+
+/// [`spawn_app_with`] with a server configuration of the test's choosing.
+pub async fn spawn_app_configured<F, Fut>(config: WebConfig, setup: F) -> TestServer
+where
+    F: FnOnce(SqlitePool, PathBuf) -> Fut,
+    Fut: std::future::Future<Output = ()>,
+{
     let dir = tempfile::tempdir().expect("tempdir");
     let pool = fresh_db(&dir).await;
     setup(pool.clone(), dir.path().to_path_buf()).await;
-    let config = WebConfig::default();
     let server = Server::bind(
         "127.0.0.1:0".parse().expect("addr"),
         AppState::new(pool.clone(), &config),

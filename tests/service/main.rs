@@ -9,3 +9,4 @@ mod helpers;
 mod import;
 mod pages;
 mod score;
+mod submissions;

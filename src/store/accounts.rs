@@ -1,0 +1,231 @@
+//! Accounts and API tokens (hashed), and the submission attempts quotas count.
+
+use serde::Serialize;
+use sqlx::{Row, SqliteConnection};
+
+use crate::accounts::{NewToken, Role, Scope, scopes_from_text, scopes_to_text, token_matches};
+
+/// A token that authenticated a request.
+#[derive(Debug, Clone)]
+pub struct Caller {
+    pub token_id: i64,
+    pub account_id: i64,
+    pub account_name: String,
+    pub scopes: Vec<Scope>,
+    pub daily_quota: Option<i64>,
+    pub total_quota: Option<i64>,
+}
+
+impl Caller {
+    pub fn has(&self, scope: Scope) -> bool {
+        self.scopes.contains(&scope)
+    }
+}
+
+/// A token as `token list` shows it: never its secret.
+#[derive(Debug, Clone, Serialize)]
+pub struct TokenListing {
+    pub id: i64,
+    pub prefix: String,
+    pub account: String,
+    pub role: String,
+    pub scopes: String,
+    pub daily_quota: Option<i64>,
+    pub total_quota: Option<i64>,
+    pub created_at: String,
+    pub revoked_at: Option<String>,
+}
+
+/// The account named `name`, created with `role` if missing. An existing account keeps its
+/// role; asking for another is an error.
+#[tracing::instrument(skip_all)]
+pub async fn ensure_account(
+    conn: &mut SqliteConnection,
+    name: &str,
+    role: Role,
+) -> Result<Result<i64, String>, sqlx::Error> {
+    let existing = sqlx::query("SELECT id, role FROM accounts WHERE name = ?")
+        .bind(name)
+        .fetch_optional(&mut *conn)
+        .await?;
+    if let Some(row) = existing {
+        let stored: String = row.try_get("role")?;
+        if stored != role.as_str() {
+            return Ok(Err(format!(
+                "account '{name}' exists with role {stored}, not {}",
+                role.as_str()
+            )));
+        }
+        return Ok(Ok(row.try_get("id")?));
+    }
+    let id = sqlx::query("INSERT INTO accounts (name, role) VALUES (?, ?)")
+        .bind(name)
+        .bind(role.as_str())
+        .execute(conn)
+        .await?
+        .last_insert_rowid();
+    Ok(Ok(id))
+}
+
+#[tracing::instrument(skip_all)]
+pub async fn insert_token(
+    conn: &mut SqliteConnection,
+    account: i64,
+    role: Role,
+    token: &NewToken,
+    daily_quota: Option<i64>,
+    total_quota: Option<i64>,
+) -> Result<i64, sqlx::Error> {
+    Ok(sqlx::query(
+        "INSERT INTO api_tokens (account, prefix, token_hash, scopes, daily_quota, total_quota) \
+         VALUES (?, ?, ?, ?, ?, ?)",
+    )
+    .bind(account)
+    .bind(&token.prefix)
+    .bind(&token.hash)
+    .bind(scopes_to_text(role.scopes()))
+    .bind(daily_quota)
+    .bind(total_quota)
+    .execute(conn)
+    .await?
+    .last_insert_rowid())
+}
+
+/// The live (unrevoked) token `presented` stands for, if any.
+#[tracing::instrument(skip_all)]
+pub async fn authenticate(
+    conn: &mut SqliteConnection,
+    presented: &str,
+) -> Result<Option<Caller>, sqlx::Error> {
+    let prefix = crate::accounts::lookup_prefix(presented);
+    let row = sqlx::query(
+        "SELECT t.id, t.account, t.token_hash, t.scopes, t.daily_quota, t.total_quota, \
+         t.revoked_at, a.name FROM api_tokens t JOIN accounts a ON a.id = t.account \
+         WHERE t.prefix = ?",
+    )
+    .bind(&prefix)
+    .fetch_optional(conn)
+    .await?;
+    let Some(row) = row else {
+        return Ok(None);
+    };
+    let hash: String = row.try_get("token_hash")?;
+    let revoked: Option<String> = row.try_get("revoked_at")?;
+    if !token_matches(presented, &hash) || revoked.is_some() {
+        return Ok(None);
+    }
+    let scopes: String = row.try_get("scopes")?;
+    Ok(Some(Caller {
+        token_id: row.try_get("id")?,
+        account_id: row.try_get("account")?,
+        account_name: row.try_get("name")?,
+        scopes: scopes_from_text(&scopes),
+        daily_quota: row.try_get("daily_quota")?,
+        total_quota: row.try_get("total_quota")?,
+    }))
+}
+
+pub async fn list_tokens(conn: &mut SqliteConnection) -> Result<Vec<TokenListing>, sqlx::Error> {
+    let rows = sqlx::query(
+        "SELECT t.id, t.prefix, a.name, a.role, t.scopes, t.daily_quota, t.total_quota, \
+         t.created_at, t.revoked_at FROM api_tokens t JOIN accounts a ON a.id = t.account \
+         ORDER BY t.id",
+    )
+    .fetch_all(conn)
+    .await?;
+    rows.iter()
+        .map(|row| {
+            Ok(TokenListing {
+                id: row.try_get("id")?,
+                prefix: row.try_get("prefix")?,
+                account: row.try_get("name")?,
+                role: row.try_get("role")?,
+                scopes: row.try_get("scopes")?,
+                daily_quota: row.try_get("daily_quota")?,
+                total_quota: row.try_get("total_quota")?,
+                created_at: row.try_get("created_at")?,
+                revoked_at: row.try_get("revoked_at")?,
+            })
+        })
+        .collect()
+}
+
+/// Revokes the token with this id or prefix. Returns whether a live token was revoked.
+#[tracing::instrument(skip_all)]
+pub async fn revoke_token(conn: &mut SqliteConnection, which: &str) -> Result<bool, sqlx::Error> {
+    let id: Option<i64> = which.parse().ok();
+    let done = sqlx::query(
+        "UPDATE api_tokens SET revoked_at = strftime('%Y-%m-%dT%H:%M:%SZ', 'now') \
+         WHERE (id = ? OR prefix = ?) AND revoked_at IS NULL",
+    )
+    .bind(id)
+    .bind(which)
+    .execute(conn)
+    .await?;
+    Ok(done.rows_affected() > 0)
+}
+
+/// Whether any live admin token exists.
+pub async fn has_admin_token(conn: &mut SqliteConnection) -> Result<bool, sqlx::Error> {
+    let n: i64 = sqlx::query_scalar(
+        "SELECT count(*) FROM api_tokens t JOIN accounts a ON a.id = t.account \
+         WHERE a.role = 'admin' AND t.revoked_at IS NULL",
+    )
+    .fetch_one(conn)
+    .await?;
+    Ok(n > 0)
+}
+
+/// Whether a token with this hash is stored (revoked or not).
+pub async fn token_hash_exists(
+    conn: &mut SqliteConnection,
+    hash: &str,
+) -> Result<bool, sqlx::Error> {
+    let n: i64 = sqlx::query_scalar("SELECT count(*) FROM api_tokens WHERE token_hash = ?")
+        .bind(hash)
+        .fetch_one(conn)
+        .await?;
+    Ok(n > 0)
+}
+
+/// The outcome of asking for one more submission attempt.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AttemptQuota {
+    Granted,
+    DailyExhausted { limit: i64 },
+    TotalExhausted { limit: i64 },
+}
+
+/// Records one attempt unless a quota is used up; the check and the insert are one statement,
+/// so concurrent requests cannot both take the last slot.
+#[tracing::instrument(skip_all)]
+pub async fn record_attempt(
+    conn: &mut SqliteConnection,
+    token: i64,
+    daily: i64,
+    total: i64,
+) -> Result<AttemptQuota, sqlx::Error> {
+    const TODAY: &str = "strftime('%Y-%m-%dT00:00:00Z', 'now')";
+    let inserted = sqlx::query(&format!(
+        "INSERT INTO submission_attempts (token) SELECT ?1 \
+         WHERE (SELECT count(*) FROM submission_attempts WHERE token = ?1 AND created_at >= {TODAY}) < ?2 \
+         AND (SELECT count(*) FROM submission_attempts WHERE token = ?1) < ?3"
+    ))
+    .bind(token)
+    .bind(daily)
+    .bind(total)
+    .execute(&mut *conn)
+    .await?;
+    if inserted.rows_affected() > 0 {
+        return Ok(AttemptQuota::Granted);
+    }
+    let used: i64 = sqlx::query_scalar("SELECT count(*) FROM submission_attempts WHERE token = ?")
+        .bind(token)
+        .fetch_one(conn)
+        .await?;
+    Ok(if used >= total {
+        AttemptQuota::TotalExhausted { limit: total }
+    } else {
+        AttemptQuota::DailyExhausted { limit: daily }
+    })
+}

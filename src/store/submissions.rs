@@ -1,0 +1,333 @@
+//! Submissions, their per-item verdicts, and the per-dataset answer visibility.
+
+use serde::Serialize;
+use sqlx::{QueryBuilder, Row, Sqlite, SqliteConnection};
+
+use crate::submission::ItemVerdict;
+use crate::verifier::StrictOutcome;
+
+/// Whether a dataset's ground truth and per-item correctness may be shown to submitters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AnswerVisibility {
+    Public,
+    Hidden,
+}
+
+impl AnswerVisibility {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            AnswerVisibility::Public => "public",
+            AnswerVisibility::Hidden => "hidden",
+        }
+    }
+}
+
+pub async fn answer_visibility(
+    conn: &mut SqliteConnection,
+    dataset: i64,
+) -> Result<AnswerVisibility, sqlx::Error> {
+    let answers: Option<String> =
+        sqlx::query_scalar("SELECT answers FROM dataset_settings WHERE dataset = ?")
+            .bind(dataset)
+            .fetch_optional(conn)
+            .await?;
+    Ok(match answers.as_deref() {
+        Some("public") => AnswerVisibility::Public,
+        _ => AnswerVisibility::Hidden,
+    })
+}
+
+pub async fn set_answer_visibility(
+    conn: &mut SqliteConnection,
+    dataset: i64,
+    answers: AnswerVisibility,
+) -> Result<(), sqlx::Error> {
+    sqlx::query(
+        "INSERT INTO dataset_settings (dataset, answers) VALUES (?, ?) \
+         ON CONFLICT (dataset) DO UPDATE SET answers = excluded.answers",
+    )
+    .bind(dataset)
+    .bind(answers.as_str())
+    .execute(conn)
+    .await?;
+    Ok(())
+}
+
+/// Metadata given with a submission.
+#[derive(Debug, Clone, Default)]
+pub struct SubmissionMetadata {
+    pub model: String,
+    pub description: String,
+    pub url: String,
+    pub prompt_version: String,
+    pub notes: String,
+}
+
+/// A stored submission.
+#[derive(Debug, Clone, Serialize)]
+pub struct SubmissionRow {
+    pub id: i64,
+    pub dataset_id: i64,
+    pub dataset: String,
+    pub account_id: i64,
+    pub account: String,
+    pub model: String,
+    pub description: String,
+    pub url: String,
+    pub prompt_version: String,
+    pub notes: String,
+    pub policy: String,
+    pub status: String,
+    pub visibility: String,
+    pub baseline: bool,
+    /// The serialised `SubmissionScores`.
+    pub scores: String,
+    pub created_at: String,
+    #[serde(skip)]
+    pub body_sha256: String,
+}
+
+const SUBMISSION_COLUMNS: &str = "s.id, s.dataset, d.name AS dataset_name, s.account, \
+    a.name AS account_name, s.model, s.description, s.url, s.prompt_version, s.notes, s.policy, \
+    s.status, s.visibility, s.baseline, s.scores, s.created_at, s.body_sha256 \
+    FROM submissions s JOIN datasets d ON d.id = s.dataset JOIN accounts a ON a.id = s.account";
+
+fn submission_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<SubmissionRow, sqlx::Error> {
+    Ok(SubmissionRow {
+        id: row.try_get("id")?,
+        dataset_id: row.try_get("dataset")?,
+        dataset: row.try_get("dataset_name")?,
+        account_id: row.try_get("account")?,
+        account: row.try_get("account_name")?,
+        model: row.try_get("model")?,
+        description: row.try_get("description")?,
+        url: row.try_get("url")?,
+        prompt_version: row.try_get("prompt_version")?,
+        notes: row.try_get("notes")?,
+        policy: row.try_get("policy")?,
+        status: row.try_get("status")?,
+        visibility: row.try_get("visibility")?,
+        baseline: row.try_get::<i64, _>("baseline")? != 0,
+        scores: row.try_get("scores")?,
+        created_at: row.try_get("created_at")?,
+        body_sha256: row.try_get("body_sha256")?,
+    })
+}
+
+pub async fn by_id(
+    conn: &mut SqliteConnection,
+    id: i64,
+) -> Result<Option<SubmissionRow>, sqlx::Error> {
+    let row = sqlx::query(&format!("SELECT {SUBMISSION_COLUMNS} WHERE s.id = ?"))
+        .bind(id)
+        .fetch_optional(conn)
+        .await?;
+    row.as_ref().map(submission_from_row).transpose()
+}
+
+pub async fn by_idempotency_key(
+    conn: &mut SqliteConnection,
+    token: i64,
+    key: &str,
+) -> Result<Option<SubmissionRow>, sqlx::Error> {
+    let row = sqlx::query(&format!(
+        "SELECT {SUBMISSION_COLUMNS} WHERE s.token = ? AND s.idempotency_key = ?"
+    ))
+    .bind(token)
+    .bind(key)
+    .fetch_optional(conn)
+    .await?;
+    row.as_ref().map(submission_from_row).transpose()
+}
+
+/// Published submissions of a dataset, oldest first.
+pub async fn published(
+    conn: &mut SqliteConnection,
+    dataset: i64,
+) -> Result<Vec<SubmissionRow>, sqlx::Error> {
+    let rows = sqlx::query(&format!(
+        "SELECT {SUBMISSION_COLUMNS} WHERE s.dataset = ? AND s.visibility = 'published' \
+         ORDER BY s.id"
+    ))
+    .bind(dataset)
+    .fetch_all(conn)
+    .await?;
+    rows.iter().map(submission_from_row).collect()
+}
+
+/// Everything a new submission row needs.
+pub struct NewSubmission<'a> {
+    pub dataset: i64,
+    pub account: i64,
+    pub token: i64,
+    pub idempotency_key: Option<&'a str>,
+    pub body_sha256: &'a str,
+    pub metadata: &'a SubmissionMetadata,
+    pub scores_json: &'a str,
+}
+
+/// Inserts the submission; call inside the transaction that also stores its items. A reused
+/// Idempotency-Key (a concurrent twin request) comes back as `Ok(None)`.
+#[tracing::instrument(skip_all)]
+pub async fn insert(
+    conn: &mut SqliteConnection,
+    new: &NewSubmission<'_>,
+) -> Result<Option<i64>, sqlx::Error> {
+    let result = sqlx::query(
+        "INSERT INTO submissions (dataset, account, token, idempotency_key, body_sha256, model, \
+         description, url, prompt_version, notes, scores) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+    )
+    .bind(new.dataset)
+    .bind(new.account)
+    .bind(new.token)
+    .bind(new.idempotency_key)
+    .bind(new.body_sha256)
+    .bind(&new.metadata.model)
+    .bind(&new.metadata.description)
+    .bind(&new.metadata.url)
+    .bind(&new.metadata.prompt_version)
+    .bind(&new.metadata.notes)
+    .bind(new.scores_json)
+    .execute(conn)
+    .await;
+    match result {
+        Ok(done) => Ok(Some(done.last_insert_rowid())),
+        Err(sqlx::Error::Database(e))
+            if e.is_unique_violation() && e.message().contains("idempotency_key") =>
+        {
+            Ok(None)
+        }
+        Err(e) => Err(e),
+    }
+}
+
+/// Rows per INSERT: 11 bound values each, under SQLite's 32766-variable limit.
+const ITEM_ROWS_PER_STATEMENT: usize = 2500;
+
+/// Stores every item verdict; `item_rows[v.target]` is the `items` row id of verdict `v`.
+#[tracing::instrument(skip_all)]
+pub async fn insert_items(
+    conn: &mut SqliteConnection,
+    submission: i64,
+    item_rows: &[i64],
+    verdicts: &[ItemVerdict],
+) -> Result<(), sqlx::Error> {
+    for chunk in verdicts.chunks(ITEM_ROWS_PER_STATEMENT) {
+        let mut builder: QueryBuilder<'_, Sqlite> = QueryBuilder::new(
+            "INSERT INTO submission_items (submission, item, line, raw_answer, permutation, \
+             outcome, failure, exact_match, semantic_match, task_accuracy, pairwise_accuracy) ",
+        );
+        builder.push_values(chunk, |mut b, v| {
+            let (outcome, permutation, failure, exact, semantic) = match &v.outcome {
+                StrictOutcome::Scored { answer, verdict } => (
+                    "scored",
+                    serde_json::to_string(answer).ok(),
+                    None,
+                    verdict.exact_match,
+                    verdict.semantic_match,
+                ),
+                StrictOutcome::Unparseable { reason } => {
+                    ("unparseable", None, Some(reason.to_string()), false, false)
+                }
+                StrictOutcome::Missing => ("missing", None, None, false, false),
+            };
+            b.push_bind(submission)
+                .push_bind(item_rows.get(v.target).copied())
+                .push_bind(v.line.map(|l| l as i64))
+                .push_bind(v.raw_answer.clone())
+                .push_bind(permutation)
+                .push_bind(outcome)
+                .push_bind(failure)
+                .push_bind(exact)
+                .push_bind(semantic)
+                .push_bind(v.task_accuracy)
+                .push_bind(v.pairwise_accuracy);
+        });
+        builder.build().execute(&mut *conn).await?;
+    }
+    Ok(())
+}
+
+/// One stored verdict, with the item it is about.
+#[derive(Debug, Clone, Serialize)]
+pub struct StoredVerdict {
+    pub id: String,
+    pub direction: String,
+    pub step_length: i64,
+    pub line: Option<i64>,
+    pub raw_answer: Option<String>,
+    pub permutation: Option<String>,
+    pub outcome: String,
+    pub failure: Option<String>,
+    pub exact_match: bool,
+    pub semantic_match: bool,
+    pub task_accuracy: bool,
+    pub pairwise_accuracy: Option<f64>,
+    pub gt_answer: String,
+}
+
+pub async fn verdicts(
+    conn: &mut SqliteConnection,
+    submission: i64,
+) -> Result<Vec<StoredVerdict>, sqlx::Error> {
+    let rows = sqlx::query(
+        "SELECT i.item_id, i.direction, i.step_length, i.gt_answer, v.line, v.raw_answer, \
+         v.permutation, v.outcome, v.failure, v.exact_match, v.semantic_match, v.task_accuracy, \
+         v.pairwise_accuracy FROM submission_items v JOIN items i ON i.id = v.item \
+         WHERE v.submission = ? ORDER BY i.id",
+    )
+    .bind(submission)
+    .fetch_all(conn)
+    .await?;
+    rows.iter()
+        .map(|row| {
+            Ok(StoredVerdict {
+                id: row.try_get("item_id")?,
+                direction: row.try_get("direction")?,
+                step_length: row.try_get("step_length")?,
+                line: row.try_get("line")?,
+                raw_answer: row.try_get("raw_answer")?,
+                permutation: row.try_get("permutation")?,
+                outcome: row.try_get("outcome")?,
+                failure: row.try_get("failure")?,
+                exact_match: row.try_get("exact_match")?,
+                semantic_match: row.try_get("semantic_match")?,
+                task_accuracy: row.try_get("task_accuracy")?,
+                pairwise_accuracy: row.try_get("pairwise_accuracy")?,
+                gt_answer: row.try_get("gt_answer")?,
+            })
+        })
+        .collect()
+}
+
+/// Admin changes to a leaderboard row. Returns whether the submission exists.
+#[tracing::instrument(skip_all)]
+pub async fn update_listing(
+    conn: &mut SqliteConnection,
+    id: i64,
+    baseline: Option<bool>,
+    visibility: Option<&str>,
+) -> Result<bool, sqlx::Error> {
+    let done = sqlx::query(
+        "UPDATE submissions SET baseline = coalesce(?, baseline), \
+         visibility = coalesce(?, visibility) WHERE id = ?",
+    )
+    .bind(baseline)
+    .bind(visibility)
+    .bind(id)
+    .execute(conn)
+    .await?;
+    Ok(done.rows_affected() > 0)
+}
+
+/// Counts used by tests and reports: submissions and verdict rows stored.
+pub async fn counts(conn: &mut SqliteConnection) -> Result<(i64, i64), sqlx::Error> {
+    let submissions: i64 = sqlx::query_scalar("SELECT count(*) FROM submissions")
+        .fetch_one(&mut *conn)
+        .await?;
+    let items: i64 = sqlx::query_scalar("SELECT count(*) FROM submission_items")
+        .fetch_one(conn)
+        .await?;
+    Ok((submissions, items))
+}

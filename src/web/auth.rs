@@ -1,0 +1,58 @@
+//! Bearer-token authentication: the `Caller` extractor.
+
+use axum::extract::FromRequestParts;
+use axum::http::header;
+use axum::http::request::Parts;
+
+use super::{AppError, AppState};
+use crate::accounts::Scope;
+use crate::store;
+use crate::store::accounts::Caller;
+
+impl FromRequestParts<AppState> for Caller {
+    type Rejection = AppError;
+
+    async fn from_request_parts(parts: &mut Parts, state: &AppState) -> Result<Self, AppError> {
+        let header = parts
+            .headers
+            .get(header::AUTHORIZATION)
+            .ok_or_else(|| {
+                AppError::Unauthorized(
+                    "this endpoint needs an API token: send `Authorization: Bearer TOKEN`"
+                        .to_owned(),
+                )
+            })?
+            .to_str()
+            .map_err(|_| {
+                AppError::Unauthorized("the Authorization header is not text".to_owned())
+            })?;
+        let token = header
+            .strip_prefix("Bearer ")
+            .or_else(|| header.strip_prefix("bearer "))
+            .map(str::trim)
+            .filter(|t| !t.is_empty())
+            .ok_or_else(|| {
+                AppError::Unauthorized(
+                    "the Authorization header must read `Bearer TOKEN`".to_owned(),
+                )
+            })?;
+        let mut conn = state.pool.acquire().await?;
+        store::accounts::authenticate(&mut conn, token)
+            .await?
+            .ok_or_else(|| {
+                AppError::Unauthorized("the API token is unknown or has been revoked".to_owned())
+            })
+    }
+}
+
+/// Refuses a caller without `scope`.
+pub fn require(caller: &Caller, scope: Scope) -> Result<(), AppError> {
+    if caller.has(scope) {
+        Ok(())
+    } else {
+        Err(AppError::Forbidden(format!(
+            "this token lacks the `{}` scope",
+            scope.as_str()
+        )))
+    }
+}
