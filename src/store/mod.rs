@@ -3,6 +3,7 @@
 //! Functions take a `&mut SqliteConnection` (a pooled connection or an open transaction), so a
 //! caller that writes several rows decides where the transaction begins and ends.
 
+pub mod annotations;
 pub mod datasets;
 pub mod frames;
 pub mod items;

@@ -1,10 +1,14 @@
 //! The HTTP service: application state, the router, and the server's life cycle.
 //!
-//! `api` serves JSON under `/api/v1`, `pages` serves the HTML site, `assets` the embedded CSS.
-//! Each exposes one `router()`; they are merged once in [`router`].
+//! `api` serves JSON under `/api/v1`, `pages` serves the HTML site, `assets` the embedded CSS
+//! and scripts; `auth` logs annotators in, `annotate` is their side of human annotation and
+//! `admin` the admins'. Each exposes one `router()`; they are merged once in [`router`].
 
+mod admin;
+mod annotate;
 mod api;
 mod assets;
+pub mod auth;
 pub mod error;
 mod frame_cache;
 mod item_cache;
@@ -23,6 +27,7 @@ use tokio::net::TcpListener;
 use tower_http::timeout::TimeoutLayer;
 use tower_http::trace::TraceLayer;
 
+pub use admin::{check_annotator_name, invite_url};
 pub use error::AppError;
 use frame_cache::FrameCache;
 use item_cache::ItemCache;
@@ -55,6 +60,7 @@ pub struct AppState {
     pub pool: SqlitePool,
     frames: Arc<FrameCache>,
     items: Arc<ItemCache>,
+    logins: Arc<auth::LoginLimiter>,
 }
 
 impl AppState {
@@ -63,6 +69,7 @@ impl AppState {
             pool,
             frames: Arc::new(FrameCache::new(config.frame_cache_bytes)),
             items: Arc::new(ItemCache::default()),
+            logins: Arc::new(auth::LoginLimiter::default()),
         }
     }
 }
@@ -101,6 +108,9 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
     Router::new()
         .route("/healthz", axum::routing::get(healthz))
         .merge(pages::router())
+        .merge(auth::router())
+        .merge(annotate::router())
+        .merge(admin::router())
         .merge(assets::router())
         .nest("/api/v1", api::router())
         .with_state(state)
@@ -147,9 +157,13 @@ impl Server {
             self.state.pool.clone(),
             self.state.items.clone(),
         ));
-        let result = axum::serve(self.listener, self.app)
-            .with_graceful_shutdown(shutdown)
-            .await;
+        // Connection info gives the login rate limit the client's address.
+        let result = axum::serve(
+            self.listener,
+            self.app.into_make_service_with_connect_info::<SocketAddr>(),
+        )
+        .with_graceful_shutdown(shutdown)
+        .await;
         watcher.abort();
         result
     }
