@@ -24,8 +24,11 @@ if ! command -v wrk >/dev/null 2>&1; then
   apt-get install -y wrk >/dev/null 2>&1 || { apt-get update >/dev/null && apt-get install -y wrk >/dev/null; }
 fi
 
-cargo build --release --locked --bin enact-hub >&2
-BIN=target/release/enact-hub
+# BIN=path/to/enact-hub uses an existing binary instead of building the release one.
+if [ -z "${BIN:-}" ]; then
+  cargo build --release --locked --bin enact-hub >&2
+  BIN=target/release/enact-hub
+fi
 DB="$OUT/bench.db"
 rm -f "$DB" "$DB-wal" "$DB-shm"
 BASE="http://127.0.0.1:$PORT"

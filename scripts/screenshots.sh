@@ -14,8 +14,11 @@ cd "$(dirname "$0")/.."
 PORT=${PORT:-18082}
 OUT=bench-out/screenshots
 mkdir -p "$OUT" docs
-cargo build --release --locked --bin enact-hub >&2
-BIN=target/release/enact-hub
+# BIN=path/to/enact-hub uses an existing binary instead of building the release one.
+if [ -z "${BIN:-}" ]; then
+  cargo build --release --locked --bin enact-hub >&2
+  BIN=target/release/enact-hub
+fi
 DB="$OUT/shots.db"
 rm -f "$DB" "$DB-wal" "$DB-shm"
 BASE="http://127.0.0.1:$PORT"

@@ -174,14 +174,14 @@ pub async fn create_session(
     Ok(())
 }
 
-/// The unexpired session with this token hash.
+/// The unexpired session with this token hash, and when it expires.
 pub async fn session(
     conn: &mut SqliteConnection,
     token_hash: &str,
     now_ms: i64,
-) -> Result<Option<Session>, sqlx::Error> {
+) -> Result<Option<(Session, i64)>, sqlx::Error> {
     let row = sqlx::query(
-        "SELECT s.annotator, s.csrf_token, a.name, a.is_admin FROM sessions s \
+        "SELECT s.annotator, s.csrf_token, s.expires_at_ms, a.name, a.is_admin FROM sessions s \
          JOIN annotators a ON a.id = s.annotator WHERE s.token_hash = ? AND s.expires_at_ms > ?",
     )
     .bind(token_hash)
@@ -189,12 +189,15 @@ pub async fn session(
     .fetch_optional(conn)
     .await?;
     row.map(|r| {
-        Ok(Session {
-            annotator: r.try_get("annotator")?,
-            name: r.try_get("name")?,
-            is_admin: r.try_get("is_admin")?,
-            csrf_token: r.try_get("csrf_token")?,
-        })
+        Ok((
+            Session {
+                annotator: r.try_get("annotator")?,
+                name: r.try_get("name")?,
+                is_admin: r.try_get("is_admin")?,
+                csrf_token: r.try_get("csrf_token")?,
+            },
+            r.try_get("expires_at_ms")?,
+        ))
     })
     .transpose()
 }
@@ -408,6 +411,10 @@ pub async fn open_draft(
     empty: &Draft,
     now_ms: i64,
 ) -> Result<StoredDraft, sqlx::Error> {
+    // Read first: page views are many, and a write would take SQLite's one write lock.
+    if let Some(found) = draft(&mut *conn, annotator, item).await? {
+        return Ok(found);
+    }
     let json = serde_json::to_string(empty).map_err(|e| corrupt("state", e))?;
     sqlx::query(
         "INSERT INTO drafts (annotator, item, slots, state, started_at_ms, updated_at_ms) \

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use super::api::frame_url;
 use super::auth::{LoggedIn, Protected};
 use super::error::PageError;
-use super::{AppError, AppState, dataset_or_404};
+use super::{AppError, AppState};
 use crate::annotation::Draft;
 use crate::dataset::{Direction, StepLength};
 use crate::store;
@@ -137,24 +137,35 @@ async fn next_item(
     })
 }
 
-/// The store id of an item assigned to the session's annotator, and whether it is finished;
-/// 404 for an unknown item, 403 for someone else's.
+/// An item assigned to the session's annotator.
+struct Assigned {
+    dataset_id: i64,
+    /// The item's store id.
+    rowid: i64,
+    finished: bool,
+}
+
+/// Looks up an item assigned to the session's annotator: 404 for an unknown dataset or item,
+/// 403 for an item that exists but is someone else's (or no one's).
 async fn assigned(
-    state: &AppState,
+    conn: &mut sqlx::SqliteConnection,
     session: &Session,
     dataset: &str,
     item_id: &str,
-) -> Result<(i64, bool), AppError> {
-    let stored = dataset_or_404(&state.pool, dataset).await?;
-    let mut conn = state.pool.acquire().await?;
-    if let Some(found) =
-        store::annotations::assigned_item(&mut conn, session.annotator, stored.id, item_id).await?
-    {
-        return Ok(found);
-    }
-    let exists = store::items::get(&mut conn, stored.id, item_id)
+) -> Result<Assigned, AppError> {
+    let stored = store::datasets::by_name(conn, dataset)
         .await?
-        .is_some();
+        .ok_or_else(|| AppError::NotFound(format!("no dataset named '{dataset}'")))?;
+    if let Some((rowid, finished)) =
+        store::annotations::assigned_item(conn, session.annotator, stored.id, item_id).await?
+    {
+        return Ok(Assigned {
+            dataset_id: stored.id,
+            rowid,
+            finished,
+        });
+    }
+    let exists = store::items::get(conn, stored.id, item_id).await?.is_some();
     Err(if exists {
         AppError::Forbidden(format!(
             "item '{item_id}' of dataset '{dataset}' is not assigned to you"
@@ -210,10 +221,13 @@ async fn item_page(
     LoggedIn(session): LoggedIn,
     Path((dataset, item_id)): Path<(String, String)>,
 ) -> Result<Html<String>, PageError> {
-    let (rowid, finished) = assigned(&state, &session, &dataset, &item_id).await?;
-    let stored = dataset_or_404(&state.pool, &dataset).await?;
     let mut conn = state.pool.acquire().await?;
-    let item = store::items::get(&mut conn, stored.id, &item_id)
+    let Assigned {
+        dataset_id,
+        rowid,
+        finished,
+    } = assigned(&mut conn, &session, &dataset, &item_id).await?;
+    let item = store::items::get(&mut conn, dataset_id, &item_id)
         .await?
         .ok_or_else(|| AppError::NotFound(format!("no item '{item_id}' in dataset '{dataset}'")))?;
     let step_length = item.summary.step_length;
@@ -303,21 +317,20 @@ async fn checked_draft(
     item_id: &str,
     draft: &Draft,
 ) -> Result<i64, AppError> {
-    let (rowid, finished) = assigned(state, session, dataset, item_id).await?;
-    if finished {
+    let mut conn = state.pool.acquire().await?;
+    let found = assigned(&mut conn, session, dataset, item_id).await?;
+    if found.finished {
         return Err(AppError::Conflict(format!(
             "item '{item_id}' is already finished; its answer can no longer change"
         )));
     }
-    let stored = dataset_or_404(&state.pool, dataset).await?;
-    let mut conn = state.pool.acquire().await?;
-    let item = store::items::get(&mut conn, stored.id, item_id)
+    let item = store::items::get(&mut conn, found.dataset_id, item_id)
         .await?
         .ok_or_else(|| AppError::NotFound(format!("no item '{item_id}' in dataset '{dataset}'")))?;
     draft
         .check(item.summary.step_length)
         .map_err(|e| AppError::BadRequest(format!("draft of item '{item_id}': {e}")))?;
-    Ok(rowid)
+    Ok(found.rowid)
 }
 
 #[derive(Serialize)]
@@ -409,7 +422,11 @@ async fn skip(
     request: Protected<SkipForm>,
 ) -> Result<Response, PageError> {
     let session = &request.session;
-    let (rowid, finished) = assigned(&state, session, &dataset, &item_id).await?;
+    let mut conn = state.pool.acquire().await?;
+    let Assigned {
+        rowid, finished, ..
+    } = assigned(&mut conn, session, &dataset, &item_id).await?;
+    drop(conn);
     if finished {
         return Err(AppError::Conflict(format!("item '{item_id}' is already finished")).into());
     }
@@ -479,9 +496,9 @@ async fn own_answer(
     LoggedIn(session): LoggedIn,
     Path((dataset, item_id)): Path<(String, String)>,
 ) -> Result<Json<OwnAnswer>, AppError> {
-    let (rowid, _) = assigned(&state, &session, &dataset, &item_id).await?;
     let mut conn = state.pool.acquire().await?;
-    let a = store::annotations::annotation(&mut conn, session.annotator, rowid)
+    let found = assigned(&mut conn, &session, &dataset, &item_id).await?;
+    let a = store::annotations::annotation(&mut conn, session.annotator, found.rowid)
         .await?
         .ok_or_else(|| {
             AppError::NotFound(format!("item '{item_id}' has no answer from you yet"))

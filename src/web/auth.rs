@@ -120,6 +120,45 @@ impl LoginLimiter {
     }
 }
 
+/// Sessions already looked up, by token hash, so that a page view costs no session query.
+/// Sessions never change once created; logout removes its entry, expiry is checked on use.
+#[derive(Default)]
+pub struct SessionCache {
+    entries: Mutex<HashMap<String, (Session, i64)>>,
+}
+
+impl SessionCache {
+    /// Entries kept at most; past this the cache starts over.
+    const MAX_ENTRIES: usize = 100_000;
+
+    fn get(&self, token_hash: &str, now_ms: i64) -> Option<Session> {
+        let mut entries = self.entries.lock().unwrap_or_else(|p| p.into_inner());
+        match entries.get(token_hash) {
+            Some((session, expires)) if *expires > now_ms => Some(session.clone()),
+            Some(_) => {
+                entries.remove(token_hash);
+                None
+            }
+            None => None,
+        }
+    }
+
+    fn insert(&self, token_hash: String, session: Session, expires_at_ms: i64) {
+        let mut entries = self.entries.lock().unwrap_or_else(|p| p.into_inner());
+        if entries.len() >= Self::MAX_ENTRIES {
+            entries.clear();
+        }
+        entries.insert(token_hash, (session, expires_at_ms));
+    }
+
+    fn remove(&self, token_hash: &str) {
+        self.entries
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .remove(token_hash);
+    }
+}
+
 /// The value of cookie `name` in the request's `Cookie` headers.
 pub fn cookie(headers: &HeaderMap, name: &str) -> Option<String> {
     headers
@@ -175,17 +214,28 @@ impl FromRequestParts<AppState> for LoggedIn {
         parts: &mut Parts,
         state: &AppState,
     ) -> Result<Self, Self::Rejection> {
+        let now = now_ms();
         let session = match cookie(&parts.headers, SESSION_COOKIE) {
             None => None,
             Some(token) => {
-                let mut conn = state
-                    .pool
-                    .acquire()
-                    .await
-                    .map_err(|e| PageError::from(e).into_response())?;
-                store::annotations::session(&mut conn, &token_hash(&token), now_ms())
-                    .await
-                    .map_err(|e| PageError::from(e).into_response())?
+                let hash = token_hash(&token);
+                match state.sessions.get(&hash, now) {
+                    Some(session) => Some(session),
+                    None => {
+                        let mut conn = state
+                            .pool
+                            .acquire()
+                            .await
+                            .map_err(|e| PageError::from(e).into_response())?;
+                        let found = store::annotations::session(&mut conn, &hash, now)
+                            .await
+                            .map_err(|e| PageError::from(e).into_response())?;
+                        if let Some((session, expires)) = &found {
+                            state.sessions.insert(hash, session.clone(), *expires);
+                        }
+                        found.map(|(session, _)| session)
+                    }
+                }
             }
         };
         match session {
@@ -236,8 +286,6 @@ impl FromRequestParts<AppState> for Admin {
 pub struct Protected<T> {
     pub session: Session,
     pub body: T,
-    /// The request came from a script (JSON), not a form: answer with JSON.
-    pub json: bool,
 }
 
 fn csrf_rejected(json: bool) -> Response {
@@ -271,41 +319,31 @@ impl<T: DeserializeOwned + Send> FromRequest<AppState> for Protected<T> {
         let bytes = Bytes::from_request(Request::from_parts(parts, body), state)
             .await
             .map_err(IntoResponse::into_response)?;
-        let (token, body) = if json {
-            let body = serde_json::from_slice::<T>(&bytes)
-                .map_err(|e| AppError::BadRequest(format!("request body: {e}")).into_response())?;
-            (header_token, body)
+        let token_ok =
+            |token: Option<&str>| token.is_some_and(|t| tokens_equal(t, &session.csrf_token));
+        // The token is checked before the body is read, so a forged request learns nothing.
+        let body = if json {
+            if !token_ok(header_token.as_deref()) {
+                return Err(csrf_rejected(true));
+            }
+            serde_json::from_slice::<T>(&bytes)
+                .map_err(|e| AppError::BadRequest(format!("request body: {e}")).into_response())?
         } else {
             let fields: Vec<(String, String)> =
                 serde_urlencoded::from_bytes(&bytes).unwrap_or_default();
-            let token = fields
+            let field_token = fields
                 .into_iter()
                 .find(|(k, _)| k == "csrf")
                 .map(|(_, v)| v)
                 .or(header_token);
-            // Check the token before reading the form, so a forged request learns nothing.
-            if !token
-                .as_deref()
-                .is_some_and(|t| tokens_equal(t, &session.csrf_token))
-            {
+            if !token_ok(field_token.as_deref()) {
                 return Err(csrf_rejected(false));
             }
-            let body = serde_urlencoded::from_bytes::<T>(&bytes).map_err(|e| {
+            serde_urlencoded::from_bytes::<T>(&bytes).map_err(|e| {
                 PageError(AppError::BadRequest(format!("form: {e}"))).into_response()
-            })?;
-            (token, body)
+            })?
         };
-        if !token
-            .as_deref()
-            .is_some_and(|t| tokens_equal(t, &session.csrf_token))
-        {
-            return Err(csrf_rejected(json));
-        }
-        Ok(Protected {
-            session,
-            body,
-            json,
-        })
+        Ok(Protected { session, body })
     }
 }
 
@@ -435,8 +473,10 @@ async fn logout(
     _checked: Protected<EmptyForm>,
 ) -> Result<Response, PageError> {
     if let Some(token) = cookie(&headers, SESSION_COOKIE) {
+        let hash = token_hash(&token);
+        state.sessions.remove(&hash);
         let mut conn = state.pool.acquire().await?;
-        store::annotations::delete_session(&mut conn, &token_hash(&token), now_ms()).await?;
+        store::annotations::delete_session(&mut conn, &hash, now_ms()).await?;
     }
     let cookie = set_cookie(&headers, SESSION_COOKIE, "", Duration::ZERO);
     Ok(([(header::SET_COOKIE, cookie)], Redirect::to("/login")).into_response())

@@ -61,6 +61,7 @@ pub struct AppState {
     frames: Arc<FrameCache>,
     items: Arc<ItemCache>,
     logins: Arc<auth::LoginLimiter>,
+    sessions: Arc<auth::SessionCache>,
 }
 
 impl AppState {
@@ -70,6 +71,7 @@ impl AppState {
             frames: Arc::new(FrameCache::new(config.frame_cache_bytes)),
             items: Arc::new(ItemCache::default()),
             logins: Arc::new(auth::LoginLimiter::default()),
+            sessions: Arc::new(auth::SessionCache::default()),
         }
     }
 }

@@ -130,6 +130,7 @@ async function screenshots(page) {
       await page.click(`.slot[data-slot="${slot}"]`);
     }
     await page.waitForLoadState("networkidle");
+    await page.evaluate(() => window.scrollTo(0, 0));
     check(await noHorizontalScroll(page), `${shot.item}: horizontal scrolling at 1280x800`);
     await page.screenshot({ path: join(params.out, shot.file) });
   }
