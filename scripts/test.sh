@@ -9,6 +9,20 @@ if ! command -v cargo >/dev/null 2>&1; then
   exit 1
 fi
 
+# The annotation end-to-end test drives headless Chromium through playwright-core (Node).
+if ! command -v chromium >/dev/null 2>&1; then
+  echo "== installing chromium and chromium-driver (Debian packages)"
+  apt-get update && apt-get install -y chromium chromium-driver
+fi
+if ! command -v node >/dev/null 2>&1; then
+  echo "== installing nodejs and npm (Debian packages)"
+  apt-get update && apt-get install -y nodejs npm
+fi
+if [ ! -d tests/browser/node_modules/playwright-core ]; then
+  echo "== npm ci (tests/browser: playwright-core, which downloads no browser)"
+  (cd tests/browser && npm ci --no-audit --no-fund)
+fi
+
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
 

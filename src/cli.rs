@@ -43,6 +43,9 @@ enum Command {
     /// Manage API tokens: create, list, revoke.
     #[command(subcommand)]
     Token(TokenCommand),
+    /// Human annotator accounts.
+    #[command(subcommand)]
+    Annotator(AnnotatorCommand),
 }
 
 #[derive(Args)]
@@ -79,6 +82,27 @@ struct GenerateArgs {
     /// instead of ENACT's code (`*_world_modeling_{L}_steps`).
     #[arg(long)]
     ordering_type_names: bool,
+}
+
+#[derive(Subcommand)]
+enum AnnotatorCommand {
+    /// Create an annotator and print their single-use invite link (on the last line).
+    Create(CreateAnnotatorArgs),
+}
+
+#[derive(Args)]
+struct CreateAnnotatorArgs {
+    #[command(flatten)]
+    db: DbArg,
+    /// Login name: letters, digits, '.', '_' and '-'.
+    #[arg(long)]
+    name: String,
+    /// Give the account the admin pages (accounts, assignments, flags, human performance).
+    #[arg(long)]
+    admin: bool,
+    /// Where annotators reach the service; the invite link starts with it.
+    #[arg(long, env = "ENACT_HUB_URL", default_value = "http://127.0.0.1:8080")]
+    base_url: String,
 }
 
 #[derive(Args)]
@@ -269,6 +293,7 @@ pub fn main() -> ExitCode {
             Command::Agreement(args) => agreement(&args),
             Command::Generate(args) => generate(args).await,
             Command::Token(command) => token(command).await,
+            Command::Annotator(AnnotatorCommand::Create(args)) => create_annotator(args).await,
         }
     });
     match result {
@@ -802,6 +827,40 @@ async fn score(args: ScoreArgs) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
     }
+}
+
+async fn create_annotator(args: CreateAnnotatorArgs) -> anyhow::Result<ExitCode> {
+    if let Err(problem) = crate::web::check_annotator_name(&args.name) {
+        eprintln!("error: --name: {problem}");
+        return Ok(ExitCode::FAILURE);
+    }
+    let pool = open_db(&args.db.db).await?;
+    let token = crate::annotation::new_token();
+    let mut conn = pool.acquire().await?;
+    let created = store::annotations::create_annotator(
+        &mut conn,
+        &args.name,
+        args.admin,
+        &crate::annotation::token_hash(&token),
+    )
+    .await?;
+    drop(conn);
+    pool.close().await;
+    if created.is_none() {
+        eprintln!(
+            "error: an annotator named '{}' already exists in {}",
+            args.name,
+            args.db.db.display()
+        );
+        return Ok(ExitCode::FAILURE);
+    }
+    let role = if args.admin { "admin" } else { "annotator" };
+    println!(
+        "created {role} '{}'; send them this single-use link to set a password:",
+        args.name
+    );
+    println!("{}", crate::web::invite_url(&args.base_url, &token));
+    Ok(ExitCode::SUCCESS)
 }
 
 /// Prints alpha (null when undefined, with the reason) and, when asked, its bootstrap interval.

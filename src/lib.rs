@@ -9,11 +9,14 @@
 //! - [`import`]: reading an ENACT release from disk into the store, all-or-nothing.
 //! - [`store`]: SQLite access, one module per table family.
 //! - [`web`]: the axum service: JSON API under `/api/v1`, HTML pages, frames.
+//! - [`annotation`]: human annotation without I/O: credentials, the balanced split, drafts,
+//!   scoring human answers; `store::annotations` and `web::{auth, annotate, admin}` serve it.
 //! - [`demo`]: the built-in demo dataset, generated at start by `serve --demo`.
 //! - [`cli`]: the command line; `src/main.rs` only calls [`cli::main`].
 
 pub mod accounts;
 pub mod agreement;
+pub mod annotation;
 pub mod cli;
 pub mod dataset;
 pub mod demo;

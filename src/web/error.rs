@@ -15,10 +15,11 @@ pub enum AppError {
     NotFound(String),
     #[error("{0}")]
     BadRequest(String),
-    /// No valid bearer token: missing, unknown or revoked.
+    /// No valid bearer token (missing, unknown or revoked), or no login session.
     #[error("{0}")]
     Unauthorized(String),
-    /// A valid token without the scope the request needs.
+    /// A token without the scope the request needs, or a page or item that is not this
+    /// annotator's (or a wrong CSRF token).
     #[error("{0}")]
     Forbidden(String),
     #[error("{0}")]

@@ -1,8 +1,11 @@
 //! The HTTP service: application state, the router, and the server's life cycle.
 //!
-//! `api` serves JSON under `/api/v1`, `pages` serves the HTML site, `assets` the embedded CSS.
-//! Each exposes one `router()`; they are merged once in [`router`].
+//! `api` serves JSON under `/api/v1`, `pages` serves the HTML site, `assets` the embedded CSS
+//! and scripts; `auth` logs annotators in, `annotate` is their side of human annotation and
+//! `admin` the admins'. Each exposes one `router()`; they are merged once in [`router`].
 
+mod admin;
+mod annotate;
 mod api;
 mod assets;
 mod auth;
@@ -11,6 +14,7 @@ mod frame_cache;
 mod item_cache;
 mod leaderboard;
 mod pages;
+pub mod session;
 mod submissions;
 
 use std::future::Future;
@@ -26,6 +30,7 @@ use tokio::net::TcpListener;
 use tower_http::timeout::TimeoutLayer;
 use tower_http::trace::TraceLayer;
 
+pub use admin::{check_annotator_name, invite_url};
 pub use error::AppError;
 use frame_cache::FrameCache;
 use item_cache::ItemCache;
@@ -72,6 +77,8 @@ pub struct AppState {
     submission_body_limit: usize,
     daily_quota: i64,
     total_quota: i64,
+    logins: Arc<session::LoginLimiter>,
+    sessions: Arc<session::SessionCache>,
 }
 
 impl AppState {
@@ -84,6 +91,8 @@ impl AppState {
             submission_body_limit: config.submission_body_limit,
             daily_quota: config.daily_quota,
             total_quota: config.total_quota,
+            logins: Arc::new(session::LoginLimiter::default()),
+            sessions: Arc::new(session::SessionCache::default()),
         }
     }
 }
@@ -123,6 +132,9 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
         .route("/healthz", axum::routing::get(healthz))
         .merge(pages::router())
         .merge(leaderboard::page_router())
+        .merge(session::router())
+        .merge(annotate::router())
+        .merge(admin::router())
         .merge(assets::router())
         .nest(
             "/api/v1",
@@ -174,9 +186,13 @@ impl Server {
             self.state.pool.clone(),
             self.state.items.clone(),
         ));
-        let result = axum::serve(self.listener, self.app)
-            .with_graceful_shutdown(shutdown)
-            .await;
+        // Connection info gives the login rate limit the client's address.
+        let result = axum::serve(
+            self.listener,
+            self.app.into_make_service_with_connect_info::<SocketAddr>(),
+        )
+        .with_graceful_shutdown(shutdown)
+        .await;
         watcher.abort();
         result
     }

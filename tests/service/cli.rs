@@ -225,3 +225,43 @@ fn generate_names_a_missing_replay_folder_and_bad_steps() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("step length 2 is outside 3..10"));
 }
+
+#[test]
+fn annotator_create_prints_a_single_use_invite_link_last() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("cli.db");
+    let run = |name: &str| {
+        enact_hub()
+            .args([
+                "annotator",
+                "create",
+                "--name",
+                name,
+                "--admin",
+                "--base-url",
+            ])
+            .arg("https://annotate.example/")
+            .arg("--db")
+            .arg(&db)
+            .output()
+            .expect("run enact-hub annotator create")
+    };
+    let first = run("alice");
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&first.stdout);
+    let last = stdout.lines().last().expect("a line");
+    let token = last
+        .strip_prefix("https://annotate.example/invite/")
+        .unwrap_or_else(|| panic!("last line is not an invite link: {stdout}"));
+    assert_eq!(token.len(), 64);
+    let again = run("alice");
+    assert!(!again.status.success());
+    assert!(String::from_utf8_lossy(&again.stderr).contains("already exists"));
+    let bad = run("a b");
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("is not allowed"));
+}

@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# Loopback throughput/latency of the annotation item page for logged-in clients, for
+# BENCHMARKS.md ("Annotation").
+#
+#   scripts/bench-annotate.sh
+#
+# Starts the release build on the demo dataset in a fresh database, creates an admin account
+# with the CLI, accepts its invite and logs in SESSIONS times with curl (each login is a
+# session of its own), assigns the demo dataset to the account, then loads one item page with
+# wrk at CONNECTIONS connections, each request carrying one of the session cookies in turn.
+# Installs Debian's `wrk` if missing. Only loopback traffic.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+DURATION=${DURATION:-10s}
+CONNECTIONS=${CONNECTIONS:-64}
+SESSIONS=${SESSIONS:-64}
+PORT=${PORT:-18081}
+OUT=bench-out/annotate
+mkdir -p "$OUT"
+
+if ! command -v wrk >/dev/null 2>&1; then
+  echo "installing wrk (Debian package)" >&2
+  apt-get install -y wrk >/dev/null 2>&1 || { apt-get update >/dev/null && apt-get install -y wrk >/dev/null; }
+fi
+
+# BIN=path/to/enact-hub uses an existing binary instead of building the release one.
+if [ -z "${BIN:-}" ]; then
+  cargo build --release --locked --bin enact-hub >&2
+  BIN=target/release/enact-hub
+fi
+DB="$OUT/bench.db"
+rm -f "$DB" "$DB-wal" "$DB-shm"
+BASE="http://127.0.0.1:$PORT"
+
+RUST_LOG=warn "$BIN" serve --demo --db "$DB" --addr "127.0.0.1:$PORT" >"$OUT/server.log" 2>&1 &
+SERVER=$!
+trap 'kill $SERVER 2>/dev/null || true' EXIT
+for _ in $(seq 300); do
+  curl -fsS "$BASE/healthz" >/dev/null 2>&1 && break
+  sleep 0.2
+done
+
+INVITE=$("$BIN" annotator create --db "$DB" --name bench --admin --base-url "$BASE" | tail -n 1)
+PASSWORD="benchmark password"
+csrf_of() { sed -n 's/.*name="csrf" value="\([0-9a-f]*\)".*/\1/p' | head -n 1; }
+session_of() { sed -n 's/^[Ss]et-[Cc]ookie: enact_session=\([0-9a-f]*\);.*/\1/p' | tr -d '\r'; }
+
+jar="$OUT/jar.txt"
+rm -f "$jar"
+token=$(curl -fsS -c "$jar" "$INVITE" | csrf_of)
+curl -fsS -b "$jar" -c "$jar" -o /dev/null \
+  --data-urlencode "csrf=$token" --data-urlencode "password=$PASSWORD" --data-urlencode "repeat=$PASSWORD" "$INVITE"
+admin_csrf=$(curl -fsS -b "$jar" "$BASE/admin" | csrf_of)
+annotator_id=$(curl -fsS -b "$jar" "$BASE/admin" | sed -n 's/.*<tr><td>\([0-9]*\)<\/td><td>bench<\/td>.*/\1/p')
+curl -fsS -b "$jar" -o /dev/null --data-urlencode "csrf=$admin_csrf" \
+  -d dataset=demo -d mode=split -d "annotator=$annotator_id" "$BASE/admin/assign"
+ITEM=$(curl -fsS -b "$jar" -o /dev/null -w '%{redirect_url}' "$BASE/annotate/next")
+ITEM=${ITEM#"$BASE"}
+echo "item page: $ITEM" >&2
+
+cookies=()
+for _ in $(seq "$SESSIONS"); do
+  ljar="$OUT/login-jar.txt"
+  rm -f "$ljar"
+  t=$(curl -fsS -c "$ljar" "$BASE/login" | csrf_of)
+  s=$(curl -sS -b "$ljar" -D - -o /dev/null --data-urlencode "csrf=$t" \
+      --data-urlencode "name=bench" --data-urlencode "password=$PASSWORD" "$BASE/login" | session_of)
+  [ -n "$s" ] || { echo "login failed" >&2; exit 1; }
+  cookies+=("\"enact_session=$s\"")
+done
+status=$(curl -sS -o "$OUT/item.html" -w '%{http_code}' -H "Cookie: ${cookies[0]//\"/}" "$BASE$ITEM")
+[ "$status" = 200 ] || { echo "item page answered $status" >&2; exit 1; }
+
+cat >"$OUT/sessions.lua" <<LUA
+cookies = { $(IFS=,; echo "${cookies[*]}") }
+i = 0
+request = function()
+  i = i % #cookies + 1
+  return wrk.format("GET", "$ITEM", { ["Cookie"] = cookies[i] })
+end
+LUA
+
+wrk -t2 -c8 -d2s -s "$OUT/sessions.lua" "$BASE" >/dev/null
+echo "## item page: GET $ITEM, ${#cookies[@]} sessions, ${CONNECTIONS} connections, $DURATION"
+wrk -t2 -c"$CONNECTIONS" -d"$DURATION" --latency -s "$OUT/sessions.lua" "$BASE" | tee "$OUT/wrk-item-page.txt"

@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Screenshots of the annotation item pages for the README: forward and inverse at L = 3 and
+# L = 10, in headless Chromium at 1280x800, written to docs/.
+#
+#   scripts/screenshots.sh
+#
+# Serves the demo dataset from a fresh database, creates an admin and an annotator with the
+# CLI, assigns four demo items to the annotator through the admin page (curl), and has
+# tests/browser/annotate.mjs log in through the annotator's invite and shoot the pages with a
+# few cards placed. Needs chromium and tests/browser/node_modules (scripts/test.sh installs both).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+PORT=${PORT:-18082}
+OUT=bench-out/screenshots
+mkdir -p "$OUT" docs
+# BIN=path/to/enact-hub uses an existing binary instead of building the release one.
+if [ -z "${BIN:-}" ]; then
+  cargo build --release --locked --bin enact-hub >&2
+  BIN=target/release/enact-hub
+fi
+DB="$OUT/shots.db"
+rm -f "$DB" "$DB-wal" "$DB-shm"
+BASE="http://127.0.0.1:$PORT"
+RUST_LOG=warn "$BIN" serve --demo --db "$DB" --addr "127.0.0.1:$PORT" >"$OUT/server.log" 2>&1 &
+SERVER=$!
+trap 'kill $SERVER 2>/dev/null || true' EXIT
+for _ in $(seq 300); do
+  curl -fsS "$BASE/healthz" >/dev/null 2>&1 && break
+  sleep 0.2
+done
+
+ADMIN_INVITE=$("$BIN" annotator create --db "$DB" --name admin --admin --base-url "$BASE" | tail -n 1)
+INVITE=$("$BIN" annotator create --db "$DB" --name annotator --base-url "$BASE" | tail -n 1)
+csrf_of() { sed -n 's/.*name="csrf" value="\([0-9a-f]*\)".*/\1/p' | head -n 1; }
+jar="$OUT/jar.txt"
+rm -f "$jar"
+token=$(curl -fsS -c "$jar" "$ADMIN_INVITE" | csrf_of)
+curl -fsS -b "$jar" -c "$jar" -o /dev/null --data-urlencode "csrf=$token" \
+  --data-urlencode "password=screenshot admin" --data-urlencode "repeat=screenshot admin" "$ADMIN_INVITE"
+admin_page=$(curl -fsS -b "$jar" "$BASE/admin")
+admin_csrf=$(echo "$admin_page" | csrf_of)
+annotator_id=$(echo "$admin_page" | sed -n 's/.*<tr><td>\([0-9]*\)<\/td><td>annotator<\/td>.*/\1/p')
+item() {
+  curl -fsS "$BASE/api/v1/datasets/demo/items?direction=$1&step_length=$2&per_page=1" \
+    | python3 -c 'import json,sys; print(json.load(sys.stdin)["items"][0]["id"])'
+}
+F3=$(item forward 3); I3=$(item inverse 3); F10=$(item forward 10); I10=$(item inverse 10)
+curl -fsS -b "$jar" -o /dev/null --data-urlencode "csrf=$admin_csrf" -d dataset=demo -d mode=list \
+  -d "annotator=$annotator_id" --data-urlencode "items=$F3 $I3 $F10 $I10" "$BASE/admin/assign"
+
+node tests/browser/annotate.mjs "$(python3 - "$BASE" "$INVITE" "$F3" "$I3" "$F10" "$I10" <<'PY'
+import json, sys
+base, invite, f3, i3, f10, i10 = sys.argv[1:]
+print(json.dumps({
+    "mode": "screenshots", "base": base, "invite": invite[len(base):], "out": "docs",
+    "failure_dir": "bench-out/screenshots",
+    "shots": [
+        {"dataset": "demo", "item": f3, "file": "annotate-forward-L3.png", "place": [[2, 1]]},
+        {"dataset": "demo", "item": i3, "file": "annotate-inverse-L3.png", "place": [[1, 2]]},
+        {"dataset": "demo", "item": f10, "file": "annotate-forward-L10.png", "place": [[4, 1], [7, 2], [1, 3]]},
+        {"dataset": "demo", "item": i10, "file": "annotate-inverse-L10.png", "place": [[5, 1], [2, 2]]},
+    ],
+}))
+PY
+)"
+ls -l docs/annotate-*.png

@@ -1,0 +1,711 @@
+//! Annotators, their sessions, assignments, drafts and finished annotations; and the human
+//! performance report built from the answers.
+
+use sqlx::{Row, SqliteConnection};
+
+use crate::annotation::{Draft, HumanAnswer, SplitItem, human_entries};
+use crate::dataset::{Direction, StepLength};
+use crate::verifier::{PerformanceReport, Permutation};
+
+/// Milliseconds since the Unix epoch, the clock of sessions and drafts.
+pub fn now_ms() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| i64::try_from(d.as_millis()).unwrap_or(i64::MAX))
+}
+
+fn corrupt(column: &str, detail: impl std::fmt::Display) -> sqlx::Error {
+    sqlx::Error::ColumnDecode {
+        index: column.to_owned(),
+        source: detail.to_string().into(),
+    }
+}
+
+fn kind_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<(Direction, StepLength), sqlx::Error> {
+    let direction: String = row.try_get("direction")?;
+    let step_length: i64 = row.try_get("step_length")?;
+    Ok((
+        Direction::parse(&direction)
+            .ok_or_else(|| corrupt("direction", format!("unknown direction {direction:?}")))?,
+        usize::try_from(step_length)
+            .ok()
+            .and_then(StepLength::new)
+            .ok_or_else(|| corrupt("step_length", format!("bad step length {step_length}")))?,
+    ))
+}
+
+#[derive(Debug, Clone)]
+pub struct Annotator {
+    pub id: i64,
+    pub name: String,
+    pub is_admin: bool,
+    /// False until the invite has been used to set a password.
+    pub active: bool,
+    pub created_at: String,
+}
+
+fn annotator_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<Annotator, sqlx::Error> {
+    Ok(Annotator {
+        id: row.try_get("id")?,
+        name: row.try_get("name")?,
+        is_admin: row.try_get("is_admin")?,
+        active: row.try_get::<Option<String>, _>("password_hash")?.is_some(),
+        created_at: row.try_get("created_at")?,
+    })
+}
+
+const ANNOTATOR_COLUMNS: &str = "id, name, is_admin, password_hash, created_at";
+
+/// Creates an annotator with a pending invite (`invite_hash` = sha256 of the invite token).
+/// `Ok(None)` when the name is taken.
+pub async fn create_annotator(
+    conn: &mut SqliteConnection,
+    name: &str,
+    is_admin: bool,
+    invite_hash: &str,
+) -> Result<Option<i64>, sqlx::Error> {
+    let result = sqlx::query_scalar(
+        "INSERT INTO annotators (name, is_admin, invite_hash) VALUES (?, ?, ?) RETURNING id",
+    )
+    .bind(name)
+    .bind(is_admin)
+    .bind(invite_hash)
+    .fetch_one(conn)
+    .await;
+    match result {
+        Ok(id) => Ok(Some(id)),
+        Err(sqlx::Error::Database(e)) if e.is_unique_violation() => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+/// Replaces an annotator's invite (the old link stops working).
+pub async fn renew_invite(
+    conn: &mut SqliteConnection,
+    annotator: i64,
+    invite_hash: &str,
+) -> Result<bool, sqlx::Error> {
+    let done = sqlx::query("UPDATE annotators SET invite_hash = ? WHERE id = ?")
+        .bind(invite_hash)
+        .bind(annotator)
+        .execute(conn)
+        .await?;
+    Ok(done.rows_affected() == 1)
+}
+
+pub async fn annotators(conn: &mut SqliteConnection) -> Result<Vec<Annotator>, sqlx::Error> {
+    let rows = sqlx::query(&format!(
+        "SELECT {ANNOTATOR_COLUMNS} FROM annotators ORDER BY name"
+    ))
+    .fetch_all(conn)
+    .await?;
+    rows.iter().map(annotator_from_row).collect()
+}
+
+pub async fn annotator_by_invite(
+    conn: &mut SqliteConnection,
+    invite_hash: &str,
+) -> Result<Option<Annotator>, sqlx::Error> {
+    let row = sqlx::query(&format!(
+        "SELECT {ANNOTATOR_COLUMNS} FROM annotators WHERE invite_hash = ?"
+    ))
+    .bind(invite_hash)
+    .fetch_optional(conn)
+    .await?;
+    row.as_ref().map(annotator_from_row).transpose()
+}
+
+/// Sets the password and consumes the invite, if the invite is still valid.
+pub async fn accept_invite(
+    conn: &mut SqliteConnection,
+    invite_hash: &str,
+    password_hash: &str,
+) -> Result<Option<i64>, sqlx::Error> {
+    sqlx::query_scalar(
+        "UPDATE annotators SET password_hash = ?, invite_hash = NULL WHERE invite_hash = ? \
+         RETURNING id",
+    )
+    .bind(password_hash)
+    .bind(invite_hash)
+    .fetch_optional(conn)
+    .await
+}
+
+/// `(annotator, password hash)` of an account that has set its password.
+pub async fn credentials(
+    conn: &mut SqliteConnection,
+    name: &str,
+) -> Result<Option<(i64, String)>, sqlx::Error> {
+    let row = sqlx::query(
+        "SELECT id, password_hash FROM annotators WHERE name = ? AND password_hash IS NOT NULL",
+    )
+    .bind(name)
+    .fetch_optional(conn)
+    .await?;
+    row.map(|r| Ok((r.try_get("id")?, r.try_get("password_hash")?)))
+        .transpose()
+}
+
+/// A logged-in session as handlers see it.
+#[derive(Debug, Clone)]
+pub struct Session {
+    pub annotator: i64,
+    pub name: String,
+    pub is_admin: bool,
+    pub csrf_token: String,
+}
+
+pub async fn create_session(
+    conn: &mut SqliteConnection,
+    token_hash: &str,
+    annotator: i64,
+    csrf_token: &str,
+    expires_at_ms: i64,
+) -> Result<(), sqlx::Error> {
+    sqlx::query(
+        "INSERT INTO sessions (token_hash, annotator, csrf_token, expires_at_ms) VALUES (?, ?, ?, ?)",
+    )
+    .bind(token_hash)
+    .bind(annotator)
+    .bind(csrf_token)
+    .bind(expires_at_ms)
+    .execute(conn)
+    .await?;
+    Ok(())
+}
+
+/// The unexpired session with this token hash, and when it expires.
+pub async fn session(
+    conn: &mut SqliteConnection,
+    token_hash: &str,
+    now_ms: i64,
+) -> Result<Option<(Session, i64)>, sqlx::Error> {
+    let row = sqlx::query(
+        "SELECT s.annotator, s.csrf_token, s.expires_at_ms, a.name, a.is_admin FROM sessions s \
+         JOIN annotators a ON a.id = s.annotator WHERE s.token_hash = ? AND s.expires_at_ms > ?",
+    )
+    .bind(token_hash)
+    .bind(now_ms)
+    .fetch_optional(conn)
+    .await?;
+    row.map(|r| {
+        Ok((
+            Session {
+                annotator: r.try_get("annotator")?,
+                name: r.try_get("name")?,
+                is_admin: r.try_get("is_admin")?,
+                csrf_token: r.try_get("csrf_token")?,
+            },
+            r.try_get("expires_at_ms")?,
+        ))
+    })
+    .transpose()
+}
+
+/// Ends a session, and any expired ones while at it.
+pub async fn delete_session(
+    conn: &mut SqliteConnection,
+    token_hash: &str,
+    now_ms: i64,
+) -> Result<(), sqlx::Error> {
+    sqlx::query("DELETE FROM sessions WHERE token_hash = ? OR expires_at_ms <= ?")
+        .bind(token_hash)
+        .bind(now_ms)
+        .execute(conn)
+        .await?;
+    Ok(())
+}
+
+/// Store ids and kinds of a dataset's items that no annotator has yet, in import order.
+pub async fn unassigned_items(
+    conn: &mut SqliteConnection,
+    dataset_id: i64,
+) -> Result<Vec<SplitItem>, sqlx::Error> {
+    let rows = sqlx::query(
+        "SELECT i.id, i.direction, i.step_length FROM items i WHERE i.dataset_id = ? \
+         AND NOT EXISTS (SELECT 1 FROM assignments a WHERE a.item = i.id) ORDER BY i.id",
+    )
+    .bind(dataset_id)
+    .fetch_all(conn)
+    .await?;
+    rows.iter()
+        .map(|r| {
+            let (direction, step_length) = kind_from_row(r)?;
+            Ok(SplitItem {
+                item: r.try_get("id")?,
+                direction,
+                step_length,
+            })
+        })
+        .collect()
+}
+
+/// Store ids of the given item ids of a dataset; ids not in the dataset come back in `Err`.
+pub async fn item_rowids(
+    conn: &mut SqliteConnection,
+    dataset_id: i64,
+    item_ids: &[String],
+) -> Result<Result<Vec<i64>, Vec<String>>, sqlx::Error> {
+    let mut found = Vec::with_capacity(item_ids.len());
+    let mut missing = Vec::new();
+    for id in item_ids {
+        let rowid: Option<i64> =
+            sqlx::query_scalar("SELECT id FROM items WHERE dataset_id = ? AND item_id = ?")
+                .bind(dataset_id)
+                .bind(id)
+                .fetch_optional(&mut *conn)
+                .await?;
+        match rowid {
+            Some(r) => found.push(r),
+            None => missing.push(id.clone()),
+        }
+    }
+    Ok(if missing.is_empty() {
+        Ok(found)
+    } else {
+        Err(missing)
+    })
+}
+
+/// Appends `(annotator, item)` pairs to the annotators' queues; pairs already assigned are
+/// left as they are. Returns how many were new. Call inside a transaction.
+pub async fn assign(conn: &mut SqliteConnection, pairs: &[(i64, i64)]) -> Result<u64, sqlx::Error> {
+    let mut added = 0;
+    for &(annotator, item) in pairs {
+        let done = sqlx::query(
+            "INSERT INTO assignments (annotator, item, position) \
+             SELECT ?1, ?2, coalesce(max(position), 0) + 1 FROM assignments WHERE annotator = ?1 \
+             ON CONFLICT (annotator, item) DO NOTHING",
+        )
+        .bind(annotator)
+        .bind(item)
+        .execute(&mut *conn)
+        .await?;
+        added += done.rows_affected();
+    }
+    Ok(added)
+}
+
+/// Where an assigned item stands for its annotator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum QueueStatus {
+    Todo,
+    /// A draft exists: the annotator has opened the item.
+    Started,
+    Answered,
+    Skipped,
+    Flagged,
+}
+
+impl QueueStatus {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            QueueStatus::Todo => "to do",
+            QueueStatus::Started => "in progress",
+            QueueStatus::Answered => "answered",
+            QueueStatus::Skipped => "skipped",
+            QueueStatus::Flagged => "flagged",
+        }
+    }
+
+    pub fn is_done(self) -> bool {
+        matches!(
+            self,
+            QueueStatus::Answered | QueueStatus::Skipped | QueueStatus::Flagged
+        )
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct QueueEntry {
+    pub dataset: String,
+    pub item_id: String,
+    pub direction: Direction,
+    pub step_length: StepLength,
+    pub status: QueueStatus,
+}
+
+/// An annotator's assigned items in queue order, with where each stands.
+pub async fn queue(
+    conn: &mut SqliteConnection,
+    annotator: i64,
+) -> Result<Vec<QueueEntry>, sqlx::Error> {
+    let rows = sqlx::query(
+        "SELECT d.name AS dataset, i.item_id, i.direction, i.step_length, n.outcome, \
+         (dr.item IS NOT NULL) AS started \
+         FROM assignments a JOIN items i ON i.id = a.item JOIN datasets d ON d.id = i.dataset_id \
+         LEFT JOIN annotations n ON n.annotator = a.annotator AND n.item = a.item \
+         LEFT JOIN drafts dr ON dr.annotator = a.annotator AND dr.item = a.item \
+         WHERE a.annotator = ? ORDER BY a.position",
+    )
+    .bind(annotator)
+    .fetch_all(conn)
+    .await?;
+    rows.iter()
+        .map(|r| {
+            let (direction, step_length) = kind_from_row(r)?;
+            let outcome: Option<String> = r.try_get("outcome")?;
+            let started: bool = r.try_get("started")?;
+            let status = match outcome.as_deref() {
+                Some("answered") => QueueStatus::Answered,
+                Some("skipped") => QueueStatus::Skipped,
+                Some("flagged") => QueueStatus::Flagged,
+                Some(other) => return Err(corrupt("outcome", format!("unknown {other:?}"))),
+                None if started => QueueStatus::Started,
+                None => QueueStatus::Todo,
+            };
+            Ok(QueueEntry {
+                dataset: r.try_get("dataset")?,
+                item_id: r.try_get("item_id")?,
+                direction,
+                step_length,
+                status,
+            })
+        })
+        .collect()
+}
+
+/// The item an annotator should work on next: one already started, else the first to do.
+pub fn next_in_queue(queue: &[QueueEntry]) -> Option<&QueueEntry> {
+    queue
+        .iter()
+        .find(|e| e.status == QueueStatus::Started)
+        .or_else(|| queue.iter().find(|e| e.status == QueueStatus::Todo))
+}
+
+/// The store id of an item if it is assigned to `annotator`, and whether it is finished.
+pub async fn assigned_item(
+    conn: &mut SqliteConnection,
+    annotator: i64,
+    dataset_id: i64,
+    item_id: &str,
+) -> Result<Option<(i64, bool)>, sqlx::Error> {
+    let row = sqlx::query(
+        "SELECT i.id, (n.item IS NOT NULL) AS finished FROM items i \
+         JOIN assignments a ON a.item = i.id AND a.annotator = ?1 \
+         LEFT JOIN annotations n ON n.item = i.id AND n.annotator = ?1 \
+         WHERE i.dataset_id = ?2 AND i.item_id = ?3",
+    )
+    .bind(annotator)
+    .bind(dataset_id)
+    .bind(item_id)
+    .fetch_optional(conn)
+    .await?;
+    row.map(|r| Ok((r.try_get("id")?, r.try_get("finished")?)))
+        .transpose()
+}
+
+/// A stored draft with its timing.
+#[derive(Debug, Clone)]
+pub struct StoredDraft {
+    pub draft: Draft,
+    pub started_at_ms: i64,
+    pub first_placement_at_ms: Option<i64>,
+}
+
+/// The annotator's draft of an item, creating an empty one (which starts the item's clock).
+pub async fn open_draft(
+    conn: &mut SqliteConnection,
+    annotator: i64,
+    item: i64,
+    empty: &Draft,
+    now_ms: i64,
+) -> Result<StoredDraft, sqlx::Error> {
+    // Read first: page views are many, and a write would take SQLite's one write lock.
+    if let Some(found) = draft(&mut *conn, annotator, item).await? {
+        return Ok(found);
+    }
+    let json = serde_json::to_string(empty).map_err(|e| corrupt("state", e))?;
+    sqlx::query(
+        "INSERT INTO drafts (annotator, item, slots, state, started_at_ms, updated_at_ms) \
+         VALUES (?1, ?2, '[]', ?3, ?4, ?4) ON CONFLICT (annotator, item) DO NOTHING",
+    )
+    .bind(annotator)
+    .bind(item)
+    .bind(json)
+    .bind(now_ms)
+    .execute(&mut *conn)
+    .await?;
+    draft(conn, annotator, item)
+        .await?
+        .ok_or_else(|| corrupt("drafts", "a draft just written is missing"))
+}
+
+pub async fn draft(
+    conn: &mut SqliteConnection,
+    annotator: i64,
+    item: i64,
+) -> Result<Option<StoredDraft>, sqlx::Error> {
+    let row = sqlx::query(
+        "SELECT state, started_at_ms, first_placement_at_ms FROM drafts \
+         WHERE annotator = ? AND item = ?",
+    )
+    .bind(annotator)
+    .bind(item)
+    .fetch_optional(conn)
+    .await?;
+    row.map(|r| {
+        let state: String = r.try_get("state")?;
+        Ok(StoredDraft {
+            draft: serde_json::from_str(&state).map_err(|e| corrupt("state", e))?,
+            started_at_ms: r.try_get("started_at_ms")?,
+            first_placement_at_ms: r.try_get("first_placement_at_ms")?,
+        })
+    })
+    .transpose()
+}
+
+/// Saves a draft; the first save with a card placed records the time of the first placement.
+pub async fn save_draft(
+    conn: &mut SqliteConnection,
+    annotator: i64,
+    item: i64,
+    draft: &Draft,
+    now_ms: i64,
+) -> Result<(), sqlx::Error> {
+    let state = serde_json::to_string(draft).map_err(|e| corrupt("state", e))?;
+    let slots = serde_json::to_string(&draft.slots).map_err(|e| corrupt("slots", e))?;
+    sqlx::query(
+        "INSERT INTO drafts (annotator, item, slots, state, started_at_ms, first_placement_at_ms, \
+         updated_at_ms) VALUES (?1, ?2, ?3, ?4, ?5, CASE WHEN ?6 THEN ?5 END, ?5) \
+         ON CONFLICT (annotator, item) DO UPDATE SET slots = excluded.slots, \
+         state = excluded.state, updated_at_ms = excluded.updated_at_ms, \
+         first_placement_at_ms = coalesce(drafts.first_placement_at_ms, \
+             excluded.first_placement_at_ms)",
+    )
+    .bind(annotator)
+    .bind(item)
+    .bind(slots)
+    .bind(state)
+    .bind(now_ms)
+    .bind(draft.has_placement())
+    .execute(conn)
+    .await?;
+    Ok(())
+}
+
+/// How an item was finished.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Outcome {
+    Answered(Permutation),
+    Skipped(String),
+    Flagged(String),
+}
+
+/// Telemetry stored with each finished item.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Telemetry {
+    pub time_on_item_ms: i64,
+    pub time_to_first_placement_ms: Option<i64>,
+    pub placements: u32,
+    pub swaps: u32,
+    pub clears: u32,
+    pub undos: u32,
+}
+
+impl Telemetry {
+    /// Times run from the item's first opening to `now_ms`.
+    pub fn of(draft: &StoredDraft, now_ms: i64) -> Telemetry {
+        Telemetry {
+            time_on_item_ms: (now_ms - draft.started_at_ms).max(0),
+            time_to_first_placement_ms: draft
+                .first_placement_at_ms
+                .map(|t| (t - draft.started_at_ms).max(0)),
+            placements: draft.draft.counts.placements,
+            swaps: draft.draft.counts.swaps,
+            clears: draft.draft.counts.clears,
+            undos: draft.draft.counts.undos,
+        }
+    }
+}
+
+/// Records a finished item and drops its draft. `Ok(false)` if it was already finished.
+pub async fn finish(
+    conn: &mut SqliteConnection,
+    annotator: i64,
+    item: i64,
+    outcome: &Outcome,
+    telemetry: &Telemetry,
+) -> Result<bool, sqlx::Error> {
+    let (kind, answer, reason) = match outcome {
+        Outcome::Answered(p) => (
+            "answered",
+            Some(serde_json::to_string(p).map_err(|e| corrupt("answer", e))?),
+            "",
+        ),
+        Outcome::Skipped(r) => ("skipped", None, r.as_str()),
+        Outcome::Flagged(r) => ("flagged", None, r.as_str()),
+    };
+    let done = sqlx::query(
+        "INSERT INTO annotations (annotator, item, outcome, answer, reason, time_on_item_ms, \
+         time_to_first_placement_ms, placements, swaps, clears, undos) \
+         VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (annotator, item) DO NOTHING",
+    )
+    .bind(annotator)
+    .bind(item)
+    .bind(kind)
+    .bind(answer)
+    .bind(reason)
+    .bind(telemetry.time_on_item_ms)
+    .bind(telemetry.time_to_first_placement_ms)
+    .bind(telemetry.placements)
+    .bind(telemetry.swaps)
+    .bind(telemetry.clears)
+    .bind(telemetry.undos)
+    .execute(&mut *conn)
+    .await?;
+    sqlx::query("DELETE FROM drafts WHERE annotator = ? AND item = ?")
+        .bind(annotator)
+        .bind(item)
+        .execute(conn)
+        .await?;
+    Ok(done.rows_affected() == 1)
+}
+
+/// One finished item as stored (for the annotator's own view and for admins).
+#[derive(Debug, Clone)]
+pub struct StoredAnnotation {
+    pub annotator: String,
+    pub dataset: String,
+    pub item_id: String,
+    pub outcome: String,
+    pub answer: Option<Vec<u8>>,
+    pub reason: String,
+    pub telemetry: Telemetry,
+    pub finished_at: String,
+}
+
+const ANNOTATION_SELECT: &str = "SELECT a.name AS annotator, d.name AS dataset, i.item_id, \
+     n.outcome, n.answer, n.reason, n.time_on_item_ms, n.time_to_first_placement_ms, \
+     n.placements, n.swaps, n.clears, n.undos, n.finished_at FROM annotations n \
+     JOIN annotators a ON a.id = n.annotator JOIN items i ON i.id = n.item \
+     JOIN datasets d ON d.id = i.dataset_id";
+
+fn annotation_from_row(r: &sqlx::sqlite::SqliteRow) -> Result<StoredAnnotation, sqlx::Error> {
+    let answer: Option<String> = r.try_get("answer")?;
+    Ok(StoredAnnotation {
+        annotator: r.try_get("annotator")?,
+        dataset: r.try_get("dataset")?,
+        item_id: r.try_get("item_id")?,
+        outcome: r.try_get("outcome")?,
+        answer: answer
+            .map(|a| serde_json::from_str(&a).map_err(|e| corrupt("answer", e)))
+            .transpose()?,
+        reason: r.try_get("reason")?,
+        telemetry: Telemetry {
+            time_on_item_ms: r.try_get("time_on_item_ms")?,
+            time_to_first_placement_ms: r.try_get("time_to_first_placement_ms")?,
+            placements: r.try_get("placements")?,
+            swaps: r.try_get("swaps")?,
+            clears: r.try_get("clears")?,
+            undos: r.try_get("undos")?,
+        },
+        finished_at: r.try_get("finished_at")?,
+    })
+}
+
+/// An annotator's own finished item.
+pub async fn annotation(
+    conn: &mut SqliteConnection,
+    annotator: i64,
+    item: i64,
+) -> Result<Option<StoredAnnotation>, sqlx::Error> {
+    let row = sqlx::query(&format!(
+        "{ANNOTATION_SELECT} WHERE n.annotator = ? AND n.item = ?"
+    ))
+    .bind(annotator)
+    .bind(item)
+    .fetch_optional(conn)
+    .await?;
+    row.as_ref().map(annotation_from_row).transpose()
+}
+
+/// Skipped and flagged items with their reasons, newest first.
+pub async fn flags(conn: &mut SqliteConnection) -> Result<Vec<StoredAnnotation>, sqlx::Error> {
+    let rows = sqlx::query(&format!(
+        "{ANNOTATION_SELECT} WHERE n.outcome IN ('skipped', 'flagged') \
+         ORDER BY n.finished_at DESC, i.item_id"
+    ))
+    .fetch_all(conn)
+    .await?;
+    rows.iter().map(annotation_from_row).collect()
+}
+
+/// Answered items of a dataset with what scoring needs, in the order they were finished.
+pub async fn human_answers(
+    conn: &mut SqliteConnection,
+    dataset_id: i64,
+) -> Result<Vec<HumanAnswer>, sqlx::Error> {
+    let rows = sqlx::query(
+        "SELECT i.direction, i.step_length, i.gt_answer, n.answer, s.signatures \
+         FROM annotations n JOIN items i ON i.id = n.item \
+         LEFT JOIN item_signatures s ON s.item = i.id \
+         WHERE i.dataset_id = ? AND n.outcome = 'answered' \
+         ORDER BY n.finished_at, i.id, n.annotator",
+    )
+    .bind(dataset_id)
+    .fetch_all(conn)
+    .await?;
+    rows.iter()
+        .map(|r| {
+            let (direction, step_length) = kind_from_row(r)?;
+            let permutation = |column: &str| -> Result<Permutation, sqlx::Error> {
+                let text: String = r.try_get(column)?;
+                serde_json::from_str(&text).map_err(|e| corrupt(column, e))
+            };
+            let signatures: Option<String> = r.try_get("signatures")?;
+            Ok(HumanAnswer {
+                direction,
+                step_length,
+                ground_truth: permutation("gt_answer")?,
+                answer: permutation("answer")?,
+                signatures: signatures
+                    .map(|s| serde_json::from_str(&s).map_err(|e| corrupt("signatures", e)))
+                    .transpose()?,
+            })
+        })
+        .collect()
+}
+
+/// Human performance on a dataset: every submitted answer scored by the verifier models are
+/// scored with (the item's stored signatures, exact match where there are none), aggregated
+/// into TA/PA by direction and step length. `None` when nobody has answered an item yet.
+///
+/// This is the "Human" row of the leaderboard and of reports. Skipped and flagged items are not
+/// answers and are left out; an item answered by several annotators counts once per answer.
+/// Verification is cheap (microseconds per answer), so it runs inline.
+pub async fn human_performance(
+    conn: &mut SqliteConnection,
+    dataset_id: i64,
+) -> Result<Option<PerformanceReport>, sqlx::Error> {
+    let answers = human_answers(conn, dataset_id).await?;
+    if answers.is_empty() {
+        return Ok(None);
+    }
+    let entries = human_entries(&answers).map_err(|e| corrupt("annotations", e))?;
+    Ok(Some(PerformanceReport::from_entries(&entries)))
+}
+
+/// Per annotator: assigned, finished and answered items.
+pub async fn progress_by_annotator(
+    conn: &mut SqliteConnection,
+) -> Result<Vec<(i64, i64, i64, i64)>, sqlx::Error> {
+    let rows = sqlx::query(
+        "SELECT a.annotator, count(*) AS assigned, count(n.item) AS finished, \
+         sum(n.outcome = 'answered') AS answered FROM assignments a \
+         LEFT JOIN annotations n ON n.annotator = a.annotator AND n.item = a.item \
+         GROUP BY a.annotator",
+    )
+    .fetch_all(conn)
+    .await?;
+    rows.iter()
+        .map(|r| {
+            Ok((
+                r.try_get("annotator")?,
+                r.try_get("assigned")?,
+                r.try_get("finished")?,
+                r.try_get::<Option<i64>, _>("answered")?.unwrap_or(0),
+            ))
+        })
+        .collect()
+}

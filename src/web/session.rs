@@ -1,0 +1,583 @@
+//! Annotator accounts at the HTTP boundary: invites, login and logout, the session cookie, the
+//! CSRF check every state-changing request passes, and the login rate limit.
+//!
+//! Sessions are opaque random tokens in an HttpOnly, SameSite=Strict cookie (Secure when the
+//! request came over TLS through a proxy that says so with `X-Forwarded-Proto: https`); the
+//! store keeps only their sha256. Each session has a synchronizer CSRF token that forms carry in
+//! a hidden `csrf` field and scripts in the `X-CSRF-Token` header; [`Protected`] is the only way
+//! a handler gets a request body, so no state-changing handler can skip the check. The login
+//! and invite forms come before any session and use a double-submit cookie instead.
+
+use std::collections::{HashMap, VecDeque};
+use std::net::{IpAddr, SocketAddr};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use askama::Template;
+use axum::Router;
+use axum::body::Bytes;
+use axum::extract::{ConnectInfo, FromRequest, FromRequestParts, Path, Request, State};
+use axum::http::request::Parts;
+use axum::http::{HeaderMap, HeaderValue, Method, header};
+use axum::response::{Html, IntoResponse, Redirect, Response};
+use axum::routing::{get, post};
+use serde::Deserialize;
+use serde::de::DeserializeOwned;
+
+use super::error::PageError;
+use super::{AppError, AppState};
+use crate::annotation::{
+    hash_password, new_token, password_problem, token_hash, tokens_equal, verify_password,
+};
+use crate::store;
+use crate::store::annotations::{Session, now_ms};
+
+pub const SESSION_COOKIE: &str = "enact_session";
+const LOGIN_CSRF_COOKIE: &str = "enact_login_csrf";
+/// How long a login lasts.
+const SESSION_LIFETIME: Duration = Duration::from_secs(12 * 3600);
+/// Failed logins allowed per window: per account, and per client address.
+const ACCOUNT_FAILURES: usize = 5;
+const ADDRESS_FAILURES: usize = 20;
+const FAILURE_WINDOW: Duration = Duration::from_secs(15 * 60);
+
+pub fn router() -> Router<AppState> {
+    Router::new()
+        .route("/login", get(login_page).post(login))
+        .route("/logout", post(logout))
+        .route("/invite/{token}", get(invite_page).post(accept_invite))
+}
+
+/// Failed login attempts in a sliding window, per account and per client address.
+#[derive(Default)]
+pub struct LoginLimiter {
+    failures: Mutex<HashMap<String, VecDeque<Instant>>>,
+}
+
+impl LoginLimiter {
+    fn keys(account: &str, address: Option<IpAddr>) -> [(String, usize); 2] {
+        [
+            (format!("account:{account}"), ACCOUNT_FAILURES),
+            (
+                format!(
+                    "address:{}",
+                    address.map_or("?".to_owned(), |a| a.to_string())
+                ),
+                ADDRESS_FAILURES,
+            ),
+        ]
+    }
+
+    /// `Err` with a message saying what is blocked and for how long.
+    pub fn check(&self, account: &str, address: Option<IpAddr>) -> Result<(), AppError> {
+        let now = Instant::now();
+        let mut failures = self.failures.lock().unwrap_or_else(|p| p.into_inner());
+        for (i, (key, limit)) in Self::keys(account, address).into_iter().enumerate() {
+            let Some(times) = failures.get_mut(&key) else {
+                continue;
+            };
+            while times
+                .front()
+                .is_some_and(|t| now.duration_since(*t) > FAILURE_WINDOW)
+            {
+                times.pop_front();
+            }
+            if times.len() >= limit {
+                let wait = times
+                    .front()
+                    .map_or(FAILURE_WINDOW, |t| FAILURE_WINDOW - now.duration_since(*t));
+                let minutes = wait.as_secs().div_ceil(60).max(1);
+                let what = if i == 0 {
+                    format!("account '{account}'")
+                } else {
+                    "your address".to_owned()
+                };
+                return Err(AppError::TooManyRequests {
+                    message: format!(
+                        "too many failed logins for {what} ({limit} in {} minutes); try again in \
+                         {minutes} minutes",
+                        FAILURE_WINDOW.as_secs() / 60
+                    ),
+                    retry_after: wait.as_secs().max(1),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    pub fn record_failure(&self, account: &str, address: Option<IpAddr>) {
+        let now = Instant::now();
+        let mut failures = self.failures.lock().unwrap_or_else(|p| p.into_inner());
+        // Bound memory under a flood of distinct names: forget everything past this size.
+        if failures.len() > 100_000 {
+            failures.clear();
+        }
+        for (key, _) in Self::keys(account, address) {
+            failures.entry(key).or_default().push_back(now);
+        }
+    }
+
+    pub fn record_success(&self, account: &str) {
+        let mut failures = self.failures.lock().unwrap_or_else(|p| p.into_inner());
+        failures.remove(&format!("account:{account}"));
+    }
+}
+
+/// Sessions already looked up, by token hash, so that a page view costs no session query.
+/// Sessions never change once created; logout removes its entry, expiry is checked on use.
+#[derive(Default)]
+pub struct SessionCache {
+    entries: Mutex<HashMap<String, (Session, i64)>>,
+}
+
+impl SessionCache {
+    /// Entries kept at most; past this the cache starts over.
+    const MAX_ENTRIES: usize = 100_000;
+
+    fn get(&self, token_hash: &str, now_ms: i64) -> Option<Session> {
+        let mut entries = self.entries.lock().unwrap_or_else(|p| p.into_inner());
+        match entries.get(token_hash) {
+            Some((session, expires)) if *expires > now_ms => Some(session.clone()),
+            Some(_) => {
+                entries.remove(token_hash);
+                None
+            }
+            None => None,
+        }
+    }
+
+    fn insert(&self, token_hash: String, session: Session, expires_at_ms: i64) {
+        let mut entries = self.entries.lock().unwrap_or_else(|p| p.into_inner());
+        if entries.len() >= Self::MAX_ENTRIES {
+            entries.clear();
+        }
+        entries.insert(token_hash, (session, expires_at_ms));
+    }
+
+    fn remove(&self, token_hash: &str) {
+        self.entries
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .remove(token_hash);
+    }
+}
+
+/// The value of cookie `name` in the request's `Cookie` headers.
+pub fn cookie(headers: &HeaderMap, name: &str) -> Option<String> {
+    headers
+        .get_all(header::COOKIE)
+        .iter()
+        .filter_map(|v| v.to_str().ok())
+        .flat_map(|v| v.split(';'))
+        .filter_map(|pair| pair.trim().split_once('='))
+        .find(|(k, _)| *k == name)
+        .map(|(_, v)| v.to_owned())
+}
+
+/// Whether the client reached us over TLS, as a TLS-terminating proxy reports it.
+fn over_tls(headers: &HeaderMap) -> bool {
+    headers
+        .get("x-forwarded-proto")
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|v| v.eq_ignore_ascii_case("https"))
+}
+
+fn set_cookie(headers: &HeaderMap, name: &str, value: &str, max_age: Duration) -> HeaderValue {
+    let secure = if over_tls(headers) { "; Secure" } else { "" };
+    let cookie = format!(
+        "{name}={value}; Path=/; HttpOnly; SameSite=Strict; Max-Age={}{secure}",
+        max_age.as_secs()
+    );
+    // Tokens are hex and names are constants: always a valid header value.
+    HeaderValue::from_str(&cookie).unwrap_or_else(|_| HeaderValue::from_static(""))
+}
+
+/// The client's address, when the server was started with connection info.
+pub struct ClientAddress(pub Option<IpAddr>);
+
+impl<S: Send + Sync> FromRequestParts<S> for ClientAddress {
+    type Rejection = std::convert::Infallible;
+    async fn from_request_parts(parts: &mut Parts, _: &S) -> Result<Self, Self::Rejection> {
+        Ok(ClientAddress(
+            parts
+                .extensions
+                .get::<ConnectInfo<SocketAddr>>()
+                .map(|c| c.0.ip()),
+        ))
+    }
+}
+
+/// A logged-in annotator. Without a valid session, pages redirect to the login form and
+/// anything else is 401.
+pub struct LoggedIn(pub Session);
+
+impl FromRequestParts<AppState> for LoggedIn {
+    type Rejection = Response;
+    async fn from_request_parts(
+        parts: &mut Parts,
+        state: &AppState,
+    ) -> Result<Self, Self::Rejection> {
+        let now = now_ms();
+        let session = match cookie(&parts.headers, SESSION_COOKIE) {
+            None => None,
+            Some(token) => {
+                let hash = token_hash(&token);
+                match state.sessions.get(&hash, now) {
+                    Some(session) => Some(session),
+                    None => {
+                        let mut conn = state
+                            .pool
+                            .acquire()
+                            .await
+                            .map_err(|e| PageError::from(e).into_response())?;
+                        let found = store::annotations::session(&mut conn, &hash, now)
+                            .await
+                            .map_err(|e| PageError::from(e).into_response())?;
+                        if let Some((session, expires)) = &found {
+                            state.sessions.insert(hash, session.clone(), *expires);
+                        }
+                        found.map(|(session, _)| session)
+                    }
+                }
+            }
+        };
+        match session {
+            Some(s) => Ok(LoggedIn(s)),
+            None if parts.method == Method::GET && !wants_json(&parts.headers, &parts.uri) => {
+                Err(Redirect::to("/login").into_response())
+            }
+            None => Err(AppError::Unauthorized(
+                "not logged in, or the session has expired: log in at /login".to_owned(),
+            )
+            .into_response()),
+        }
+    }
+}
+
+fn wants_json(headers: &HeaderMap, uri: &axum::http::Uri) -> bool {
+    uri.path().ends_with("/answer")
+        || headers
+            .get(header::ACCEPT)
+            .and_then(|v| v.to_str().ok())
+            .is_some_and(|v| v.contains("application/json"))
+}
+
+/// An admin session; anyone else gets 403.
+pub struct Admin(pub Session);
+
+impl FromRequestParts<AppState> for Admin {
+    type Rejection = Response;
+    async fn from_request_parts(
+        parts: &mut Parts,
+        state: &AppState,
+    ) -> Result<Self, Self::Rejection> {
+        let LoggedIn(session) = LoggedIn::from_request_parts(parts, state).await?;
+        if session.is_admin {
+            Ok(Admin(session))
+        } else {
+            Err(PageError(AppError::Forbidden(format!(
+                "the admin pages are for admins; '{}' is an annotator",
+                session.name
+            )))
+            .into_response())
+        }
+    }
+}
+
+/// A state-changing request: a logged-in session whose CSRF token matched, and the body. Form
+/// bodies carry the token in their `csrf` field, JSON bodies in the `X-CSRF-Token` header.
+pub struct Protected<T> {
+    pub session: Session,
+    pub body: T,
+}
+
+fn csrf_rejected(json: bool) -> Response {
+    let error = AppError::Forbidden(
+        "this request lacks the page's CSRF token, or carries a stale one: reload the page and \
+         try again"
+            .to_owned(),
+    );
+    if json {
+        error.into_response()
+    } else {
+        PageError(error).into_response()
+    }
+}
+
+impl<T: DeserializeOwned + Send> FromRequest<AppState> for Protected<T> {
+    type Rejection = Response;
+    async fn from_request(request: Request, state: &AppState) -> Result<Self, Self::Rejection> {
+        let (mut parts, body) = request.into_parts();
+        let LoggedIn(session) = LoggedIn::from_request_parts(&mut parts, state).await?;
+        let json = parts
+            .headers
+            .get(header::CONTENT_TYPE)
+            .and_then(|v| v.to_str().ok())
+            .is_some_and(|v| v.starts_with("application/json"));
+        let header_token = parts
+            .headers
+            .get("x-csrf-token")
+            .and_then(|v| v.to_str().ok())
+            .map(str::to_owned);
+        let bytes = Bytes::from_request(Request::from_parts(parts, body), state)
+            .await
+            .map_err(IntoResponse::into_response)?;
+        let token_ok =
+            |token: Option<&str>| token.is_some_and(|t| tokens_equal(t, &session.csrf_token));
+        // The token is checked before the body is read, so a forged request learns nothing.
+        let body = if json {
+            if !token_ok(header_token.as_deref()) {
+                return Err(csrf_rejected(true));
+            }
+            serde_json::from_slice::<T>(&bytes)
+                .map_err(|e| AppError::BadRequest(format!("request body: {e}")).into_response())?
+        } else {
+            let fields: Vec<(String, String)> =
+                serde_urlencoded::from_bytes(&bytes).unwrap_or_default();
+            let field_token = fields
+                .into_iter()
+                .find(|(k, _)| k == "csrf")
+                .map(|(_, v)| v)
+                .or(header_token);
+            if !token_ok(field_token.as_deref()) {
+                return Err(csrf_rejected(false));
+            }
+            serde_urlencoded::from_bytes::<T>(&bytes).map_err(|e| {
+                PageError(AppError::BadRequest(format!("form: {e}"))).into_response()
+            })?
+        };
+        Ok(Protected { session, body })
+    }
+}
+
+#[derive(Template)]
+#[template(path = "login.html")]
+struct LoginPage {
+    csrf: String,
+    name: String,
+    error: Option<String>,
+}
+
+/// A login-form page with a fresh double-submit token in a cookie and in the form.
+fn login_form(
+    headers: &HeaderMap,
+    status: axum::http::StatusCode,
+    name: String,
+    error: Option<String>,
+) -> Result<Response, PageError> {
+    let csrf = new_token();
+    let page = LoginPage {
+        csrf: csrf.clone(),
+        name,
+        error,
+    };
+    let cookie = set_cookie(headers, LOGIN_CSRF_COOKIE, &csrf, Duration::from_secs(3600));
+    Ok((status, [(header::SET_COOKIE, cookie)], Html(page.render()?)).into_response())
+}
+
+async fn login_page(headers: HeaderMap) -> Result<Response, PageError> {
+    login_form(&headers, axum::http::StatusCode::OK, String::new(), None)
+}
+
+#[derive(Deserialize)]
+struct LoginForm {
+    #[serde(default)]
+    csrf: String,
+    #[serde(default)]
+    name: String,
+    #[serde(default)]
+    password: String,
+}
+
+fn login_csrf_ok(headers: &HeaderMap, form_token: &str) -> bool {
+    cookie(headers, LOGIN_CSRF_COOKIE)
+        .is_some_and(|c| !c.is_empty() && tokens_equal(&c, form_token))
+}
+
+/// Starts a session for `annotator` and redirects to `to`.
+async fn start_session(
+    state: &AppState,
+    headers: &HeaderMap,
+    annotator: i64,
+    to: &str,
+) -> Result<Response, AppError> {
+    let token = new_token();
+    let mut conn = state.pool.acquire().await?;
+    store::annotations::create_session(
+        &mut conn,
+        &token_hash(&token),
+        annotator,
+        &new_token(),
+        now_ms() + i64::try_from(SESSION_LIFETIME.as_millis()).unwrap_or(i64::MAX),
+    )
+    .await?;
+    let cookie = set_cookie(headers, SESSION_COOKIE, &token, SESSION_LIFETIME);
+    Ok(([(header::SET_COOKIE, cookie)], Redirect::to(to)).into_response())
+}
+
+async fn login(
+    State(state): State<AppState>,
+    ClientAddress(address): ClientAddress,
+    headers: HeaderMap,
+    axum::Form(form): axum::Form<LoginForm>,
+) -> Result<Response, PageError> {
+    use axum::http::StatusCode;
+    if !login_csrf_ok(&headers, &form.csrf) {
+        return login_form(
+            &headers,
+            StatusCode::FORBIDDEN,
+            form.name,
+            Some("the login form expired or lacks its CSRF token: please try again".to_owned()),
+        );
+    }
+    let name = form.name.trim().to_owned();
+    if name.is_empty() || form.password.is_empty() {
+        return login_form(
+            &headers,
+            StatusCode::BAD_REQUEST,
+            name,
+            Some("give your name and your password".to_owned()),
+        );
+    }
+    if let Err(e) = state.logins.check(&name, address) {
+        return login_form(&headers, e.status(), name, Some(e.to_string()));
+    }
+    let mut conn = state.pool.acquire().await?;
+    let stored = store::annotations::credentials(&mut conn, &name).await?;
+    drop(conn);
+    let password = form.password;
+    let matched = match stored {
+        Some((id, hash)) => {
+            tokio::task::spawn_blocking(move || verify_password(&password, &hash).then_some(id))
+                .await
+                .map_err(|e| AppError::Internal(e.into()))?
+        }
+        None => None,
+    };
+    let Some(annotator) = matched else {
+        state.logins.record_failure(&name, address);
+        return login_form(
+            &headers,
+            StatusCode::UNAUTHORIZED,
+            name,
+            Some("unknown name or wrong password".to_owned()),
+        );
+    };
+    state.logins.record_success(&name);
+    Ok(start_session(&state, &headers, annotator, "/annotate").await?)
+}
+
+#[derive(Deserialize)]
+struct EmptyForm {}
+
+async fn logout(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    _checked: Protected<EmptyForm>,
+) -> Result<Response, PageError> {
+    if let Some(token) = cookie(&headers, SESSION_COOKIE) {
+        let hash = token_hash(&token);
+        state.sessions.remove(&hash);
+        let mut conn = state.pool.acquire().await?;
+        store::annotations::delete_session(&mut conn, &hash, now_ms()).await?;
+    }
+    let cookie = set_cookie(&headers, SESSION_COOKIE, "", Duration::ZERO);
+    Ok(([(header::SET_COOKIE, cookie)], Redirect::to("/login")).into_response())
+}
+
+#[derive(Template)]
+#[template(path = "invite.html")]
+struct InvitePage {
+    csrf: String,
+    name: String,
+    token: String,
+    min_chars: usize,
+    error: Option<String>,
+}
+
+async fn invite_form(
+    state: &AppState,
+    headers: &HeaderMap,
+    token: String,
+    status: axum::http::StatusCode,
+    error: Option<String>,
+) -> Result<Response, PageError> {
+    let mut conn = state.pool.acquire().await?;
+    let annotator = store::annotations::annotator_by_invite(&mut conn, &token_hash(&token))
+        .await?
+        .ok_or_else(|| {
+            AppError::NotFound(
+                "this invite link is unknown or has already been used: ask an admin for a new one"
+                    .to_owned(),
+            )
+        })?;
+    let csrf = new_token();
+    let page = InvitePage {
+        csrf: csrf.clone(),
+        name: annotator.name,
+        token,
+        min_chars: crate::annotation::MIN_PASSWORD_CHARS,
+        error,
+    };
+    let cookie = set_cookie(headers, LOGIN_CSRF_COOKIE, &csrf, Duration::from_secs(3600));
+    Ok((status, [(header::SET_COOKIE, cookie)], Html(page.render()?)).into_response())
+}
+
+async fn invite_page(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    Path(token): Path<String>,
+) -> Result<Response, PageError> {
+    invite_form(&state, &headers, token, axum::http::StatusCode::OK, None).await
+}
+
+#[derive(Deserialize)]
+struct InviteForm {
+    #[serde(default)]
+    csrf: String,
+    #[serde(default)]
+    password: String,
+    #[serde(default)]
+    repeat: String,
+}
+
+async fn accept_invite(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    Path(token): Path<String>,
+    axum::Form(form): axum::Form<InviteForm>,
+) -> Result<Response, PageError> {
+    use axum::http::StatusCode;
+    let problem = if !login_csrf_ok(&headers, &form.csrf) {
+        Some((
+            StatusCode::FORBIDDEN,
+            "the form expired or lacks its CSRF token: please try again".to_owned(),
+        ))
+    } else if form.password != form.repeat {
+        Some((
+            StatusCode::BAD_REQUEST,
+            "the two passwords differ".to_owned(),
+        ))
+    } else {
+        password_problem(&form.password).map(|p| (StatusCode::BAD_REQUEST, p))
+    };
+    if let Some((status, message)) = problem {
+        return invite_form(&state, &headers, token, status, Some(message)).await;
+    }
+    let password = form.password;
+    let hash = tokio::task::spawn_blocking(move || hash_password(&password))
+        .await
+        .map_err(|e| AppError::Internal(e.into()))?
+        .map_err(|e| AppError::Internal(anyhow::anyhow!("argon2: {e}")))?;
+    let mut conn = state.pool.acquire().await?;
+    let accepted = store::annotations::accept_invite(&mut conn, &token_hash(&token), &hash).await?;
+    drop(conn);
+    let Some(annotator) = accepted else {
+        return Err(AppError::NotFound(
+            "this invite link is unknown or has already been used: ask an admin for a new one"
+                .to_owned(),
+        )
+        .into());
+    };
+    Ok(start_session(&state, &headers, annotator, "/annotate").await?)
+}

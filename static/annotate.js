@@ -1,0 +1,255 @@
+// enact-hub item page: place library cards into answer slots by drag-and-drop, by click (card
+// then slot) or by keyboard (focus a card, press the slot number). Every change is saved to the
+// server as a draft, so a reload resumes exactly where the annotator left off.
+"use strict";
+
+(function () {
+  const root = document.getElementById("annotator");
+  if (!root) return;
+  const base = root.dataset.base;
+  const csrf = document.querySelector('meta[name="csrf-token"]').content;
+  const draft = JSON.parse(root.dataset.draft);
+  let slots = draft.slots.slice();
+  const counts = Object.assign({ placements: 0, swaps: 0, clears: 0, undos: 0 }, draft.counts);
+  const history = (draft.history || []).map((h) => h.slice());
+  const MAX_HISTORY = 200;
+
+  const slotButtons = Array.from(root.querySelectorAll(".slot"));
+  const cards = Array.from(root.querySelectorAll(".card"));
+  const cardByLabel = new Map(cards.map((c) => [Number(c.dataset.label), c]));
+  const announcer = document.getElementById("announce");
+  const submitButton = document.getElementById("submit");
+  const undoButton = document.getElementById("undo");
+  const saveStatus = document.getElementById("save-status");
+  let selected = null;
+
+  const nameOf = (label) => cardByLabel.get(label).dataset.name;
+  const announce = (text) => {
+    announcer.textContent = text;
+  };
+
+  function render() {
+    slotButtons.forEach((button, i) => {
+      const content = button.querySelector(".slot-content");
+      content.replaceChildren();
+      const label = slots[i];
+      button.classList.toggle("filled", label !== null);
+      button.draggable = label !== null;
+      if (label === null) {
+        button.setAttribute("aria-label", `Slot ${i + 1}: empty`);
+        return;
+      }
+      const card = cardByLabel.get(label);
+      for (const child of card.children) {
+        if (child.classList.contains("card-used")) continue;
+        content.appendChild(child.cloneNode(true));
+      }
+      button.setAttribute("aria-label", `Slot ${i + 1}: ${card.dataset.name}`);
+    });
+    for (const [label, card] of cardByLabel) {
+      const at = slots.indexOf(label);
+      card.classList.toggle("used", at >= 0);
+      card.classList.toggle("selected", selected === label);
+      card.setAttribute("aria-pressed", selected === label ? "true" : "false");
+      card.querySelector(".card-used").textContent = at >= 0 ? `in slot ${at + 1}` : "";
+    }
+    submitButton.disabled = slots.some((s) => s === null);
+    undoButton.disabled = history.length === 0;
+  }
+
+  let saving = Promise.resolve();
+  function save() {
+    const body = JSON.stringify({ slots, counts, history });
+    saving = saving.then(async () => {
+      saveStatus.textContent = "Saving…";
+      try {
+        const response = await fetch(`${base}/draft`, {
+          method: "POST",
+          headers: { "Content-Type": "application/json", "X-CSRF-Token": csrf },
+          body,
+          credentials: "same-origin",
+        });
+        if (!response.ok) {
+          const error = await response.json().catch(() => ({ error: response.statusText }));
+          saveStatus.textContent = `Not saved: ${error.error}`;
+          return;
+        }
+        saveStatus.textContent = "Saved";
+      } catch (e) {
+        saveStatus.textContent = `Not saved: ${e.message}`;
+      }
+    });
+    return saving;
+  }
+
+  function remember() {
+    history.push(slots.slice());
+    if (history.length > MAX_HISTORY) history.shift();
+  }
+
+  function changed(message) {
+    selected = null;
+    render();
+    announce(message);
+    save();
+  }
+
+  function place(label, index) {
+    if (index < 0 || index >= slots.length) return;
+    const from = slots.indexOf(label);
+    if (from === index) return;
+    remember();
+    const occupant = slots[index];
+    if (from >= 0) slots[from] = occupant;
+    slots[index] = label;
+    counts.placements += 1;
+    let message = `${nameOf(label)} placed in slot ${index + 1}.`;
+    if (occupant !== null) {
+      counts.swaps += 1;
+      message += from >= 0
+        ? ` ${nameOf(occupant)} moved to slot ${from + 1}.`
+        : ` ${nameOf(occupant)} returned to the library.`;
+    }
+    changed(message);
+  }
+
+  function clear(index) {
+    if (slots[index] === null) return;
+    remember();
+    const label = slots[index];
+    slots[index] = null;
+    counts.clears += 1;
+    changed(`Slot ${index + 1} cleared; ${nameOf(label)} returned to the library.`);
+  }
+
+  function undo() {
+    if (history.length === 0) {
+      announce("Nothing to undo.");
+      return;
+    }
+    slots = history.pop();
+    counts.undos += 1;
+    changed("Undone.");
+  }
+
+  // Click: a card, then a slot.
+  for (const card of cards) {
+    const label = Number(card.dataset.label);
+    card.addEventListener("click", () => {
+      selected = selected === label ? null : label;
+      render();
+      if (selected !== null) announce(`${nameOf(label)} selected: choose a slot.`);
+    });
+    card.addEventListener("keydown", (event) => {
+      if (event.ctrlKey || event.metaKey || event.altKey) return;
+      if (/^[1-9]$/.test(event.key)) {
+        event.preventDefault();
+        const index = Number(event.key) - 1;
+        if (index >= slots.length) {
+          announce(`There is no slot ${event.key}; slots go from 1 to ${slots.length}.`);
+          return;
+        }
+        place(label, index);
+        card.focus();
+      } else if (event.key === "Backspace" || event.key === "Delete") {
+        event.preventDefault();
+        const at = slots.indexOf(label);
+        if (at >= 0) clear(at);
+      }
+    });
+    card.addEventListener("dragstart", (event) => {
+      event.dataTransfer.setData("text/plain", `card:${label}`);
+      event.dataTransfer.effectAllowed = "move";
+    });
+  }
+
+  slotButtons.forEach((button, index) => {
+    button.addEventListener("click", () => {
+      if (selected !== null) {
+        place(selected, index);
+      } else if (slots[index] !== null) {
+        selected = slots[index];
+        render();
+        announce(`${nameOf(selected)} selected: choose another slot to move it.`);
+      }
+    });
+    button.addEventListener("keydown", (event) => {
+      if (event.key === "Backspace" || event.key === "Delete") {
+        event.preventDefault();
+        clear(index);
+      }
+    });
+    button.addEventListener("dragstart", (event) => {
+      if (slots[index] === null) return;
+      event.dataTransfer.setData("text/plain", `slot:${index}`);
+      event.dataTransfer.effectAllowed = "move";
+    });
+    button.addEventListener("dragover", (event) => {
+      event.preventDefault();
+      button.classList.add("drop-target");
+    });
+    button.addEventListener("dragleave", () => button.classList.remove("drop-target"));
+    button.addEventListener("drop", (event) => {
+      event.preventDefault();
+      button.classList.remove("drop-target");
+      const [kind, value] = event.dataTransfer.getData("text/plain").split(":");
+      if (kind === "card") place(Number(value), index);
+      if (kind === "slot" && slots[Number(value)] !== null) place(slots[Number(value)], index);
+    });
+  });
+
+  // Dropping a placed card back on the library clears its slot.
+  const library = root.querySelector(".library");
+  library.addEventListener("dragover", (event) => event.preventDefault());
+  library.addEventListener("drop", (event) => {
+    event.preventDefault();
+    const [kind, value] = event.dataTransfer.getData("text/plain").split(":");
+    if (kind === "slot") clear(Number(value));
+  });
+
+  undoButton.addEventListener("click", undo);
+  document.addEventListener("keydown", (event) => {
+    const typing = event.target.closest && event.target.closest("textarea, input");
+    if (!typing && (event.ctrlKey || event.metaKey) && event.key.toLowerCase() === "z") {
+      event.preventDefault();
+      undo();
+    }
+  });
+
+  submitButton.addEventListener("click", async () => {
+    if (slots.some((s) => s === null)) return;
+    submitButton.disabled = true;
+    await saving;
+    const response = await fetch(`${base}/submit`, {
+      method: "POST",
+      headers: { "Content-Type": "application/json", "X-CSRF-Token": csrf },
+      body: JSON.stringify({ slots, counts, history }),
+      credentials: "same-origin",
+    });
+    const reply = await response.json().catch(() => ({ error: response.statusText }));
+    if (response.ok) {
+      announce("Answer submitted.");
+      window.location.assign(reply.next);
+    } else {
+      saveStatus.textContent = `Not submitted: ${reply.error}`;
+      submitButton.disabled = false;
+    }
+  });
+
+  // Lightbox: enlarge any image.
+  const lightbox = document.getElementById("lightbox");
+  for (const zoom of document.querySelectorAll(".zoom, .zoom-frame")) {
+    zoom.addEventListener("click", () => {
+      const img = lightbox.querySelector("img");
+      img.src = zoom.dataset.src;
+      img.alt = zoom.dataset.name;
+      lightbox.querySelector(".lightbox-name").textContent = zoom.dataset.name;
+      lightbox.showModal();
+    });
+  }
+  lightbox.addEventListener("click", (event) => {
+    if (event.target === lightbox) lightbox.close();
+  });
+
+  render();
+})();

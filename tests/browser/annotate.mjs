@@ -1,0 +1,159 @@
+// Drives headless Chromium through the annotation UI. Started by tests/service/browser.rs
+// (mode "e2e") and by scripts/screenshots.sh (mode "screenshots"); parameters come as JSON in
+// the first argument. Prints one JSON line of findings on success; on failure saves a
+// screenshot and exits 1.
+import { chromium } from "playwright-core";
+import { mkdtempSync, mkdirSync } from "node:fs";
+import { tmpdir } from "node:os";
+import { join } from "node:path";
+
+const params = JSON.parse(process.argv[2]);
+const { base, mode } = params;
+const CHROMIUM_FLAGS = [
+  "--headless",
+  "--no-sandbox",
+  "--disable-gpu",
+  "--disable-dev-shm-usage",
+  "--no-first-run",
+  "--disable-background-networking",
+  "--disable-component-update",
+  "--disable-sync",
+];
+
+function check(condition, message) {
+  if (!condition) throw new Error(message);
+}
+
+// Presses Tab until the focused element matches `selector`: keyboard only, no clicks.
+async function tabTo(page, selector) {
+  for (let i = 0; i < 200; i++) {
+    if (await page.evaluate((s) => document.activeElement?.matches(s) ?? false, selector)) return;
+    await page.keyboard.press("Tab");
+  }
+  throw new Error(`Tab never reached ${selector}`);
+}
+
+async function waitSaved(page) {
+  await page.waitForFunction(() => document.getElementById("save-status")?.textContent === "Saved");
+}
+
+async function slotLabels(page) {
+  return page.$$eval(".slot", (slots) => slots.map((s) => s.getAttribute("aria-label")));
+}
+
+async function noHorizontalScroll(page) {
+  return page.evaluate(() => document.documentElement.scrollWidth <= window.innerWidth);
+}
+
+async function acceptInvite(page, invite, password) {
+  await page.goto(base + invite);
+  await page.fill('input[name="password"]', password);
+  await page.fill('input[name="repeat"]', password);
+  await Promise.all([page.waitForURL(`${base}/annotate`), page.click('button[type="submit"]')]);
+}
+
+async function e2e(page) {
+  const found = {};
+  await acceptInvite(page, params.invite, "a long enough password");
+  check((await page.textContent("body")).includes("0 of"), "queue page shows no progress");
+
+  // Forward L = 3 by drag-and-drop.
+  await Promise.all([page.waitForURL(`${base}/annotate/mini/${params.forward}`), page.click("#continue")]);
+  check((await page.$$(".slot")).length === 2, "forward L=3 has two slots");
+  check(await page.isVisible(".context img[alt='Current State']"), "current state is pinned");
+  await page.dragAndDrop('.card[data-label="2"]', '.slot[data-slot="1"]');
+  await waitSaved(page);
+  check(await page.isDisabled("#submit"), "submit enabled with an empty slot");
+  found.announced = await page.textContent("#announce");
+
+  // Reload mid-item: the placement survives.
+  await page.reload();
+  const afterReload = await slotLabels(page);
+  check(afterReload[0] === "Slot 1: Next State 2" && afterReload[1] === "Slot 2: empty",
+    `partial answer lost on reload: ${afterReload}`);
+  check(await page.$eval('.card[data-label="2"]', (c) => c.classList.contains("used")), "placed card not shown as used");
+  found.after_reload = afterReload;
+
+  // The lightbox enlarges an image.
+  await page.click('.zoom[data-name="Next State 1"]');
+  check(await page.isVisible("#lightbox img[alt='Next State 1']"), "lightbox did not open");
+  await page.keyboard.press("Escape");
+
+  await page.dragAndDrop('.card[data-label="1"]', '.slot[data-slot="2"]');
+  await waitSaved(page);
+  check(!(await page.isDisabled("#submit")), "submit still disabled with every slot filled");
+  await Promise.all([page.waitForURL(`${base}/annotate/mini/${params.inverse}`), page.click("#submit")]);
+
+  // Inverse L = 4 by keyboard only.
+  check((await page.$$("li.transition")).length === 3, "inverse L=4 has three transitions");
+  const press = async (label, key) => {
+    await tabTo(page, `.card[data-label="${label}"]`);
+    await page.keyboard.press(key);
+  };
+  await press(1, "3");
+  await press(2, "1");
+  await press(2, "3"); // onto a filled slot: swap with Action 1
+  check((await slotLabels(page)).join("|") === "Slot 1: Action 1|Slot 2: empty|Slot 3: Action 2", "swap");
+  await page.keyboard.press("Control+z");
+  check((await slotLabels(page)).join("|") === "Slot 1: Action 2|Slot 2: empty|Slot 3: Action 1", "undo");
+  await press(3, "1"); // Action 2 goes back to the library
+  await press(3, "Backspace");
+  await press(3, "1");
+  await waitSaved(page);
+  await page.reload();
+  check((await slotLabels(page)).join("|") === "Slot 1: Action 3|Slot 2: empty|Slot 3: Action 1",
+    `inverse partial answer lost on reload: ${await slotLabels(page)}`);
+  await press(2, "2");
+  await waitSaved(page);
+  found.announced_last = await page.textContent("#announce");
+  await tabTo(page, "#submit");
+  await Promise.all([page.waitForURL((url) => !url.pathname.endsWith(params.inverse)), page.keyboard.press("Enter")]);
+
+  // L = 10 pages fit 1280 pixels.
+  for (const item of params.wide || []) {
+    await page.goto(`${base}/annotate/mini/${item}`);
+    check(await noHorizontalScroll(page), `${item}: horizontal scrolling at 1280x800`);
+  }
+  found.wide_checked = (params.wide || []).length;
+  return found;
+}
+
+// Screenshots of both pages at L = 3 and L = 10, with a few cards placed.
+async function screenshots(page) {
+  await acceptInvite(page, params.invite, "a long enough password");
+  mkdirSync(params.out, { recursive: true });
+  for (const shot of params.shots) {
+    await page.goto(`${base}/annotate/${shot.dataset}/${shot.item}`);
+    await page.waitForLoadState("networkidle");
+    for (const [label, slot] of shot.place) {
+      await page.click(`.card[data-label="${label}"]`);
+      await page.click(`.slot[data-slot="${slot}"]`);
+    }
+    await page.waitForLoadState("networkidle");
+    await page.evaluate(() => window.scrollTo(0, 0));
+    check(await noHorizontalScroll(page), `${shot.item}: horizontal scrolling at 1280x800`);
+    await page.screenshot({ path: join(params.out, shot.file) });
+  }
+  return { written: params.shots.length };
+}
+
+const userDataDir = mkdtempSync(join(tmpdir(), "enact-hub-chromium-"));
+const context = await chromium.launchPersistentContext(userDataDir, {
+  executablePath: params.chromium || "/usr/bin/chromium",
+  headless: true,
+  args: CHROMIUM_FLAGS,
+  viewport: { width: 1280, height: 800 },
+});
+const page = context.pages()[0] || (await context.newPage());
+page.setDefaultTimeout(15000);
+try {
+  const found = mode === "screenshots" ? await screenshots(page) : await e2e(page);
+  console.log(JSON.stringify({ ok: true, ...found }));
+  await context.close();
+} catch (error) {
+  const shot = join(params.failure_dir || tmpdir(), "annotation-e2e-failure.png");
+  await page.screenshot({ path: shot, fullPage: true }).catch(() => {});
+  console.error(`browser test failed at ${page.url()}: ${error.stack}\nscreenshot: ${shot}`);
+  await context.close().catch(() => {});
+  process.exit(1);
+}

@@ -1,0 +1,755 @@
+//! Human annotation over HTTP: invites and login, CSRF, blind annotation and 403s, drafts,
+//! submissions scored like model answers, the admin page.
+
+use enact_hub::annotation::{hash_password, new_token, token_hash};
+use enact_hub::store;
+use reqwest::StatusCode;
+use reqwest::header::{COOKIE, SET_COOKIE};
+use serde_json::{Value, json};
+
+use crate::helpers::*;
+
+/// A client that keeps its cookies by hand and does not follow redirects, so tests see the
+/// `Set-Cookie` and `Location` headers.
+pub struct Browser {
+    client: reqwest::Client,
+    base: String,
+    cookies: Vec<(String, String)>,
+}
+
+impl Browser {
+    pub fn new(server: &TestServer) -> Browser {
+        Browser {
+            client: reqwest::Client::builder()
+                .redirect(reqwest::redirect::Policy::none())
+                .build()
+                .expect("client"),
+            base: server.url(""),
+            cookies: Vec::new(),
+        }
+    }
+
+    fn cookie_header(&self) -> String {
+        self.cookies
+            .iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect::<Vec<_>>()
+            .join("; ")
+    }
+
+    fn keep_cookies(&mut self, response: &reqwest::Response) {
+        for value in response.headers().get_all(SET_COOKIE) {
+            let text = value.to_str().expect("ascii cookie");
+            let (pair, _) = text.split_once(';').unwrap_or((text, ""));
+            let (k, v) = pair.split_once('=').expect("name=value");
+            self.cookies.retain(|(name, _)| name != k);
+            if !v.is_empty() {
+                self.cookies.push((k.to_owned(), v.to_owned()));
+            }
+        }
+    }
+
+    pub async fn get(&mut self, path: &str) -> reqwest::Response {
+        let r = self
+            .client
+            .get(format!("{}{path}", self.base))
+            .header(COOKIE, self.cookie_header())
+            .send()
+            .await
+            .unwrap_or_else(|e| panic!("GET {path}: {e}"));
+        self.keep_cookies(&r);
+        r
+    }
+
+    pub async fn text(&mut self, path: &str) -> (StatusCode, String) {
+        let r = self.get(path).await;
+        (r.status(), r.text().await.expect("body"))
+    }
+
+    pub async fn post_form(&mut self, path: &str, fields: &[(&str, &str)]) -> reqwest::Response {
+        let r = self
+            .client
+            .post(format!("{}{path}", self.base))
+            .header(COOKIE, self.cookie_header())
+            .header("content-type", "application/x-www-form-urlencoded")
+            .body(serde_urlencoded::to_string(fields).expect("form"))
+            .send()
+            .await
+            .unwrap_or_else(|e| panic!("POST {path}: {e}"));
+        self.keep_cookies(&r);
+        r
+    }
+
+    pub async fn post_json(
+        &mut self,
+        path: &str,
+        csrf: Option<&str>,
+        body: &Value,
+    ) -> reqwest::Response {
+        let mut request = self
+            .client
+            .post(format!("{}{path}", self.base))
+            .header(COOKIE, self.cookie_header())
+            .json(body);
+        if let Some(token) = csrf {
+            request = request.header("x-csrf-token", token);
+        }
+        let r = request
+            .send()
+            .await
+            .unwrap_or_else(|e| panic!("POST {path}: {e}"));
+        self.keep_cookies(&r);
+        r
+    }
+
+    /// The CSRF token a page carries in its forms.
+    pub async fn csrf(&mut self, path: &str) -> String {
+        let (status, html) = self.text(path).await;
+        assert_eq!(status, StatusCode::OK, "{path}: {html}");
+        hidden_csrf(&html)
+    }
+
+    pub async fn login(&mut self, name: &str, password: &str) -> reqwest::Response {
+        let token = self.csrf("/login").await;
+        self.post_form(
+            "/login",
+            &[("csrf", &token), ("name", name), ("password", password)],
+        )
+        .await
+    }
+}
+
+pub fn hidden_csrf(html: &str) -> String {
+    let start = html.find("name=\"csrf\" value=\"").expect("a csrf field") + 19;
+    html[start..start + 64].to_owned()
+}
+
+pub const PASSWORD: &str = "a long enough password";
+
+/// Creates an account with a password already set; returns its id.
+pub async fn annotator(server: &TestServer, name: &str, admin: bool) -> i64 {
+    let mut conn = server.pool.acquire().await.expect("conn");
+    let id =
+        store::annotations::create_annotator(&mut conn, name, admin, &token_hash(&new_token()))
+            .await
+            .expect("insert")
+            .expect("new name");
+    sqlx::query("UPDATE annotators SET password_hash = ?, invite_hash = NULL WHERE id = ?")
+        .bind(hash_password(PASSWORD).expect("hash"))
+        .bind(id)
+        .execute(&mut *conn)
+        .await
+        .expect("set password");
+    id
+}
+
+/// Assigns the listed items of dataset "mini" to `annotator`.
+pub async fn assign(server: &TestServer, annotator: i64, item_ids: &[&str]) {
+    let mut conn = server.pool.acquire().await.expect("conn");
+    let dataset = store::datasets::by_name(&mut conn, "mini")
+        .await
+        .expect("query")
+        .expect("mini");
+    let ids: Vec<String> = item_ids.iter().map(|s| (*s).to_owned()).collect();
+    let rows = store::annotations::item_rowids(&mut conn, dataset.id, &ids)
+        .await
+        .expect("query")
+        .expect("known ids");
+    let pairs: Vec<(i64, i64)> = rows.into_iter().map(|r| (annotator, r)).collect();
+    store::annotations::assign(&mut conn, &pairs)
+        .await
+        .expect("assign");
+}
+
+async fn logged_in(server: &TestServer, name: &str) -> (Browser, String) {
+    let mut browser = Browser::new(server);
+    let r = browser.login(name, PASSWORD).await;
+    assert_eq!(r.status(), StatusCode::SEE_OTHER, "login of {name}");
+    let csrf = browser.csrf("/annotate").await;
+    (browser, csrf)
+}
+
+fn id(records: &[Value], i: usize) -> String {
+    records[i]["id"].as_str().expect("id").to_owned()
+}
+
+#[tokio::test]
+async fn invite_sets_a_password_once_and_logs_in() {
+    let (server, _) = spawn_app_with_release().await;
+    let token = new_token();
+    {
+        let mut conn = server.pool.acquire().await.expect("conn");
+        store::annotations::create_annotator(&mut conn, "ada", false, &token_hash(&token))
+            .await
+            .expect("insert")
+            .expect("new");
+    }
+    let mut browser = Browser::new(&server);
+    let path = format!("/invite/{token}");
+    let csrf = browser.csrf(&path).await;
+    let short = browser
+        .post_form(
+            &path,
+            &[("csrf", &csrf), ("password", "short"), ("repeat", "short")],
+        )
+        .await;
+    assert_eq!(short.status(), StatusCode::BAD_REQUEST);
+    assert!(
+        short
+            .text()
+            .await
+            .expect("body")
+            .contains("use at least 10")
+    );
+    let csrf = browser.csrf(&path).await;
+    let ok = browser
+        .post_form(
+            &path,
+            &[
+                ("csrf", &csrf),
+                ("password", PASSWORD),
+                ("repeat", PASSWORD),
+            ],
+        )
+        .await;
+    assert_eq!(ok.status(), StatusCode::SEE_OTHER);
+    let cookie = ok
+        .headers()
+        .get_all(SET_COOKIE)
+        .iter()
+        .map(|v| v.to_str().expect("ascii").to_owned())
+        .find(|c| c.starts_with("enact_session="))
+        .expect("a session cookie");
+    assert!(
+        cookie.contains("HttpOnly") && cookie.contains("SameSite=Strict"),
+        "{cookie}"
+    );
+    assert!(!cookie.contains("Secure"), "plain HTTP: {cookie}");
+    let (status, html) = browser.text("/annotate").await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(html.contains("Logged in as <strong>ada</strong>"), "{html}");
+    // The link works once.
+    let (status, html) = Browser::new(&server).text(&path).await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
+    assert!(html.contains("already been used"), "{html}");
+    // Behind a TLS proxy the cookie is Secure.
+    let r = reqwest::Client::new()
+        .get(server.url("/login"))
+        .header("x-forwarded-proto", "https")
+        .send()
+        .await
+        .expect("login page");
+    let cookie = r
+        .headers()
+        .get(SET_COOKIE)
+        .expect("cookie")
+        .to_str()
+        .expect("ascii");
+    assert!(cookie.contains("; Secure"), "{cookie}");
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn logins_are_rate_limited_per_account_with_a_clear_message() {
+    let (server, _) = spawn_app_with_release().await;
+    annotator(&server, "bob", false).await;
+    let mut browser = Browser::new(&server);
+    for _ in 0..5 {
+        let r = browser.login("bob", "wrong password!").await;
+        assert_eq!(r.status(), StatusCode::UNAUTHORIZED);
+        assert!(
+            r.text()
+                .await
+                .expect("body")
+                .contains("unknown name or wrong password")
+        );
+    }
+    // Even the right password is refused now, and the page says why and for how long.
+    let r = browser.login("bob", PASSWORD).await;
+    assert_eq!(r.status(), StatusCode::TOO_MANY_REQUESTS);
+    let html = r.text().await.expect("body");
+    assert!(
+        html.contains("too many failed logins for account &#39;bob&#39;")
+            && html.contains("try again in 15 minutes"),
+        "{html}"
+    );
+    // Unauthenticated pages redirect to the login form; scripts get 401.
+    let r = Browser::new(&server).get("/annotate").await;
+    assert_eq!(r.status(), StatusCode::SEE_OTHER);
+    assert_eq!(r.headers()["location"], "/login");
+    let r = Browser::new(&server)
+        .post_json("/annotate/mini/x/draft", Some("t"), &json!({}))
+        .await;
+    assert_eq!(r.status(), StatusCode::UNAUTHORIZED);
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn annotators_cannot_see_each_others_items_or_answers() {
+    let (server, records) = spawn_app_with_release().await;
+    let a = annotator(&server, "alice", false).await;
+    let b = annotator(&server, "bert", false).await;
+    let (mine, theirs) = (id(&records, 0), id(&records, 1));
+    assign(&server, a, &[&mine]).await;
+    assign(&server, b, &[&theirs]).await;
+    let (mut alice, alice_csrf) = logged_in(&server, "alice").await;
+    let (mut bert, bert_csrf) = logged_in(&server, "bert").await;
+
+    // Bert answers his item.
+    assert_eq!(
+        bert.get(&format!("/annotate/mini/{theirs}")).await.status(),
+        StatusCode::OK
+    );
+    let r = bert
+        .post_json(
+            &format!("/annotate/mini/{theirs}/submit"),
+            Some(&bert_csrf),
+            &json!({"slots": [1, 2], "counts": {"placements": 2, "swaps": 0, "clears": 0, "undos": 0}}),
+        )
+        .await;
+    assert_eq!(
+        r.status(),
+        StatusCode::OK,
+        "{}",
+        r.text().await.unwrap_or_default()
+    );
+
+    for path in [
+        format!("/annotate/mini/{theirs}"),
+        format!("/annotate/mini/{theirs}/answer"),
+    ] {
+        let r = alice.get(&path).await;
+        assert_eq!(r.status(), StatusCode::FORBIDDEN, "{path}");
+        assert!(
+            r.text()
+                .await
+                .expect("body")
+                .contains("is not assigned to you")
+        );
+    }
+    let r = alice
+        .post_json(
+            &format!("/annotate/mini/{theirs}/draft"),
+            Some(&alice_csrf),
+            &json!({"slots": [null, null], "counts": {"placements": 0, "swaps": 0, "clears": 0, "undos": 0}}),
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::FORBIDDEN);
+    let r = alice
+        .post_form(
+            &format!("/annotate/mini/{theirs}/skip"),
+            &[("csrf", &alice_csrf), ("reason", "x"), ("action", "skip")],
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::FORBIDDEN);
+    // Bert's session token does not work as Alice's CSRF token and vice versa.
+    let r = alice
+        .post_json(
+            &format!("/annotate/mini/{mine}/draft"),
+            Some(&bert_csrf),
+            &json!({"slots": [null, null], "counts": {"placements": 0, "swaps": 0, "clears": 0, "undos": 0}}),
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::FORBIDDEN);
+    // Annotators do not get the admin pages.
+    let (status, html) = alice.text("/admin").await;
+    assert_eq!(status, StatusCode::FORBIDDEN);
+    assert!(html.contains("the admin pages are for admins"));
+    // Unknown items are 404, not 403.
+    assert_eq!(
+        alice.get("/annotate/mini/nope").await.status(),
+        StatusCode::NOT_FOUND
+    );
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn no_annotator_response_contains_ground_truth_or_scores() {
+    let (server, records) = spawn_app_with_release().await;
+    let a = annotator(&server, "alice", false).await;
+    let ids: Vec<String> = (0..records.len()).map(|i| id(&records, i)).collect();
+    let refs: Vec<&str> = ids.iter().map(String::as_str).collect();
+    assign(&server, a, &refs).await;
+    let (mut alice, csrf) = logged_in(&server, "alice").await;
+    let forbidden = [
+        "gt_answer",
+        "ground_truth",
+        "key_frame",
+        "task_accuracy",
+        "pairwise",
+        "correct",
+    ];
+    let check = |what: &str, body: &str| {
+        for word in forbidden {
+            assert!(!body.contains(word), "{what} contains {word:?}");
+        }
+    };
+    check("queue", &alice.text("/annotate").await.1);
+    for (i, item) in ids.iter().enumerate() {
+        let (status, html) = alice.text(&format!("/annotate/mini/{item}")).await;
+        assert_eq!(status, StatusCode::OK);
+        check(item, &html);
+        let l = records[i]["images"].as_array().expect("images").len();
+        // Submit the ground truth itself: the reply still says nothing about correctness.
+        let gt = &records[i]["gt_answer"];
+        let r = alice
+            .post_json(
+                &format!("/annotate/mini/{item}/submit"),
+                Some(&csrf),
+                &json!({"slots": gt, "counts": {"placements": l - 1, "swaps": 0, "clears": 0, "undos": 0}}),
+            )
+            .await;
+        assert_eq!(r.status(), StatusCode::OK);
+        check("submit reply", &r.text().await.expect("body"));
+        let (status, answer) = alice.text(&format!("/annotate/mini/{item}/answer")).await;
+        assert_eq!(status, StatusCode::OK);
+        check("own answer", &answer);
+        let answer: Value = serde_json::from_str(&answer).expect("json");
+        assert_eq!(&answer["answer"], gt);
+        check(
+            "item page after",
+            &alice.text(&format!("/annotate/mini/{item}")).await.1,
+        );
+    }
+    check("queue after", &alice.text("/annotate").await.1);
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn state_changing_requests_without_the_csrf_token_are_rejected() {
+    let (server, records) = spawn_app_with_release().await;
+    let a = annotator(&server, "alice", true).await;
+    let item = id(&records, 0);
+    assign(&server, a, &[&item]).await;
+    let (mut alice, csrf) = logged_in(&server, "alice").await;
+    let draft = json!({"slots": [2, null], "counts": {"placements": 1, "swaps": 0, "clears": 0, "undos": 0}});
+    let path = format!("/annotate/mini/{item}/draft");
+    for token in [None, Some("0".repeat(64).as_str()), Some("")] {
+        let r = alice.post_json(&path, token, &draft).await;
+        assert_eq!(r.status(), StatusCode::FORBIDDEN, "{token:?}");
+        assert!(r.text().await.expect("body").contains("CSRF token"));
+    }
+    let submit = format!("/annotate/mini/{item}/submit");
+    let full =
+        json!({"slots": [2, 1], "counts": {"placements": 2, "swaps": 0, "clears": 0, "undos": 0}});
+    assert_eq!(
+        alice.post_json(&submit, None, &full).await.status(),
+        StatusCode::FORBIDDEN
+    );
+    for (path, fields) in [
+        (
+            format!("/annotate/mini/{item}/skip"),
+            vec![("reason", "blurry"), ("action", "flag")],
+        ),
+        ("/admin/annotators".to_owned(), vec![("name", "mallory")]),
+        (
+            "/admin/assign".to_owned(),
+            vec![("dataset", "mini"), ("mode", "split"), ("annotator", "1")],
+        ),
+        ("/logout".to_owned(), vec![]),
+    ] {
+        let r = alice.post_form(&path, &fields).await;
+        assert_eq!(r.status(), StatusCode::FORBIDDEN, "{path}");
+        let mut wrong = fields.clone();
+        wrong.push(("csrf", "f00d"));
+        assert_eq!(
+            alice.post_form(&path, &wrong).await.status(),
+            StatusCode::FORBIDDEN,
+            "{path}"
+        );
+    }
+    // Nothing happened: no draft with a placement, no flag, no account, still logged in.
+    let mut conn = server.pool.acquire().await.expect("conn");
+    let placed: i64 = sqlx::query_scalar(
+        "SELECT count(*) FROM drafts WHERE slots != '[]' AND slots != '[null,null]'",
+    )
+    .fetch_one(&mut *conn)
+    .await
+    .expect("count");
+    assert_eq!(placed, 0);
+    let finished: i64 = sqlx::query_scalar("SELECT count(*) FROM annotations")
+        .fetch_one(&mut *conn)
+        .await
+        .expect("count");
+    assert_eq!(finished, 0);
+    let accounts: i64 = sqlx::query_scalar("SELECT count(*) FROM annotators")
+        .fetch_one(&mut *conn)
+        .await
+        .expect("count");
+    assert_eq!(accounts, 1);
+    assert_eq!(alice.get("/annotate").await.status(), StatusCode::OK);
+    // The login form has its own double-submit token.
+    let mut fresh = Browser::new(&server);
+    let r = fresh
+        .post_form("/login", &[("name", "alice"), ("password", PASSWORD)])
+        .await;
+    assert_eq!(r.status(), StatusCode::FORBIDDEN);
+    // With the token everything works.
+    let r = alice.post_json(&path, Some(&csrf), &draft).await;
+    assert_eq!(r.status(), StatusCode::OK);
+    let r = alice.post_form("/logout", &[("csrf", &csrf)]).await;
+    assert_eq!(r.status(), StatusCode::SEE_OTHER);
+    assert_eq!(alice.get("/annotate").await.status(), StatusCode::SEE_OTHER);
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn drafts_resume_submissions_are_checked_and_scored_for_the_human_row() {
+    let (server, records) = spawn_app_with_release().await;
+    let a = annotator(&server, "alice", false).await;
+    let ids: Vec<String> = (0..records.len()).map(|i| id(&records, i)).collect();
+    let refs: Vec<&str> = ids.iter().map(String::as_str).collect();
+    assign(&server, a, &refs).await;
+    let (mut alice, csrf) = logged_in(&server, "alice").await;
+    let fwd3 = &ids[0]; // forward, L = 3, ground truth [2, 1]
+    let counts = json!({"placements": 3, "swaps": 1, "clears": 1, "undos": 1});
+
+    // The queue sends her to the first item; a saved draft comes back on the page.
+    let r = alice.get("/annotate/next").await;
+    assert_eq!(
+        r.headers()["location"],
+        format!("/annotate/mini/{fwd3}").as_str()
+    );
+    alice.get(&format!("/annotate/mini/{fwd3}")).await;
+    let r = alice
+        .post_json(
+            &format!("/annotate/mini/{fwd3}/draft"),
+            Some(&csrf),
+            &json!({"slots": [null, 1], "counts": counts, "history": [[null, null]]}),
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::OK);
+    let (_, html) = alice.text(&format!("/annotate/mini/{fwd3}")).await;
+    assert!(html.contains("&#34;slots&#34;:[null,1]"), "{html}");
+    let (_, queue) = alice.text("/annotate").await;
+    assert!(queue.contains("Resume where you left off"), "{queue}");
+
+    // Bad drafts say what is wrong.
+    let r = alice
+        .post_json(
+            &format!("/annotate/mini/{fwd3}/draft"),
+            Some(&csrf),
+            &json!({"slots": [1, 1], "counts": counts}),
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::BAD_REQUEST);
+    let body: Value = r.json().await.expect("json");
+    assert_eq!(
+        body["error"],
+        format!("draft of item '{fwd3}': slots[1]: label 1 is placed twice")
+    );
+    let r = alice
+        .post_json(
+            &format!("/annotate/mini/{fwd3}/submit"),
+            Some(&csrf),
+            &json!({"slots": [null, 1], "counts": counts}),
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::BAD_REQUEST);
+    let body: Value = r.json().await.expect("json");
+    assert_eq!(
+        body["error"],
+        format!("item '{fwd3}': slots 1 are empty; fill every slot before submitting")
+    );
+
+    // Right on the forward item, wrong on the inverse one.
+    for (item, slots) in [(fwd3, json!([2, 1])), (&ids[1], json!([1, 2]))] {
+        alice.get(&format!("/annotate/mini/{item}")).await;
+        let r = alice
+            .post_json(
+                &format!("/annotate/mini/{item}/submit"),
+                Some(&csrf),
+                &json!({"slots": slots, "counts": counts}),
+            )
+            .await;
+        assert_eq!(r.status(), StatusCode::OK);
+    }
+    let r = alice
+        .post_json(
+            &format!("/annotate/mini/{fwd3}/submit"),
+            Some(&csrf),
+            &json!({"slots": [1, 2], "counts": counts}),
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::CONFLICT, "an answer is final");
+    // Skipping needs a reason; flags reach the admin page.
+    let skip = format!("/annotate/mini/{}/skip", ids[2]);
+    let r = alice
+        .post_form(
+            &skip,
+            &[("csrf", &csrf), ("reason", " "), ("action", "flag")],
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::BAD_REQUEST);
+    assert!(
+        r.text()
+            .await
+            .expect("body")
+            .contains("say why in the reason field")
+    );
+    let r = alice
+        .post_form(
+            &skip,
+            &[
+                ("csrf", &csrf),
+                ("reason", "two frames look identical"),
+                ("action", "flag"),
+            ],
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::SEE_OTHER);
+
+    let (_, answer) = alice.text(&format!("/annotate/mini/{fwd3}/answer")).await;
+    let answer: Value = serde_json::from_str(&answer).expect("json");
+    assert_eq!(answer["answer"], json!([2, 1]));
+    assert_eq!(
+        (
+            &answer["placements"],
+            &answer["swaps"],
+            &answer["clears"],
+            &answer["undos"]
+        ),
+        (&json!(3), &json!(1), &json!(1), &json!(1))
+    );
+    assert!(
+        answer["time_to_first_placement_ms"].as_i64().expect("set")
+            <= answer["time_on_item_ms"].as_i64().expect("set")
+    );
+
+    let mut conn = server.pool.acquire().await.expect("conn");
+    let dataset = store::datasets::by_name(&mut conn, "mini")
+        .await
+        .expect("q")
+        .expect("mini");
+    let report = store::annotations::human_performance(&mut conn, dataset.id)
+        .await
+        .expect("query")
+        .expect("two answers");
+    let overall = report.overall.as_ref().expect("overall");
+    assert_eq!(overall.totals.count, 2, "the flagged item is not an answer");
+    assert_eq!(overall.totals.task_accuracy, 0.5);
+    assert_eq!(
+        report
+            .forward_world_modeling
+            .as_ref()
+            .expect("fwd")
+            .totals
+            .task_accuracy,
+        1.0
+    );
+    assert_eq!(
+        report
+            .inverse_world_modeling
+            .as_ref()
+            .expect("inv")
+            .totals
+            .task_accuracy,
+        0.0
+    );
+    drop(conn);
+
+    // The admin page shows the flag and the human row.
+    annotator(&server, "root", true).await;
+    let (mut admin, _) = logged_in(&server, "root").await;
+    let (status, html) = admin.text("/admin").await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(html.contains("two frames look identical"), "{html}");
+    assert!(
+        html.contains("<th scope=\"row\">overall</th><td>2</td><td>50.0</td>"),
+        "{html}"
+    );
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn admins_create_annotators_and_split_datasets_evenly() {
+    let (server, records) = spawn_app_with_release().await;
+    annotator(&server, "root", true).await;
+    let (mut admin, csrf) = logged_in(&server, "root").await;
+    let r = admin
+        .post_form("/admin/annotators", &[("csrf", &csrf), ("name", "carol")])
+        .await;
+    assert_eq!(r.status(), StatusCode::OK);
+    let html = r.text().await.expect("body");
+    let start = html.find("<code id=\"invite-url\">").expect("invite shown") + 22;
+    let url = &html[start..html[start..].find('<').expect("end") + start];
+    assert!(
+        url.starts_with(&format!("http://{}/invite/", server.addr)),
+        "{url}"
+    );
+    let r = admin
+        .post_form("/admin/annotators", &[("csrf", &csrf), ("name", "carol")])
+        .await;
+    assert_eq!(r.status(), StatusCode::CONFLICT);
+    let r = admin
+        .post_form("/admin/annotators", &[("csrf", &csrf), ("name", "<b>")])
+        .await;
+    assert_eq!(r.status(), StatusCode::BAD_REQUEST);
+    admin
+        .post_form("/admin/annotators", &[("csrf", &csrf), ("name", "dave")])
+        .await;
+    let mut conn = server.pool.acquire().await.expect("conn");
+    let accounts = store::annotations::annotators(&mut conn)
+        .await
+        .expect("list");
+    drop(conn);
+    let ids: Vec<String> = accounts
+        .iter()
+        .filter(|a| a.name == "carol" || a.name == "dave")
+        .map(|a| a.id.to_string())
+        .collect();
+    let r = admin
+        .post_form(
+            "/admin/assign",
+            &[
+                ("csrf", &csrf),
+                ("dataset", "mini"),
+                ("mode", "split"),
+                ("annotator", &ids[0]),
+                ("annotator", &ids[1]),
+            ],
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::OK);
+    assert!(
+        r.text()
+            .await
+            .expect("body")
+            .contains("Assigned 4 items of &#39;mini&#39;")
+    );
+    // Each got one item of each direction (L = 3 and 4 alternate within a direction).
+    let mut conn = server.pool.acquire().await.expect("conn");
+    for who in &ids {
+        let queue = store::annotations::queue(&mut conn, who.parse().expect("id"))
+            .await
+            .expect("queue");
+        assert_eq!(queue.len(), 2);
+        let forward = queue
+            .iter()
+            .filter(|e| e.direction.as_str() == "forward")
+            .count();
+        assert_eq!(forward, 1, "{who}: {queue:?}");
+    }
+    drop(conn);
+    // Listing unknown ids names them.
+    let r = admin
+        .post_form(
+            "/admin/assign",
+            &[
+                ("csrf", &csrf),
+                ("dataset", "mini"),
+                ("mode", "list"),
+                ("annotator", &ids[0]),
+                ("items", &format!("{} nope", id(&records, 0))),
+            ],
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::BAD_REQUEST);
+    assert!(
+        r.text()
+            .await
+            .expect("body")
+            .contains("not in dataset &#39;mini&#39;: nope")
+    );
+    server.stop().await;
+}

@@ -1,0 +1,137 @@
+//! The annotation UI in a real browser: headless Chromium driven by playwright-core
+//! (tests/browser/annotate.mjs) against a server on 127.0.0.1:0. The stored answers and
+//! telemetry are then checked here, in the database.
+
+use std::path::{Path, PathBuf};
+
+use enact_hub::annotation::{new_token, token_hash};
+use enact_hub::store;
+use serde_json::{Value, json};
+
+use crate::annotate::assign;
+use crate::helpers::*;
+
+const CHROMIUM: &str = "/usr/bin/chromium";
+
+fn browser_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/browser")
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
+    let in_ci = std::env::var("CI").is_ok_and(|v| v == "true");
+    if !Path::new(CHROMIUM).exists() {
+        assert!(
+            !in_ci,
+            "{CHROMIUM} is missing in CI: scripts/test.sh installs it"
+        );
+        eprintln!("skipping: {CHROMIUM} is absent (install chromium, or run scripts/test.sh)");
+        return;
+    }
+    assert!(
+        browser_dir().join("node_modules/playwright-core").is_dir(),
+        "tests/browser/node_modules is missing: run `npm ci` in tests/browser (scripts/test.sh does)"
+    );
+    let records = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let shared = records.clone();
+    let server = spawn_app_with(|pool, dir| async move {
+        let root = dir.join("release");
+        let written = write_release(&root, &[3, 4, 10]);
+        import(&pool, &root, &options("mini")).await;
+        *shared.lock().expect("lock") = written;
+    })
+    .await;
+    let records: Vec<Value> = records.lock().expect("lock").clone();
+    let id = |i: usize| records[i]["id"].as_str().expect("id").to_owned();
+    // write_release: forward then inverse for each L; so 0 = forward 3, 3 = inverse 4.
+    let (forward, inverse, wide) = (id(0), id(3), [id(4), id(5)]);
+    let token = new_token();
+    let annotator = {
+        let mut conn = server.pool.acquire().await.expect("conn");
+        store::annotations::create_annotator(&mut conn, "eve", false, &token_hash(&token))
+            .await
+            .expect("insert")
+            .expect("new")
+    };
+    assign(
+        &server,
+        annotator,
+        &[&forward, &inverse, &wide[0], &wide[1]],
+    )
+    .await;
+
+    let params = json!({
+        "mode": "e2e",
+        "base": server.url(""),
+        "invite": format!("/invite/{token}"),
+        "forward": forward,
+        "inverse": inverse,
+        "wide": wide,
+        "chromium": CHROMIUM,
+        "failure_dir": env!("CARGO_TARGET_TMPDIR"),
+    });
+    let output = tokio::task::spawn_blocking(move || {
+        std::process::Command::new("node")
+            .arg(browser_dir().join("annotate.mjs"))
+            .arg(params.to_string())
+            .output()
+            .expect("run node")
+    })
+    .await
+    .expect("join");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        output.status.success(),
+        "browser run failed:\n{stderr}\n{stdout}"
+    );
+    let found: Value =
+        serde_json::from_str(stdout.lines().last().expect("a result line")).expect("JSON result");
+    assert_eq!(
+        found["after_reload"],
+        json!(["Slot 1: Next State 2", "Slot 2: empty"])
+    );
+    assert_eq!(found["announced"], "Next State 2 placed in slot 1.");
+    assert_eq!(found["announced_last"], "Action 2 placed in slot 2.");
+    assert_eq!(found["wide_checked"], 2);
+
+    let mut conn = server.pool.acquire().await.expect("conn");
+    let rowid = |item: String| {
+        sqlx::query_scalar::<_, i64>("SELECT id FROM items WHERE item_id = ?").bind(item)
+    };
+    let f = rowid(forward).fetch_one(&mut *conn).await.expect("forward");
+    let i = rowid(inverse).fetch_one(&mut *conn).await.expect("inverse");
+    let fwd = store::annotations::annotation(&mut conn, annotator, f)
+        .await
+        .expect("query")
+        .expect("forward answered");
+    assert_eq!(fwd.answer, Some(vec![2, 1]));
+    let t = fwd.telemetry;
+    assert_eq!((t.placements, t.swaps, t.clears, t.undos), (2, 0, 0, 0));
+    let first = t.time_to_first_placement_ms.expect("first placement time");
+    assert!(first <= t.time_on_item_ms && t.time_on_item_ms > 0, "{t:?}");
+    let inv = store::annotations::annotation(&mut conn, annotator, i)
+        .await
+        .expect("query")
+        .expect("inverse answered");
+    assert_eq!(inv.answer, Some(vec![3, 2, 1]));
+    let t = inv.telemetry;
+    assert_eq!((t.placements, t.swaps, t.clears, t.undos), (6, 2, 1, 1));
+    assert!(t.time_to_first_placement_ms.expect("set") <= t.time_on_item_ms);
+    // Both answers equal the ground truth, and the verifier agrees.
+    let dataset = store::datasets::by_name(&mut conn, "mini")
+        .await
+        .expect("q")
+        .expect("mini");
+    let report = store::annotations::human_performance(&mut conn, dataset.id)
+        .await
+        .expect("query")
+        .expect("answers");
+    let overall = report.overall.expect("overall");
+    assert_eq!(
+        (overall.totals.count, overall.totals.task_accuracy),
+        (2, 1.0)
+    );
+    drop(conn);
+    server.stop().await;
+}
