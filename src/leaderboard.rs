@@ -13,6 +13,8 @@ use crate::dataset::StepLength;
 #[serde(rename_all = "snake_case")]
 pub enum RowSource {
     Submission,
+    /// Annotators' submitted answers, scored by the same verifier as model submissions.
+    Human,
 }
 
 /// TA and PA as fractions in [0, 1]; `None` where the group had no item.
@@ -120,6 +122,38 @@ impl LeaderboardRow {
             inverse: columns(&report["inverse_world_modeling"]),
             coverage: coverage["coverage"].as_f64().unwrap_or(0.0),
             parse_failure_rate: coverage["parse_failure_rate"].as_f64().unwrap_or(0.0),
+        }
+    }
+}
+
+impl LeaderboardRow {
+    /// The Human row: `report` over the annotators' submitted answers; `dataset_items` gives
+    /// its coverage.
+    pub fn human(
+        report: &crate::verifier::PerformanceReport,
+        dataset_items: usize,
+    ) -> LeaderboardRow {
+        // The report serialises to the same shape as stored submission scores.
+        let report = serde_json::to_value(report).unwrap_or(Value::Null);
+        let overall = cell(&report["overall"]);
+        LeaderboardRow {
+            source: RowSource::Human,
+            submission: None,
+            model: "Human".to_owned(),
+            account: "annotators".to_owned(),
+            baseline: false,
+            submitted_at: String::new(),
+            coverage: if dataset_items == 0 {
+                0.0
+            } else {
+                overall.count as f64 / dataset_items as f64
+            },
+            overall,
+            overall_task_accuracy_ci: None,
+            overall_pairwise_accuracy_ci: None,
+            forward: columns(&report["forward_world_modeling"]),
+            inverse: columns(&report["inverse_world_modeling"]),
+            parse_failure_rate: 0.0,
         }
     }
 }

@@ -47,7 +47,13 @@ async fn leaderboard_rows(state: &AppState, dataset: i64) -> Result<Vec<Leaderbo
             &scores,
         ));
     }
-    // Human performance rows, once annotations exist, are appended here (RowSource).
+    if let Some(report) = store::annotations::human_performance(&mut conn, dataset).await? {
+        let items = store::datasets::counts(&mut conn, dataset).await?.total;
+        rows.push(LeaderboardRow::human(
+            &report,
+            usize::try_from(items).unwrap_or(0),
+        ));
+    }
     rank(&mut rows);
     Ok(rows)
 }

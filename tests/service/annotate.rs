@@ -658,6 +658,23 @@ async fn drafts_resume_submissions_are_checked_and_scored_for_the_human_row() {
         html.contains("<th scope=\"row\">overall</th><td>2</td><td>50.0</td>"),
         "{html}"
     );
+
+    // And the leaderboard carries a Human row with the same figures, beside no submission.
+    let (status, board) = server.get_json("/api/v1/datasets/mini/leaderboard").await;
+    assert_eq!(status, StatusCode::OK);
+    let rows = board["rows"].as_array().expect("rows");
+    assert_eq!(rows.len(), 1, "{board}");
+    assert_eq!(rows[0]["source"], "human");
+    assert_eq!(rows[0]["model"], "Human");
+    assert_eq!(rows[0]["overall"]["task_accuracy"], 0.5);
+    assert_eq!(rows[0]["forward"]["total"]["task_accuracy"], 1.0);
+    let page = server
+        .get("/leaderboard/mini")
+        .await
+        .text()
+        .await
+        .expect("page");
+    assert!(page.contains("Human"), "{page}");
     server.stop().await;
 }
 
