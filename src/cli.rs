@@ -613,14 +613,7 @@ async fn scoring_targets(
                  at import (enact-hub import DATA_DIR --scene-graphs REPLAYED_DIR)"
             );
         }
-        let pool = open_db(db).await?;
-        let mut conn = pool.acquire().await?;
-        let stored = store::datasets::by_name(&mut conn, dataset)
-            .await?
-            .with_context(|| format!("no dataset named '{dataset}' in {}", db.display()))?;
-        let rows = store::items::scoring_items(&mut conn, stored.id).await?;
-        drop(conn);
-        pool.close().await;
+        let rows = stored_scoring_items(db, dataset).await?;
         let targets = scoring::targets_from_stored(rows).map_err(anyhow::Error::msg)?;
         return Ok(Ok(targets));
     }
@@ -904,14 +897,7 @@ fn agreement(args: &AgreementArgs) -> anyhow::Result<ExitCode> {
 
 /// The scene-graph signatures stored for a dataset's items, for the enact policy.
 async fn stored_signatures(db: &Path, dataset: &str) -> anyhow::Result<scoring::StoredSignatures> {
-    let pool = open_db(db).await?;
-    let mut conn = pool.acquire().await?;
-    let stored = store::datasets::by_name(&mut conn, dataset)
-        .await?
-        .with_context(|| format!("no dataset named '{dataset}' in {}", db.display()))?;
-    let rows = store::items::scoring_items(&mut conn, stored.id).await?;
-    drop(conn);
-    pool.close().await;
+    let rows = stored_scoring_items(db, dataset).await?;
     let mut tables = Vec::new();
     for row in rows {
         let Some((source, json)) = row.semantics else {
@@ -1021,4 +1007,20 @@ async fn generate(args: GenerateArgs) -> anyhow::Result<ExitCode> {
         args.out.join("replayed_activities").display()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// Every item of a stored dataset with what scoring needs (ground truth, signatures).
+async fn stored_scoring_items(
+    db: &Path,
+    dataset: &str,
+) -> anyhow::Result<Vec<store::items::ScoringItem>> {
+    let pool = open_db(db).await?;
+    let mut conn = pool.acquire().await?;
+    let stored = store::datasets::by_name(&mut conn, dataset)
+        .await?
+        .with_context(|| format!("no dataset named '{dataset}' in {}", db.display()))?;
+    let rows = store::items::scoring_items(&mut conn, stored.id).await?;
+    drop(conn);
+    pool.close().await;
+    Ok(rows)
 }
