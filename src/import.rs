@@ -200,6 +200,8 @@ pub enum ImportError {
     },
     #[error("image {path} changed on disk during the import; nothing was imported")]
     ImageChanged { path: String },
+    #[error("cannot serialise the signatures of item {item_id}: {message}")]
+    Signatures { item_id: String, message: String },
     #[error("database error: {0}")]
     Database(#[from] sqlx::Error),
 }
@@ -588,9 +590,11 @@ async fn store_semantics(
     item_id: &str,
     semantics: &ItemSemantics,
 ) -> Result<(), ImportError> {
-    let json = serde_json::to_string(&semantics.signatures).map_err(|e| {
-        ImportError::Location(format!("cannot serialise signatures of {item_id}: {e}"))
-    })?;
+    let json =
+        serde_json::to_string(&semantics.signatures).map_err(|e| ImportError::Signatures {
+            item_id: item_id.to_owned(),
+            message: e.to_string(),
+        })?;
     store::items::set_semantics(conn, dataset_id, item_id, semantics.source.as_str(), &json)
         .await?;
     Ok(())

@@ -1,12 +1,6 @@
 //! The command line as users run it: exit codes and what it prints.
 
-use std::process::Command;
-
 use crate::helpers::*;
-
-fn enact_hub() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_enact-hub"))
-}
 
 #[test]
 fn import_prints_a_summary_and_reports_nothing_changed_the_second_time() {

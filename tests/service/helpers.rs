@@ -240,3 +240,8 @@ pub async fn spawn_app_with_release() -> (TestServer, Vec<Value>) {
     let records = records.lock().expect("lock").clone();
     (server, records)
 }
+
+/// The `enact-hub` binary built for these tests.
+pub fn enact_hub() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_enact-hub"))
+}

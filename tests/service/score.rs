@@ -2,15 +2,10 @@
 //! the strict policy's failure accounting.
 
 use std::path::Path;
-use std::process::Command;
 
 use serde_json::{Value, json};
 
 use crate::helpers::*;
-
-fn enact_hub() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_enact-hub"))
-}
 
 fn run(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (bool, String, String) {
     let out = enact_hub()

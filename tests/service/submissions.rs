@@ -2,7 +2,6 @@
 //! and parity with `enact-hub score --policy strict` on ENACT's fixtures.
 
 use std::collections::HashMap;
-use std::process::Command;
 
 use enact_hub::accounts::{NewToken, Role};
 use enact_hub::store;
@@ -11,10 +10,6 @@ use serde_json::{Value, json};
 use sqlx::SqlitePool;
 
 use crate::helpers::*;
-
-fn enact_hub() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_enact-hub"))
-}
 
 /// A token for a fresh (or existing) account, straight into the store.
 async fn make_token(pool: &SqlitePool, name: &str, role: Role, daily: Option<i64>) -> String {
