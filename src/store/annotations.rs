@@ -373,26 +373,43 @@ pub fn next_in_queue(queue: &[QueueEntry]) -> Option<&QueueEntry> {
         .or_else(|| queue.iter().find(|e| e.status == QueueStatus::Todo))
 }
 
-/// The store id of an item if it is assigned to `annotator`, and whether it is finished.
-pub async fn assigned_item(
+/// An annotator's standing on one item: whether it is finished, and the draft if one exists.
+#[derive(Debug, Clone)]
+pub struct AssignmentState {
+    pub finished: bool,
+    pub draft: Option<StoredDraft>,
+}
+
+/// The annotator's standing on `item` in one query (the item page's hot path), or `None` when
+/// the item is not assigned to them.
+pub async fn assignment_state(
     conn: &mut SqliteConnection,
     annotator: i64,
-    dataset_id: i64,
-    item_id: &str,
-) -> Result<Option<(i64, bool)>, sqlx::Error> {
+    item: i64,
+) -> Result<Option<AssignmentState>, sqlx::Error> {
     let row = sqlx::query(
-        "SELECT i.id, (n.item IS NOT NULL) AS finished FROM items i \
-         JOIN assignments a ON a.item = i.id AND a.annotator = ?1 \
-         LEFT JOIN annotations n ON n.item = i.id AND n.annotator = ?1 \
-         WHERE i.dataset_id = ?2 AND i.item_id = ?3",
+        "SELECT (n.item IS NOT NULL) AS finished, d.state, d.started_at_ms, \
+         d.first_placement_at_ms FROM assignments a \
+         LEFT JOIN annotations n ON n.annotator = a.annotator AND n.item = a.item \
+         LEFT JOIN drafts d ON d.annotator = a.annotator AND d.item = a.item \
+         WHERE a.annotator = ?1 AND a.item = ?2",
     )
     .bind(annotator)
-    .bind(dataset_id)
-    .bind(item_id)
+    .bind(item)
     .fetch_optional(conn)
     .await?;
-    row.map(|r| Ok((r.try_get("id")?, r.try_get("finished")?)))
-        .transpose()
+    row.map(|r| {
+        let has_draft = r.try_get::<Option<String>, _>("state")?.is_some();
+        Ok(AssignmentState {
+            finished: r.try_get("finished")?,
+            draft: if has_draft {
+                Some(stored_draft(&r)?)
+            } else {
+                None
+            },
+        })
+    })
+    .transpose()
 }
 
 /// A stored draft with its timing.
@@ -444,15 +461,17 @@ pub async fn draft(
     .bind(item)
     .fetch_optional(conn)
     .await?;
-    row.map(|r| {
-        let state: String = r.try_get("state")?;
-        Ok(StoredDraft {
-            draft: serde_json::from_str(&state).map_err(|e| corrupt("state", e))?,
-            started_at_ms: r.try_get("started_at_ms")?,
-            first_placement_at_ms: r.try_get("first_placement_at_ms")?,
-        })
+    row.as_ref().map(stored_draft).transpose()
+}
+
+/// Reads a draft from a row holding `state`, `started_at_ms` and `first_placement_at_ms`.
+fn stored_draft(r: &sqlx::sqlite::SqliteRow) -> Result<StoredDraft, sqlx::Error> {
+    let state: String = r.try_get("state")?;
+    Ok(StoredDraft {
+        draft: serde_json::from_str(&state).map_err(|e| corrupt("state", e))?,
+        started_at_ms: r.try_get("started_at_ms")?,
+        first_placement_at_ms: r.try_get("first_placement_at_ms")?,
     })
-    .transpose()
 }
 
 /// Saves a draft; the first save with a card placed records the time of the first placement.

@@ -34,6 +34,8 @@ impl ItemImage {
 /// One stored item, ground truth included: web handlers choose what to show of it.
 #[derive(Debug, Clone)]
 pub struct StoredItem {
+    /// The row id in `items`.
+    pub rowid: i64,
     pub summary: ItemSummary,
     pub key_frame_ids: Vec<String>,
     pub question: String,
@@ -167,6 +169,7 @@ pub async fn get(
     })
     .collect::<Result<Vec<_>, sqlx::Error>>()?;
     Ok(Some(StoredItem {
+        rowid,
         summary: summary_from_row(&row)?,
         key_frame_ids: json_column(&row, "key_frame_ids")?,
         question: row.try_get("question")?,

@@ -4,6 +4,8 @@
 //! Blind by construction: nothing here reads an item's ground truth or score, and an item not
 //! assigned to the session's annotator is 403 on every route.
 
+use std::sync::Arc;
+
 use askama::Template;
 use axum::Json;
 use axum::Router;
@@ -19,7 +21,10 @@ use super::{AppError, AppState};
 use crate::annotation::Draft;
 use crate::dataset::{Direction, StepLength};
 use crate::store;
-use crate::store::annotations::{Outcome, QueueStatus, Session, Telemetry, now_ms};
+use crate::store::items::StoredItem;
+use crate::store::annotations::{
+    Outcome, QueueStatus, Session, StoredDraft, Telemetry, now_ms,
+};
 
 pub fn router() -> Router<AppState> {
     Router::new()
@@ -137,41 +142,61 @@ async fn next_item(
     })
 }
 
-/// An item assigned to the session's annotator.
+/// An item assigned to the session's annotator, with the annotator's standing on it.
 struct Assigned {
-    dataset_id: i64,
-    /// The item's store id.
-    rowid: i64,
+    item: Arc<StoredItem>,
     finished: bool,
+    draft: Option<StoredDraft>,
+}
+
+impl Assigned {
+    fn rowid(&self) -> i64 {
+        self.item.rowid
+    }
+}
+
+/// The item a URL names, from memory when it was read before (the item page is the hot path).
+async fn cached_item(
+    state: &AppState,
+    conn: &mut sqlx::SqliteConnection,
+    dataset: &str,
+    item_id: &str,
+) -> Result<Arc<StoredItem>, AppError> {
+    if let Some(found) = state.items.stored(dataset, item_id) {
+        return Ok(found);
+    }
+    let stored = store::datasets::by_name(conn, dataset)
+        .await?
+        .ok_or_else(|| AppError::NotFound(format!("no dataset named '{dataset}'")))?;
+    let item = store::items::get(conn, stored.id, item_id)
+        .await?
+        .ok_or_else(|| AppError::NotFound(format!("no item '{item_id}' in dataset '{dataset}'")))?;
+    let found = Arc::new(item);
+    state.items.insert_stored(dataset, item_id, found.clone());
+    Ok(found)
 }
 
 /// Looks up an item assigned to the session's annotator: 404 for an unknown dataset or item,
 /// 403 for an item that exists but is someone else's (or no one's).
 async fn assigned(
+    state: &AppState,
     conn: &mut sqlx::SqliteConnection,
     session: &Session,
     dataset: &str,
     item_id: &str,
 ) -> Result<Assigned, AppError> {
-    let stored = store::datasets::by_name(conn, dataset)
+    let item = cached_item(state, conn, dataset, item_id).await?;
+    let standing = store::annotations::assignment_state(conn, session.annotator, item.rowid)
         .await?
-        .ok_or_else(|| AppError::NotFound(format!("no dataset named '{dataset}'")))?;
-    if let Some((rowid, finished)) =
-        store::annotations::assigned_item(conn, session.annotator, stored.id, item_id).await?
-    {
-        return Ok(Assigned {
-            dataset_id: stored.id,
-            rowid,
-            finished,
-        });
-    }
-    let exists = store::items::get(conn, stored.id, item_id).await?.is_some();
-    Err(if exists {
-        AppError::Forbidden(format!(
-            "item '{item_id}' of dataset '{dataset}' is not assigned to you"
-        ))
-    } else {
-        AppError::NotFound(format!("no item '{item_id}' in dataset '{dataset}'"))
+        .ok_or_else(|| {
+            AppError::Forbidden(format!(
+                "item '{item_id}' of dataset '{dataset}' is not assigned to you"
+            ))
+        })?;
+    Ok(Assigned {
+        item,
+        finished: standing.finished,
+        draft: standing.draft,
     })
 }
 
@@ -222,28 +247,26 @@ async fn item_page(
     Path((dataset, item_id)): Path<(String, String)>,
 ) -> Result<Html<String>, PageError> {
     let mut conn = state.pool.acquire().await?;
-    let Assigned {
-        dataset_id,
-        rowid,
-        finished,
-    } = assigned(&mut conn, &session, &dataset, &item_id).await?;
-    let item = store::items::get(&mut conn, dataset_id, &item_id)
-        .await?
-        .ok_or_else(|| AppError::NotFound(format!("no item '{item_id}' in dataset '{dataset}'")))?;
+    let found = assigned(&state, &mut conn, &session, &dataset, &item_id).await?;
+    let item = &found.item;
+    let finished = found.finished;
     let step_length = item.summary.step_length;
-    let draft = if finished {
-        Draft::empty(step_length)
-    } else {
-        store::annotations::open_draft(
-            &mut conn,
-            session.annotator,
-            rowid,
-            &Draft::empty(step_length),
-            now_ms(),
-        )
-        .await?
-        .draft
+    let draft = match (finished, found.draft) {
+        (true, _) => Draft::empty(step_length),
+        (false, Some(stored)) => stored.draft,
+        (false, None) => {
+            store::annotations::open_draft(
+                &mut conn,
+                session.annotator,
+                item.rowid,
+                &Draft::empty(step_length),
+                now_ms(),
+            )
+            .await?
+            .draft
+        }
     };
+    drop(conn);
     let frame = |position: usize| -> Option<Frame> {
         item.images.get(position).map(|img| Frame {
             name: img.label(),
@@ -318,19 +341,16 @@ async fn checked_draft(
     draft: &Draft,
 ) -> Result<i64, AppError> {
     let mut conn = state.pool.acquire().await?;
-    let found = assigned(&mut conn, session, dataset, item_id).await?;
+    let found = assigned(state, &mut conn, session, dataset, item_id).await?;
     if found.finished {
         return Err(AppError::Conflict(format!(
             "item '{item_id}' is already finished; its answer can no longer change"
         )));
     }
-    let item = store::items::get(&mut conn, found.dataset_id, item_id)
-        .await?
-        .ok_or_else(|| AppError::NotFound(format!("no item '{item_id}' in dataset '{dataset}'")))?;
     draft
-        .check(item.summary.step_length)
+        .check(found.item.summary.step_length)
         .map_err(|e| AppError::BadRequest(format!("draft of item '{item_id}': {e}")))?;
-    Ok(found.rowid)
+    Ok(found.rowid())
 }
 
 #[derive(Serialize)]
@@ -423,9 +443,8 @@ async fn skip(
 ) -> Result<Response, PageError> {
     let session = &request.session;
     let mut conn = state.pool.acquire().await?;
-    let Assigned {
-        rowid, finished, ..
-    } = assigned(&mut conn, session, &dataset, &item_id).await?;
+    let found = assigned(&state, &mut conn, session, &dataset, &item_id).await?;
+    let (rowid, finished) = (found.rowid(), found.finished);
     drop(conn);
     if finished {
         return Err(AppError::Conflict(format!("item '{item_id}' is already finished")).into());
@@ -497,8 +516,8 @@ async fn own_answer(
     Path((dataset, item_id)): Path<(String, String)>,
 ) -> Result<Json<OwnAnswer>, AppError> {
     let mut conn = state.pool.acquire().await?;
-    let found = assigned(&mut conn, &session, &dataset, &item_id).await?;
-    let a = store::annotations::annotation(&mut conn, session.annotator, found.rowid)
+    let found = assigned(&state, &mut conn, &session, &dataset, &item_id).await?;
+    let a = store::annotations::annotation(&mut conn, session.annotator, found.rowid())
         .await?
         .ok_or_else(|| {
             AppError::NotFound(format!("item '{item_id}' has no answer from you yet"))

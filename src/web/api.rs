@@ -315,7 +315,7 @@ async fn get_item(
     State(state): State<AppState>,
     Path((name, item_id)): Path<(String, String)>,
 ) -> Result<Response, AppError> {
-    let json = match state.items.get(&name, &item_id) {
+    let json = match state.items.json(&name, &item_id) {
         Some(json) => json,
         None => {
             let dataset = dataset_or_404(&state.pool, &name).await?;
@@ -329,7 +329,7 @@ async fn get_item(
                 serde_json::to_vec(&ItemView::new(name.clone(), item))
                     .map_err(|e| AppError::Internal(e.into()))?,
             );
-            state.items.insert(&name, &item_id, json.clone());
+            state.items.insert_json(&name, &item_id, json.clone());
             json
         }
     };
