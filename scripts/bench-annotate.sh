@@ -14,6 +14,8 @@ cd "$(dirname "$0")/.."
 
 DURATION=${DURATION:-10s}
 CONNECTIONS=${CONNECTIONS:-64}
+# wrk threads share the 2 cores with the server; one thread drives 64 connections easily.
+WRK_THREADS=${WRK_THREADS:-1}
 SESSIONS=${SESSIONS:-64}
 PORT=${PORT:-18081}
 OUT=bench-out/annotate
@@ -82,5 +84,5 @@ end
 LUA
 
 wrk -t2 -c8 -d2s -s "$OUT/sessions.lua" "$BASE" >/dev/null
-echo "## item page: GET $ITEM, ${#cookies[@]} sessions, ${CONNECTIONS} connections, $DURATION"
-wrk -t2 -c"$CONNECTIONS" -d"$DURATION" --latency -s "$OUT/sessions.lua" "$BASE" | tee "$OUT/wrk-item-page.txt"
+echo "## item page: GET $ITEM, ${#cookies[@]} sessions, ${CONNECTIONS} connections, ${WRK_THREADS} wrk thread(s), $DURATION"
+wrk -t"$WRK_THREADS" -c"$CONNECTIONS" -d"$DURATION" --latency -s "$OUT/sessions.lua" "$BASE" | tee "$OUT/wrk-item-page.txt"

@@ -34,6 +34,9 @@ pub async fn open(path: &Path) -> Result<SqlitePool, sqlx::Error> {
         .max_connections(8)
         .min_connections(1)
         .acquire_timeout(Duration::from_secs(15))
+        // A local file connection does not go stale; pinging it on every acquire would cost a
+        // round trip to its worker thread on every request.
+        .test_before_acquire(false)
         .connect_with(options)
         .await?;
     sqlx::migrate!("./migrations").run(&pool).await?;

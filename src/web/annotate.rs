@@ -21,10 +21,8 @@ use super::{AppError, AppState};
 use crate::annotation::Draft;
 use crate::dataset::{Direction, StepLength};
 use crate::store;
+use crate::store::annotations::{Outcome, QueueStatus, Session, StoredDraft, Telemetry, now_ms};
 use crate::store::items::StoredItem;
-use crate::store::annotations::{
-    Outcome, QueueStatus, Session, StoredDraft, Telemetry, now_ms,
-};
 
 pub fn router() -> Router<AppState> {
     Router::new()
@@ -158,13 +156,13 @@ impl Assigned {
 /// The item a URL names, from memory when it was read before (the item page is the hot path).
 async fn cached_item(
     state: &AppState,
-    conn: &mut sqlx::SqliteConnection,
     dataset: &str,
     item_id: &str,
 ) -> Result<Arc<StoredItem>, AppError> {
     if let Some(found) = state.items.stored(dataset, item_id) {
         return Ok(found);
     }
+    let conn = &mut *state.pool.acquire().await?;
     let stored = store::datasets::by_name(conn, dataset)
         .await?
         .ok_or_else(|| AppError::NotFound(format!("no dataset named '{dataset}'")))?;
@@ -178,21 +176,33 @@ async fn cached_item(
 
 /// Looks up an item assigned to the session's annotator: 404 for an unknown dataset or item,
 /// 403 for an item that exists but is someone else's (or no one's).
+/// Touches the store only for what is not already in memory.
 async fn assigned(
     state: &AppState,
-    conn: &mut sqlx::SqliteConnection,
     session: &Session,
     dataset: &str,
     item_id: &str,
 ) -> Result<Assigned, AppError> {
-    let item = cached_item(state, conn, dataset, item_id).await?;
-    let standing = store::annotations::assignment_state(conn, session.annotator, item.rowid)
-        .await?
-        .ok_or_else(|| {
-            AppError::Forbidden(format!(
-                "item '{item_id}' of dataset '{dataset}' is not assigned to you"
-            ))
-        })?;
+    let item = cached_item(state, dataset, item_id).await?;
+    let standing = match state.standings.get(session.annotator, item.rowid) {
+        Some(known) => known,
+        None => {
+            let ticket = state.standings.ticket();
+            let mut conn = state.pool.acquire().await?;
+            let read =
+                store::annotations::assignment_state(&mut conn, session.annotator, item.rowid)
+                    .await?
+                    .ok_or_else(|| {
+                        AppError::Forbidden(format!(
+                            "item '{item_id}' of dataset '{dataset}' is not assigned to you"
+                        ))
+                    })?;
+            state
+                .standings
+                .remember(ticket, session.annotator, item.rowid, read.clone());
+            read
+        }
+    };
     Ok(Assigned {
         item,
         finished: standing.finished,
@@ -246,8 +256,7 @@ async fn item_page(
     LoggedIn(session): LoggedIn,
     Path((dataset, item_id)): Path<(String, String)>,
 ) -> Result<Html<String>, PageError> {
-    let mut conn = state.pool.acquire().await?;
-    let found = assigned(&state, &mut conn, &session, &dataset, &item_id).await?;
+    let found = assigned(&state, &session, &dataset, &item_id).await?;
     let item = &found.item;
     let finished = found.finished;
     let step_length = item.summary.step_length;
@@ -255,18 +264,19 @@ async fn item_page(
         (true, _) => Draft::empty(step_length),
         (false, Some(stored)) => stored.draft,
         (false, None) => {
-            store::annotations::open_draft(
+            let mut conn = state.pool.acquire().await?;
+            let opened = store::annotations::open_draft(
                 &mut conn,
                 session.annotator,
                 item.rowid,
                 &Draft::empty(step_length),
                 now_ms(),
             )
-            .await?
-            .draft
+            .await?;
+            state.standings.forget(session.annotator, item.rowid);
+            opened.draft
         }
     };
-    drop(conn);
     let frame = |position: usize| -> Option<Frame> {
         item.images.get(position).map(|img| Frame {
             name: img.label(),
@@ -340,8 +350,7 @@ async fn checked_draft(
     item_id: &str,
     draft: &Draft,
 ) -> Result<i64, AppError> {
-    let mut conn = state.pool.acquire().await?;
-    let found = assigned(state, &mut conn, session, dataset, item_id).await?;
+    let found = assigned(state, session, dataset, item_id).await?;
     if found.finished {
         return Err(AppError::Conflict(format!(
             "item '{item_id}' is already finished; its answer can no longer change"
@@ -373,6 +382,7 @@ async fn save_draft(
         now_ms(),
     )
     .await?;
+    state.standings.forget(request.session.annotator, rowid);
     Ok(Json(Saved { saved: true }))
 }
 
@@ -422,6 +432,7 @@ async fn submit(
         )));
     }
     tx.commit().await?;
+    state.standings.forget(session.annotator, rowid);
     Ok(Json(Submitted {
         next: "/annotate/next".to_owned(),
     }))
@@ -442,10 +453,8 @@ async fn skip(
     request: Protected<SkipForm>,
 ) -> Result<Response, PageError> {
     let session = &request.session;
-    let mut conn = state.pool.acquire().await?;
-    let found = assigned(&state, &mut conn, session, &dataset, &item_id).await?;
+    let found = assigned(&state, session, &dataset, &item_id).await?;
     let (rowid, finished) = (found.rowid(), found.finished);
-    drop(conn);
     if finished {
         return Err(AppError::Conflict(format!("item '{item_id}' is already finished")).into());
     }
@@ -490,6 +499,7 @@ async fn skip(
     );
     store::annotations::finish(&mut tx, session.annotator, rowid, &outcome, &telemetry).await?;
     tx.commit().await?;
+    state.standings.forget(session.annotator, rowid);
     Ok(Redirect::to("/annotate/next").into_response())
 }
 
@@ -515,8 +525,8 @@ async fn own_answer(
     LoggedIn(session): LoggedIn,
     Path((dataset, item_id)): Path<(String, String)>,
 ) -> Result<Json<OwnAnswer>, AppError> {
+    let found = assigned(&state, &session, &dataset, &item_id).await?;
     let mut conn = state.pool.acquire().await?;
-    let found = assigned(&state, &mut conn, &session, &dataset, &item_id).await?;
     let a = store::annotations::annotation(&mut conn, session.annotator, found.rowid())
         .await?
         .ok_or_else(|| {

@@ -12,6 +12,7 @@ use std::time::Duration;
 use axum::body::Bytes;
 use sqlx::SqlitePool;
 
+use super::standing_cache::StandingCache;
 use crate::store;
 use crate::store::items::StoredItem;
 
@@ -89,8 +90,12 @@ impl<V: Clone> KeyedCache<V> {
     }
 }
 
-/// Clears `cache` whenever the store's content generation changes. Runs until the pool closes.
-pub async fn watch_generation(pool: SqlitePool, cache: Arc<ItemCache>) {
+/// Clears `cache` and `standings` whenever the store's content generation changes. Runs until the pool closes.
+pub async fn watch_generation(
+    pool: SqlitePool,
+    cache: Arc<ItemCache>,
+    standings: Arc<StandingCache>,
+) {
     let mut seen = None;
     let mut ticker = tokio::time::interval(POLL_INTERVAL);
     ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
@@ -108,6 +113,7 @@ pub async fn watch_generation(pool: SqlitePool, cache: Arc<ItemCache>) {
                 if seen.is_some_and(|s| s != generation) {
                     tracing::info!(generation, "stored items changed: item cache cleared");
                     cache.clear();
+                    standings.clear();
                 }
                 seen = Some(generation);
             }
@@ -115,6 +121,7 @@ pub async fn watch_generation(pool: SqlitePool, cache: Arc<ItemCache>) {
                 // Serving stale items is worse than serving none: drop the cache.
                 tracing::warn!(error = %e, "cannot read the content generation");
                 cache.clear();
+                standings.clear();
             }
         }
     }

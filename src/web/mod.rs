@@ -15,6 +15,7 @@ mod item_cache;
 mod leaderboard;
 mod pages;
 pub mod session;
+mod standing_cache;
 mod submissions;
 
 use std::future::Future;
@@ -34,6 +35,7 @@ pub use admin::{check_annotator_name, invite_url};
 pub use error::AppError;
 use frame_cache::FrameCache;
 use item_cache::ItemCache;
+use standing_cache::StandingCache;
 
 use crate::store;
 
@@ -73,6 +75,7 @@ pub struct AppState {
     pub pool: SqlitePool,
     frames: Arc<FrameCache>,
     items: Arc<ItemCache>,
+    standings: Arc<StandingCache>,
     targets: Arc<submissions::TargetCache>,
     submission_body_limit: usize,
     daily_quota: i64,
@@ -87,6 +90,7 @@ impl AppState {
             pool,
             frames: Arc::new(FrameCache::new(config.frame_cache_bytes)),
             items: Arc::new(ItemCache::default()),
+            standings: Arc::new(StandingCache::default()),
             targets: Arc::new(submissions::TargetCache::default()),
             submission_body_limit: config.submission_body_limit,
             daily_quota: config.daily_quota,
@@ -185,6 +189,7 @@ impl Server {
         let watcher = tokio::spawn(item_cache::watch_generation(
             self.state.pool.clone(),
             self.state.items.clone(),
+            self.state.standings.clone(),
         ));
         // Connection info gives the login rate limit the client's address.
         let result = axum::serve(

@@ -510,7 +510,10 @@ async fn drafts_resume_submissions_are_checked_and_scored_for_the_human_row() {
         r.headers()["location"],
         format!("/annotate/mini/{fwd3}").as_str()
     );
+    // Read twice, so the server holds her standing on the item in memory before she saves.
     alice.get(&format!("/annotate/mini/{fwd3}")).await;
+    let (_, html) = alice.text(&format!("/annotate/mini/{fwd3}")).await;
+    assert!(html.contains("&#34;slots&#34;:[null,null]"), "{html}");
     let r = alice
         .post_json(
             &format!("/annotate/mini/{fwd3}/draft"),
@@ -563,6 +566,8 @@ async fn drafts_resume_submissions_are_checked_and_scored_for_the_human_row() {
             )
             .await;
         assert_eq!(r.status(), StatusCode::OK);
+        let (_, html) = alice.text(&format!("/annotate/mini/{item}")).await;
+        assert!(html.contains("You have finished this item"), "{html}");
     }
     let r = alice
         .post_json(
