@@ -19,40 +19,21 @@ WRK_THREADS=${WRK_THREADS:-1}
 SESSIONS=${SESSIONS:-64}
 PORT=${PORT:-18081}
 OUT=bench-out/annotate
-mkdir -p "$OUT"
+DB_NAME=bench.db
 
 if ! command -v wrk >/dev/null 2>&1; then
   echo "installing wrk (Debian package)" >&2
   apt-get install -y wrk >/dev/null 2>&1 || { apt-get update >/dev/null && apt-get install -y wrk >/dev/null; }
 fi
-
-# BIN=path/to/enact-hub uses an existing binary instead of building the release one.
-if [ -z "${BIN:-}" ]; then
-  cargo build --release --locked --bin enact-hub >&2
-  BIN=target/release/enact-hub
-fi
-DB="$OUT/bench.db"
-rm -f "$DB" "$DB-wal" "$DB-shm"
-BASE="http://127.0.0.1:$PORT"
-
-RUST_LOG=warn "$BIN" serve --demo --db "$DB" --addr "127.0.0.1:$PORT" >"$OUT/server.log" 2>&1 &
-SERVER=$!
-trap 'kill $SERVER 2>/dev/null || true' EXIT
-for _ in $(seq 300); do
-  curl -fsS "$BASE/healthz" >/dev/null 2>&1 && break
-  sleep 0.2
-done
+# shellcheck source=scripts/lib/demo-server.sh
+source scripts/lib/demo-server.sh
 
 INVITE=$("$BIN" annotator create --db "$DB" --name bench --admin --base-url "$BASE" | tail -n 1)
 PASSWORD="benchmark password"
-csrf_of() { sed -n 's/.*name="csrf" value="\([0-9a-f]*\)".*/\1/p' | head -n 1; }
 session_of() { sed -n 's/^[Ss]et-[Cc]ookie: enact_session=\([0-9a-f]*\);.*/\1/p' | tr -d '\r'; }
 
 jar="$OUT/jar.txt"
-rm -f "$jar"
-token=$(curl -fsS -c "$jar" "$INVITE" | csrf_of)
-curl -fsS -b "$jar" -c "$jar" -o /dev/null \
-  --data-urlencode "csrf=$token" --data-urlencode "password=$PASSWORD" --data-urlencode "repeat=$PASSWORD" "$INVITE"
+accept_invite "$INVITE" "$PASSWORD" "$jar"
 admin_csrf=$(curl -fsS -b "$jar" "$BASE/admin" | csrf_of)
 annotator_id=$(curl -fsS -b "$jar" "$BASE/admin" | sed -n 's/.*<tr><td>\([0-9]*\)<\/td><td>bench<\/td>.*/\1/p')
 curl -fsS -b "$jar" -o /dev/null --data-urlencode "csrf=$admin_csrf" \

@@ -13,31 +13,15 @@ cd "$(dirname "$0")/.."
 
 PORT=${PORT:-18082}
 OUT=bench-out/screenshots
-mkdir -p "$OUT" docs
-# BIN=path/to/enact-hub uses an existing binary instead of building the release one.
-if [ -z "${BIN:-}" ]; then
-  cargo build --release --locked --bin enact-hub >&2
-  BIN=target/release/enact-hub
-fi
-DB="$OUT/shots.db"
-rm -f "$DB" "$DB-wal" "$DB-shm"
-BASE="http://127.0.0.1:$PORT"
-RUST_LOG=warn "$BIN" serve --demo --db "$DB" --addr "127.0.0.1:$PORT" >"$OUT/server.log" 2>&1 &
-SERVER=$!
-trap 'kill $SERVER 2>/dev/null || true' EXIT
-for _ in $(seq 300); do
-  curl -fsS "$BASE/healthz" >/dev/null 2>&1 && break
-  sleep 0.2
-done
+DB_NAME=shots.db
+mkdir -p docs
+# shellcheck source=scripts/lib/demo-server.sh
+source scripts/lib/demo-server.sh
 
 ADMIN_INVITE=$("$BIN" annotator create --db "$DB" --name admin --admin --base-url "$BASE" | tail -n 1)
 INVITE=$("$BIN" annotator create --db "$DB" --name annotator --base-url "$BASE" | tail -n 1)
-csrf_of() { sed -n 's/.*name="csrf" value="\([0-9a-f]*\)".*/\1/p' | head -n 1; }
 jar="$OUT/jar.txt"
-rm -f "$jar"
-token=$(curl -fsS -c "$jar" "$ADMIN_INVITE" | csrf_of)
-curl -fsS -b "$jar" -c "$jar" -o /dev/null --data-urlencode "csrf=$token" \
-  --data-urlencode "password=screenshot admin" --data-urlencode "repeat=screenshot admin" "$ADMIN_INVITE"
+accept_invite "$ADMIN_INVITE" "screenshot admin" "$jar"
 admin_page=$(curl -fsS -b "$jar" "$BASE/admin")
 admin_csrf=$(echo "$admin_page" | csrf_of)
 annotator_id=$(echo "$admin_page" | sed -n 's/.*<tr><td>\([0-9]*\)<\/td><td>annotator<\/td>.*/\1/p')
