@@ -335,6 +335,25 @@ pub(crate) mod tests {
         }
     }
 
+    /// A node change as the diff reports it, for tests of what consumes diffs.
+    pub(crate) fn node_change(name: &str, states: &[&str], parent: Option<&[&str]>) -> NodeChange {
+        NodeChange {
+            name: name.into(),
+            states: owned(states),
+            category: Some("x".into()),
+            parent: parent.map(owned),
+        }
+    }
+
+    /// An edge change as the diff reports it, for tests of what consumes diffs.
+    pub(crate) fn edge_change(from: &str, to: &str, states: &[&str]) -> EdgeChange {
+        EdgeChange {
+            from: from.into(),
+            to: to.into(),
+            states: owned(states),
+        }
+    }
+
     fn graph(nodes: Vec<SceneNode>, edges: Vec<SceneEdge>) -> SceneGraph {
         SceneGraph { nodes, edges }
     }
@@ -427,14 +446,6 @@ pub(crate) mod tests {
         let only_contact = graph(vec![], vec![edge("c", "d", &["RightContact"])]);
         let d = state_centric_diff(&SceneGraph::default(), &only_contact).unwrap();
         assert!(!d.has_meaningful_change());
-    }
-
-    fn edge_change(from: &str, to: &str, states: &[&str]) -> EdgeChange {
-        EdgeChange {
-            from: from.into(),
-            to: to.into(),
-            states: owned(states),
-        }
     }
 
     #[test]

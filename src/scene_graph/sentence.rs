@@ -287,27 +287,11 @@ pub fn parse_action(text: &str) -> Result<BTreeSet<String>, SentenceParseError> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene_graph::diff::{DiffSide, EdgeChange, NodeChange};
+    use crate::scene_graph::diff::DiffSide;
+    use crate::scene_graph::diff::tests::{edge_change as edge, node_change as change};
     use crate::scene_graph::signature::diff_signatures;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
-
-    fn change(name: &str, states: &[&str], parent: Option<&[&str]>) -> NodeChange {
-        NodeChange {
-            name: name.into(),
-            states: states.iter().map(|s| s.to_string()).collect(),
-            category: Some("x".into()),
-            parent: parent.map(|p| p.iter().map(|s| s.to_string()).collect()),
-        }
-    }
-
-    fn edge(from: &str, to: &str, states: &[&str]) -> EdgeChange {
-        EdgeChange {
-            from: from.into(),
-            to: to.into(),
-            states: states.iter().map(|s| s.to_string()).collect(),
-        }
-    }
 
     fn sample() -> StateDiff {
         StateDiff {

@@ -210,24 +210,8 @@ pub fn diff_signatures(diff: &StateDiff) -> Result<BTreeSet<String>, NameError> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene_graph::diff::{DiffSide, EdgeChange, NodeChange};
-
-    fn change(name: &str, states: &[&str], parent: Option<&[&str]>) -> NodeChange {
-        NodeChange {
-            name: name.into(),
-            states: states.iter().map(|s| s.to_string()).collect(),
-            category: Some("x".into()),
-            parent: parent.map(|p| p.iter().map(|s| s.to_string()).collect()),
-        }
-    }
-
-    fn edge(from: &str, to: &str, states: &[&str]) -> EdgeChange {
-        EdgeChange {
-            from: from.into(),
-            to: to.into(),
-            states: states.iter().map(|s| s.to_string()).collect(),
-        }
-    }
+    use crate::scene_graph::diff::DiffSide;
+    use crate::scene_graph::diff::tests::{edge_change as edge, node_change as change};
 
     fn sigs(add: DiffSide, remove: DiffSide) -> Vec<String> {
         diff_signatures(&StateDiff { add, remove })
