@@ -1,0 +1,104 @@
+//! Commands over a stored dataset's annotations: `agreement --db`, `agreement-protocol` and
+//! `report`, printing JSON or writing the report bundle.
+
+use std::path::Path;
+use std::process::ExitCode;
+
+use anyhow::Context;
+use serde_json::json;
+
+use crate::agreement::{BootstrapConfig, MeasurementLevel, OrderingEncoding};
+use crate::agreement_report::{
+    AgreementSection, REPORT_METRIC_VERSION, agreement_section, overlapping_answers,
+};
+use crate::store;
+
+/// What `agreement --db` computes.
+pub struct AgreementOptions {
+    pub encoding: OrderingEncoding,
+    pub level: Option<MeasurementLevel>,
+    pub bootstrap: BootstrapConfig,
+}
+
+/// The dataset's id, or an error naming the dataset and the database.
+async fn dataset_id(
+    conn: &mut sqlx::SqliteConnection,
+    db: &Path,
+    name: &str,
+) -> anyhow::Result<i64> {
+    Ok(store::datasets::by_name(conn, name)
+        .await?
+        .with_context(|| format!("no dataset named '{name}' in {}", db.display()))?
+        .id)
+}
+
+/// The JSON `agreement --db` prints for one agreement section.
+pub fn agreement_json(
+    dataset: &str,
+    dataset_hash: &str,
+    section: &AgreementSection,
+) -> serde_json::Value {
+    let alpha = &section.alpha;
+    let ci = (alpha.replicates > 0).then(|| {
+        json!({
+            "low": alpha.ci_low,
+            "high": alpha.ci_high,
+            "confidence_level": alpha.confidence_level,
+            "replicates": alpha.replicates,
+            "undefined_replicates": alpha.undefined_replicates,
+            "resampled": "items",
+            "seed": alpha.seed,
+            "rng": alpha.rng,
+        })
+    });
+    json!({
+        "dataset": dataset,
+        "dataset_hash": dataset_hash,
+        "metric_version": REPORT_METRIC_VERSION,
+        "encoding": section.encoding,
+        "level": section.level,
+        "alpha": alpha.estimate.alpha,
+        "reason": alpha.estimate.reason.as_ref().map(ToString::to_string),
+        "ci": ci,
+        "pairwise": section.pairwise,
+        "mean_pairwise_alpha": section.mean_pairwise_alpha,
+        "exact_agreement": section.exact_agreement,
+        "annotators": section.annotators,
+        "counts": {
+            "annotators": section.annotators.len(),
+            "items": section.items,
+            "answers": section.answers,
+            "units": alpha.estimate.units,
+            "units_used": alpha.estimate.units_used,
+            "pairable_values": alpha.estimate.pairable_values,
+            "by_direction_and_step_length": section.counts,
+        },
+    })
+}
+
+/// `agreement --db PATH --dataset NAME`: alpha over the items two or more annotators answered.
+pub async fn agreement(
+    db: &Path,
+    dataset: &str,
+    options: &AgreementOptions,
+) -> anyhow::Result<ExitCode> {
+    let pool = super::open_db(db).await?;
+    let mut conn = pool.acquire().await?;
+    let id = dataset_id(&mut conn, db, dataset).await?;
+    let answers = store::agreement::annotator_answers(&mut conn, id).await?;
+    let (hash, _) = store::agreement::dataset_hash(&mut conn, id).await?;
+    drop(conn);
+    pool.close().await;
+    let overlap = overlapping_answers(&answers).with_context(|| format!("dataset '{dataset}'"))?;
+    let (encoding, level, config) = (options.encoding, options.level, options.bootstrap);
+    let section =
+        tokio::task::spawn_blocking(move || agreement_section(&overlap, encoding, level, &config))
+            .await
+            .context("agreement task failed")?
+            .with_context(|| format!("dataset '{dataset}'"))?;
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&agreement_json(dataset, &hash, &section))?
+    );
+    Ok(ExitCode::SUCCESS)
+}
