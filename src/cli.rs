@@ -39,6 +39,9 @@ enum Command {
     Score(ScoreArgs),
     /// Krippendorff's alpha of reliability data, with an optional bootstrap interval.
     Agreement(AgreementArgs),
+    /// The paper's cross-annotation protocol on a stored dataset: draw k completed primary items
+    /// per annotator × direction × step length and assign each to the other annotators.
+    AgreementProtocol(stored::ProtocolArgs),
     /// Run ENACT's data pipeline on BEHAVIOR-format replays: key-frame segmentation, then
     /// forward and inverse QA items in the ENACT release layout.
     Generate(GenerateArgs),
@@ -313,6 +316,7 @@ pub fn main() -> ExitCode {
                 (Some(db), Some(dataset)) => stored::agreement(db, dataset, &args.stored()).await,
                 _ => agreement(&args),
             },
+            Command::AgreementProtocol(args) => stored::agreement_protocol(&args).await,
             Command::Generate(args) => generate(args).await,
             Command::Token(command) => token(command).await,
             Command::Annotator(AnnotatorCommand::Create(args)) => create_annotator(args).await,

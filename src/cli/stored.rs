@@ -102,3 +102,55 @@ pub async fn agreement(
     );
     Ok(ExitCode::SUCCESS)
 }
+
+#[derive(clap::Args)]
+pub struct ProtocolArgs {
+    /// SQLite database file.
+    #[arg(long, env = "ENACT_HUB_DB", default_value = "enact-hub.db")]
+    db: std::path::PathBuf,
+    /// The stored dataset.
+    #[arg(long)]
+    dataset: String,
+    /// Items drawn per annotator, direction and step length (the paper: 5).
+    #[arg(long, default_value_t = crate::agreement_protocol::DEFAULT_ITEMS_PER_CELL)]
+    items_per_cell: usize,
+    /// Seed of the draw, recorded with the round.
+    #[arg(long, default_value_t = crate::agreement_protocol::DEFAULT_PROTOCOL_SEED)]
+    seed: u64,
+}
+
+/// `agreement-protocol`: runs the protocol once and prints what it drew as JSON.
+pub async fn agreement_protocol(args: &ProtocolArgs) -> anyhow::Result<ExitCode> {
+    let pool = super::open_db(&args.db).await?;
+    let mut conn = pool.acquire().await?;
+    let id = dataset_id(&mut conn, &args.db, &args.dataset).await?;
+    drop(conn);
+    let mut tx = pool.begin().await?;
+    let run =
+        store::agreement::run_protocol(&mut tx, id, args.items_per_cell, args.seed, None).await?;
+    let run = match run {
+        Ok(run) => {
+            tx.commit().await?;
+            run
+        }
+        Err(refusal) => {
+            tx.rollback().await?;
+            pool.close().await;
+            anyhow::bail!("dataset '{}': {refusal}", args.dataset);
+        }
+    };
+    pool.close().await;
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&json!({
+            "dataset": args.dataset,
+            "items_per_cell": run.plan.items_per_cell,
+            "seed": run.plan.seed,
+            "annotators": run.annotators,
+            "samples": run.plan.samples,
+            "assignments_added": run.assignments_added,
+            "shortfalls": run.plan.shortfalls,
+        }))?
+    );
+    Ok(ExitCode::SUCCESS)
+}

@@ -10,6 +10,7 @@ use enact_hub::store::annotations::{Outcome, Telemetry};
 use enact_hub::verifier::Permutation;
 use serde_json::Value;
 
+use crate::annotate::{Browser, PASSWORD, annotator};
 use crate::helpers::*;
 
 const TELEMETRY: Telemetry = Telemetry {
@@ -239,4 +240,170 @@ async fn agreement_without_overlapping_answers_says_so() {
         stderr.contains("no item has answers from two or more annotators (2 answers on 2 items)"),
         "{stderr}"
     );
+}
+
+/// A release with `per_cell` items in every direction × L in `lengths`, imported as "mini".
+pub fn write_balanced_release(
+    root: &std::path::Path,
+    lengths: &[usize],
+    per_cell: u32,
+) -> Vec<Value> {
+    let mut records = Vec::new();
+    let mut n = 1;
+    for &l in lengths {
+        for forward in [true, false] {
+            for _ in 0..per_cell {
+                records.push(write_record(
+                    root,
+                    "cook_bacon_1749678308264596",
+                    forward,
+                    l,
+                    n,
+                ));
+                n += 1;
+            }
+        }
+    }
+    let lines: Vec<String> = records.iter().map(Value::to_string).collect();
+    write_qa_file(root, &lines);
+    records
+}
+
+async fn logged_in(server: &TestServer, name: &str) -> (Browser, String) {
+    let mut browser = Browser::new(server);
+    let r = browser.login(name, PASSWORD).await;
+    assert_eq!(
+        r.status(),
+        reqwest::StatusCode::SEE_OTHER,
+        "login of {name}"
+    );
+    let csrf = browser.csrf("/annotate").await;
+    (browser, csrf)
+}
+
+async fn kinds(server: &TestServer) -> Vec<(i64, String, String)> {
+    sqlx::query_as(
+        "SELECT g.annotator, i.item_id, g.kind FROM assignments g JOIN items i ON i.id = g.item \
+         ORDER BY g.annotator, i.item_id",
+    )
+    .fetch_all(&server.pool)
+    .await
+    .expect("assignments")
+}
+
+#[tokio::test]
+async fn the_protocol_runs_once_with_csrf_and_cross_assigns_blind() {
+    let server = spawn_app_with(|pool, dir| async move {
+        let root = dir.join("release");
+        write_balanced_release(&root, &[3, 4], 4);
+        import(&pool, &root, &options("mini")).await;
+    })
+    .await;
+    annotator(&server, "root", true).await;
+    let ids: Vec<i64> = [
+        annotator(&server, "ann", false).await,
+        annotator(&server, "bob", false).await,
+    ]
+    .to_vec();
+    let (mut admin, csrf) = logged_in(&server, "root").await;
+    let mut fields = vec![
+        ("csrf", csrf.as_str()),
+        ("dataset", "mini"),
+        ("mode", "split"),
+    ];
+    let id_text: Vec<String> = ids.iter().map(i64::to_string).collect();
+    for id in &id_text {
+        fields.push(("annotator", id));
+    }
+    assert_eq!(
+        admin.post_form("/admin/assign", &fields).await.status(),
+        200
+    );
+    // Each answers their whole primary share (ground truth is the reversed order).
+    for name in ["ann", "bob"] {
+        let (mut browser, token) = logged_in(&server, name).await;
+        let queue = store::annotations::queue(
+            &mut server.pool.acquire().await.expect("conn"),
+            ids[usize::from(name == "bob")],
+        )
+        .await
+        .expect("queue");
+        assert_eq!(queue.len(), 8);
+        for entry in queue {
+            let slots: Vec<u8> = (1..entry.step_length.get()).rev().collect();
+            let path = format!("/annotate/mini/{}", entry.item_id);
+            browser.get(&path).await;
+            let r = browser
+                .post_json(
+                    &format!("{path}/submit"),
+                    Some(&token),
+                    &serde_json::json!({"slots": slots, "counts": {"placements": 1, "swaps": 0, "clears": 0, "undos": 0}}),
+                )
+                .await;
+            assert_eq!(r.status(), 200);
+        }
+    }
+    let path = "/admin/datasets/mini/agreement-protocol";
+    let r = admin
+        .post_form(path, &[("items_per_cell", "1"), ("seed", "5")])
+        .await;
+    assert_eq!(r.status(), 403, "no CSRF token, no protocol");
+    let r = admin
+        .post_form(
+            path,
+            &[("csrf", &csrf), ("items_per_cell", "1"), ("seed", "5")],
+        )
+        .await;
+    assert_eq!(r.status(), 200);
+    let html = r.text().await.expect("body");
+    assert!(
+        html.contains("drew 8 items (k = 1, seed = 5) from the completed primary items of 2 annotators and added 8 assignments"),
+        "{html}"
+    );
+    let stored = kinds(&server).await;
+    let cross: Vec<&(i64, String, String)> = stored
+        .iter()
+        .filter(|(_, _, kind)| kind == "agreement")
+        .collect();
+    assert_eq!(cross.len(), 8);
+    assert_eq!(stored.len(), 16 + 8);
+    // Each cross-assigned item is the other annotator's primary item.
+    for (who, item, _) in &cross {
+        assert!(
+            stored
+                .iter()
+                .any(|(other, it, kind)| other != who && it == item && kind == "primary")
+        );
+    }
+    // The annotator's queue and item page look like any other assignment.
+    let (mut ann, _) = logged_in(&server, "ann").await;
+    let (_, queue) = ann.text("/annotate").await;
+    assert!(!queue.to_lowercase().contains("agreement"), "{queue}");
+    let theirs = cross
+        .iter()
+        .find(|(who, _, _)| *who == ids[0])
+        .expect("ann has one");
+    let (status, page) = ann.text(&format!("/annotate/mini/{}", theirs.1)).await;
+    assert_eq!(status, 200);
+    assert!(!page.to_lowercase().contains("agreement"), "{page}");
+    // A second run is refused and changes nothing, over HTTP and on the command line.
+    let r = admin
+        .post_form(path, &[("csrf", &csrf), ("items_per_cell", "2")])
+        .await;
+    assert_eq!(r.status(), 409);
+    assert!(
+        r.text()
+            .await
+            .expect("body")
+            .contains("already ran on this dataset")
+    );
+    let out = enact_hub()
+        .args(["agreement-protocol", "--dataset", "mini", "--db"])
+        .arg(server.db_path())
+        .output()
+        .expect("run");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("seed = 5"));
+    assert_eq!(kinds(&server).await, stored);
+    server.stop().await;
 }
