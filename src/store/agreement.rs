@@ -294,3 +294,73 @@ pub async fn run_protocol(
         },
     )
 }
+
+/// How a report is computed: the admin's or the command line's choices.
+#[derive(Debug, Clone, Copy)]
+pub struct ReportSettings {
+    pub encoding: crate::agreement::OrderingEncoding,
+    pub level: Option<crate::agreement::MeasurementLevel>,
+    pub bootstrap: crate::agreement::BootstrapConfig,
+    pub chosen_pair: Option<(i64, i64)>,
+}
+
+/// Everything [`crate::agreement_report::build_report`] needs about a stored dataset.
+pub async fn report_inputs(
+    conn: &mut SqliteConnection,
+    dataset: &crate::store::datasets::Dataset,
+    settings: &ReportSettings,
+) -> Result<crate::agreement_report::ReportInputs, sqlx::Error> {
+    use crate::agreement_report::{ItemScore, ProtocolStamp, ReportInputs, SubmissionInput};
+    use crate::leaderboard::{LeaderboardRow, RowIdentity};
+    let (dataset_hash, dataset_items) = dataset_hash(&mut *conn, dataset.id).await?;
+    let answers = annotator_answers(&mut *conn, dataset.id).await?;
+    let mut submissions = Vec::new();
+    for s in crate::store::submissions::published(&mut *conn, dataset.id).await? {
+        let scores: serde_json::Value = serde_json::from_str(&s.scores)
+            .map_err(|e| corrupt("scores", format!("submission {}: {e}", s.id)))?;
+        let row = LeaderboardRow::from_scores(
+            &RowIdentity {
+                submission: s.id,
+                model: &s.model,
+                account: &s.account,
+                baseline: s.baseline,
+                submitted_at: &s.created_at,
+            },
+            &scores,
+        );
+        let mut item_scores = Vec::new();
+        for v in crate::store::submissions::verdicts(&mut *conn, s.id).await? {
+            let (Some(direction), Some(step_length)) = (
+                Direction::parse(&v.direction),
+                usize::try_from(v.step_length)
+                    .ok()
+                    .and_then(StepLength::new),
+            ) else {
+                return Err(corrupt("items", format!("item {}: bad kind", v.id)));
+            };
+            item_scores.push(ItemScore {
+                item_id: v.id,
+                direction,
+                step_length,
+                pairwise_accuracy: v.pairwise_accuracy,
+            });
+        }
+        submissions.push(SubmissionInput { row, item_scores });
+    }
+    let protocol = round(&mut *conn, dataset.id).await?.map(|r| ProtocolStamp {
+        items_per_cell: r.items_per_cell,
+        seed: r.seed,
+    });
+    Ok(ReportInputs {
+        dataset: dataset.name.clone(),
+        dataset_hash,
+        dataset_items,
+        answers,
+        submissions,
+        chosen_pair: settings.chosen_pair,
+        encoding: settings.encoding,
+        level: settings.level,
+        bootstrap: settings.bootstrap,
+        protocol,
+    })
+}
