@@ -42,6 +42,8 @@ enum Command {
     /// The paper's cross-annotation protocol on a stored dataset: draw k completed primary items
     /// per annotator × direction × step length and assign each to the other annotators.
     AgreementProtocol(stored::ProtocolArgs),
+    /// Write a stored dataset's agreement report (JSON, CSV, Markdown, LaTeX, SVG) to a folder.
+    Report(stored::ReportArgs),
     /// Run ENACT's data pipeline on BEHAVIOR-format replays: key-frame segmentation, then
     /// forward and inverse QA items in the ENACT release layout.
     Generate(GenerateArgs),
@@ -317,6 +319,7 @@ pub fn main() -> ExitCode {
                 _ => agreement(&args),
             },
             Command::AgreementProtocol(args) => stored::agreement_protocol(&args).await,
+            Command::Report(args) => stored::report(&args).await,
             Command::Generate(args) => generate(args).await,
             Command::Token(command) => token(command).await,
             Command::Annotator(AnnotatorCommand::Create(args)) => create_annotator(args).await,

@@ -154,3 +154,97 @@ pub async fn agreement_protocol(args: &ProtocolArgs) -> anyhow::Result<ExitCode>
     );
     Ok(ExitCode::SUCCESS)
 }
+
+#[derive(clap::Args)]
+pub struct ReportArgs {
+    /// SQLite database file.
+    #[arg(long, env = "ENACT_HUB_DB", default_value = "enact-hub.db")]
+    db: std::path::PathBuf,
+    /// The stored dataset.
+    #[arg(long)]
+    dataset: String,
+    /// Folder to write the report files into (created if missing; files are overwritten).
+    #[arg(long, value_name = "DIR")]
+    out: std::path::PathBuf,
+    /// How an ordering answer becomes reliability data: answer, position or rank.
+    #[arg(long, default_value_t = crate::agreement::PAPER_COMPARABLE_ENCODING)]
+    encoding: OrderingEncoding,
+    /// Level of measurement (default: the encoding's).
+    #[arg(long)]
+    level: Option<MeasurementLevel>,
+    /// Bootstrap resamples of the overlapping items.
+    #[arg(long, default_value_t = crate::agreement::DEFAULT_REPLICATES)]
+    bootstrap: usize,
+    /// Seed of the bootstrap, recorded in every file.
+    #[arg(long, default_value_t = crate::agreement::DEFAULT_BOOTSTRAP_SEED)]
+    seed: u64,
+    /// Coverage of the bootstrap interval.
+    #[arg(long, default_value_t = crate::agreement::DEFAULT_CONFIDENCE_LEVEL)]
+    confidence: f64,
+    /// Two published submission ids to compare with each other (a − b).
+    #[arg(long, num_args = 2, value_names = ["A", "B"])]
+    compare: Option<Vec<i64>>,
+}
+
+/// `report`: builds the dataset's report and writes the bundle's files into `--out`.
+pub async fn report(args: &ReportArgs) -> anyhow::Result<ExitCode> {
+    use crate::agreement_report::{build_report, export};
+    let pool = super::open_db(&args.db).await?;
+    let mut conn = pool.acquire().await?;
+    let dataset = store::datasets::by_name(&mut conn, &args.dataset)
+        .await?
+        .with_context(|| {
+            format!("no dataset named '{}' in {}", args.dataset, args.db.display())
+        })?;
+    let settings = store::agreement::ReportSettings {
+        encoding: args.encoding,
+        level: args.level,
+        bootstrap: BootstrapConfig {
+            replicates: args.bootstrap,
+            confidence_level: args.confidence,
+            seed: args.seed,
+        },
+        chosen_pair: args.compare.as_deref().and_then(|ids| match ids {
+            [a, b] => Some((*a, *b)),
+            _ => None,
+        }),
+    };
+    let inputs = store::agreement::report_inputs(&mut conn, &dataset, &settings).await?;
+    drop(conn);
+    pool.close().await;
+    let report = tokio::task::spawn_blocking(move || build_report(&inputs))
+        .await
+        .context("report task failed")?
+        .with_context(|| format!("dataset '{}'", args.dataset))?;
+    let files = export::bundle_files(&report)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    for file in &files {
+        let path = args.out.join(file.name);
+        std::fs::write(&path, &file.bytes)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    match (&report.agreement, &report.agreement_unavailable) {
+        (Some(a), _) => eprintln!(
+            "alpha {} ({} encoding, {} items, {} annotators); exact agreement {}/{}",
+            a.alpha
+                .estimate
+                .alpha
+                .map_or_else(|| "undefined".to_owned(), |v| format!("{v:.4}")),
+            a.encoding,
+            a.items,
+            a.annotators.len(),
+            a.exact_agreement.agreeing_items,
+            a.exact_agreement.compared_items
+        ),
+        (None, Some(why)) => eprintln!("no agreement figures: {why}"),
+        (None, None) => {}
+    }
+    eprintln!(
+        "wrote {} files to {} (dataset hash sha256:{})",
+        files.len(),
+        args.out.display(),
+        report.stamp.dataset_hash
+    );
+    Ok(ExitCode::SUCCESS)
+}
