@@ -407,3 +407,321 @@ async fn the_protocol_runs_once_with_csrf_and_cross_assigns_blind() {
     assert_eq!(kinds(&server).await, stored);
     server.stop().await;
 }
+
+/// The answer `who` gives to an item whose ground truth is L−1..1: mostly right, with the
+/// first two labels swapped on some items so that annotators disagree.
+fn answer_of(who: usize, item_id: &str, length: u8) -> Vec<u8> {
+    let mut labels: Vec<u8> = (1..length).rev().collect();
+    let spread: usize = item_id.bytes().map(usize::from).sum();
+    if (spread + who) % 6 == 0 {
+        labels.swap(0, 1);
+    }
+    labels
+}
+
+/// Answers every item still to do in `name`'s queue over HTTP; records what was sent.
+async fn answer_queue(
+    server: &TestServer,
+    who: usize,
+    name: &str,
+    annotator_id: i64,
+    sent: &mut Vec<(String, usize, Vec<u8>)>,
+) -> usize {
+    let (mut browser, token) = logged_in(server, name).await;
+    let queue = store::annotations::queue(
+        &mut server.pool.acquire().await.expect("conn"),
+        annotator_id,
+    )
+    .await
+    .expect("queue");
+    let mut answered = 0;
+    for entry in queue.iter().filter(|e| !e.status.is_done()) {
+        let labels = answer_of(who, &entry.item_id, entry.step_length.get());
+        let path = format!("/annotate/mini/{}", entry.item_id);
+        let (status, _) = browser.text(&path).await;
+        assert_eq!(status, 200, "{name} opens {path}");
+        let r = browser
+            .post_json(
+                &format!("{path}/submit"),
+                Some(&token),
+                &serde_json::json!({"slots": labels, "counts": {"placements": 3, "swaps": 0, "clears": 0, "undos": 0}}),
+            )
+            .await;
+        assert_eq!(r.status(), 200, "{name} submits {path}");
+        sent.push((entry.item_id.clone(), who, labels));
+        answered += 1;
+    }
+    answered
+}
+
+#[tokio::test]
+async fn end_to_end_primary_split_protocol_answers_and_report() {
+    let server = spawn_app_with(|pool, dir| async move {
+        let root = dir.join("release");
+        write_balanced_release(&root, &[3, 4], 3);
+        import(&pool, &root, &options("mini")).await;
+    })
+    .await;
+    annotator(&server, "root", true).await;
+    let names = ["ann", "bob", "cat"];
+    let mut ids = Vec::new();
+    for name in names {
+        ids.push(annotator(&server, name, false).await);
+    }
+    let (mut admin, csrf) = logged_in(&server, "root").await;
+
+    // Primary: a balanced split of the 12 items, one per direction × L for each annotator.
+    let id_text: Vec<String> = ids.iter().map(i64::to_string).collect();
+    let mut fields = vec![
+        ("csrf", csrf.as_str()),
+        ("dataset", "mini"),
+        ("mode", "split"),
+    ];
+    for id in &id_text {
+        fields.push(("annotator", id));
+    }
+    assert_eq!(
+        admin.post_form("/admin/assign", &fields).await.status(),
+        200
+    );
+    let mut sent = Vec::new();
+    for (who, name) in names.iter().enumerate() {
+        assert_eq!(
+            answer_queue(&server, who, name, ids[who], &mut sent).await,
+            4
+        );
+    }
+
+    // Before the protocol there is nothing to agree on, and the report says so.
+    let (status, body) =
+        admin_json(&mut admin, "/admin/datasets/mini/report.json?bootstrap=50").await;
+    assert_eq!(status, 200);
+    assert!(body["agreement"].is_null());
+    assert!(
+        body["agreement_unavailable"]
+            .as_str()
+            .expect("why")
+            .contains("no item has answers")
+    );
+
+    // The protocol: k = 1 per annotator × direction × L, each item to the two others.
+    let r = admin
+        .post_form(
+            "/admin/datasets/mini/agreement-protocol",
+            &[("csrf", &csrf), ("items_per_cell", "1"), ("seed", "3")],
+        )
+        .await;
+    assert_eq!(r.status(), 200);
+    assert!(
+        r.text()
+            .await
+            .expect("body")
+            .contains("drew 12 items (k = 1, seed = 3)")
+    );
+    for (who, name) in names.iter().enumerate() {
+        assert_eq!(
+            answer_queue(&server, who, name, ids[who], &mut sent).await,
+            8
+        );
+    }
+    assert_eq!(sent.len(), 12 + 24);
+
+    // A model submission for the comparisons.
+    let token = {
+        use enact_hub::accounts::{NewToken, Role};
+        let mut conn = server.pool.acquire().await.expect("conn");
+        let account = store::accounts::ensure_account(&mut conn, "team", Role::Submitter)
+            .await
+            .expect("account")
+            .expect("role");
+        let token = NewToken::generate();
+        store::accounts::insert_token(&mut conn, account, Role::Submitter, &token, None, None)
+            .await
+            .expect("token");
+        token.token
+    };
+    let mut item_ids: Vec<String> = sent.iter().map(|(item, _, _)| item.clone()).collect();
+    item_ids.sort();
+    item_ids.dedup();
+    let body: String = item_ids
+        .iter()
+        .map(|id| {
+            let length = sent
+                .iter()
+                .find(|(i, _, _)| i == id)
+                .map_or(0, |s| s.2.len());
+            let answer: Vec<usize> = (1..=length).collect();
+            format!("{}\n", serde_json::json!({"id": id, "answer": answer}))
+        })
+        .collect();
+    let r = server
+        .client
+        .post(server.url("/api/v1/datasets/mini/submissions?model=ascending"))
+        .bearer_auth(&token)
+        .body(body)
+        .send()
+        .await
+        .expect("submit");
+    assert_eq!(r.status(), 201);
+    let submission = r.json::<Value>().await.expect("json")["id"]
+        .as_i64()
+        .expect("id");
+
+    // The pure core on exactly what was submitted.
+    let mut items: Vec<AnnotatedOrdering> = item_ids
+        .iter()
+        .map(|id| AnnotatedOrdering {
+            item_id: id.clone(),
+            answers: (0..3)
+                .map(|who| {
+                    sent.iter()
+                        .find(|(item, w, _)| item == id && *w == who)
+                        .map(|(_, _, labels)| labels.clone())
+                })
+                .collect(),
+        })
+        .filter(|item| item.answers.iter().flatten().count() >= 2)
+        .collect();
+    items.sort_by(|a, b| a.item_id.cmp(&b.item_id));
+    assert_eq!(items.len(), 12, "every sampled item has three answers");
+    assert!(items.iter().all(|i| i.answers.iter().all(Option::is_some)));
+    let core = OrderingAnnotations::new(names.iter().map(|n| (*n).to_owned()).collect(), items)
+        .expect("valid");
+    let config = BootstrapConfig {
+        replicates: 400,
+        confidence_level: 0.95,
+        seed: 4,
+    };
+    let expected = ordering_agreement(&core, OrderingEncoding::Answer, &config).expect("core");
+    let exact = core.exact_agreement();
+    assert!(
+        exact.agreeing_items < 12 && exact.agreeing_items > 0,
+        "{exact:?}"
+    );
+
+    // The report over HTTP.
+    let query = "?bootstrap=400&seed=4&encoding=answer";
+    let (status, report) = admin_json(
+        &mut admin,
+        &format!("/admin/datasets/mini/report.json{query}"),
+    )
+    .await;
+    assert_eq!(status, 200, "{report}");
+    let agreement = &report["agreement"];
+    assert_eq!(agreement["items"], 12);
+    assert_eq!(agreement["answers"], 36);
+    close(
+        &agreement["alpha"]["estimate"]["alpha"],
+        expected.alpha.estimate.alpha,
+    );
+    close(&agreement["alpha"]["ci_low"], expected.alpha.ci_low);
+    close(&agreement["alpha"]["ci_high"], expected.alpha.ci_high);
+    let pairs = agreement["pairwise"].as_array().expect("pairs");
+    assert_eq!(pairs.len(), 3);
+    for (pair, want) in pairs.iter().zip(&expected.pairwise) {
+        close(&pair["alpha"], want.result.alpha);
+        assert_eq!(pair["a"]["name"], names[want.coder_a]);
+        assert_eq!(pair["b"]["name"], names[want.coder_b]);
+    }
+    assert_eq!(
+        agreement["exact_agreement"]["agreeing_items"],
+        exact.agreeing_items
+    );
+    assert_eq!(agreement["exact_agreement"]["compared_items"], 12);
+    let counts = agreement["counts"].as_array().expect("counts");
+    assert_eq!(counts.len(), 4, "forward and inverse × L = 3, 4");
+    assert!(counts.iter().all(|c| c["items"] == 3 && c["answers"] == 9));
+    let stamp = &report["stamp"];
+    assert_eq!(stamp["bootstrap_seed"], 4);
+    assert_eq!(stamp["submission_ids"], serde_json::json!([submission]));
+    assert_eq!(stamp["annotator_ids"], serde_json::json!(ids));
+    assert_eq!(stamp["protocol"]["seed"], 3);
+    let rows = report["rows"].as_array().expect("rows");
+    assert_eq!(rows.last().expect("human")["source"], "human");
+    let comparison = &report["comparisons"][0];
+    assert_eq!(comparison["a"]["submission"], submission);
+    assert_eq!(comparison["b"]["label"], "Human");
+    assert_eq!(comparison["cells"].as_array().expect("cells").len(), 16);
+    assert!(comparison["items"].as_u64().expect("items") > 0);
+
+    // The page and the bundle.
+    let (status, html) = admin
+        .text(&format!("/admin/datasets/mini/report{query}"))
+        .await;
+    assert_eq!(status, 200);
+    assert!(
+        html.contains(&format!(
+            "{:.4}",
+            expected.alpha.estimate.alpha.expect("alpha")
+        )),
+        "{html}"
+    );
+    assert!(html.contains("<svg") && html.contains("ascending (#"));
+    let r = admin
+        .get(&format!("/admin/datasets/mini/report.tar{query}"))
+        .await;
+    assert_eq!(r.status(), 200);
+    assert_eq!(r.headers()["content-type"], "application/x-tar");
+    let bytes = r.bytes().await.expect("tar");
+    let mut archive = tar::Archive::new(bytes.as_ref());
+    let hash = stamp["dataset_hash"].as_str().expect("hash").to_owned();
+    let mut names_in_tar = Vec::new();
+    for entry in archive.entries().expect("entries") {
+        let mut entry = entry.expect("entry");
+        let mut text = String::new();
+        std::io::Read::read_to_string(&mut entry, &mut text).expect("utf-8");
+        let path = entry.path().expect("path").display().to_string();
+        assert!(text.contains(&hash), "{path} lacks the dataset hash");
+        assert!(text.contains("enact-hub-agreement-report/1"), "{path}");
+        names_in_tar.push(path);
+    }
+    assert_eq!(names_in_tar.len(), 9);
+    assert!(names_in_tar.iter().any(|n| n.ends_with("/tables.tex")));
+
+    // An annotator is refused the report; the command line writes the same files.
+    let (mut ann, _) = logged_in(&server, "ann").await;
+    assert_eq!(ann.get("/admin/datasets/mini/report").await.status(), 403);
+    let out_dir = tempfile::tempdir().expect("out");
+    let out = enact_hub()
+        .args([
+            "report",
+            "--dataset",
+            "mini",
+            "--bootstrap",
+            "400",
+            "--seed",
+            "4",
+            "--db",
+        ])
+        .arg(server.db_path())
+        .arg("--out")
+        .arg(out_dir.path())
+        .output()
+        .expect("run report");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let written: Value = serde_json::from_str(
+        &std::fs::read_to_string(out_dir.path().join("report.json")).expect("report.json"),
+    )
+    .expect("json");
+    assert_eq!(written["agreement"]["pairwise"], agreement["pairwise"]);
+    assert_eq!(
+        written["agreement"]["alpha"]["ci_low"],
+        agreement["alpha"]["ci_low"]
+    );
+    assert!(
+        std::fs::read_to_string(out_dir.path().join("agreement.csv"))
+            .expect("csv")
+            .starts_with("# dataset: mini\n")
+    );
+    server.stop().await;
+}
+
+async fn admin_json(browser: &mut Browser, path: &str) -> (reqwest::StatusCode, Value) {
+    let r = browser.get(path).await;
+    let status = r.status();
+    (status, r.json().await.expect("json"))
+}
