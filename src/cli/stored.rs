@@ -194,7 +194,11 @@ pub async fn report(args: &ReportArgs) -> anyhow::Result<ExitCode> {
     let dataset = store::datasets::by_name(&mut conn, &args.dataset)
         .await?
         .with_context(|| {
-            format!("no dataset named '{}' in {}", args.dataset, args.db.display())
+            format!(
+                "no dataset named '{}' in {}",
+                args.dataset,
+                args.db.display()
+            )
         })?;
     let settings = store::agreement::ReportSettings {
         encoding: args.encoding,

@@ -21,7 +21,7 @@ use crate::agreement::{
 use crate::agreement_protocol::DEFAULT_ITEMS_PER_CELL;
 use crate::agreement_report::export::{bundle_files, tar_archive};
 use crate::agreement_report::heatmap::Heatmap;
-use crate::agreement_report::{AgreementReport, build_report};
+use crate::agreement_report::{AgreementReport, ReportError, build_report};
 use crate::dataset::{Direction, StepLength};
 use crate::leaderboard::{AccuracyChart, LeaderboardRow, RowSource};
 use crate::store;
@@ -154,7 +154,10 @@ impl ReportQuery {
     }
 
     fn settings(&self) -> Result<ReportSettings, AppError> {
-        let chosen_pair = match (optional::<i64>("a", &self.a)?, optional::<i64>("b", &self.b)?) {
+        let chosen_pair = match (
+            optional::<i64>("a", &self.a)?,
+            optional::<i64>("b", &self.b)?,
+        ) {
             (Some(a), Some(b)) => Some((a, b)),
             (None, None) => None,
             _ => {
@@ -171,7 +174,8 @@ impl ReportQuery {
                 "query parameter `confidence`: {confidence_level} is not strictly between 0 and 1"
             )));
         }
-        let replicates = optional::<usize>("bootstrap", &self.bootstrap)?.unwrap_or(DEFAULT_REPLICATES);
+        let replicates =
+            optional::<usize>("bootstrap", &self.bootstrap)?.unwrap_or(DEFAULT_REPLICATES);
         // A page request must stay bounded; the command line has no such limit.
         if replicates > 20_000 {
             return Err(AppError::BadRequest(format!(
@@ -206,7 +210,16 @@ async fn dataset_report(
     let report = tokio::task::spawn_blocking(move || build_report(&inputs))
         .await
         .map_err(|e| AppError::Internal(e.into()))?
-        .map_err(|e| AppError::BadRequest(format!("dataset '{}': {e}", dataset.name)))?;
+        .map_err(|e| match e {
+            // The admin's choices: a submission id or a level that does not apply.
+            ReportError::UnknownSubmission(_) | ReportError::Agreement(_) => {
+                AppError::BadRequest(format!("dataset '{}': {e}", dataset.name))
+            }
+            // Stored answers the verifier or the test cannot use: our side.
+            ReportError::Unscorable { .. } | ReportError::Comparison { .. } => {
+                AppError::Internal(anyhow::anyhow!("dataset '{}': {e}", dataset.name))
+            }
+        })?;
     Ok((report, settings))
 }
 
@@ -233,7 +246,10 @@ async fn report_bundle(
         .map_err(|e| AppError::Internal(e.into()))?;
     Ok((
         [
-            (header::CONTENT_TYPE, HeaderValue::from_static("application/x-tar")),
+            (
+                header::CONTENT_TYPE,
+                HeaderValue::from_static("application/x-tar"),
+            ),
             (header::CONTENT_DISPOSITION, disposition),
         ],
         archive,
@@ -248,7 +264,13 @@ pub fn bundle_folder(report: &AgreementReport) -> String {
         .stamp
         .dataset
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect();
     let hash = report.stamp.dataset_hash.get(..12).unwrap_or("");
     format!("enact-hub-report-{name}-{hash}")
@@ -356,7 +378,11 @@ fn table_rows(rows: &[LeaderboardRow], task: bool) -> Vec<TableRowText> {
                         Direction::Inverse => &row.inverse,
                     };
                     columns.per_step.iter().map(|(_, cell)| {
-                        percent(if task { cell.task_accuracy } else { cell.pairwise_accuracy })
+                        percent(if task {
+                            cell.task_accuracy
+                        } else {
+                            cell.pairwise_accuracy
+                        })
                     })
                 })
                 .collect(),
@@ -369,12 +395,18 @@ fn comparison_text(a: &str, b: &str, items: usize, w: &WelchComparison) -> Compa
         a: a.to_owned(),
         b: b.to_owned(),
         items,
-        delta: w.delta.map_or_else(|| "–".to_owned(), |d| format!("{d:+.4}")),
+        delta: w
+            .delta
+            .map_or_else(|| "–".to_owned(), |d| format!("{d:+.4}")),
         se: fixed(w.se, 4),
         t: fixed(w.t, 3),
         df: fixed(w.df, 1),
         p: w.p.map_or_else(
-            || w.reason.as_ref().map_or_else(|| "–".to_owned(), ToString::to_string),
+            || {
+                w.reason
+                    .as_ref()
+                    .map_or_else(|| "–".to_owned(), ToString::to_string)
+            },
             |p| format!("{p:.3e}"),
         ),
     }
@@ -442,7 +474,11 @@ async fn report_page(
     let query = raw.unwrap_or_default();
     let page = ReportPage {
         dataset: report.stamp.dataset.clone(),
-        query: if query.is_empty() { String::new() } else { format!("?{query}") },
+        query: if query.is_empty() {
+            String::new()
+        } else {
+            format!("?{query}")
+        },
         stamp: crate::agreement_report::export::stamp_lines(&report.stamp).join("; "),
         stamp_lines: crate::agreement_report::export::stamp_lines(&report.stamp),
         agreement,

@@ -678,6 +678,64 @@ async fn end_to_end_primary_split_protocol_answers_and_report() {
     assert_eq!(names_in_tar.len(), 9);
     assert!(names_in_tar.iter().any(|n| n.ends_with("/tables.tex")));
 
+    // Two submissions chosen by the admin: the ground truth itself against "ascending".
+    let body: String = item_ids
+        .iter()
+        .map(|id| {
+            let length = sent
+                .iter()
+                .find(|(i, _, _)| i == id)
+                .map_or(0, |s| s.2.len());
+            let answer: Vec<usize> = (1..=length).rev().collect();
+            format!("{}\n", serde_json::json!({"id": id, "answer": answer}))
+        })
+        .collect();
+    let r = server
+        .client
+        .post(server.url("/api/v1/datasets/mini/submissions?model=oracle"))
+        .bearer_auth(&token)
+        .body(body)
+        .send()
+        .await
+        .expect("submit");
+    assert_eq!(r.status(), 201);
+    let oracle = r.json::<Value>().await.expect("json")["id"]
+        .as_i64()
+        .expect("id");
+    let (status, chosen) = admin_json(
+        &mut admin,
+        &format!("/admin/datasets/mini/report.json?bootstrap=0&a={submission}&b={oracle}"),
+    )
+    .await;
+    assert_eq!(status, 200, "{chosen}");
+    let pair = chosen["comparisons"]
+        .as_array()
+        .expect("list")
+        .last()
+        .expect("pair")
+        .clone();
+    assert_eq!(pair["a"]["submission"], submission);
+    assert_eq!(pair["b"]["submission"], oracle);
+    assert!(
+        pair["overall"]["delta"].as_f64().expect("delta") < 0.0,
+        "{pair}"
+    );
+    assert_eq!(pair["overall"]["mean_b"], 1.0);
+    let (status, error) = admin_json(
+        &mut admin,
+        &format!("/admin/datasets/mini/report.json?a={submission}&b=999"),
+    )
+    .await;
+    assert_eq!(status, 400);
+    assert!(
+        error["error"]
+            .as_str()
+            .expect("msg")
+            .contains("submission 999 is not a published")
+    );
+    let (status, _) = admin_json(&mut admin, "/admin/datasets/mini/report.json?a=1").await;
+    assert_eq!(status, 400);
+
     // An annotator is refused the report; the command line writes the same files.
     let (mut ann, _) = logged_in(&server, "ann").await;
     assert_eq!(ann.get("/admin/datasets/mini/report").await.status(), 403);
