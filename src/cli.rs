@@ -16,6 +16,8 @@ use crate::scoring::{self, ScoringTarget, SemanticCoverage};
 use crate::web::{AppState, Server, WebConfig, shutdown_signal};
 use crate::{demo, store};
 
+mod stored;
+
 #[derive(Parser)]
 #[command(
     name = "enact-hub",
@@ -37,6 +39,11 @@ enum Command {
     Score(ScoreArgs),
     /// Krippendorff's alpha of reliability data, with an optional bootstrap interval.
     Agreement(AgreementArgs),
+    /// The paper's cross-annotation protocol on a stored dataset: draw k completed primary items
+    /// per annotator × direction × step length and assign each to the other annotators.
+    AgreementProtocol(stored::ProtocolArgs),
+    /// Write a stored dataset's agreement report (JSON, CSV, Markdown, LaTeX, SVG) to a folder.
+    Report(stored::ReportArgs),
     /// Run ENACT's data pipeline on BEHAVIOR-format replays: key-frame segmentation, then
     /// forward and inverse QA items in the ENACT release layout.
     Generate(GenerateArgs),
@@ -108,14 +115,31 @@ struct CreateAnnotatorArgs {
 #[derive(Args)]
 struct AgreementArgs {
     /// `{"data": [[...], ...]}`: one list per coder, numbers or null for a missing value.
-    #[arg(long, value_name = "FILE.json")]
-    input: PathBuf,
-    /// Level of measurement: nominal, ordinal, interval or ratio.
+    #[arg(
+        long,
+        value_name = "FILE.json",
+        required_unless_present = "db",
+        conflicts_with = "db"
+    )]
+    input: Option<PathBuf>,
+    /// Agreement on a stored dataset's submitted annotations instead of a file (with --dataset).
+    #[arg(long, requires = "dataset")]
+    db: Option<PathBuf>,
+    /// The stored dataset whose annotations to use.
+    #[arg(long, requires = "db")]
+    dataset: Option<String>,
+    /// With --db: how an ordering answer becomes reliability data: answer (whole permutation,
+    /// nominal; comparable with the paper), position or rank (ordinal).
+    #[arg(long, requires = "db", default_value_t = crate::agreement::PAPER_COMPARABLE_ENCODING)]
+    encoding: crate::agreement::OrderingEncoding,
+    /// Level of measurement: nominal, ordinal, interval or ratio. Required with --input; with
+    /// --db it defaults to the encoding's level.
+    #[arg(long, required_unless_present = "db")]
+    level: Option<crate::agreement::MeasurementLevel>,
+    /// Number of bootstrap replicates (units resampled with replacement, or items with --db);
+    /// 0 for none. Default: 0 with --input, 1000 with --db.
     #[arg(long)]
-    level: crate::agreement::MeasurementLevel,
-    /// Number of bootstrap replicates (units resampled with replacement); 0 for none.
-    #[arg(long, default_value_t = 0)]
-    bootstrap: usize,
+    bootstrap: Option<usize>,
     /// Seed of the bootstrap, recorded in the output.
     #[arg(long, default_value_t = crate::agreement::DEFAULT_BOOTSTRAP_SEED)]
     seed: u64,
@@ -290,7 +314,12 @@ pub fn main() -> ExitCode {
             Command::Serve(args) => serve(args).await,
             Command::Import(args) => import(args).await,
             Command::Score(args) => score(args).await,
-            Command::Agreement(args) => agreement(&args),
+            Command::Agreement(args) => match (&args.db, &args.dataset) {
+                (Some(db), Some(dataset)) => stored::agreement(db, dataset, &args.stored()).await,
+                _ => agreement(&args),
+            },
+            Command::AgreementProtocol(args) => stored::agreement_protocol(&args).await,
+            Command::Report(args) => stored::report(&args).await,
             Command::Generate(args) => generate(args).await,
             Command::Token(command) => token(command).await,
             Command::Annotator(AnnotatorCommand::Create(args)) => create_annotator(args).await,
@@ -856,16 +885,34 @@ async fn create_annotator(args: CreateAnnotatorArgs) -> anyhow::Result<ExitCode>
     Ok(ExitCode::SUCCESS)
 }
 
+impl AgreementArgs {
+    fn stored(&self) -> stored::AgreementOptions {
+        stored::AgreementOptions {
+            encoding: self.encoding,
+            level: self.level,
+            bootstrap: crate::agreement::BootstrapConfig {
+                replicates: self
+                    .bootstrap
+                    .unwrap_or(crate::agreement::DEFAULT_REPLICATES),
+                confidence_level: self.confidence,
+                seed: self.seed,
+            },
+        }
+    }
+}
+
 /// Prints alpha (null when undefined, with the reason) and, when asked, its bootstrap interval.
 fn agreement(args: &AgreementArgs) -> anyhow::Result<ExitCode> {
     use crate::agreement::{BootstrapConfig, PreparedAlpha, UnitItems, read_reliability_json};
-    let data = read_reliability_json(&args.input)?;
-    let prepared =
-        PreparedAlpha::with_items(&data, args.level, &UnitItems::one_per_unit(data.units()))?;
+    let (Some(input), Some(level)) = (&args.input, args.level) else {
+        anyhow::bail!("--input and --level are both needed without --db");
+    };
+    let data = read_reliability_json(input)?;
+    let prepared = PreparedAlpha::with_items(&data, level, &UnitItems::one_per_unit(data.units()))?;
     let estimate = prepared.estimate();
     let mut out = serde_json::json!({
-        "input": args.input.display().to_string(),
-        "level": args.level.to_string(),
+        "input": input.display().to_string(),
+        "level": level.to_string(),
         "alpha": estimate.alpha,
         "reason": estimate.reason.as_ref().map(ToString::to_string),
         "coders": estimate.coders,
@@ -873,9 +920,10 @@ fn agreement(args: &AgreementArgs) -> anyhow::Result<ExitCode> {
         "units_used": estimate.units_used,
         "pairable_values": estimate.pairable_values,
     });
-    if args.bootstrap > 0 {
+    let replicates = args.bootstrap.unwrap_or(0);
+    if replicates > 0 {
         let config = BootstrapConfig {
-            replicates: args.bootstrap,
+            replicates,
             confidence_level: args.confidence,
             seed: args.seed,
         };

@@ -11,11 +11,16 @@
 //! - [`web`]: the axum service: JSON API under `/api/v1`, HTML pages, frames.
 //! - [`annotation`]: human annotation without I/O: credentials, the balanced split, drafts,
 //!   scoring human answers; `store::annotations` and `web::{auth, annotate, admin}` serve it.
+//! - [`agreement_protocol`]: the paper's cross-annotation protocol: which items go to whom (pure).
+//! - [`agreement_report`]: the agreement report: alpha, pairs, exact agreement, TA/PA tables,
+//!   Welch comparisons, heatmap and bundle files (pure); `store::agreement` feeds it.
 //! - [`demo`]: the built-in demo dataset, generated at start by `serve --demo`.
 //! - [`cli`]: the command line; `src/main.rs` only calls [`cli::main`].
 
 pub mod accounts;
 pub mod agreement;
+pub mod agreement_protocol;
+pub mod agreement_report;
 pub mod annotation;
 pub mod cli;
 pub mod dataset;

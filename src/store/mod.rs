@@ -4,6 +4,7 @@
 //! caller that writes several rows decides where the transaction begins and ends.
 
 pub mod accounts;
+pub mod agreement;
 pub mod annotations;
 pub mod datasets;
 pub mod frames;

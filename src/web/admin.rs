@@ -134,7 +134,7 @@ fn performance_rows(report: &PerformanceReport) -> Vec<PerformanceRow> {
         .collect()
 }
 
-async fn render_admin(
+pub(super) async fn render_admin(
     state: &AppState,
     session: store::annotations::Session,
     notice: Option<String>,
@@ -260,7 +260,7 @@ async fn create_annotator(
     .await
 }
 
-fn require_admin(session: &store::annotations::Session) -> Result<(), AppError> {
+pub(super) fn require_admin(session: &store::annotations::Session) -> Result<(), AppError> {
     if session.is_admin {
         Ok(())
     } else {

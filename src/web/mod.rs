@@ -5,6 +5,7 @@
 //! `admin` the admins'. Each exposes one `router()`; they are merged once in [`router`].
 
 mod admin;
+mod agreement;
 mod annotate;
 mod api;
 mod assets;
@@ -139,6 +140,7 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
         .merge(session::router())
         .merge(annotate::router())
         .merge(admin::router())
+        .merge(agreement::router())
         .merge(assets::router())
         .nest(
             "/api/v1",
