@@ -192,8 +192,14 @@ pub async fn token_hash_exists(
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AttemptQuota {
     Granted,
-    DailyExhausted { limit: i64 },
-    TotalExhausted { limit: i64 },
+    DailyExhausted {
+        limit: i64,
+    },
+    /// `used` attempts were made against a total of `limit`; waiting will not help.
+    TotalExhausted {
+        used: i64,
+        limit: i64,
+    },
 }
 
 /// Records one attempt unless a quota is used up; the check and the insert are one statement,
@@ -224,7 +230,7 @@ pub async fn record_attempt(
         .fetch_one(conn)
         .await?;
     Ok(if used >= total {
-        AttemptQuota::TotalExhausted { limit: total }
+        AttemptQuota::TotalExhausted { used, limit: total }
     } else {
         AttemptQuota::DailyExhausted { limit: daily }
     })

@@ -293,16 +293,18 @@ async fn submit(
                         "this token has used its {limit} submissions for today (UTC); \
                          try again in {retry_after} s"
                     ),
-                    retry_after,
+                    retry_after: Some(retry_after),
                 });
             }
-            AttemptQuota::TotalExhausted { limit } => {
+            AttemptQuota::TotalExhausted { used, limit } => {
+                // No Retry-After: the total never refills, so waiting would not help.
                 return Err(AppError::TooManyRequests {
                     message: format!(
-                        "this token has used all of its {limit} submissions; ask an admin for \
-                         a larger quota"
+                        "this token's total quota is used up: {used} of {limit} submissions \
+                         made; waiting will not help, ask an admin for a new token or a larger \
+                         total quota"
                     ),
-                    retry_after: seconds_until_utc_midnight(),
+                    retry_after: None,
                 });
             }
         }
