@@ -5,6 +5,7 @@
 //! `admin` the admins'. Each exposes one `router()`; they are merged once in [`router`].
 
 mod admin;
+mod admin_tokens;
 mod annotate;
 mod api;
 mod assets;
@@ -135,6 +136,7 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
         .merge(session::router())
         .merge(annotate::router())
         .merge(admin::router())
+        .merge(admin_tokens::router())
         .merge(assets::router())
         .nest(
             "/api/v1",

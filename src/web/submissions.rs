@@ -547,13 +547,13 @@ struct TokenRequest {
 }
 
 #[derive(Serialize)]
-struct CreatedToken {
-    id: i64,
-    prefix: String,
-    account: String,
-    role: &'static str,
+pub(super) struct CreatedToken {
+    pub id: i64,
+    pub prefix: String,
+    pub account: String,
+    pub role: &'static str,
     /// The secret, shown this once.
-    token: String,
+    pub token: String,
 }
 
 async fn create_token(
@@ -564,20 +564,40 @@ async fn create_token(
     require(&caller, Scope::Admin)?;
     let role = match request.role.as_deref() {
         None => Role::Submitter,
-        Some(r) => Role::parse(r).ok_or_else(|| {
-            AppError::BadRequest(format!("role must be 'submitter' or 'admin', not {r:?}"))
-        })?,
+        Some(r) => parse_role(r)?,
     };
-    let name = request.name.trim();
+    let created = issue_token(
+        &state,
+        &request.name,
+        role,
+        request.daily_quota,
+        request.total_quota,
+    )
+    .await?;
+    Ok((StatusCode::CREATED, Json(created)))
+}
+
+pub(super) fn parse_role(text: &str) -> Result<Role, AppError> {
+    Role::parse(text).ok_or_else(|| {
+        AppError::BadRequest(format!("role must be 'submitter' or 'admin', not {text:?}"))
+    })
+}
+
+/// Creates a token (and its account if new) for the JSON API and the admin page alike.
+pub(super) async fn issue_token(
+    state: &AppState,
+    name: &str,
+    role: Role,
+    daily_quota: Option<i64>,
+    total_quota: Option<i64>,
+) -> Result<CreatedToken, AppError> {
+    let name = name.trim();
     if name.is_empty() || name.chars().count() > 100 {
         return Err(AppError::BadRequest(
             "`name` must be 1 to 100 characters".to_owned(),
         ));
     }
-    for (field, quota) in [
-        ("daily_quota", request.daily_quota),
-        ("total_quota", request.total_quota),
-    ] {
+    for (field, quota) in [("daily_quota", daily_quota), ("total_quota", total_quota)] {
         if quota.is_some_and(|q| q < 0) {
             return Err(AppError::BadRequest(format!(
                 "`{field}` must not be negative"
@@ -589,26 +609,17 @@ async fn create_token(
     let account = store::accounts::ensure_account(&mut tx, name, role)
         .await?
         .map_err(AppError::Conflict)?;
-    let id = store::accounts::insert_token(
-        &mut tx,
-        account,
-        role,
-        &token,
-        request.daily_quota,
-        request.total_quota,
-    )
-    .await?;
+    let id =
+        store::accounts::insert_token(&mut tx, account, role, &token, daily_quota, total_quota)
+            .await?;
     tx.commit().await?;
-    Ok((
-        StatusCode::CREATED,
-        Json(CreatedToken {
-            id,
-            prefix: token.prefix.clone(),
-            account: name.to_owned(),
-            role: role.as_str(),
-            token: token.token,
-        }),
-    ))
+    Ok(CreatedToken {
+        id,
+        prefix: token.prefix.clone(),
+        account: name.to_owned(),
+        role: role.as_str(),
+        token: token.token,
+    })
 }
 
 async fn list_tokens(

@@ -1,6 +1,7 @@
 //! Integration tests: the importer, the HTTP service on 127.0.0.1:0 and the command line, each
 //! test with a fresh database. Built as one test binary.
 
+mod admin_tokens;
 mod annotate;
 mod api;
 mod browser;
