@@ -8,6 +8,7 @@ mod admin;
 mod admin_tokens;
 mod annotate;
 mod api;
+mod archive;
 mod assets;
 mod auth;
 pub mod error;
@@ -142,7 +143,8 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
             "/api/v1",
             api::router()
                 .merge(submissions::router())
-                .merge(leaderboard::api_router()),
+                .merge(leaderboard::api_router())
+                .merge(archive::router()),
         )
         .with_state(state)
         .layer(DefaultBodyLimit::max(config.body_limit))

@@ -4,6 +4,7 @@
 mod admin_tokens;
 mod annotate;
 mod api;
+mod archive;
 mod browser;
 mod cli;
 #[path = "../support/fixtures.rs"]
