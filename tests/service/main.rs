@@ -7,6 +7,7 @@ mod api;
 mod archive;
 mod browser;
 mod cli;
+mod client;
 #[path = "../support/fixtures.rs"]
 mod fixtures;
 mod helpers;
