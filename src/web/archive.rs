@@ -5,15 +5,14 @@
 
 use std::collections::HashSet;
 
-use axum::Router;
 use axum::body::{Body, Bytes};
 use axum::extract::{Path, State};
 use axum::http::{HeaderValue, header};
 use axum::response::{IntoResponse, Response};
-use axum::routing::get;
 use sqlx::SqlitePool;
 use tokio::sync::mpsc;
 
+use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState, dataset_or_404};
 use crate::release::{ArchiveWriter, QA_FILE, release_line};
 use crate::store;
@@ -22,8 +21,24 @@ use crate::store::submissions::AnswerVisibility;
 /// Items whose frames are read from the database at a time.
 const ITEMS_PER_BATCH: usize = 16;
 
-pub fn router() -> Router<AppState> {
-    Router::new().route("/datasets/{dataset}/archive", get(download))
+pub fn routes() -> Vec<ApiRoute> {
+    vec![
+        ApiRoute::new(
+            Verb::Get,
+            "/datasets/{dataset}/archive",
+            download,
+            "The dataset as an ENACT release archive",
+        )
+        .describe(
+            "A tar archive, streamed: `QA/enact_ordering.jsonl` then every image under the path \
+             its record names. For a dataset whose answers are public, extracting it and running \
+             `enact-hub import DIR` reads back the same items. For a hidden dataset `gt_answer` \
+             and `key_frame_ids` are left out of every line (the importer then refuses it). The \
+             `X-Enact-Ground-Truth` header says `included` or `omitted`.",
+        )
+        .responds(200, Some("application/x-tar"), "The archive.")
+        .errors(&[404]),
+    ]
 }
 
 /// A name safe inside a quoted `Content-Disposition` filename.
@@ -41,7 +56,7 @@ fn archive_file_name(dataset: &str) -> String {
     format!("{stem}.tar")
 }
 
-pub(super) async fn download(
+async fn download(
     State(state): State<AppState>,
     Path(name): Path<String>,
 ) -> Result<Response, AppError> {

@@ -3,6 +3,8 @@
 //! `api` serves JSON under `/api/v1`, `pages` serves the HTML site, `assets` the embedded CSS
 //! and scripts; `auth` logs annotators in, `annotate` is their side of human annotation and
 //! `admin` the admins'. Each exposes one `router()`; they are merged once in [`router`].
+//! The JSON routes are one table instead ([`openapi`]): the `/api/v1` router and the OpenAPI
+//! document are both built from it.
 
 mod admin;
 mod admin_tokens;
@@ -15,6 +17,7 @@ pub mod error;
 mod frame_cache;
 mod item_cache;
 mod leaderboard;
+pub mod openapi;
 mod pages;
 pub mod session;
 mod submissions;
@@ -139,12 +142,10 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
         .merge(admin::router())
         .merge(admin_tokens::router())
         .merge(assets::router())
+        .merge(openapi::page_router())
         .nest(
-            "/api/v1",
-            api::router()
-                .merge(submissions::router())
-                .merge(leaderboard::api_router())
-                .merge(archive::router()),
+            openapi::API_PREFIX,
+            openapi::api_router(openapi::api_routes()),
         )
         .with_state(state)
         .layer(DefaultBodyLimit::max(config.body_limit))

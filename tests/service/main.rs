@@ -12,6 +12,7 @@ mod client;
 mod fixtures;
 mod helpers;
 mod import;
+mod openapi;
 mod pages;
 mod score;
 mod submissions;
