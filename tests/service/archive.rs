@@ -142,3 +142,51 @@ async fn an_unknown_dataset_has_no_archive() {
     assert!(html.contains("href=\"/api/v1/datasets/mini/archive\""));
     server.stop().await;
 }
+
+#[tokio::test]
+async fn the_enact_sample_round_trips_through_its_archive() {
+    let Some(fixtures) = shared_fixtures() else {
+        eprintln!("shared fixtures not present, skipping");
+        return;
+    };
+    let sample = fixtures.join("enact-sample");
+    let server = spawn_app_with(|pool, _| async move {
+        import(&pool, &sample, &options("mini")).await;
+    })
+    .await;
+    set_answers(&server, AnswerVisibility::Public).await;
+    let out = tempfile::tempdir().expect("tempdir");
+    download(&server, out.path()).await;
+    // Line for line the release's own records (ENACT's field order and values).
+    let original = std::fs::read_to_string(fixtures.join("enact-sample/QA/enact_ordering.jsonl"))
+        .expect("sample QA");
+    let written = std::fs::read_to_string(out.path().join("QA/enact_ordering.jsonl")).expect("QA");
+    let parse = |text: &str| -> Vec<serde_json::Value> {
+        text.lines()
+            .filter(|l| !l.trim().is_empty())
+            .map(|l| serde_json::from_str(l).expect("json"))
+            .collect()
+    };
+    assert_eq!(parse(&written), parse(&original));
+    let db = out.path().join("copy.db");
+    let import = enact_hub()
+        .arg("import")
+        .arg(out.path())
+        .arg("--db")
+        .arg(&db)
+        .arg("--dataset")
+        .arg("mini")
+        .output()
+        .expect("run enact-hub import");
+    assert!(
+        import.status.success(),
+        "{}",
+        String::from_utf8_lossy(&import.stderr)
+    );
+    let copy = store::open(&db).await.expect("open copy");
+    assert_eq!(
+        content_hashes(&copy, "mini").await,
+        content_hashes(&server.pool, "mini").await
+    );
+    server.stop().await;
+}
