@@ -438,17 +438,36 @@ async fn openapi_json() -> Json<Value> {
     Json(cached_document().clone())
 }
 
+/// A piece of a description: descriptions are CommonMark, and the page shows their
+/// `code spans` as code (the only markup they use).
+struct Span {
+    code: bool,
+    text: String,
+}
+
+fn spans(description: &str) -> Vec<Span> {
+    description
+        .split('`')
+        .enumerate()
+        .filter(|(_, t)| !t.is_empty())
+        .map(|(i, t)| Span {
+            code: i % 2 == 1,
+            text: t.to_owned(),
+        })
+        .collect()
+}
+
 struct ParamView {
     name: String,
     location: String,
     required: bool,
-    description: String,
+    description: Vec<Span>,
 }
 
 struct ResponseView {
     status: String,
     media_type: String,
-    description: String,
+    description: Vec<Span>,
 }
 
 struct OperationView {
@@ -456,11 +475,11 @@ struct OperationView {
     method: String,
     path: String,
     summary: String,
-    description: String,
+    description: Vec<Span>,
     auth: String,
     params: Vec<ParamView>,
     body_types: Vec<String>,
-    body_description: String,
+    body_description: Vec<Span>,
     body_example: Option<String>,
     responses: Vec<ResponseView>,
 }
@@ -470,7 +489,7 @@ struct OperationView {
 struct DocsPage {
     title: String,
     version: String,
-    description: String,
+    description: Vec<Span>,
     operations: Vec<OperationView>,
 }
 
@@ -491,7 +510,7 @@ fn operations(doc: &Value) -> Vec<OperationView> {
         for (method, op) in item {
             let auth = match op["security"].as_array().map(Vec::len) {
                 Some(0) | None => "none (public)".to_owned(),
-                _ => format!("Bearer token with scope `{}`", text(&op["x-scope"])),
+                _ => format!("Bearer token with scope {}", text(&op["x-scope"])),
             };
             let body = &op["requestBody"];
             let body_types: Vec<String> = body["content"]
@@ -507,7 +526,7 @@ fn operations(doc: &Value) -> Vec<OperationView> {
                 method: method.to_ascii_uppercase(),
                 path: path.clone(),
                 summary: text(&op["summary"]),
-                description: text(&op["description"]),
+                description: spans(&text(&op["description"])),
                 auth,
                 params: op["parameters"]
                     .as_array()
@@ -517,13 +536,13 @@ fn operations(doc: &Value) -> Vec<OperationView> {
                                 name: text(&p["name"]),
                                 location: text(&p["in"]),
                                 required: p["required"].as_bool().unwrap_or(false),
-                                description: text(&p["description"]),
+                                description: spans(&text(&p["description"])),
                             })
                             .collect()
                     })
                     .unwrap_or_default(),
                 body_types,
-                body_description: text(&body["description"]),
+                body_description: spans(&text(&body["description"])),
                 body_example,
                 responses: op["responses"]
                     .as_object()
@@ -535,7 +554,7 @@ fn operations(doc: &Value) -> Vec<OperationView> {
                                     .as_object()
                                     .and_then(|c| c.keys().next().cloned())
                                     .unwrap_or_default(),
-                                description: text(&r["description"]),
+                                description: spans(&text(&r["description"])),
                             })
                             .collect()
                     })
@@ -551,7 +570,7 @@ async fn docs_page() -> Result<Html<String>, PageError> {
     let page = DocsPage {
         title: text(&doc["info"]["title"]),
         version: text(&doc["info"]["version"]),
-        description: text(&doc["info"]["description"]),
+        description: spans(&text(&doc["info"]["description"])),
         operations: operations(doc),
     };
     Ok(Html(page.render()?))

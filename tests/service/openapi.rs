@@ -205,7 +205,11 @@ async fn the_docs_page_renders_the_document_without_scripts_or_network() {
             assert!(html.contains(&heading), "the page lacks {heading}");
         }
     }
-    assert!(html.contains("Bearer token with scope `submit`"));
+    assert!(html.contains("Bearer token with scope submit"));
+    assert!(
+        html.contains("<code>Retry-After</code>"),
+        "code spans shown as code"
+    );
     assert!(html.contains("application/x-ndjson"));
     assert!(html.contains("waiting will"));
     server.stop().await;
