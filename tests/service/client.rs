@@ -113,32 +113,22 @@ fn python_with_requests() -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn the_example_client_answers_through_a_chat_endpoint_and_submits() {
-    if !python_with_requests() {
-        let in_ci = std::env::var("CI").is_ok_and(|v| v == "true");
-        assert!(
-            !in_ci,
-            "python3 with requests is missing in CI: scripts/test.sh installs it"
-        );
-        eprintln!("skipping: python3 with `requests` is absent (run scripts/test.sh)");
-        return;
-    }
-    let (server, records) = spawn_app_with_release().await;
-    let token = {
-        let mut conn = server.pool.acquire().await.expect("conn");
-        let account = store::accounts::ensure_account(&mut conn, "team-a", Role::Submitter)
-            .await
-            .expect("account")
-            .expect("role");
-        let token = NewToken::generate();
-        store::accounts::insert_token(&mut conn, account, Role::Submitter, &token, None, None)
-            .await
-            .expect("token");
-        token.token
-    };
+async fn submitter_token(server: &TestServer) -> String {
+    let mut conn = server.pool.acquire().await.expect("conn");
+    let account = store::accounts::ensure_account(&mut conn, "team-a", Role::Submitter)
+        .await
+        .expect("account")
+        .expect("role");
+    let token = NewToken::generate();
+    store::accounts::insert_token(&mut conn, account, Role::Submitter, &token, None, None)
+        .await
+        .expect("token");
+    token.token
+}
 
-    // Items 0 and 1: the right order; item 2: prose with no order in it; item 3: reversed.
+/// A fake chat endpoint for `records`. Items 0 and 1 get the right order, item 2 prose with no
+/// order in it, item 3 the reversed order.
+async fn spawn_fake(records: &[Value]) -> (Arc<Fake>, String, tokio::task::JoinHandle<()>) {
     let mut by_question = HashMap::new();
     for (i, r) in records.iter().enumerate() {
         let mut gt: Vec<u64> = r["gt_answer"]
@@ -177,27 +167,50 @@ async fn the_example_client_answers_through_a_chat_endpoint_and_submits() {
         .await
         .expect("bind fake endpoint");
     let fake_addr = listener.local_addr().expect("addr");
-    let fake_server = tokio::spawn(async move {
+    let handle = tokio::spawn(async move {
         axum::serve(listener, app).await.expect("fake endpoint");
     });
+    (fake, format!("http://{fake_addr}/v1"), handle)
+}
 
+/// Runs the client against the hub and the fake endpoint, with `extra` arguments.
+async fn run_client(
+    server: &TestServer,
+    model_url: &str,
+    hub_token: &str,
+    extra: &[&str],
+) -> std::process::Output {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("clients/enact_client.py");
-    let hub = server.url("");
-    let model_url = format!("http://{fake_addr}/v1");
-    let output = tokio::task::spawn_blocking(move || {
-        Command::new("python3")
-            .arg(script)
-            .args(["--hub", &hub, "--dataset", "mini"])
-            .args(["--model-url", &model_url, "--model", "fake-vlm"])
-            .args(["--name", "Fake VLM", "--retry-delay", "0.01"])
-            .args(["--api-key-env", "FAKE_ENDPOINT_KEY"])
-            .env("FAKE_ENDPOINT_KEY", API_KEY)
-            .env("ENACT_HUB_TOKEN", token)
-            .output()
-            .expect("run python3")
-    })
-    .await
-    .expect("client task");
+    let mut command = Command::new("python3");
+    command
+        .arg(script)
+        .args(["--hub", &server.url(""), "--dataset", "mini"])
+        .args(["--model-url", model_url, "--model", "fake-vlm"])
+        .args(["--name", "Fake VLM", "--retry-delay", "0.01"])
+        .args(["--api-key-env", "FAKE_ENDPOINT_KEY"])
+        .args(extra)
+        .env("FAKE_ENDPOINT_KEY", API_KEY)
+        .env("ENACT_HUB_TOKEN", hub_token);
+    tokio::task::spawn_blocking(move || command.output().expect("run python3"))
+        .await
+        .expect("client task")
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_example_client_answers_through_a_chat_endpoint_and_submits() {
+    if !python_with_requests() {
+        let in_ci = std::env::var("CI").is_ok_and(|v| v == "true");
+        assert!(
+            !in_ci,
+            "python3 with requests is missing in CI: scripts/test.sh installs it"
+        );
+        eprintln!("skipping: python3 with `requests` is absent (run scripts/test.sh)");
+        return;
+    }
+    let (server, records) = spawn_app_with_release().await;
+    let token = submitter_token(&server).await;
+    let (fake, model_url, fake_server) = spawn_fake(&records).await;
+    let output = run_client(&server, &model_url, &token, &[]).await;
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "client failed: {stderr}");
     assert!(
@@ -254,27 +267,65 @@ async fn the_example_client_answers_through_a_chat_endpoint_and_submits() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_example_client_tries_a_few_items_and_names_a_refused_token() {
+    if !python_with_requests() {
+        eprintln!("skipping: python3 with `requests` is absent (run scripts/test.sh)");
+        return;
+    }
+    let (server, records) = spawn_app_with_release().await;
+    let (fake, model_url, fake_server) = spawn_fake(&records).await;
+
+    let refused = run_client(
+        &server,
+        &model_url,
+        "ehub_000000000000_nope",
+        &["--limit", "2"],
+    )
+    .await;
+    assert_eq!(refused.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        stderr.contains("posting the submission: HTTP 401") && stderr.contains("revoked"),
+        "{stderr}"
+    );
+
+    let token = submitter_token(&server).await;
+    let output = run_client(&server, &model_url, &token, &["--limit", "2"]).await;
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "client failed: {stderr}");
+    let printed: Value = serde_json::from_slice(&output.stdout).expect("client prints JSON");
+    let coverage = &printed["scores"]["coverage"];
+    assert_eq!(coverage["answered"], 2);
+    assert_eq!(coverage["missing"], 2);
+    assert_eq!(coverage["coverage"], 0.5);
+    assert_eq!(coverage["unparseable"], 0);
+    // Two right answers out of four items: the unanswered ones score 0.
+    assert_eq!(printed["scores"]["report"]["overall"]["task_accuracy"], 0.5);
+    assert_eq!(
+        fake.log.lock().expect("log").answered.len(),
+        4,
+        "two runs of two"
+    );
+    fake_server.abort();
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_example_client_stops_with_a_clear_message_when_the_model_endpoint_refuses() {
     if !python_with_requests() {
         eprintln!("skipping: python3 with `requests` is absent (run scripts/test.sh)");
         return;
     }
     let (server, _) = spawn_app_with_release().await;
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("clients/enact_client.py");
-    let hub = server.url("");
     // The hub itself has no chat endpoint: a 404, which is not worth retrying.
-    let model_url = format!("{hub}/v1");
-    let output = tokio::task::spawn_blocking(move || {
-        Command::new("python3")
-            .arg(script)
-            .args(["--hub", &hub, "--dataset", "mini", "--limit", "1"])
-            .args(["--model-url", &model_url, "--model", "m"])
-            .env("ENACT_HUB_TOKEN", "ehub_000000000000_nope")
-            .output()
-            .expect("run python3")
-    })
-    .await
-    .expect("client task");
+    let model_url = server.url("/v1");
+    let output = run_client(
+        &server,
+        &model_url,
+        "ehub_000000000000_nope",
+        &["--limit", "1"],
+    )
+    .await;
     assert_eq!(output.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(
