@@ -23,6 +23,12 @@ if [ ! -d tests/browser/node_modules/playwright-core ]; then
   (cd tests/browser && npm ci --no-audit --no-fund)
 fi
 
+# The example client's end-to-end test runs clients/enact_client.py with python3 and requests.
+if ! command -v python3 >/dev/null 2>&1 || ! python3 -c 'import requests' >/dev/null 2>&1; then
+  echo "== installing python3 and python3-requests (Debian packages)"
+  apt-get update && apt-get install -y python3 python3-requests
+fi
+
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
 

@@ -7,6 +7,7 @@
 //! - [`submission`]: reading, refusing and scoring a leaderboard submission (pure).
 //! - [`leaderboard`]: leaderboard rows (Table 1 layout) and the TA-vs-L chart geometry (pure).
 //! - [`import`]: reading an ENACT release from disk into the store, all-or-nothing.
+//! - [`release`]: writing a stored dataset back out as a release archive (pure).
 //! - [`store`]: SQLite access, one module per table family.
 //! - [`web`]: the axum service: JSON API under `/api/v1`, HTML pages, frames.
 //! - [`annotation`]: human annotation without I/O: credentials, the balanced split, drafts,
@@ -28,6 +29,7 @@ pub mod demo;
 pub mod import;
 pub mod leaderboard;
 pub mod pipeline;
+pub mod release;
 pub mod scene_graph;
 pub mod scoring;
 pub mod semantics;

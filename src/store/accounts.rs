@@ -33,6 +33,8 @@ pub struct TokenListing {
     pub daily_quota: Option<i64>,
     pub total_quota: Option<i64>,
     pub created_at: String,
+    /// When the token last made a submission attempt (admin tokens: last submission).
+    pub last_used_at: Option<String>,
     pub revoked_at: Option<String>,
 }
 
@@ -128,8 +130,10 @@ pub async fn authenticate(
 pub async fn list_tokens(conn: &mut SqliteConnection) -> Result<Vec<TokenListing>, sqlx::Error> {
     let rows = sqlx::query(
         "SELECT t.id, t.prefix, a.name, a.role, t.scopes, t.daily_quota, t.total_quota, \
-         t.created_at, t.revoked_at FROM api_tokens t JOIN accounts a ON a.id = t.account \
-         ORDER BY t.id",
+         t.created_at, t.revoked_at, \
+         (SELECT max(c) FROM (SELECT created_at AS c FROM submission_attempts WHERE token = t.id \
+          UNION ALL SELECT created_at FROM submissions WHERE token = t.id)) AS last_used_at \
+         FROM api_tokens t JOIN accounts a ON a.id = t.account ORDER BY t.id",
     )
     .fetch_all(conn)
     .await?;
@@ -144,6 +148,7 @@ pub async fn list_tokens(conn: &mut SqliteConnection) -> Result<Vec<TokenListing
                 daily_quota: row.try_get("daily_quota")?,
                 total_quota: row.try_get("total_quota")?,
                 created_at: row.try_get("created_at")?,
+                last_used_at: row.try_get("last_used_at")?,
                 revoked_at: row.try_get("revoked_at")?,
             })
         })
@@ -192,8 +197,14 @@ pub async fn token_hash_exists(
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AttemptQuota {
     Granted,
-    DailyExhausted { limit: i64 },
-    TotalExhausted { limit: i64 },
+    DailyExhausted {
+        limit: i64,
+    },
+    /// `used` attempts were made against a total of `limit`; waiting will not help.
+    TotalExhausted {
+        used: i64,
+        limit: i64,
+    },
 }
 
 /// Records one attempt unless a quota is used up; the check and the insert are one statement,
@@ -224,7 +235,7 @@ pub async fn record_attempt(
         .fetch_one(conn)
         .await?;
     Ok(if used >= total {
-        AttemptQuota::TotalExhausted { limit: total }
+        AttemptQuota::TotalExhausted { used, limit: total }
     } else {
         AttemptQuota::DailyExhausted { limit: daily }
     })

@@ -339,3 +339,68 @@ pub async fn scoring_items(
         })
         .collect()
 }
+
+/// Every item of a dataset as its release line needs it, in file order, each with its row id
+/// in `items`. Ground truth included: the caller decides whether to write it.
+pub async fn release_items(
+    conn: &mut SqliteConnection,
+    dataset_id: i64,
+) -> Result<Vec<(i64, crate::release::ReleaseItem)>, sqlx::Error> {
+    let mut paths: HashMap<i64, Vec<String>> = HashMap::new();
+    let image_rows = sqlx::query(
+        "SELECT ii.item, ii.path FROM item_images ii JOIN items i ON i.id = ii.item \
+         WHERE i.dataset_id = ? ORDER BY ii.item, ii.position",
+    )
+    .bind(dataset_id)
+    .fetch_all(&mut *conn)
+    .await?;
+    for row in &image_rows {
+        paths
+            .entry(row.try_get("item")?)
+            .or_default()
+            .push(row.try_get("path")?);
+    }
+    let rows = sqlx::query(
+        "SELECT id, item_id, item_type, task_name, key_frame_ids, question, gt_answer \
+         FROM items WHERE dataset_id = ? ORDER BY source_line, id",
+    )
+    .bind(dataset_id)
+    .fetch_all(conn)
+    .await?;
+    rows.iter()
+        .map(|row| {
+            let row_id: i64 = row.try_get("id")?;
+            Ok((
+                row_id,
+                crate::release::ReleaseItem {
+                    id: row.try_get("item_id")?,
+                    item_type: row.try_get("item_type")?,
+                    task_name: row.try_get("task_name")?,
+                    key_frame_ids: json_column(row, "key_frame_ids")?,
+                    images: paths.remove(&row_id).unwrap_or_default(),
+                    question: row.try_get("question")?,
+                    gt_answer: json_column(row, "gt_answer")?,
+                },
+            ))
+        })
+        .collect()
+}
+
+/// The image files of the items with these row ids: `(path, PNG bytes)`, item by item in
+/// row-id order, each item's images in position order.
+pub async fn release_images(
+    conn: &mut SqliteConnection,
+    item_rows: &[i64],
+) -> Result<Vec<(String, Vec<u8>)>, sqlx::Error> {
+    let ids = serde_json::to_string(item_rows).map_err(|e| corrupt("item", e))?;
+    let rows = sqlx::query(
+        "SELECT ii.path, f.png FROM item_images ii JOIN frames f ON f.id = ii.frame \
+         WHERE ii.item IN (SELECT value FROM json_each(?)) ORDER BY ii.item, ii.position",
+    )
+    .bind(ids)
+    .fetch_all(conn)
+    .await?;
+    rows.iter()
+        .map(|row| Ok((row.try_get("path")?, row.try_get("png")?)))
+        .collect()
+}

@@ -3,27 +3,68 @@
 use std::collections::BTreeMap;
 
 use axum::Json;
-use axum::Router;
 use axum::body::{Body, Bytes};
 use axum::extract::{Path, Query, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
-use axum::routing::get;
 use serde::{Deserialize, Serialize};
 
+use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState, dataset_or_404};
 use crate::dataset::{Direction, StepLength};
 use crate::store;
 use crate::store::datasets::DatasetOverview;
 use crate::store::items::{ItemFilter, StoredItem};
 
-pub fn router() -> Router<AppState> {
-    Router::new()
-        .route("/datasets", get(list_datasets))
-        .route("/datasets/{dataset}", get(get_dataset))
-        .route("/datasets/{dataset}/items", get(list_items))
-        .route("/datasets/{dataset}/items/{item_id}", get(get_item))
-        .route("/frames/{sha256}", get(get_frame))
+/// The read API's routes (see [`super::openapi`]).
+pub fn routes() -> Vec<ApiRoute> {
+    vec![
+        ApiRoute::new(Verb::Get, "/datasets", list_datasets, "List datasets")
+            .describe("Every dataset with its item counts by direction and step length.")
+            .responds(200, Some("application/json"), "`{\"datasets\": [...]}`."),
+        ApiRoute::new(Verb::Get, "/datasets/{dataset}", get_dataset, "One dataset")
+            .describe("A dataset's item counts by direction and step length, and its items URL.")
+            .responds(200, Some("application/json"), "The dataset.")
+            .errors(&[404]),
+        ApiRoute::new(
+            Verb::Get,
+            "/datasets/{dataset}/items",
+            list_items,
+            "List items",
+        )
+        .describe(
+            "A dataset's items in import order, filtered and paged; `next` is the URL of \
+                 the following page, or null on the last. Never includes ground truth.",
+        )
+        .query("direction", false, "`forward` or `inverse`.")
+        .query("step_length", false, "L, the number of images: 3 to 10.")
+        .query("task", false, "An ENACT task name.")
+        .query("page", false, "1-based page number (default 1).")
+        .query("per_page", false, "Items per page, 1 to 500 (default 50).")
+        .responds(200, Some("application/json"), "A page of items.")
+        .errors(&[400, 404]),
+        ApiRoute::new(
+            Verb::Get,
+            "/datasets/{dataset}/items/{item_id}",
+            get_item,
+            "One item",
+        )
+        .describe(
+            "An item as a model sees it: question, action texts, and its images' labels \
+                 and URLs in order. Never includes ground truth or key frame ids.",
+        )
+        .responds(200, Some("application/json"), "The item.")
+        .errors(&[404]),
+        ApiRoute::new(Verb::Get, "/frames/{sha256}", get_frame, "A frame")
+            .describe(
+                "A key frame as PNG, with a strong ETag and `Cache-Control: immutable`; \
+                 `If-None-Match` with the ETag answers 304.",
+            )
+            .header("If-None-Match", "The ETag of a copy the client holds.")
+            .responds(200, Some("image/png"), "The PNG bytes.")
+            .responds(304, None, "The client's copy is current.")
+            .errors(&[404]),
+    ]
 }
 
 pub fn frame_url(sha256: &str) -> String {

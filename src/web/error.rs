@@ -32,8 +32,13 @@ pub enum AppError {
         message: String,
         problems: Vec<crate::submission::LineProblem>,
     },
+    /// A quota or rate limit. `retry_after` is set only when waiting helps: a used-up total
+    /// quota never refills, so it sends no `Retry-After`.
     #[error("{message}")]
-    TooManyRequests { message: String, retry_after: u64 },
+    TooManyRequests {
+        message: String,
+        retry_after: Option<u64>,
+    },
     #[error("internal error")]
     Internal(#[source] anyhow::Error),
 }
@@ -97,7 +102,10 @@ impl IntoResponse for AppError {
                     HeaderValue::from_static("Bearer realm=\"enact-hub\""),
                 );
             }
-            AppError::TooManyRequests { retry_after, .. } => {
+            AppError::TooManyRequests {
+                retry_after: Some(retry_after),
+                ..
+            } => {
                 response
                     .headers_mut()
                     .insert(header::RETRY_AFTER, HeaderValue::from(*retry_after));

@@ -10,6 +10,7 @@ use axum::routing::get;
 use serde::Serialize;
 
 use super::error::PageError;
+use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState, dataset_or_404};
 use crate::dataset::StepLength;
 use crate::leaderboard::{
@@ -17,8 +18,22 @@ use crate::leaderboard::{
 };
 use crate::store;
 
-pub fn api_router() -> Router<AppState> {
-    Router::new().route("/datasets/{dataset}/leaderboard", get(leaderboard_json))
+pub fn api_routes() -> Vec<ApiRoute> {
+    vec![
+        ApiRoute::new(
+            Verb::Get,
+            "/datasets/{dataset}/leaderboard",
+            leaderboard_json,
+            "The leaderboard",
+        )
+        .describe(
+            "One row per published submission, best overall TA first: TA and PA overall, \
+             forward, inverse and per step length 3..10, 95% bootstrap intervals, coverage and \
+             date; a Human row when annotations exist. The HTML page is /leaderboard/{dataset}.",
+        )
+        .responds(200, Some("application/json"), "The rows.")
+        .errors(&[404]),
+    ]
 }
 
 pub fn page_router() -> Router<AppState> {

@@ -3,17 +3,22 @@
 //! `api` serves JSON under `/api/v1`, `pages` serves the HTML site, `assets` the embedded CSS
 //! and scripts; `auth` logs annotators in, `annotate` is their side of human annotation and
 //! `admin` the admins'. Each exposes one `router()`; they are merged once in [`router`].
+//! The JSON routes are one table instead ([`openapi`]): the `/api/v1` router and the OpenAPI
+//! document are both built from it.
 
 mod admin;
+mod admin_tokens;
 mod agreement;
 mod annotate;
 mod api;
+mod archive;
 mod assets;
 mod auth;
 pub mod error;
 mod frame_cache;
 mod item_cache;
 mod leaderboard;
+pub mod openapi;
 mod pages;
 pub mod session;
 mod standing_cache;
@@ -141,12 +146,12 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
         .merge(annotate::router())
         .merge(admin::router())
         .merge(agreement::router())
+        .merge(admin_tokens::router())
         .merge(assets::router())
+        .merge(openapi::page_router())
         .nest(
-            "/api/v1",
-            api::router()
-                .merge(submissions::router())
-                .merge(leaderboard::api_router()),
+            openapi::API_PREFIX,
+            openapi::api_router(openapi::api_routes()),
         )
         .with_state(state)
         .layer(DefaultBodyLimit::max(config.body_limit))

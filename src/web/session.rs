@@ -98,7 +98,7 @@ impl LoginLimiter {
                          {minutes} minutes",
                         FAILURE_WINDOW.as_secs() / 60
                     ),
-                    retry_after: wait.as_secs().max(1),
+                    retry_after: Some(wait.as_secs().max(1)),
                 });
             }
         }

@@ -6,17 +6,16 @@ use std::pin::Pin;
 use std::sync::{Arc, Mutex};
 
 use axum::Json;
-use axum::Router;
 use axum::body::{Body, HttpBody};
 use axum::extract::{Path, Query, State};
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
-use axum::routing::{delete, get, patch, post, put};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use sha2::{Digest, Sha256};
 
 use super::auth::require;
+use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState, dataset_or_404};
 use crate::accounts::{NewToken, Role, Scope};
 use crate::scoring::{self, ScoringTarget};
@@ -27,14 +26,113 @@ use crate::store::submissions::{
 };
 use crate::submission::{SubmissionError, score_submission};
 
-pub fn router() -> Router<AppState> {
-    Router::new()
-        .route("/datasets/{dataset}/submissions", post(submit))
-        .route("/submissions/{id}", get(get_submission))
-        .route("/admin/submissions/{id}", patch(update_listing))
-        .route("/admin/datasets/{dataset}/answers", put(set_answers))
-        .route("/admin/tokens", post(create_token).get(list_tokens))
-        .route("/admin/tokens/{token}", delete(revoke_token))
+/// Submitting, reading scores, and the admin's controls (see [`super::openapi`]).
+pub fn routes() -> Vec<ApiRoute> {
+    vec![
+        ApiRoute::new(
+            Verb::Post,
+            "/datasets/{dataset}/submissions",
+            submit,
+            "Submit a model's answers",
+        )
+        .describe(
+            "Scores a prediction file against every item of the dataset and stores it, all or \
+             nothing. The body is ENACT's model-output JSONL (each QA record plus `answer`), \
+             compact JSONL (`{\"id\", \"answer\"}` per line), or a JSON array of such objects. \
+             Only `id` and `answer` are read: a submitted `gt_answer`, `type` or `key_frame_ids` \
+             never influences scoring. `answer` may be the model's raw text or a list; an \
+             answer that cannot be parsed is scored as a failure and counted, not refused. \
+             Every dataset item counts: unanswered items score 0. Each attempt (refused ones \
+             too) counts against the token's daily and total quotas; admin tokens are exempt.",
+        )
+        .bearer("submit")
+        .query("model", true, "The model's name on the leaderboard (1 to 200 characters).")
+        .query("description", false, "Free text about the model or run.")
+        .query("url", false, "A link to the model or paper.")
+        .query("prompt_version", false, "Which prompt produced the answers.")
+        .query("notes", false, "Anything else worth recording.")
+        .header(
+            "Idempotency-Key",
+            "1 to 200 characters. Repeating a request with the same key and body returns the \
+             first submission (200) instead of storing another; a different body is 409.",
+        )
+        .body(
+            &["application/x-ndjson", "application/json", "text/plain"],
+            "One JSON object per line, or one JSON array. The body limit is the server's \
+             `--submission-body-limit` (64 MiB by default, enough for a full ENACT file).",
+            Some(
+                "{\"id\": \"cook_bacon_..._forward_world_modeling_ordering_3_steps_...\", \"answer\": \"[2, 1]\"}\n\
+                 {\"id\": \"...\", \"answer\": [1, 3, 2]}",
+            ),
+        )
+        .responds(201, Some("application/json"), "Stored and scored: the submission with its `id`, `href` and `scores`; `Location` names it.")
+        .responds(200, Some("application/json"), "A repeat with the same `Idempotency-Key` and body: the first submission.")
+        .errors(&[400, 401, 403, 404, 409, 413, 422, 429]),
+        ApiRoute::new(Verb::Get, "/submissions/{id}", get_submission, "A submission's scores")
+            .describe(
+                "Status; TA and PA overall, forward, inverse and per step length; coverage and \
+                 parse-failure rate; 95% bootstrap intervals on overall TA and PA. Per-item \
+                 verdicts (`items`) only to the owner (or an admin) and only if the dataset's \
+                 answers are public; otherwise `items_withheld` says why.",
+            )
+            .bearer("read_own")
+            .responds(200, Some("application/json"), "The submission.")
+            .errors(&[401, 403, 404]),
+        ApiRoute::new(
+            Verb::Patch,
+            "/admin/submissions/{id}",
+            update_listing,
+            "Change a submission's leaderboard listing",
+        )
+        .describe("Mark a baseline, or hide, publish or withdraw a leaderboard row.")
+        .bearer("admin")
+        .body(
+            &["application/json"],
+            "`baseline` (bool) and/or `visibility`: `published`, `hidden` or `withdrawn`.",
+            Some("{\"baseline\": true, \"visibility\": \"published\"}"),
+        )
+        .responds(200, Some("application/json"), "The submission as changed.")
+        .errors(&[400, 401, 403, 404, 422]),
+        ApiRoute::new(
+            Verb::Put,
+            "/admin/datasets/{dataset}/answers",
+            set_answers,
+            "Set whether a dataset's answers are public",
+        )
+        .describe(
+            "`hidden` (the default) never shows ground truth or per-item correctness to \
+             submitters, and leaves ground truth out of the dataset archive; `public` shows \
+             both.",
+        )
+        .bearer("admin")
+        .body(&["application/json"], "`{\"answers\": \"public\" | \"hidden\"}`.", Some("{\"answers\": \"public\"}"))
+        .responds(200, Some("application/json"), "The dataset's setting.")
+        .errors(&[400, 401, 403, 404, 422]),
+        ApiRoute::new(Verb::Post, "/admin/tokens", create_token, "Create an API token")
+            .describe(
+                "Creates the account if it is new, and a token for it. The token's secret is in \
+                 this response only; the server keeps its SHA-256.",
+            )
+            .bearer("admin")
+            .body(
+                &["application/json"],
+                "`name` (1 to 100 characters), `role` (`submitter`, the default, or `admin`), \
+                 optional `daily_quota` and `total_quota` (else the server's defaults).",
+                Some("{\"name\": \"team-a\", \"role\": \"submitter\", \"daily_quota\": 5}"),
+            )
+            .responds(201, Some("application/json"), "`id`, `prefix`, `account`, `role`, and `token`, the secret.")
+            .errors(&[400, 401, 403, 409, 422]),
+        ApiRoute::new(Verb::Get, "/admin/tokens", list_tokens, "List API tokens")
+            .describe("Every token with its account, role, scopes, quotas, creation, last use and revocation; never a secret.")
+            .bearer("admin")
+            .responds(200, Some("application/json"), "The tokens.")
+            .errors(&[401, 403]),
+        ApiRoute::new(Verb::Delete, "/admin/tokens/{token}", revoke_token, "Revoke an API token")
+            .describe("Takes effect at once: the next request with the token gets 401.")
+            .bearer("admin")
+            .responds(204, None, "Revoked.")
+            .errors(&[401, 403, 404]),
+    ]
 }
 
 /// A dataset's scoring targets and their `items` row ids, in dataset order.
@@ -293,16 +391,18 @@ async fn submit(
                         "this token has used its {limit} submissions for today (UTC); \
                          try again in {retry_after} s"
                     ),
-                    retry_after,
+                    retry_after: Some(retry_after),
                 });
             }
-            AttemptQuota::TotalExhausted { limit } => {
+            AttemptQuota::TotalExhausted { used, limit } => {
+                // No Retry-After: the total never refills, so waiting would not help.
                 return Err(AppError::TooManyRequests {
                     message: format!(
-                        "this token has used all of its {limit} submissions; ask an admin for \
-                         a larger quota"
+                        "this token's total quota is used up: {used} of {limit} submissions \
+                         made; waiting will not help, ask an admin for a new token or a larger \
+                         total quota"
                     ),
-                    retry_after: seconds_until_utc_midnight(),
+                    retry_after: None,
                 });
             }
         }
@@ -545,13 +645,13 @@ struct TokenRequest {
 }
 
 #[derive(Serialize)]
-struct CreatedToken {
-    id: i64,
-    prefix: String,
-    account: String,
-    role: &'static str,
+pub(super) struct CreatedToken {
+    pub id: i64,
+    pub prefix: String,
+    pub account: String,
+    pub role: &'static str,
     /// The secret, shown this once.
-    token: String,
+    pub token: String,
 }
 
 async fn create_token(
@@ -562,20 +662,40 @@ async fn create_token(
     require(&caller, Scope::Admin)?;
     let role = match request.role.as_deref() {
         None => Role::Submitter,
-        Some(r) => Role::parse(r).ok_or_else(|| {
-            AppError::BadRequest(format!("role must be 'submitter' or 'admin', not {r:?}"))
-        })?,
+        Some(r) => parse_role(r)?,
     };
-    let name = request.name.trim();
+    let created = issue_token(
+        &state,
+        &request.name,
+        role,
+        request.daily_quota,
+        request.total_quota,
+    )
+    .await?;
+    Ok((StatusCode::CREATED, Json(created)))
+}
+
+pub(super) fn parse_role(text: &str) -> Result<Role, AppError> {
+    Role::parse(text).ok_or_else(|| {
+        AppError::BadRequest(format!("role must be 'submitter' or 'admin', not {text:?}"))
+    })
+}
+
+/// Creates a token (and its account if new) for the JSON API and the admin page alike.
+pub(super) async fn issue_token(
+    state: &AppState,
+    name: &str,
+    role: Role,
+    daily_quota: Option<i64>,
+    total_quota: Option<i64>,
+) -> Result<CreatedToken, AppError> {
+    let name = name.trim();
     if name.is_empty() || name.chars().count() > 100 {
         return Err(AppError::BadRequest(
             "`name` must be 1 to 100 characters".to_owned(),
         ));
     }
-    for (field, quota) in [
-        ("daily_quota", request.daily_quota),
-        ("total_quota", request.total_quota),
-    ] {
+    for (field, quota) in [("daily_quota", daily_quota), ("total_quota", total_quota)] {
         if quota.is_some_and(|q| q < 0) {
             return Err(AppError::BadRequest(format!(
                 "`{field}` must not be negative"
@@ -587,26 +707,17 @@ async fn create_token(
     let account = store::accounts::ensure_account(&mut tx, name, role)
         .await?
         .map_err(AppError::Conflict)?;
-    let id = store::accounts::insert_token(
-        &mut tx,
-        account,
-        role,
-        &token,
-        request.daily_quota,
-        request.total_quota,
-    )
-    .await?;
+    let id =
+        store::accounts::insert_token(&mut tx, account, role, &token, daily_quota, total_quota)
+            .await?;
     tx.commit().await?;
-    Ok((
-        StatusCode::CREATED,
-        Json(CreatedToken {
-            id,
-            prefix: token.prefix.clone(),
-            account: name.to_owned(),
-            role: role.as_str(),
-            token: token.token,
-        }),
-    ))
+    Ok(CreatedToken {
+        id,
+        prefix: token.prefix.clone(),
+        account: name.to_owned(),
+        role: role.as_str(),
+        token: token.token,
+    })
 }
 
 async fn list_tokens(

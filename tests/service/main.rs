@@ -1,15 +1,19 @@
 //! Integration tests: the importer, the HTTP service on 127.0.0.1:0 and the command line, each
 //! test with a fresh database. Built as one test binary.
 
+mod admin_tokens;
 mod agreement;
 mod annotate;
 mod api;
+mod archive;
 mod browser;
 mod cli;
+mod client;
 #[path = "../support/fixtures.rs"]
 mod fixtures;
 mod helpers;
 mod import;
+mod openapi;
 mod pages;
 mod score;
 mod submissions;

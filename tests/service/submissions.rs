@@ -389,6 +389,47 @@ async fn quotas_count_rejected_attempts_and_answer_429_with_retry_after() {
 }
 
 #[tokio::test]
+async fn a_used_up_total_quota_answers_429_without_retry_after() {
+    let (server, records) = spawn_app_with_release().await;
+    let token = {
+        let mut conn = server.pool.acquire().await.expect("conn");
+        let account = store::accounts::ensure_account(&mut conn, "carol", Role::Submitter)
+            .await
+            .expect("account")
+            .expect("role");
+        let token = NewToken::generate();
+        // A generous daily quota, so the total is what runs out.
+        store::accounts::insert_token(
+            &mut conn,
+            account,
+            Role::Submitter,
+            &token,
+            Some(50),
+            Some(2),
+        )
+        .await
+        .expect("token");
+        token.token
+    };
+    let (status, _, _) = post(&server, "mini", "model=m", Some(&token), "{oops", None).await;
+    assert_eq!(status, 422);
+    let body = answers(&records, &[]);
+    let (status, _, _) = post(&server, "mini", "model=m", Some(&token), body.clone(), None).await;
+    assert_eq!(status, 201);
+    let (status, headers, error) = post(&server, "mini", "model=m", Some(&token), body, None).await;
+    assert_eq!(status, 429, "{error}");
+    assert!(
+        headers.get("retry-after").is_none(),
+        "a used-up total quota must not suggest waiting: {headers:?}"
+    );
+    let message = error["error"].as_str().expect("msg");
+    assert!(message.contains("2 of 2 submissions"), "{message}");
+    assert!(message.contains("total quota"), "{message}");
+    assert_eq!(stored_counts(&server.pool).await.0, 1);
+    server.stop().await;
+}
+
+#[tokio::test]
 async fn idempotency_keys_return_the_first_submission_and_refuse_another_body() {
     let (server, records) = spawn_app_with_release().await;
     let token = make_token(&server.pool, "alice", Role::Submitter, None).await;

@@ -1,0 +1,284 @@
+#!/usr/bin/env python3
+"""Example enact-hub client: ask a model every item of a dataset, then submit its answers.
+
+For each item of DATASET on the hub, this script
+
+1. reads the item over the hub's JSON API (`GET /api/v1/datasets/{dataset}/items`, then each
+   item's own URL for its question and image URLs, then the PNG frames);
+2. sends the images and the question to an OpenAI-compatible chat-completions endpoint
+   (`POST {model_url}/chat/completions`) as one user message: for each image a text part with
+   its label ("Current State", "Next State 1", ...) followed by the image as a base64
+   `data:image/png` URL, then the question text;
+3. keeps the model's raw answer text (the hub parses it, as ENACT's evaluation does);
+
+then posts all answers as compact JSONL (`{"id": ..., "answer": "<raw text>"}` per line) to
+`POST /api/v1/datasets/{dataset}/submissions?model=...` with the hub token, and prints the
+scores the hub returns. Items not answered (with --limit, or when the model endpoint keeps
+failing) count as unanswered: the hub scores every item of the dataset.
+
+Needs Python 3.8+ and `requests`. Example:
+
+    export ENACT_HUB_TOKEN=ehub_...          # from your hub admin
+    export OPENAI_API_KEY=sk-...             # if the model endpoint needs one
+    python3 clients/enact_client.py --hub http://127.0.0.1:8080 --dataset enact \\
+        --model-url https://api.openai.com/v1 --model gpt-4o --limit 5
+
+Exit status: 0 when the submission was stored, 1 on any error (the message says which
+request failed and why).
+"""
+
+import argparse
+import base64
+import json
+import os
+import sys
+import time
+
+import requests
+
+USER_AGENT = "enact-hub-example-client/1"
+
+
+class ClientError(Exception):
+    """A failure the user should read: which request, and what came back."""
+
+
+def describe_failure(response):
+    """The hub's JSON error message when there is one, else the start of the body."""
+    try:
+        body = response.json()
+        if isinstance(body, dict) and "error" in body:
+            text = str(body["error"])
+            problems = body.get("problems") or []
+            for p in problems[:10]:
+                text += "\n  line {}: {}".format(p.get("line"), p.get("message"))
+            return text
+    except ValueError:
+        pass
+    return response.text[:500]
+
+
+def retry_delay(response, attempt, base_delay):
+    """Seconds to wait before the next attempt: Retry-After when given, else exponential."""
+    if response is not None:
+        header = response.headers.get("Retry-After")
+        if header is not None:
+            try:
+                return min(float(header), 300.0)
+            except ValueError:
+                pass
+    return base_delay * (2 ** attempt)
+
+
+def request_with_retries(session, method, url, what, max_retries, base_delay, **kwargs):
+    """Sends a request, retrying connection errors, 429 and 5xx with backoff."""
+    for attempt in range(max_retries + 1):
+        response = None
+        try:
+            response = session.request(method, url, **kwargs)
+        except requests.RequestException as error:
+            failure = "{} failed: {}".format(what, error)
+        else:
+            if response.status_code < 400:
+                return response
+            failure = "{}: HTTP {}: {}".format(what, response.status_code, describe_failure(response))
+            if response.status_code != 429 and response.status_code < 500:
+                raise ClientError(failure)
+        if attempt == max_retries:
+            raise ClientError("{} (gave up after {} attempts)".format(failure, attempt + 1))
+        delay = retry_delay(response, attempt, base_delay)
+        print("{}; retrying in {:.1f} s".format(failure, delay), file=sys.stderr)
+        time.sleep(delay)
+    raise ClientError(what + ": no attempt was made")
+
+
+class Hub:
+    """The enact-hub side: reading items and posting the submission."""
+
+    def __init__(self, base_url, token, timeout):
+        self.base = base_url.rstrip("/")
+        self.token = token
+        self.timeout = timeout
+        self.session = requests.Session()
+        self.session.headers["User-Agent"] = USER_AGENT
+
+    def get(self, path, what, **kwargs):
+        url = path if path.startswith("http") else self.base + path
+        # Reading is idempotent: retry transient failures a few times.
+        return request_with_retries(self.session, "GET", url, what, 3, 1.0, timeout=self.timeout, **kwargs)
+
+    def item_urls(self, dataset, limit):
+        """Item URLs in dataset order, at most `limit` of them (all when None)."""
+        urls = []
+        path = "/api/v1/datasets/{}/items?per_page=500".format(dataset)
+        while path and (limit is None or len(urls) < limit):
+            page = self.get(path, "listing items of dataset '{}'".format(dataset)).json()
+            urls.extend(entry["url"] for entry in page["items"])
+            path = page.get("next")
+        return urls if limit is None else urls[:limit]
+
+    def item(self, url):
+        return self.get(url, "reading item {}".format(url)).json()
+
+    def image_data_url(self, url):
+        png = self.get(url, "reading frame {}".format(url)).content
+        return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+
+    def submit(self, dataset, answers, metadata):
+        body = "".join(json.dumps({"id": i, "answer": a}, ensure_ascii=False) + "\n" for i, a in answers)
+        url = "{}/api/v1/datasets/{}/submissions".format(self.base, dataset)
+        try:
+            response = self.session.post(
+                url,
+                params=metadata,
+                data=body.encode("utf-8"),
+                headers={
+                    "Authorization": "Bearer " + self.token,
+                    "Content-Type": "application/x-ndjson",
+                },
+                timeout=max(self.timeout, 300),
+            )
+        except requests.RequestException as error:
+            raise ClientError("posting the submission failed: {}".format(error))
+        if response.status_code not in (200, 201):
+            raise ClientError(
+                "posting the submission: HTTP {}: {}".format(response.status_code, describe_failure(response))
+            )
+        return response.json()
+
+
+class ChatModel:
+    """Any OpenAI-compatible chat-completions endpoint."""
+
+    def __init__(self, base_url, model, api_key, timeout, max_retries, base_delay, max_tokens):
+        self.url = base_url.rstrip("/") + "/chat/completions"
+        self.model = model
+        self.timeout = timeout
+        self.max_retries = max_retries
+        self.base_delay = base_delay
+        self.max_tokens = max_tokens
+        self.session = requests.Session()
+        self.session.headers["User-Agent"] = USER_AGENT
+        if api_key:
+            self.session.headers["Authorization"] = "Bearer " + api_key
+
+    def answer(self, item, image_urls):
+        content = []
+        for image, data_url in zip(item["images"], image_urls):
+            content.append({"type": "text", "text": image["label"] + ":"})
+            content.append({"type": "image_url", "image_url": {"url": data_url}})
+        content.append({"type": "text", "text": item["question"]})
+        payload = {
+            "model": self.model,
+            "messages": [{"role": "user", "content": content}],
+            "temperature": 0,
+        }
+        if self.max_tokens:
+            payload["max_tokens"] = self.max_tokens
+        response = request_with_retries(
+            self.session,
+            "POST",
+            self.url,
+            "model endpoint, item {}".format(item["id"]),
+            self.max_retries,
+            self.base_delay,
+            json=payload,
+            timeout=self.timeout,
+        )
+        try:
+            message = response.json()["choices"][0]["message"]["content"]
+        except (ValueError, KeyError, IndexError, TypeError):
+            raise ClientError(
+                "model endpoint, item {}: the reply has no choices[0].message.content: {}".format(
+                    item["id"], response.text[:300]
+                )
+            )
+        if isinstance(message, list):
+            # Some servers answer with content parts; keep their text.
+            message = "".join(part.get("text", "") for part in message if isinstance(part, dict))
+        return message if isinstance(message, str) else ""
+
+
+def parse_args(argv):
+    parser = argparse.ArgumentParser(
+        description="Answer an enact-hub dataset with an OpenAI-compatible model and submit the answers."
+    )
+    parser.add_argument("--hub", default="http://127.0.0.1:8080", help="enact-hub base URL (default: %(default)s)")
+    parser.add_argument("--dataset", required=True, help="dataset name on the hub")
+    parser.add_argument("--model-url", required=True, help="base URL of the chat-completions API, e.g. https://api.openai.com/v1")
+    parser.add_argument("--model", required=True, help="model name sent to the endpoint")
+    parser.add_argument("--api-key-env", default="OPENAI_API_KEY", help="environment variable holding the endpoint's API key, if any (default: %(default)s)")
+    parser.add_argument("--hub-token-env", default="ENACT_HUB_TOKEN", help="environment variable holding the hub token (default: %(default)s)")
+    parser.add_argument("--name", help="model name for the leaderboard (default: --model)")
+    parser.add_argument("--description", default="", help="submission description")
+    parser.add_argument("--prompt-version", default="enact_client.py/1", help="recorded with the submission (default: %(default)s)")
+    parser.add_argument("--limit", type=int, help="answer only the first N items (the others count as unanswered)")
+    parser.add_argument("--timeout", type=float, default=120.0, help="seconds per HTTP request (default: %(default)s)")
+    parser.add_argument("--max-retries", type=int, default=5, help="retries on 429/5xx from the model endpoint (default: %(default)s)")
+    parser.add_argument("--retry-delay", type=float, default=2.0, help="first backoff delay in seconds, doubled each retry (default: %(default)s)")
+    parser.add_argument("--max-tokens", type=int, default=0, help="max_tokens for the model (0: not sent)")
+    parser.add_argument("--answers-out", help="also write the answers JSONL to this file")
+    args = parser.parse_args(argv)
+    if args.limit is not None and args.limit < 1:
+        parser.error("--limit must be at least 1")
+    return args
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    token = os.environ.get(args.hub_token_env, "").strip()
+    if not token:
+        print("error: set {} to your enact-hub token".format(args.hub_token_env), file=sys.stderr)
+        return 1
+    hub = Hub(args.hub, token, args.timeout)
+    model = ChatModel(
+        args.model_url,
+        args.model,
+        os.environ.get(args.api_key_env, "").strip(),
+        args.timeout,
+        args.max_retries,
+        args.retry_delay,
+        args.max_tokens,
+    )
+    try:
+        urls = hub.item_urls(args.dataset, args.limit)
+        print("answering {} items of '{}' with {}".format(len(urls), args.dataset, args.model), file=sys.stderr)
+        answers = []
+        for n, url in enumerate(urls, 1):
+            item = hub.item(url)
+            images = [hub.image_data_url(image["url"]) for image in item["images"]]
+            answers.append((item["id"], model.answer(item, images)))
+            print("  {}/{} {}".format(n, len(urls), item["id"]), file=sys.stderr)
+        if args.answers_out:
+            with open(args.answers_out, "w", encoding="utf-8") as out:
+                for item_id, answer in answers:
+                    out.write(json.dumps({"id": item_id, "answer": answer}, ensure_ascii=False) + "\n")
+        metadata = {
+            "model": args.name or args.model,
+            "description": args.description,
+            "prompt_version": args.prompt_version,
+            "notes": "sent by clients/enact_client.py; {} items answered".format(len(answers)),
+        }
+        submission = hub.submit(args.dataset, answers, metadata)
+    except ClientError as error:
+        print("error: {}".format(error), file=sys.stderr)
+        return 1
+    print(json.dumps(submission, indent=2))
+    scores = submission.get("scores") or {}
+    overall = (scores.get("report") or {}).get("overall") or {}
+    coverage = scores.get("coverage") or {}
+    print(
+        "submission {}: overall TA {} PA {}; coverage {}, parse failures {}".format(
+            submission.get("id"),
+            overall.get("task_accuracy"),
+            overall.get("pairwise_accuracy"),
+            coverage.get("coverage"),
+            coverage.get("parse_failure_rate"),
+        ),
+        file=sys.stderr,
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,577 @@
+//! The `/api/v1` route table, and the OpenAPI document and docs page built from it.
+//!
+//! Every JSON API route is an [`ApiRoute`]: its method, path, handler and documentation in one
+//! value. [`api_router`] mounts exactly the table and [`document`] describes exactly the table,
+//! so a route cannot be served without being documented, nor documented with another method
+//! than the one it answers to.
+
+use std::sync::OnceLock;
+
+use askama::Template;
+use axum::Json;
+use axum::Router;
+use axum::handler::Handler;
+use axum::http::Method;
+use axum::response::Html;
+use axum::routing::{MethodFilter, MethodRouter, get, on};
+use serde_json::{Map, Value, json};
+
+use super::error::PageError;
+use super::{AppState, api, archive, leaderboard, submissions};
+
+/// Where the table is mounted.
+pub const API_PREFIX: &str = "/api/v1";
+
+/// The HTTP methods the API uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verb {
+    Get,
+    Post,
+    Put,
+    Patch,
+    Delete,
+}
+
+impl Verb {
+    pub fn method(self) -> Method {
+        match self {
+            Verb::Get => Method::GET,
+            Verb::Post => Method::POST,
+            Verb::Put => Method::PUT,
+            Verb::Patch => Method::PATCH,
+            Verb::Delete => Method::DELETE,
+        }
+    }
+
+    fn filter(self) -> MethodFilter {
+        match self {
+            Verb::Get => MethodFilter::GET,
+            Verb::Post => MethodFilter::POST,
+            Verb::Put => MethodFilter::PUT,
+            Verb::Patch => MethodFilter::PATCH,
+            Verb::Delete => MethodFilter::DELETE,
+        }
+    }
+
+    /// The key of an operation in an OpenAPI path item.
+    fn key(self) -> &'static str {
+        match self {
+            Verb::Get => "get",
+            Verb::Post => "post",
+            Verb::Put => "put",
+            Verb::Patch => "patch",
+            Verb::Delete => "delete",
+        }
+    }
+}
+
+/// Who may call a route.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Access {
+    Public,
+    /// `Authorization: Bearer TOKEN` with this scope.
+    Bearer(&'static str),
+}
+
+/// A query parameter or request header.
+#[derive(Debug, Clone)]
+pub struct Param {
+    pub name: &'static str,
+    /// `query` or `header`.
+    pub location: &'static str,
+    pub required: bool,
+    pub description: &'static str,
+    /// JSON Schema type: `string` or `integer`.
+    pub kind: &'static str,
+}
+
+/// A request body: its media types and what it holds.
+#[derive(Debug, Clone)]
+pub struct RequestBody {
+    pub media_types: &'static [&'static str],
+    pub description: &'static str,
+    pub example: Option<&'static str>,
+}
+
+/// One documented response.
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    pub status: u16,
+    pub description: String,
+    /// The media type of the body, if any.
+    pub media_type: Option<&'static str>,
+}
+
+/// One route of the JSON API: what is mounted and what is documented, together.
+pub struct ApiRoute {
+    pub verb: Verb,
+    /// Relative to [`API_PREFIX`], in axum's `{name}` syntax (which is OpenAPI's too).
+    pub path: &'static str,
+    pub summary: &'static str,
+    pub description: &'static str,
+    pub access: Access,
+    pub params: Vec<Param>,
+    pub body: Option<RequestBody>,
+    pub outcomes: Vec<Outcome>,
+    handler: MethodRouter<AppState>,
+}
+
+/// What an error status means on this API; every error body is the `Error` schema.
+fn error_meaning(status: u16) -> &'static str {
+    match status {
+        400 => "A malformed request: a missing or invalid query parameter or body field.",
+        401 => {
+            "No valid API token: the `Authorization: Bearer TOKEN` header is missing, or the \
+             token is unknown or revoked (`WWW-Authenticate: Bearer` is sent)."
+        }
+        403 => "The token lacks the scope this route needs.",
+        404 => {
+            "Nothing by that name or id (another account's submission is answered the same \
+             way)."
+        }
+        409 => "A conflict with what is stored (see the message).",
+        413 => "The body is larger than the server's limit for this route.",
+        422 => {
+            "The body was read but refused; nothing was stored. `problems` lists each bad \
+             line: its 1-based number, a `kind` (invalid_json, not_an_object, missing_id, \
+             unknown_id, duplicate_id, missing_answer), the item id when known, and a message."
+        }
+        429 => {
+            "A quota is used up. Past the daily quota, `Retry-After` gives the seconds to the \
+             next UTC midnight; past the total quota there is no `Retry-After`: waiting will \
+             not help."
+        }
+        _ => "An error; see the message.",
+    }
+}
+
+impl ApiRoute {
+    pub fn new<H, T>(verb: Verb, path: &'static str, handler: H, summary: &'static str) -> Self
+    where
+        H: Handler<T, AppState>,
+        T: 'static,
+    {
+        ApiRoute {
+            verb,
+            path,
+            summary,
+            description: "",
+            access: Access::Public,
+            params: Vec::new(),
+            body: None,
+            outcomes: Vec::new(),
+            handler: on(verb.filter(), handler),
+        }
+    }
+
+    pub fn describe(mut self, description: &'static str) -> Self {
+        self.description = description;
+        self
+    }
+
+    pub fn bearer(mut self, scope: &'static str) -> Self {
+        self.access = Access::Bearer(scope);
+        self
+    }
+
+    pub fn query(mut self, name: &'static str, required: bool, description: &'static str) -> Self {
+        self.params.push(Param {
+            name,
+            location: "query",
+            required,
+            description,
+            kind: "string",
+        });
+        self
+    }
+
+    pub fn header(mut self, name: &'static str, description: &'static str) -> Self {
+        self.params.push(Param {
+            name,
+            location: "header",
+            required: false,
+            description,
+            kind: "string",
+        });
+        self
+    }
+
+    pub fn body(
+        mut self,
+        media_types: &'static [&'static str],
+        description: &'static str,
+        example: Option<&'static str>,
+    ) -> Self {
+        self.body = Some(RequestBody {
+            media_types,
+            description,
+            example,
+        });
+        self
+    }
+
+    /// A success (or other non-error) response.
+    pub fn responds(
+        mut self,
+        status: u16,
+        media_type: Option<&'static str>,
+        description: &'static str,
+    ) -> Self {
+        self.outcomes.push(Outcome {
+            status,
+            description: description.to_owned(),
+            media_type,
+        });
+        self
+    }
+
+    /// Error responses, with this API's standard meaning for each status.
+    pub fn errors(mut self, statuses: &[u16]) -> Self {
+        for &status in statuses {
+            self.outcomes.push(Outcome {
+                status,
+                description: error_meaning(status).to_owned(),
+                media_type: Some("application/json"),
+            });
+        }
+        self
+    }
+
+    /// The path as clients call it.
+    pub fn full_path(&self) -> String {
+        format!("{API_PREFIX}{}", self.path)
+    }
+
+    /// The names of the path's `{parameters}`, in order.
+    pub fn path_params(&self) -> Vec<&'static str> {
+        self.path
+            .split('/')
+            .filter_map(|s| s.strip_prefix('{').and_then(|s| s.strip_suffix('}')))
+            .collect()
+    }
+}
+
+/// Every route of the JSON API, in the order the document lists them.
+pub fn api_routes() -> Vec<ApiRoute> {
+    let mut routes = api::routes();
+    routes.extend(archive::routes());
+    routes.extend(submissions::routes());
+    routes.extend(leaderboard::api_routes());
+    routes.push(
+        ApiRoute::new(Verb::Get, "/openapi.json", openapi_json, "This document")
+            .describe(
+                "The OpenAPI 3.1 description of every route under /api/v1, built from the same \
+                 table the router is built from. Rendered as HTML at /api/docs.",
+            )
+            .responds(200, Some("application/json"), "The OpenAPI document."),
+    );
+    routes
+}
+
+/// The router of exactly the routes in `routes` (to be nested under [`API_PREFIX`]).
+pub fn api_router(routes: Vec<ApiRoute>) -> Router<AppState> {
+    // Two methods on one path merge into one method router; a method given twice panics at
+    // start-up, which the test suite would show.
+    routes
+        .into_iter()
+        .fold(Router::new(), |router, r| router.route(r.path, r.handler))
+}
+
+/// The HTML docs page, outside `/api/v1`.
+pub fn page_router() -> Router<AppState> {
+    Router::new().route("/api/docs", get(docs_page))
+}
+
+fn path_param_description(name: &str) -> &'static str {
+    match name {
+        "dataset" => "Dataset name, as listed by GET /api/v1/datasets.",
+        "item_id" => "ENACT item id within the dataset.",
+        "sha256" => "The frame's SHA-256, 64 lowercase hex digits (from an item's image URLs).",
+        "id" => "Submission id, as returned when it was posted.",
+        "token" => "A token's id or its public prefix.",
+        _ => "Path parameter.",
+    }
+}
+
+fn parameter_json(
+    name: &str,
+    location: &str,
+    required: bool,
+    description: &str,
+    kind: &str,
+) -> Value {
+    json!({
+        "name": name,
+        "in": location,
+        "required": required,
+        "description": description,
+        "schema": {"type": kind},
+    })
+}
+
+fn operation_json(route: &ApiRoute) -> Value {
+    let mut parameters: Vec<Value> = route
+        .path_params()
+        .into_iter()
+        .map(|p| parameter_json(p, "path", true, path_param_description(p), "string"))
+        .collect();
+    parameters.extend(
+        route
+            .params
+            .iter()
+            .map(|p| parameter_json(p.name, p.location, p.required, p.description, p.kind)),
+    );
+    let mut responses = Map::new();
+    for outcome in &route.outcomes {
+        let mut response = json!({"description": outcome.description});
+        if let Some(media) = outcome.media_type {
+            let schema = if outcome.status >= 400 {
+                json!({"$ref": "#/components/schemas/Error"})
+            } else if media == "application/json" {
+                json!({"type": "object"})
+            } else {
+                json!({"type": "string", "format": "binary"})
+            };
+            response["content"] = json!({ media: {"schema": schema} });
+        }
+        responses.insert(outcome.status.to_string(), response);
+    }
+    let mut operation = json!({
+        "operationId": format!("{}{}", route.verb.key(), route.path.replace(['/', '{', '}'], "_")),
+        "summary": route.summary,
+        "description": route.description,
+        "parameters": parameters,
+        "responses": responses,
+    });
+    match route.access {
+        Access::Public => operation["security"] = json!([]),
+        Access::Bearer(scope) => {
+            operation["security"] = json!([{"bearer": []}]);
+            operation["x-scope"] = json!(scope);
+        }
+    }
+    if let Some(body) = &route.body {
+        let mut content = Map::new();
+        for media in body.media_types {
+            let mut entry = json!({"schema": {"type": "string"}});
+            if media.ends_with("json") && !media.contains("ndjson") {
+                entry["schema"] = json!({});
+            }
+            if let Some(example) = body.example {
+                entry["example"] = json!(example);
+            }
+            content.insert((*media).to_owned(), entry);
+        }
+        operation["requestBody"] = json!({
+            "required": true,
+            "description": body.description,
+            "content": content,
+        });
+    }
+    operation
+}
+
+/// The OpenAPI 3.1 document of `routes`.
+pub fn document(routes: &[ApiRoute]) -> Value {
+    let mut paths = Map::new();
+    for route in routes {
+        let item = paths
+            .entry(route.full_path())
+            .or_insert_with(|| Value::Object(Map::new()));
+        item[route.verb.key()] = operation_json(route);
+    }
+    json!({
+        "openapi": "3.1.0",
+        "info": {
+            "title": "enact-hub API",
+            "version": env!("CARGO_PKG_VERSION"),
+            "description": "Datasets of the ENACT benchmark, their items and frames, model \
+                submissions with their scores, and the leaderboard. Reading datasets is public; \
+                submitting and administration need an API token sent as \
+                `Authorization: Bearer TOKEN` (tokens come from an admin: `enact-hub token \
+                create`, or the /admin/tokens page). Every error is JSON of the Error schema.",
+        },
+        "paths": paths,
+        "components": {
+            "securitySchemes": {
+                "bearer": {
+                    "type": "http",
+                    "scheme": "bearer",
+                    "description": "An enact-hub API token. Submitter tokens have the scopes \
+                        submit and read_own; admin tokens also have admin.",
+                },
+            },
+            "schemas": {
+                "Error": {
+                    "type": "object",
+                    "required": ["error"],
+                    "properties": {
+                        "error": {"type": "string", "description": "What was wrong, for a person to act on."},
+                        "problems": {
+                            "type": "array",
+                            "description": "422 only: each refused line of the body.",
+                            "items": {
+                                "type": "object",
+                                "required": ["line", "kind", "message"],
+                                "properties": {
+                                    "line": {"type": "integer", "description": "1-based line (JSONL) or element (JSON array)."},
+                                    "kind": {"type": "string", "enum": ["invalid_json", "not_an_object", "missing_id", "unknown_id", "duplicate_id", "missing_answer"]},
+                                    "item": {"type": "string", "description": "The item id, when the line named one."},
+                                    "message": {"type": "string"},
+                                },
+                            },
+                        },
+                    },
+                },
+            },
+        },
+    })
+}
+
+/// The document never changes while the server runs: build it once.
+fn cached_document() -> &'static Value {
+    static DOCUMENT: OnceLock<Value> = OnceLock::new();
+    DOCUMENT.get_or_init(|| document(&api_routes()))
+}
+
+async fn openapi_json() -> Json<Value> {
+    Json(cached_document().clone())
+}
+
+/// A piece of a description: descriptions are CommonMark, and the page shows their
+/// `code spans` as code (the only markup they use).
+struct Span {
+    code: bool,
+    text: String,
+}
+
+fn spans(description: &str) -> Vec<Span> {
+    description
+        .split('`')
+        .enumerate()
+        .filter(|(_, t)| !t.is_empty())
+        .map(|(i, t)| Span {
+            code: i % 2 == 1,
+            text: t.to_owned(),
+        })
+        .collect()
+}
+
+struct ParamView {
+    name: String,
+    location: String,
+    required: bool,
+    description: Vec<Span>,
+}
+
+struct ResponseView {
+    status: String,
+    media_type: String,
+    description: Vec<Span>,
+}
+
+struct OperationView {
+    anchor: String,
+    method: String,
+    path: String,
+    summary: String,
+    description: Vec<Span>,
+    auth: String,
+    params: Vec<ParamView>,
+    body_types: Vec<String>,
+    body_description: Vec<Span>,
+    body_example: Option<String>,
+    responses: Vec<ResponseView>,
+}
+
+#[derive(Template)]
+#[template(path = "api_docs.html")]
+struct DocsPage {
+    title: String,
+    version: String,
+    description: Vec<Span>,
+    operations: Vec<OperationView>,
+}
+
+fn text(v: &Value) -> String {
+    v.as_str().unwrap_or_default().to_owned()
+}
+
+/// Reads the operations back out of the document, so the page shows what the document says.
+fn operations(doc: &Value) -> Vec<OperationView> {
+    let mut out = Vec::new();
+    let Some(paths) = doc["paths"].as_object() else {
+        return out;
+    };
+    for (path, item) in paths {
+        let Some(item) = item.as_object() else {
+            continue;
+        };
+        for (method, op) in item {
+            let auth = match op["security"].as_array().map(Vec::len) {
+                Some(0) | None => "none (public)".to_owned(),
+                _ => format!("Bearer token with scope {}", text(&op["x-scope"])),
+            };
+            let body = &op["requestBody"];
+            let body_types: Vec<String> = body["content"]
+                .as_object()
+                .map(|c| c.keys().cloned().collect())
+                .unwrap_or_default();
+            let body_example = body["content"]
+                .as_object()
+                .and_then(|c| c.values().find_map(|m| m["example"].as_str()))
+                .map(str::to_owned);
+            out.push(OperationView {
+                anchor: text(&op["operationId"]),
+                method: method.to_ascii_uppercase(),
+                path: path.clone(),
+                summary: text(&op["summary"]),
+                description: spans(&text(&op["description"])),
+                auth,
+                params: op["parameters"]
+                    .as_array()
+                    .map(|ps| {
+                        ps.iter()
+                            .map(|p| ParamView {
+                                name: text(&p["name"]),
+                                location: text(&p["in"]),
+                                required: p["required"].as_bool().unwrap_or(false),
+                                description: spans(&text(&p["description"])),
+                            })
+                            .collect()
+                    })
+                    .unwrap_or_default(),
+                body_types,
+                body_description: spans(&text(&body["description"])),
+                body_example,
+                responses: op["responses"]
+                    .as_object()
+                    .map(|rs| {
+                        rs.iter()
+                            .map(|(status, r)| ResponseView {
+                                status: status.clone(),
+                                media_type: r["content"]
+                                    .as_object()
+                                    .and_then(|c| c.keys().next().cloned())
+                                    .unwrap_or_default(),
+                                description: spans(&text(&r["description"])),
+                            })
+                            .collect()
+                    })
+                    .unwrap_or_default(),
+            });
+        }
+    }
+    out
+}
+
+async fn docs_page() -> Result<Html<String>, PageError> {
+    let doc = cached_document();
+    let page = DocsPage {
+        title: text(&doc["info"]["title"]),
+        version: text(&doc["info"]["version"]),
+        description: spans(&text(&doc["info"]["description"])),
+        operations: operations(doc),
+    };
+    Ok(Html(page.render()?))
+}

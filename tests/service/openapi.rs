@@ -1,0 +1,216 @@
+//! The OpenAPI document and its docs page: built from the route table the router is built
+//! from, checked over HTTP so neither can drift from what is served.
+
+use std::collections::BTreeSet;
+
+use enact_hub::accounts::{NewToken, Role};
+use enact_hub::store;
+use enact_hub::web::openapi::api_routes;
+use reqwest::Method;
+use serde_json::{Value, json};
+
+use crate::helpers::*;
+
+async fn token(server: &TestServer, name: &str, role: Role) -> (i64, String) {
+    let mut conn = server.pool.acquire().await.expect("conn");
+    let account = store::accounts::ensure_account(&mut conn, name, role)
+        .await
+        .expect("account")
+        .expect("role");
+    let token = NewToken::generate();
+    let id = store::accounts::insert_token(&mut conn, account, role, &token, None, None)
+        .await
+        .expect("token");
+    (id, token.token)
+}
+
+const METHODS: [&str; 5] = ["get", "post", "put", "patch", "delete"];
+
+#[tokio::test]
+async fn every_api_route_is_documented_and_every_documented_route_answers() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, admin) = token(&server, "root", Role::Admin).await;
+    let (throwaway, _) = token(&server, "team-a", Role::Submitter).await;
+
+    // Real values for every path parameter, so no handler answers 404 for want of one.
+    let item_id = records[0]["id"].as_str().expect("id").to_owned();
+    let (_, item) = server
+        .get_json(&format!("/api/v1/datasets/mini/items/{item_id}"))
+        .await;
+    let frame_url = item["images"][0]["url"].as_str().expect("url").to_owned();
+    let sha256 = frame_url.rsplit('/').next().expect("hash").to_owned();
+    let body: String = records
+        .iter()
+        .map(|r| json!({"id": r["id"], "answer": r["gt_answer"]}).to_string() + "\n")
+        .collect();
+    let created: Value = server
+        .client
+        .post(server.url("/api/v1/datasets/mini/submissions?model=m"))
+        .bearer_auth(&admin)
+        .body(body)
+        .send()
+        .await
+        .expect("submit")
+        .json()
+        .await
+        .expect("json");
+    let submission = created["id"].as_i64().expect("id").to_string();
+
+    let (status, doc) = server.get_json("/api/v1/openapi.json").await;
+    assert_eq!(status, 200);
+    assert_eq!(doc["openapi"], "3.1.0");
+    let documented: BTreeSet<(String, String)> = doc["paths"]
+        .as_object()
+        .expect("paths")
+        .iter()
+        .flat_map(|(path, item)| {
+            item.as_object()
+                .expect("path item")
+                .keys()
+                .map(move |m| (m.to_ascii_uppercase(), path.clone()))
+        })
+        .collect();
+    let mounted: BTreeSet<(String, String)> = api_routes()
+        .iter()
+        .map(|r| (r.verb.method().to_string(), r.full_path()))
+        .collect();
+    assert_eq!(
+        documented, mounted,
+        "the document lists exactly the mounted routes"
+    );
+    assert!(documented.len() >= 15, "{documented:?}");
+
+    let fill = |path: &str| {
+        path.replace("{dataset}", "mini")
+            .replace("{item_id}", &item_id)
+            .replace("{sha256}", &sha256)
+            .replace("{id}", &submission)
+            .replace("{token}", &throwaway.to_string())
+    };
+    for (method, path) in &documented {
+        let url = server.url(&fill(path));
+        let response = server
+            .client
+            .request(Method::from_bytes(method.as_bytes()).expect("method"), &url)
+            .bearer_auth(&admin)
+            .json(&json!({}))
+            .send()
+            .await
+            .expect("request");
+        let status = response.status().as_u16();
+        assert!(
+            status != 404 && status != 405,
+            "{method} {path} answered {status}: {}",
+            response.text().await.unwrap_or_default()
+        );
+    }
+    // A method a path does not document is not served either.
+    let paths: BTreeSet<&String> = documented.iter().map(|(_, p)| p).collect();
+    for path in paths {
+        for method in METHODS {
+            let m = method.to_ascii_uppercase();
+            if documented.contains(&(m.clone(), path.clone())) {
+                continue;
+            }
+            let status = server
+                .client
+                .request(
+                    Method::from_bytes(m.as_bytes()).expect("method"),
+                    server.url(&fill(path)),
+                )
+                .bearer_auth(&admin)
+                .send()
+                .await
+                .expect("request")
+                .status();
+            assert_eq!(status, 405, "{m} {path} is served but not documented");
+        }
+    }
+    // And the check can fail: an unknown route is 404.
+    assert_eq!(server.get("/api/v1/no-such-route").await.status(), 404);
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn the_document_covers_auth_bodies_parameters_and_errors() {
+    let (server, _) = spawn_app_with_release().await;
+    let (_, doc) = server.get_json("/api/v1/openapi.json").await;
+    assert_eq!(
+        doc["components"]["securitySchemes"]["bearer"]["scheme"],
+        "bearer"
+    );
+    let error = &doc["components"]["schemas"]["Error"];
+    assert_eq!(error["required"], json!(["error"]));
+    assert!(error["properties"]["problems"]["items"]["properties"]["line"].is_object());
+
+    let submit = &doc["paths"]["/api/v1/datasets/{dataset}/submissions"]["post"];
+    assert_eq!(submit["security"], json!([{"bearer": []}]));
+    for status in [
+        "201", "200", "400", "401", "403", "404", "409", "413", "422", "429",
+    ] {
+        assert!(submit["responses"][status].is_object(), "missing {status}");
+    }
+    for status in ["401", "403", "404", "413", "422", "429"] {
+        assert_eq!(
+            submit["responses"][status]["content"]["application/json"]["schema"]["$ref"],
+            "#/components/schemas/Error"
+        );
+    }
+    assert!(
+        submit["responses"]["429"]["description"]
+            .as_str()
+            .expect("text")
+            .contains("Retry-After")
+    );
+    let params = submit["parameters"].as_array().expect("params");
+    let param = |name: &str| {
+        params
+            .iter()
+            .find(|p| p["name"] == name)
+            .unwrap_or_else(|| panic!("no parameter {name}"))
+    };
+    assert_eq!(param("model")["required"], true);
+    assert_eq!(param("model")["in"], "query");
+    for name in ["description", "url", "prompt_version", "notes"] {
+        assert_eq!(param(name)["required"], false);
+    }
+    assert_eq!(param("Idempotency-Key")["in"], "header");
+    assert_eq!(param("dataset")["in"], "path");
+    let content = submit["requestBody"]["content"].as_object().expect("body");
+    assert!(
+        content.contains_key("application/x-ndjson") && content.contains_key("application/json")
+    );
+    let public = &doc["paths"]["/api/v1/datasets"]["get"];
+    assert_eq!(public["security"], json!([]));
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn the_docs_page_renders_the_document_without_scripts_or_network() {
+    let (server, _) = spawn_app_with_release().await;
+    let home = server.get("/").await.text().await.expect("home");
+    assert!(home.contains("href=\"/api/docs\""));
+    let response = server.get("/api/docs").await;
+    assert_eq!(response.status(), 200);
+    let html = response.text().await.expect("page");
+    assert!(!html.contains("<script"), "no JavaScript");
+    assert!(
+        !html.contains("src=\"http") && !html.contains("href=\"http"),
+        "nothing loaded from elsewhere"
+    );
+    let (_, doc) = server.get_json("/api/v1/openapi.json").await;
+    for (path, item) in doc["paths"].as_object().expect("paths") {
+        for method in item.as_object().expect("item").keys() {
+            let heading = format!("{} {}", method.to_ascii_uppercase(), path);
+            assert!(html.contains(&heading), "the page lacks {heading}");
+        }
+    }
+    assert!(html.contains("Bearer token with scope submit"));
+    assert!(
+        html.contains("<code>Retry-After</code>"),
+        "code spans shown as code"
+    );
+    assert!(html.contains("application/x-ndjson"));
+    assert!(html.contains("waiting will"));
+    server.stop().await;
+}
