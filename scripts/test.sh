@@ -27,6 +27,10 @@ fi
 if ! command -v python3 >/dev/null 2>&1 || ! python3 -c 'import requests' >/dev/null 2>&1; then
   echo "== installing python3 and python3-requests (Debian packages)"
   apt-get update && apt-get install -y python3 python3-requests
+  # A python3 earlier on PATH (pyenv, a venv) does not see Debian's package: take it from PyPI.
+  if ! python3 -c 'import requests' >/dev/null 2>&1; then
+    python3 -m pip install --quiet requests
+  fi
 fi
 
 echo "== cargo fmt --check"
