@@ -4,6 +4,8 @@
 
 use sqlx::{Row, SqliteConnection};
 
+use super::{corrupt, kind_from_row};
+
 use crate::agreement_protocol::{
     AssignmentKind, PrimaryAnswer, ProtocolError, ProtocolPlan, plan_cross_assignments,
 };
@@ -11,26 +13,6 @@ use crate::agreement_report::{AnnotatorAnswer, dataset_content_hash};
 use crate::annotation::HumanAnswer;
 use crate::dataset::{Direction, StepLength};
 use crate::verifier::Permutation;
-
-fn corrupt(column: &str, detail: impl std::fmt::Display) -> sqlx::Error {
-    sqlx::Error::ColumnDecode {
-        index: column.to_owned(),
-        source: detail.to_string().into(),
-    }
-}
-
-fn kind_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<(Direction, StepLength), sqlx::Error> {
-    let direction: String = row.try_get("direction")?;
-    let step_length: i64 = row.try_get("step_length")?;
-    Ok((
-        Direction::parse(&direction)
-            .ok_or_else(|| corrupt("direction", format!("unknown direction {direction:?}")))?,
-        usize::try_from(step_length)
-            .ok()
-            .and_then(StepLength::new)
-            .ok_or_else(|| corrupt("step_length", format!("bad step length {step_length}")))?,
-    ))
-}
 
 /// [`dataset_content_hash`] of a stored dataset, from its items' ids and content hashes.
 pub async fn dataset_hash(

@@ -3,6 +3,8 @@
 
 use sqlx::{Row, SqliteConnection};
 
+use super::{corrupt, kind_from_row};
+
 use crate::annotation::{Draft, HumanAnswer, SplitItem, human_entries};
 use crate::dataset::{Direction, StepLength};
 use crate::verifier::{PerformanceReport, Permutation};
@@ -12,26 +14,6 @@ pub fn now_ms() -> i64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| i64::try_from(d.as_millis()).unwrap_or(i64::MAX))
-}
-
-fn corrupt(column: &str, detail: impl std::fmt::Display) -> sqlx::Error {
-    sqlx::Error::ColumnDecode {
-        index: column.to_owned(),
-        source: detail.to_string().into(),
-    }
-}
-
-fn kind_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<(Direction, StepLength), sqlx::Error> {
-    let direction: String = row.try_get("direction")?;
-    let step_length: i64 = row.try_get("step_length")?;
-    Ok((
-        Direction::parse(&direction)
-            .ok_or_else(|| corrupt("direction", format!("unknown direction {direction:?}")))?,
-        usize::try_from(step_length)
-            .ok()
-            .and_then(StepLength::new)
-            .ok_or_else(|| corrupt("step_length", format!("bad step length {step_length}")))?,
-    ))
 }
 
 #[derive(Debug, Clone)]

@@ -5,6 +5,8 @@ use std::collections::HashMap;
 use sqlx::sqlite::SqliteRow;
 use sqlx::{Row, SqliteConnection};
 
+use super::{corrupt, kind_from_row};
+
 use crate::dataset::{Direction, QaItem, StepLength};
 
 /// What a list of items shows of each one.
@@ -51,25 +53,13 @@ pub struct ItemFilter {
     pub task: Option<String>,
 }
 
-fn corrupt(column: &str, detail: impl std::fmt::Display) -> sqlx::Error {
-    sqlx::Error::ColumnDecode {
-        index: column.to_owned(),
-        source: format!("{detail}").into(),
-    }
-}
-
 fn summary_from_row(row: &SqliteRow) -> Result<ItemSummary, sqlx::Error> {
-    let direction: String = row.try_get("direction")?;
-    let step_length: i64 = row.try_get("step_length")?;
+    let (direction, step_length) = kind_from_row(row)?;
     Ok(ItemSummary {
         item_id: row.try_get("item_id")?,
         item_type: row.try_get("item_type")?,
-        direction: Direction::parse(&direction)
-            .ok_or_else(|| corrupt("direction", format!("unknown direction {direction:?}")))?,
-        step_length: usize::try_from(step_length)
-            .ok()
-            .and_then(StepLength::new)
-            .ok_or_else(|| corrupt("step_length", format!("bad step length {step_length}")))?,
+        direction,
+        step_length,
         task_name: row.try_get("task_name")?,
     })
 }

@@ -58,3 +58,28 @@ pub async fn bump_content_generation(conn: &mut sqlx::SqliteConnection) -> Resul
         .await?;
     Ok(())
 }
+
+/// A column that holds something this version cannot read, as a decode error naming it.
+pub(crate) fn corrupt(column: &str, detail: impl std::fmt::Display) -> sqlx::Error {
+    sqlx::Error::ColumnDecode {
+        index: column.to_owned(),
+        source: detail.to_string().into(),
+    }
+}
+
+/// The `direction` and `step_length` columns of an item row.
+pub(crate) fn kind_from_row(
+    row: &sqlx::sqlite::SqliteRow,
+) -> Result<(crate::dataset::Direction, crate::dataset::StepLength), sqlx::Error> {
+    use sqlx::Row;
+    let direction: String = row.try_get("direction")?;
+    let step_length: i64 = row.try_get("step_length")?;
+    Ok((
+        crate::dataset::Direction::parse(&direction)
+            .ok_or_else(|| corrupt("direction", format!("unknown direction {direction:?}")))?,
+        usize::try_from(step_length)
+            .ok()
+            .and_then(crate::dataset::StepLength::new)
+            .ok_or_else(|| corrupt("step_length", format!("bad step length {step_length}")))?,
+    ))
+}
