@@ -11,6 +11,7 @@
 //! - [`web`]: the axum service: JSON API under `/api/v1`, HTML pages, frames.
 //! - [`annotation`]: human annotation without I/O: credentials, the balanced split, drafts,
 //!   scoring human answers; `store::annotations` and `web::{auth, annotate, admin}` serve it.
+//! - [`world`]: a synthetic household world that writes BEHAVIOR-format replays (pure).
 //! - [`demo`]: the built-in demo dataset, generated at start by `serve --demo`.
 //! - [`cli`]: the command line; `src/main.rs` only calls [`cli::main`].
 
@@ -30,3 +31,4 @@ pub mod store;
 pub mod submission;
 pub mod verifier;
 pub mod web;
+pub mod world;
