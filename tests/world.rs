@@ -28,7 +28,9 @@ fn options(activity: Activity, seed: u64) -> SimulateOptions {
 
 fn write(dir: &Path, options: &SimulateOptions) -> Simulation {
     let simulation = simulate(options).unwrap();
-    simulation.write_replay(dir, FrameImages::KeyFrames).unwrap();
+    simulation
+        .write_replay(dir, FrameImages::KeyFrames)
+        .unwrap();
     simulation
 }
 
@@ -41,7 +43,11 @@ fn timeline(dir: &Path, simulation: &Simulation) -> SceneGraphTimeline {
 }
 
 fn frames(simulation: &Simulation) -> Vec<String> {
-    simulation.key_frames.iter().map(|f| f.to_string()).collect()
+    simulation
+        .key_frames
+        .iter()
+        .map(|f| f.to_string())
+        .collect()
 }
 
 /// The predicate named by a signature: the last `_` field of node/edge signatures, and
@@ -89,7 +95,10 @@ fn the_activities_emit_every_predicate_class_in_view() {
         "RightGrasping",
         "Transition",
     ] {
-        assert!(seen.contains(class), "no visible {class} change; saw {seen:?}");
+        assert!(
+            seen.contains(class),
+            "no visible {class} change; saw {seen:?}"
+        );
     }
 }
 
@@ -97,7 +106,11 @@ fn the_activities_emit_every_predicate_class_in_view() {
 fn a_closed_cabinet_hides_its_contents_and_opening_shows_them() {
     let dir = tempfile::tempdir().unwrap();
     let simulation = write(dir.path(), &options(Activity::PutDishesAway, 4));
-    assert!(simulation.actions[0].action.starts_with("open top_cabinet_0"));
+    assert!(
+        simulation.actions[0]
+            .action
+            .starts_with("open top_cabinet_0")
+    );
     let timeline = timeline(dir.path(), &simulation);
     let visible = |frame: u64, name: &str| {
         let graph = timeline.scene_graph(&frame.to_string()).unwrap();
@@ -127,7 +140,10 @@ fn a_narrow_field_of_view_loses_objects_at_the_edges() {
             .collect()
     };
     let (w, n) = (seen(&wide), seen(&narrow));
-    assert!(n.is_subset(&w) && n.len() < w.len(), "wide {w:?}, narrow {n:?}");
+    assert!(
+        n.is_subset(&w) && n.len() < w.len(),
+        "wide {w:?}, narrow {n:?}"
+    );
 }
 
 #[test]

@@ -57,65 +57,203 @@ impl Activity {
         match self {
             Activity::PutDishesAway => vec![
                 Open { thing: CABINET },
-                Grasp { hand: L, thing: BOWL },
-                Place { hand: L, relation: Relation::Inside, target: CABINET },
-                Grasp { hand: R, thing: PLATE },
-                Place { hand: R, relation: Relation::Inside, target: CABINET },
-                Grasp { hand: L, thing: MUG },
-                Place { hand: L, relation: on, target: COUNTERTOP },
+                Grasp {
+                    hand: L,
+                    thing: BOWL,
+                },
+                Place {
+                    hand: L,
+                    relation: Relation::Inside,
+                    target: CABINET,
+                },
+                Grasp {
+                    hand: R,
+                    thing: PLATE,
+                },
+                Place {
+                    hand: R,
+                    relation: Relation::Inside,
+                    target: CABINET,
+                },
+                Grasp {
+                    hand: L,
+                    thing: MUG,
+                },
+                Place {
+                    hand: L,
+                    relation: on,
+                    target: COUNTERTOP,
+                },
                 Close { thing: CABINET },
-                Grasp { hand: R, thing: DISHTOWEL },
-                Cover { hand: R, target: MUG },
+                Grasp {
+                    hand: R,
+                    thing: DISHTOWEL,
+                },
+                Cover {
+                    hand: R,
+                    target: MUG,
+                },
                 Open { thing: CABINET },
             ],
             Activity::MakeTea => vec![
                 Open { thing: CABINET },
-                Grasp { hand: R, thing: MUG },
-                Place { hand: R, relation: on, target: COUNTERTOP },
+                Grasp {
+                    hand: R,
+                    thing: MUG,
+                },
+                Place {
+                    hand: R,
+                    relation: on,
+                    target: COUNTERTOP,
+                },
                 Close { thing: CABINET },
-                Grasp { hand: L, thing: KETTLE },
-                Place { hand: L, relation: on, target: STOVE },
+                Grasp {
+                    hand: L,
+                    thing: KETTLE,
+                },
+                Place {
+                    hand: L,
+                    relation: on,
+                    target: STOVE,
+                },
                 ToggleOn { thing: STOVE },
                 ToggleOff { thing: STOVE },
-                Grasp { hand: L, thing: KETTLE },
-                Pour { hand: L, target: MUG },
-                Place { hand: L, relation: on, target: COUNTERTOP },
+                Grasp {
+                    hand: L,
+                    thing: KETTLE,
+                },
+                Pour {
+                    hand: L,
+                    target: MUG,
+                },
+                Place {
+                    hand: L,
+                    relation: on,
+                    target: COUNTERTOP,
+                },
             ],
             Activity::CookBacon => vec![
-                Grasp { hand: R, thing: BACON },
-                Place { hand: R, relation: on, target: PAN },
+                Grasp {
+                    hand: R,
+                    thing: BACON,
+                },
+                Place {
+                    hand: R,
+                    relation: on,
+                    target: PAN,
+                },
                 ToggleOn { thing: STOVE },
                 Cook { thing: BACON },
                 ToggleOff { thing: STOVE },
-                Grasp { hand: L, thing: BACON },
-                Place { hand: L, relation: on, target: PLATE },
-                Grasp { hand: R, thing: DISHTOWEL },
-                Cover { hand: R, target: PLATE },
-                Grasp { hand: L, thing: BOWL },
-                Place { hand: L, relation: on, target: STOVE },
+                Grasp {
+                    hand: L,
+                    thing: BACON,
+                },
+                Place {
+                    hand: L,
+                    relation: on,
+                    target: PLATE,
+                },
+                Grasp {
+                    hand: R,
+                    thing: DISHTOWEL,
+                },
+                Cover {
+                    hand: R,
+                    target: PLATE,
+                },
+                Grasp {
+                    hand: L,
+                    thing: BOWL,
+                },
+                Place {
+                    hand: L,
+                    relation: on,
+                    target: STOVE,
+                },
             ],
             Activity::SliceFruit => vec![
-                Grasp { hand: R, thing: KNIFE },
-                Slice { hand: R, thing: APPLE },
-                Place { hand: R, relation: on, target: COUNTERTOP },
-                Grasp { hand: L, thing: BOWL },
-                Place { hand: L, relation: on, target: STOVE },
-                Grasp { hand: R, thing: KETTLE },
-                Pour { hand: R, target: BOWL },
-                Place { hand: R, relation: on, target: COUNTERTOP },
-                Grasp { hand: L, thing: DISHTOWEL },
-                Cover { hand: L, target: BOARD },
+                Grasp {
+                    hand: R,
+                    thing: KNIFE,
+                },
+                Slice {
+                    hand: R,
+                    thing: APPLE,
+                },
+                Place {
+                    hand: R,
+                    relation: on,
+                    target: COUNTERTOP,
+                },
+                Grasp {
+                    hand: L,
+                    thing: BOWL,
+                },
+                Place {
+                    hand: L,
+                    relation: on,
+                    target: STOVE,
+                },
+                Grasp {
+                    hand: R,
+                    thing: KETTLE,
+                },
+                Pour {
+                    hand: R,
+                    target: BOWL,
+                },
+                Place {
+                    hand: R,
+                    relation: on,
+                    target: COUNTERTOP,
+                },
+                Grasp {
+                    hand: L,
+                    thing: DISHTOWEL,
+                },
+                Cover {
+                    hand: L,
+                    target: BOARD,
+                },
             ],
             Activity::TidyLivingRoom => vec![
                 ToggleOn { thing: LAMP },
-                Grasp { hand: L, thing: REMOTE },
-                Place { hand: L, relation: on, target: SOFA },
-                Grasp { hand: R, thing: BASKET },
-                Place { hand: R, relation: Relation::Under, target: COFFEE_TABLE },
-                Grasp { hand: L, thing: BOOK },
-                Place { hand: L, relation: on, target: COFFEE_TABLE },
-                Grasp { hand: R, thing: BLANKET },
-                Cover { hand: R, target: BASKET },
+                Grasp {
+                    hand: L,
+                    thing: REMOTE,
+                },
+                Place {
+                    hand: L,
+                    relation: on,
+                    target: SOFA,
+                },
+                Grasp {
+                    hand: R,
+                    thing: BASKET,
+                },
+                Place {
+                    hand: R,
+                    relation: Relation::Under,
+                    target: COFFEE_TABLE,
+                },
+                Grasp {
+                    hand: L,
+                    thing: BOOK,
+                },
+                Place {
+                    hand: L,
+                    relation: on,
+                    target: COFFEE_TABLE,
+                },
+                Grasp {
+                    hand: R,
+                    thing: BLANKET,
+                },
+                Cover {
+                    hand: R,
+                    target: BASKET,
+                },
                 ToggleOff { thing: LAMP },
             ],
         }
@@ -159,7 +297,10 @@ fn mirrored(action: Action) -> Action {
         Hand::Right => Hand::Left,
     };
     match action {
-        Action::Grasp { hand, thing } => Action::Grasp { hand: other(hand), thing },
+        Action::Grasp { hand, thing } => Action::Grasp {
+            hand: other(hand),
+            thing,
+        },
         Action::Place {
             hand,
             relation,
@@ -169,9 +310,18 @@ fn mirrored(action: Action) -> Action {
             relation,
             target,
         },
-        Action::Cover { hand, target } => Action::Cover { hand: other(hand), target },
-        Action::Slice { hand, thing } => Action::Slice { hand: other(hand), thing },
-        Action::Pour { hand, target } => Action::Pour { hand: other(hand), target },
+        Action::Cover { hand, target } => Action::Cover {
+            hand: other(hand),
+            target,
+        },
+        Action::Slice { hand, thing } => Action::Slice {
+            hand: other(hand),
+            thing,
+        },
+        Action::Pour { hand, target } => Action::Pour {
+            hand: other(hand),
+            target,
+        },
         other_action => other_action,
     }
 }

@@ -151,7 +151,9 @@ fn check_options(options: &SimulateOptions) -> Result<(), WorldError> {
         )));
     }
     if options.length == Some(0) {
-        return Err(WorldError::Options("length must be at least 1 action".into()));
+        return Err(WorldError::Options(
+            "length must be at least 1 action".into(),
+        ));
     }
     Ok(())
 }
@@ -342,7 +344,9 @@ struct WorldLog<'a> {
 impl Simulation {
     /// Index of the state shown at `frame`.
     fn state_at(&self, frame: u64) -> usize {
-        self.starts.partition_point(|&s| s <= frame).saturating_sub(1)
+        self.starts
+            .partition_point(|&s| s <= frame)
+            .saturating_sub(1)
     }
 
     /// The recorded scene graph of a frame (glitches included).
@@ -432,7 +436,10 @@ impl Simulation {
                 let mut bytes = Vec::new();
                 self.views[state]
                     .1
-                    .write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+                    .write_to(
+                        &mut std::io::Cursor::new(&mut bytes),
+                        image::ImageFormat::Png,
+                    )
                     .map_err(|source| WorldError::Png {
                         path: path.clone(),
                         source,

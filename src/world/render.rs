@@ -356,7 +356,10 @@ impl Scene<'_> {
                 owner[free] = Some(t);
             }
         }
-        owner.iter().position(|o| *o == Some(thing)).unwrap_or(home_slot(thing) % slots)
+        owner
+            .iter()
+            .position(|o| *o == Some(thing))
+            .unwrap_or(home_slot(thing) % slots)
     }
 
     fn anchor(&self, thing: ThingId, depth: usize) -> Option<Anchor> {
@@ -394,8 +397,17 @@ impl Scene<'_> {
             let (slots, y, z, key) = match relation {
                 Relation::OnTop => {
                     let top = if sup.look == Look::Sofa { 0.45 } else { h };
-                    let z = if sup.look == Look::Sofa { z0 + 0.25 } else { z0 + d / 2.0 };
-                    (things::surface_slots(support).unwrap_or(1), y0 + top, z, base.key - 0.001)
+                    let z = if sup.look == Look::Sofa {
+                        z0 + 0.25
+                    } else {
+                        z0 + d / 2.0
+                    };
+                    (
+                        things::surface_slots(support).unwrap_or(1),
+                        y0 + top,
+                        z,
+                        base.key - 0.001,
+                    )
                 }
                 Relation::Inside => (3, y0 + 0.03, z0 + 0.15, z0 - 0.005),
                 Relation::Under => (2, 0.0, z0 + d / 2.0, base.key + 0.0005),
@@ -434,10 +446,15 @@ pub fn render(state: &WorldState, room: Room, rig: &CameraRig) -> View {
     };
     let mut canvas = Canvas::new(rig.image_size, wall);
     let back = 3.4;
-    let floor_pts: Vec<(f32, f32)> = [[-8.0, 0.0, 0.3], [8.0, 0.0, 0.3], [8.0, 0.0, back], [-8.0, 0.0, back]]
-        .iter()
-        .filter_map(|p| scene.camera.project(*p).map(|(u, v, _)| (u, v)))
-        .collect();
+    let floor_pts: Vec<(f32, f32)> = [
+        [-8.0, 0.0, 0.3],
+        [8.0, 0.0, 0.3],
+        [8.0, 0.0, back],
+        [-8.0, 0.0, back],
+    ]
+    .iter()
+    .filter_map(|p| scene.camera.project(*p).map(|(u, v, _)| (u, v)))
+    .collect();
     canvas.polygon(&floor_pts, floor, 0);
 
     let mut order: Vec<(f32, ThingId, Anchor)> = (0..CATALOGUE.len())
@@ -475,10 +492,18 @@ pub fn render(state: &WorldState, room: Room, rig: &CameraRig) -> View {
         } else {
             CATALOGUE[(owner - 2) as usize].name
         };
-        let reading = [count as u64, x0 as u64, y0 as u64, x1 as u64, y1 as u64, size, size]
-            .iter()
-            .map(|&v| v.into())
-            .collect();
+        let reading = [
+            count as u64,
+            x0 as u64,
+            y0 as u64,
+            x1 as u64,
+            y1 as u64,
+            size,
+            size,
+        ]
+        .iter()
+        .map(|&v| v.into())
+        .collect();
         let mut v = Visibility::new();
         v.insert(SENSOR.to_string(), reading);
         visibility.insert(name.to_string(), v);
@@ -501,17 +526,58 @@ fn draw_arms(canvas: &mut Canvas, camera: &Camera, rig: &CameraRig) {
         };
         let elbow = ((shoulder.0 + gx) / 2.0, gy + s * 0.12);
         canvas.line(shoulder, elbow, s * 0.1, rig.robot_colour, ROBOT_OWNER);
-        canvas.ellipse(elbow.0, elbow.1, s * 0.055, s * 0.055, shade(rig.robot_colour, 0.8), ROBOT_OWNER);
-        canvas.line(elbow, (gx, gy + s * 0.05), s * 0.075, rig.robot_colour, ROBOT_OWNER);
+        canvas.ellipse(
+            elbow.0,
+            elbow.1,
+            s * 0.055,
+            s * 0.055,
+            shade(rig.robot_colour, 0.8),
+            ROBOT_OWNER,
+        );
+        canvas.line(
+            elbow,
+            (gx, gy + s * 0.05),
+            s * 0.075,
+            rig.robot_colour,
+            ROBOT_OWNER,
+        );
         let jaw = [50, 52, 58];
-        canvas.rect(gx - s * 0.06, gy + s * 0.03, gx + s * 0.06, gy + s * 0.065, jaw, ROBOT_OWNER);
-        canvas.rect(gx - s * 0.06, gy - s * 0.04, gx - s * 0.04, gy + s * 0.05, jaw, ROBOT_OWNER);
-        canvas.rect(gx + s * 0.04, gy - s * 0.04, gx + s * 0.06, gy + s * 0.05, jaw, ROBOT_OWNER);
+        canvas.rect(
+            gx - s * 0.06,
+            gy + s * 0.03,
+            gx + s * 0.06,
+            gy + s * 0.065,
+            jaw,
+            ROBOT_OWNER,
+        );
+        canvas.rect(
+            gx - s * 0.06,
+            gy - s * 0.04,
+            gx - s * 0.04,
+            gy + s * 0.05,
+            jaw,
+            ROBOT_OWNER,
+        );
+        canvas.rect(
+            gx + s * 0.04,
+            gy - s * 0.04,
+            gx + s * 0.06,
+            gy + s * 0.05,
+            jaw,
+            ROBOT_OWNER,
+        );
     }
 }
 
 /// Draws an axis-aligned box: visible side, top or bottom, then the front face.
-fn draw_box(canvas: &mut Canvas, camera: &Camera, at: [f32; 3], size: [f32; 3], colour: [u8; 3], owner: u16) {
+fn draw_box(
+    canvas: &mut Canvas,
+    camera: &Camera,
+    at: [f32; 3],
+    size: [f32; 3],
+    colour: [u8; 3],
+    owner: u16,
+) {
     let [x0, y0, z0] = at;
     let (x1, y1, z1) = (x0 + size[0], y0 + size[1], z0 + size[2]);
     let quad = |c: &mut Canvas, pts: [[f32; 3]; 4], col: [u8; 3]| {
@@ -524,20 +590,47 @@ fn draw_box(canvas: &mut Canvas, camera: &Camera, at: [f32; 3], size: [f32; 3], 
         }
     };
     if x1 < camera.eye[0] {
-        quad(canvas, [[x1, y0, z0], [x1, y0, z1], [x1, y1, z1], [x1, y1, z0]], shade(colour, 0.7));
+        quad(
+            canvas,
+            [[x1, y0, z0], [x1, y0, z1], [x1, y1, z1], [x1, y1, z0]],
+            shade(colour, 0.7),
+        );
     }
     if x0 > camera.eye[0] {
-        quad(canvas, [[x0, y0, z0], [x0, y0, z1], [x0, y1, z1], [x0, y1, z0]], shade(colour, 0.7));
+        quad(
+            canvas,
+            [[x0, y0, z0], [x0, y0, z1], [x0, y1, z1], [x0, y1, z0]],
+            shade(colour, 0.7),
+        );
     }
     if y1 < camera.eye[1] {
-        quad(canvas, [[x0, y1, z0], [x1, y1, z0], [x1, y1, z1], [x0, y1, z1]], shade(colour, 1.12));
+        quad(
+            canvas,
+            [[x0, y1, z0], [x1, y1, z0], [x1, y1, z1], [x0, y1, z1]],
+            shade(colour, 1.12),
+        );
     } else if y0 > camera.eye[1] {
-        quad(canvas, [[x0, y0, z0], [x1, y0, z0], [x1, y0, z1], [x0, y0, z1]], shade(colour, 0.6));
+        quad(
+            canvas,
+            [[x0, y0, z0], [x1, y0, z0], [x1, y0, z1], [x0, y0, z1]],
+            shade(colour, 0.6),
+        );
     }
-    quad(canvas, [[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0]], colour);
+    quad(
+        canvas,
+        [[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0]],
+        colour,
+    );
 }
 
-fn project_rect(camera: &Camera, x0: f32, y0: f32, x1: f32, y1: f32, z: f32) -> Option<(f32, f32, f32, f32)> {
+fn project_rect(
+    camera: &Camera,
+    x0: f32,
+    y0: f32,
+    x1: f32,
+    y1: f32,
+    z: f32,
+) -> Option<(f32, f32, f32, f32)> {
     let (a, b, _) = camera.project([x0, y1, z])?;
     let (c, d, _) = camera.project([x1, y0, z])?;
     Some((a, b, c, d))
@@ -559,9 +652,18 @@ fn draw_thing(canvas: &mut Canvas, scene: &Scene, thing: ThingId, anchor: Anchor
                 draw_box(canvas, cam, at, spec.size, col, owner);
                 for i in 0..4 {
                     let x = at[0] + w * (i as f32 + 0.5) / 4.0;
-                    if let Some((u0, v0, u1, v1)) = project_rect(cam, x - 0.2, at[1] + 0.1, x + 0.2, at[1] + 0.75, at[2]) {
+                    if let Some((u0, v0, u1, v1)) =
+                        project_rect(cam, x - 0.2, at[1] + 0.1, x + 0.2, at[1] + 0.75, at[2])
+                    {
                         canvas.rect(u0, v0, u1, v1, shade(col, 0.92), owner);
-                        canvas.rect(u0, v0 + (v1 - v0) * 0.1, u1, v0 + (v1 - v0) * 0.14, dark, owner);
+                        canvas.rect(
+                            u0,
+                            v0 + (v1 - v0) * 0.1,
+                            u1,
+                            v0 + (v1 - v0) * 0.14,
+                            dark,
+                            owner,
+                        );
                     }
                 }
             }
@@ -600,7 +702,14 @@ fn draw_thing(canvas: &mut Canvas, scene: &Scene, thing: ThingId, anchor: Anchor
                     project_rect(cam, at[0], at[1], at[0] + w, at[1] + h, at[2])
                 {
                     canvas.rect(u0, v0, u1, v1, col, owner);
-                    canvas.rect(u0 + 3.0, v0 + 3.0, u1 - 3.0, v1 - 3.0, shade(col, 1.1), owner);
+                    canvas.rect(
+                        u0 + 3.0,
+                        v0 + 3.0,
+                        u1 - 3.0,
+                        v1 - 3.0,
+                        shade(col, 1.1),
+                        owner,
+                    );
                     let knob = (u1 - (u1 - u0) * 0.1, (v0 + v1) / 2.0);
                     canvas.ellipse(knob.0, knob.1, 4.0, 4.0, [230, 200, 120], owner);
                 }
@@ -609,7 +718,9 @@ fn draw_thing(canvas: &mut Canvas, scene: &Scene, thing: ThingId, anchor: Anchor
                 draw_box(canvas, cam, at, spec.size, col, owner);
                 let on = state.is_on(thing);
                 for (i, bx) in [0.25f32, 0.75].iter().enumerate() {
-                    if let Some((u, v, s)) = cam.project([at[0] + w * bx, at[1] + h, at[2] + d * 0.5]) {
+                    if let Some((u, v, s)) =
+                        cam.project([at[0] + w * bx, at[1] + h, at[2] + d * 0.5])
+                    {
                         let hot = on && i == 0;
                         canvas.ellipse(u, v, 0.14 * s, 0.05 * s, [30, 30, 30], owner);
                         if hot {
@@ -620,27 +731,80 @@ fn draw_thing(canvas: &mut Canvas, scene: &Scene, thing: ThingId, anchor: Anchor
                         }
                     }
                 }
-                if let Some((u0, v0, u1, v1)) = project_rect(cam, at[0] + 0.08, at[1] + 0.1, at[0] + w - 0.08, at[1] + 0.6, at[2]) {
+                if let Some((u0, v0, u1, v1)) = project_rect(
+                    cam,
+                    at[0] + 0.08,
+                    at[1] + 0.1,
+                    at[0] + w - 0.08,
+                    at[1] + 0.6,
+                    at[2],
+                ) {
                     canvas.rect(u0, v0, u1, v1, [40, 40, 46], owner);
                 }
                 for k in 0..3 {
-                    if let Some((u, v, s)) = cam.project([at[0] + w * (0.25 + 0.25 * k as f32), at[1] + 0.78, at[2]]) {
-                        let knob = if on && k == 0 { [255, 90, 30] } else { [60, 60, 60] };
+                    if let Some((u, v, s)) =
+                        cam.project([at[0] + w * (0.25 + 0.25 * k as f32), at[1] + 0.78, at[2]])
+                    {
+                        let knob = if on && k == 0 {
+                            [255, 90, 30]
+                        } else {
+                            [60, 60, 60]
+                        };
                         canvas.ellipse(u, v, 0.035 * s, 0.035 * s, knob, owner);
                     }
                 }
             }
             Look::Sofa => {
-                draw_box(canvas, cam, [at[0], at[1] + 0.45, at[2] + d - 0.2], [w, h - 0.45, 0.2], shade(col, 0.9), owner);
+                draw_box(
+                    canvas,
+                    cam,
+                    [at[0], at[1] + 0.45, at[2] + d - 0.2],
+                    [w, h - 0.45, 0.2],
+                    shade(col, 0.9),
+                    owner,
+                );
                 draw_box(canvas, cam, at, [w, 0.45, d], col, owner);
-                draw_box(canvas, cam, [at[0] - 0.12, at[1], at[2]], [0.12, 0.62, d], shade(col, 0.8), owner);
-                draw_box(canvas, cam, [at[0] + w, at[1], at[2]], [0.12, 0.62, d], shade(col, 0.8), owner);
+                draw_box(
+                    canvas,
+                    cam,
+                    [at[0] - 0.12, at[1], at[2]],
+                    [0.12, 0.62, d],
+                    shade(col, 0.8),
+                    owner,
+                );
+                draw_box(
+                    canvas,
+                    cam,
+                    [at[0] + w, at[1], at[2]],
+                    [0.12, 0.62, d],
+                    shade(col, 0.8),
+                    owner,
+                );
             }
             Look::CoffeeTable => {
-                for (lx, lz) in [(0.05, 0.05), (w - 0.1, 0.05), (0.05, d - 0.1), (w - 0.1, d - 0.1)] {
-                    draw_box(canvas, cam, [at[0] + lx, 0.0, at[2] + lz], [0.05, h - 0.05, 0.05], dark, owner);
+                for (lx, lz) in [
+                    (0.05, 0.05),
+                    (w - 0.1, 0.05),
+                    (0.05, d - 0.1),
+                    (w - 0.1, d - 0.1),
+                ] {
+                    draw_box(
+                        canvas,
+                        cam,
+                        [at[0] + lx, 0.0, at[2] + lz],
+                        [0.05, h - 0.05, 0.05],
+                        dark,
+                        owner,
+                    );
                 }
-                draw_box(canvas, cam, [at[0], h - 0.06, at[2]], [w, 0.06, d], col, owner);
+                draw_box(
+                    canvas,
+                    cam,
+                    [at[0], h - 0.06, at[2]],
+                    [w, 0.06, d],
+                    col,
+                    owner,
+                );
             }
             Look::Lamp => {
                 let cx = at[0] + w / 2.0;
@@ -653,13 +817,22 @@ fn draw_thing(canvas: &mut Canvas, scene: &Scene, thing: ThingId, anchor: Anchor
                 if let Some((u, v, s)) = cam.project([cx, 0.0, cz]) {
                     canvas.ellipse(u, v, 0.16 * s, 0.05 * s, dark, owner);
                 }
-                if let (Some(a), Some(b)) = (cam.project([cx, 0.0, cz]), cam.project([cx, h - 0.25, cz])) {
+                if let (Some(a), Some(b)) =
+                    (cam.project([cx, 0.0, cz]), cam.project([cx, h - 0.25, cz]))
+                {
                     canvas.line((a.0, a.1), (b.0, b.1), 0.035 * a.2, dark, owner);
                 }
-                if let (Some((u0, v0, s)), Some((_, v1, _))) = (cam.project([cx, h - 0.3, cz]), cam.project([cx, h, cz])) {
+                if let (Some((u0, v0, s)), Some((_, v1, _))) =
+                    (cam.project([cx, h - 0.3, cz]), cam.project([cx, h, cz]))
+                {
                     let shade_colour = if on { [255, 226, 90] } else { [236, 228, 206] };
                     canvas.polygon(
-                        &[(u0 - 0.2 * s, v0), (u0 + 0.2 * s, v0), (u0 + 0.12 * s, v1), (u0 - 0.12 * s, v1)],
+                        &[
+                            (u0 - 0.2 * s, v0),
+                            (u0 + 0.2 * s, v0),
+                            (u0 + 0.12 * s, v1),
+                            (u0 - 0.12 * s, v1),
+                        ],
                         shade_colour,
                         owner,
                     );
@@ -695,9 +868,23 @@ fn draw_thing(canvas: &mut Canvas, scene: &Scene, thing: ThingId, anchor: Anchor
     };
     match spec.look {
         Look::Plate => {
-            canvas.ellipse(u, v - h / 2.0, w / 2.0 + 1.5, (w * 0.16).max(h) + 1.5, [120, 120, 120], owner);
+            canvas.ellipse(
+                u,
+                v - h / 2.0,
+                w / 2.0 + 1.5,
+                (w * 0.16).max(h) + 1.5,
+                [120, 120, 120],
+                owner,
+            );
             canvas.ellipse(u, v - h / 2.0, w / 2.0, (w * 0.16).max(h), col, owner);
-            canvas.ellipse(u, v - h / 2.0, w * 0.32, (w * 0.1).max(h * 0.6), [232, 232, 226], owner);
+            canvas.ellipse(
+                u,
+                v - h / 2.0,
+                w * 0.32,
+                (w * 0.1).max(h * 0.6),
+                [232, 232, 226],
+                owner,
+            );
         }
         Look::Bowl => {
             canvas.lower_half_ellipse(u, v - h, w / 2.0 + 1.5, h + 1.5, shade(col, 0.5), owner);
@@ -710,16 +897,56 @@ fn draw_thing(canvas: &mut Canvas, scene: &Scene, thing: ThingId, anchor: Anchor
             }
         }
         Look::Mug => {
-            canvas.ellipse(u + w * 0.55, v - h * 0.5, w * 0.28, h * 0.28, shade(col, 0.6), owner);
-            outline(canvas, &[(u - w / 2.0, v - h), (u + w / 2.0, v - h), (u + w / 2.0, v), (u - w / 2.0, v)], col);
-            let rim = if state.has_water(thing) { (water_colour, water) } else { ([80, 20, 20], owner) };
+            canvas.ellipse(
+                u + w * 0.55,
+                v - h * 0.5,
+                w * 0.28,
+                h * 0.28,
+                shade(col, 0.6),
+                owner,
+            );
+            outline(
+                canvas,
+                &[
+                    (u - w / 2.0, v - h),
+                    (u + w / 2.0, v - h),
+                    (u + w / 2.0, v),
+                    (u - w / 2.0, v),
+                ],
+                col,
+            );
+            let rim = if state.has_water(thing) {
+                (water_colour, water)
+            } else {
+                ([80, 20, 20], owner)
+            };
             canvas.ellipse(u, v - h, w / 2.0, w * 0.16, rim.0, rim.1);
         }
         Look::Apple => {
-            canvas.ellipse(u, v - w / 2.0, w / 2.0 + 1.5, w / 2.0 + 1.5, [110, 10, 20], owner);
+            canvas.ellipse(
+                u,
+                v - w / 2.0,
+                w / 2.0 + 1.5,
+                w / 2.0 + 1.5,
+                [110, 10, 20],
+                owner,
+            );
             canvas.ellipse(u, v - w / 2.0, w / 2.0, w / 2.0, col, owner);
-            canvas.line((u, v - w), (u + w * 0.1, v - w * 1.25), w * 0.08, [90, 60, 30], owner);
-            canvas.ellipse(u + w * 0.22, v - w * 1.12, w * 0.16, w * 0.08, [60, 160, 60], owner);
+            canvas.line(
+                (u, v - w),
+                (u + w * 0.1, v - w * 1.25),
+                w * 0.08,
+                [90, 60, 30],
+                owner,
+            );
+            canvas.ellipse(
+                u + w * 0.22,
+                v - w * 1.12,
+                w * 0.16,
+                w * 0.08,
+                [60, 160, 60],
+                owner,
+            );
         }
         Look::HalfApple => {
             canvas.lower_half_ellipse(u, v - h, w / 2.0 + 1.5, h + 1.5, [110, 10, 20], owner);
@@ -729,38 +956,139 @@ fn draw_thing(canvas: &mut Canvas, scene: &Scene, thing: ThingId, anchor: Anchor
         }
         Look::Board => {
             let top = w * 0.18;
-            outline(canvas, &[(u - w / 2.0, v - h - top), (u + w / 2.0, v - h - top), (u + w / 2.0, v), (u - w / 2.0, v)], col);
+            outline(
+                canvas,
+                &[
+                    (u - w / 2.0, v - h - top),
+                    (u + w / 2.0, v - h - top),
+                    (u + w / 2.0, v),
+                    (u - w / 2.0, v),
+                ],
+                col,
+            );
             canvas.rect(u - w / 2.0, v - h, u + w / 2.0, v, shade(col, 0.8), owner);
         }
         Look::Knife => {
-            let blade = [(u - w / 2.0, v - h), (u + w * 0.1, v - h * 1.6), (u + w * 0.1, v), (u - w / 2.0, v)];
+            let blade = [
+                (u - w / 2.0, v - h),
+                (u + w * 0.1, v - h * 1.6),
+                (u + w * 0.1, v),
+                (u - w / 2.0, v),
+            ];
             outline(canvas, &blade, col);
-            canvas.rect(u + w * 0.1, v - h * 1.2, u + w / 2.0, v, [40, 30, 25], owner);
+            canvas.rect(
+                u + w * 0.1,
+                v - h * 1.2,
+                u + w / 2.0,
+                v,
+                [40, 30, 25],
+                owner,
+            );
         }
         Look::Pan => {
-            canvas.line((u + w * 0.4, v - h), (u + w * 0.95, v - h * 1.4), h * 0.5 + 2.0, [30, 30, 30], owner);
-            canvas.ellipse(u, v - h / 2.0, w / 2.0 + 1.5, w * 0.17 + 1.5, [20, 20, 20], owner);
+            canvas.line(
+                (u + w * 0.4, v - h),
+                (u + w * 0.95, v - h * 1.4),
+                h * 0.5 + 2.0,
+                [30, 30, 30],
+                owner,
+            );
+            canvas.ellipse(
+                u,
+                v - h / 2.0,
+                w / 2.0 + 1.5,
+                w * 0.17 + 1.5,
+                [20, 20, 20],
+                owner,
+            );
             canvas.ellipse(u, v - h / 2.0, w / 2.0, w * 0.17, col, owner);
             canvas.ellipse(u, v - h / 2.0, w * 0.4, w * 0.12, shade(col, 1.4), owner);
         }
         Look::Bacon => {
-            let c = if state.is_cooked(thing) { [150, 75, 35] } else { col };
-            let fat = if state.is_cooked(thing) { [200, 150, 90] } else { [252, 225, 220] };
+            let c = if state.is_cooked(thing) {
+                [150, 75, 35]
+            } else {
+                col
+            };
+            let fat = if state.is_cooked(thing) {
+                [200, 150, 90]
+            } else {
+                [252, 225, 220]
+            };
             for k in 0..2 {
                 let y = v - h * (1.0 + k as f32 * 1.3);
-                outline(canvas, &[(u - w / 2.0, y - h), (u + w / 2.0, y - h * 1.3), (u + w / 2.0, y), (u - w / 2.0, y + h * 0.3)], c);
-                canvas.line((u - w / 2.0, y - h * 0.4), (u + w / 2.0, y - h * 0.7), (h * 0.25).max(1.0), fat, owner);
+                outline(
+                    canvas,
+                    &[
+                        (u - w / 2.0, y - h),
+                        (u + w / 2.0, y - h * 1.3),
+                        (u + w / 2.0, y),
+                        (u - w / 2.0, y + h * 0.3),
+                    ],
+                    c,
+                );
+                canvas.line(
+                    (u - w / 2.0, y - h * 0.4),
+                    (u + w / 2.0, y - h * 0.7),
+                    (h * 0.25).max(1.0),
+                    fat,
+                    owner,
+                );
             }
         }
         Look::Kettle => {
-            canvas.polygon(&[(u + w * 0.35, v - h * 0.5), (u + w * 0.75, v - h * 0.95), (u + w * 0.75, v - h * 0.85), (u + w * 0.35, v - h * 0.3)], shade(col, 0.7), owner);
-            outline(canvas, &[(u - w / 2.0, v), (u + w / 2.0, v), (u + w * 0.38, v - h * 0.85), (u - w * 0.38, v - h * 0.85)], col);
-            canvas.line((u - w * 0.3, v - h * 0.85), (u, v - h * 1.1), h * 0.07 + 1.0, [40, 40, 40], owner);
-            canvas.line((u, v - h * 1.1), (u + w * 0.3, v - h * 0.85), h * 0.07 + 1.0, [40, 40, 40], owner);
+            canvas.polygon(
+                &[
+                    (u + w * 0.35, v - h * 0.5),
+                    (u + w * 0.75, v - h * 0.95),
+                    (u + w * 0.75, v - h * 0.85),
+                    (u + w * 0.35, v - h * 0.3),
+                ],
+                shade(col, 0.7),
+                owner,
+            );
+            outline(
+                canvas,
+                &[
+                    (u - w / 2.0, v),
+                    (u + w / 2.0, v),
+                    (u + w * 0.38, v - h * 0.85),
+                    (u - w * 0.38, v - h * 0.85),
+                ],
+                col,
+            );
+            canvas.line(
+                (u - w * 0.3, v - h * 0.85),
+                (u, v - h * 1.1),
+                h * 0.07 + 1.0,
+                [40, 40, 40],
+                owner,
+            );
+            canvas.line(
+                (u, v - h * 1.1),
+                (u + w * 0.3, v - h * 0.85),
+                h * 0.07 + 1.0,
+                [40, 40, 40],
+                owner,
+            );
             let window = (u - w * 0.2, v - h * 0.7, u + w * 0.1, v - h * 0.1);
-            canvas.rect(window.0, window.1, window.2, window.3, [230, 240, 245], owner);
+            canvas.rect(
+                window.0,
+                window.1,
+                window.2,
+                window.3,
+                [230, 240, 245],
+                owner,
+            );
             if state.has_water(thing) {
-                canvas.rect(window.0, window.1 + (window.3 - window.1) * 0.35, window.2, window.3, water_colour, water);
+                canvas.rect(
+                    window.0,
+                    window.1 + (window.3 - window.1) * 0.35,
+                    window.2,
+                    window.3,
+                    water_colour,
+                    water,
+                );
             }
         }
         Look::Cloth => {
@@ -777,33 +1105,110 @@ fn draw_thing(canvas: &mut Canvas, scene: &Scene, thing: ThingId, anchor: Anchor
                     outline(canvas, &drape, col);
                     for k in 1..4 {
                         let x = x0 + cw * k as f32 / 4.0;
-                        canvas.line((x, y0 - ch * 0.06), (x, y0 + ch * 0.66), (cw * 0.03).max(1.0), stripe, owner);
+                        canvas.line(
+                            (x, y0 - ch * 0.06),
+                            (x, y0 + ch * 0.66),
+                            (cw * 0.03).max(1.0),
+                            stripe,
+                            owner,
+                        );
                     }
                 }
             } else {
                 let fold = if anchor.held { w * 0.5 } else { w };
-                let hh = if anchor.held { fold * 0.6 } else { h + w * 0.12 };
-                outline(canvas, &[(u - fold / 2.0, v - hh), (u + fold / 2.0, v - hh), (u + fold / 2.0, v), (u - fold / 2.0, v)], col);
-                canvas.line((u - fold / 2.0, v - hh * 0.5), (u + fold / 2.0, v - hh * 0.5), (hh * 0.15).max(1.0), stripe, owner);
+                let hh = if anchor.held {
+                    fold * 0.6
+                } else {
+                    h + w * 0.12
+                };
+                outline(
+                    canvas,
+                    &[
+                        (u - fold / 2.0, v - hh),
+                        (u + fold / 2.0, v - hh),
+                        (u + fold / 2.0, v),
+                        (u - fold / 2.0, v),
+                    ],
+                    col,
+                );
+                canvas.line(
+                    (u - fold / 2.0, v - hh * 0.5),
+                    (u + fold / 2.0, v - hh * 0.5),
+                    (hh * 0.15).max(1.0),
+                    stripe,
+                    owner,
+                );
             }
         }
         Look::Book => {
-            outline(canvas, &[(u - w / 2.0, v - h - w * 0.15), (u + w / 2.0, v - h - w * 0.15), (u + w / 2.0, v), (u - w / 2.0, v)], col);
+            outline(
+                canvas,
+                &[
+                    (u - w / 2.0, v - h - w * 0.15),
+                    (u + w / 2.0, v - h - w * 0.15),
+                    (u + w / 2.0, v),
+                    (u - w / 2.0, v),
+                ],
+                col,
+            );
             canvas.rect(u - w / 2.0, v - h, u + w / 2.0, v, [240, 236, 220], owner);
-            canvas.rect(u - w / 2.0, v - h - w * 0.15, u - w * 0.38, v, shade(col, 0.6), owner);
+            canvas.rect(
+                u - w / 2.0,
+                v - h - w * 0.15,
+                u - w * 0.38,
+                v,
+                shade(col, 0.6),
+                owner,
+            );
         }
         Look::Remote => {
-            outline(canvas, &[(u - w / 2.0, v - h - w * 0.1), (u + w / 2.0, v - h - w * 0.1), (u + w / 2.0, v), (u - w / 2.0, v)], col);
+            outline(
+                canvas,
+                &[
+                    (u - w / 2.0, v - h - w * 0.1),
+                    (u + w / 2.0, v - h - w * 0.1),
+                    (u + w / 2.0, v),
+                    (u - w / 2.0, v),
+                ],
+                col,
+            );
             canvas.ellipse(u - w * 0.3, v - h, w * 0.05, w * 0.04, [220, 40, 40], owner);
             canvas.ellipse(u, v - h, w * 0.05, w * 0.04, [60, 160, 220], owner);
         }
         Look::Basket => {
-            canvas.line((u - w * 0.35, v - h), (u, v - h * 1.5), w * 0.05 + 1.0, dark, owner);
-            canvas.line((u, v - h * 1.5), (u + w * 0.35, v - h), w * 0.05 + 1.0, dark, owner);
-            outline(canvas, &[(u - w / 2.0, v - h), (u + w / 2.0, v - h), (u + w * 0.4, v), (u - w * 0.4, v)], col);
+            canvas.line(
+                (u - w * 0.35, v - h),
+                (u, v - h * 1.5),
+                w * 0.05 + 1.0,
+                dark,
+                owner,
+            );
+            canvas.line(
+                (u, v - h * 1.5),
+                (u + w * 0.35, v - h),
+                w * 0.05 + 1.0,
+                dark,
+                owner,
+            );
+            outline(
+                canvas,
+                &[
+                    (u - w / 2.0, v - h),
+                    (u + w / 2.0, v - h),
+                    (u + w * 0.4, v),
+                    (u - w * 0.4, v),
+                ],
+                col,
+            );
             for k in 1..4 {
                 let y = v - h * k as f32 / 4.0;
-                canvas.line((u - w * 0.45, y), (u + w * 0.45, y), (h * 0.04).max(1.0), dark, owner);
+                canvas.line(
+                    (u - w * 0.45, y),
+                    (u + w * 0.45, y),
+                    (h * 0.04).max(1.0),
+                    dark,
+                    owner,
+                );
             }
         }
         _ => {}
@@ -825,4 +1230,3 @@ fn covered_box(scene: &Scene, target: ThingId) -> Option<(f32, f32, f32, f32)> {
     let h = h.max(w * 0.2);
     Some((u - w * s / 2.0, v - h * s * 1.2, u + w * s / 2.0, v))
 }
-

@@ -68,27 +68,55 @@ impl Relation {
 /// One action of the robot (or, for cooking, of the world while the robot waits).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Action {
-    Grasp { hand: Hand, thing: ThingId },
-    Place { hand: Hand, relation: Relation, target: ThingId },
+    Grasp {
+        hand: Hand,
+        thing: ThingId,
+    },
+    Place {
+        hand: Hand,
+        relation: Relation,
+        target: ThingId,
+    },
     /// Lays the cloth held in `hand` over `target`.
-    Cover { hand: Hand, target: ThingId },
-    Open { thing: ThingId },
-    Close { thing: ThingId },
-    ToggleOn { thing: ThingId },
-    ToggleOff { thing: ThingId },
+    Cover {
+        hand: Hand,
+        target: ThingId,
+    },
+    Open {
+        thing: ThingId,
+    },
+    Close {
+        thing: ThingId,
+    },
+    ToggleOn {
+        thing: ThingId,
+    },
+    ToggleOff {
+        thing: ThingId,
+    },
     /// Cuts `thing` in two with the knife held in `hand`.
-    Slice { hand: Hand, thing: ThingId },
+    Slice {
+        hand: Hand,
+        thing: ThingId,
+    },
     /// Pours water from the kettle held in `hand` into `target`.
-    Pour { hand: Hand, target: ThingId },
+    Pour {
+        hand: Hand,
+        target: ThingId,
+    },
     /// Waits on the hot pan until `thing` is cooked.
-    Cook { thing: ThingId },
+    Cook {
+        thing: ThingId,
+    },
 }
 
 impl fmt::Display for Action {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let n = |t: ThingId| CATALOGUE[t].name;
         match *self {
-            Action::Grasp { hand, thing } => write!(f, "grasp {} with the {hand} gripper", n(thing)),
+            Action::Grasp { hand, thing } => {
+                write!(f, "grasp {} with the {hand} gripper", n(thing))
+            }
             Action::Place {
                 hand,
                 relation,
@@ -100,7 +128,11 @@ impl fmt::Display for Action {
                 n(target)
             ),
             Action::Cover { hand, target } => {
-                write!(f, "cover {} with the cloth in the {hand} gripper", n(target))
+                write!(
+                    f,
+                    "cover {} with the cloth in the {hand} gripper",
+                    n(target)
+                )
             }
             Action::Open { thing } => write!(f, "open {}", n(thing)),
             Action::Close { thing } => write!(f, "close {}", n(thing)),
@@ -110,7 +142,11 @@ impl fmt::Display for Action {
                 write!(f, "slice {} with the knife in the {hand} gripper", n(thing))
             }
             Action::Pour { hand, target } => {
-                write!(f, "pour water from the {hand} gripper's kettle into {}", n(target))
+                write!(
+                    f,
+                    "pour water from the {hand} gripper's kettle into {}",
+                    n(target)
+                )
             }
             Action::Cook { thing } => write!(f, "wait until {} is cooked", n(thing)),
         }
@@ -211,7 +247,9 @@ impl WorldState {
 
     /// The gripper holding `thing`, if any.
     pub fn holder(&self, thing: ThingId) -> Option<Hand> {
-        Hand::BOTH.into_iter().find(|h| self.held(*h) == Some(thing))
+        Hand::BOTH
+            .into_iter()
+            .find(|h| self.held(*h) == Some(thing))
     }
 
     /// Whether `thing` is held, directly or by resting on something held.
@@ -444,9 +482,15 @@ impl WorldState {
         for hand in Hand::BOTH {
             for &thing in &in_room {
                 all.push(Action::Grasp { hand, thing });
-                all.push(Action::Cover { hand, target: thing });
+                all.push(Action::Cover {
+                    hand,
+                    target: thing,
+                });
                 all.push(Action::Slice { hand, thing });
-                all.push(Action::Pour { hand, target: thing });
+                all.push(Action::Pour {
+                    hand,
+                    target: thing,
+                });
                 for relation in [Relation::OnTop, Relation::Inside, Relation::Under] {
                     all.push(Action::Place {
                         hand,
@@ -515,7 +559,11 @@ impl WorldState {
                 continue;
             }
             if let Some((relation, target)) = self.support[t] {
-                edges.push(edge(CATALOGUE[t].name, CATALOGUE[target].name, relation.state()));
+                edges.push(edge(
+                    CATALOGUE[t].name,
+                    CATALOGUE[target].name,
+                    relation.state(),
+                ));
             }
             if let Some(target) = self.covering[t] {
                 edges.push(edge(CATALOGUE[target].name, CATALOGUE[t].name, "Covered"));
@@ -559,10 +607,16 @@ mod tests {
         })
         .unwrap();
         let g = s.scene_graph();
-        assert!(g.edges.iter().any(|e| e.from == "bowl_0"
-            && e.to == "top_cabinet_0"
-            && e.states == ["Inside"]));
-        assert!(g.nodes.iter().any(|n| n.name == "top_cabinet_0" && n.states == ["Open"]));
+        assert!(
+            g.edges
+                .iter()
+                .any(|e| e.from == "bowl_0" && e.to == "top_cabinet_0" && e.states == ["Inside"])
+        );
+        assert!(
+            g.nodes
+                .iter()
+                .any(|n| n.name == "top_cabinet_0" && n.states == ["Open"])
+        );
     }
 
     #[test]
@@ -587,13 +641,23 @@ mod tests {
             .filter(|n| n.name.starts_with("half_apple"))
             .collect();
         assert_eq!(halves.len(), 2);
-        assert!(halves.iter().all(|n| n.parent == Some(vec!["apple_0".into()])));
+        assert!(
+            halves
+                .iter()
+                .all(|n| n.parent == Some(vec!["apple_0".into()]))
+        );
     }
 
     #[test]
     fn things_shut_away_or_covered_cannot_be_grasped() {
         let mut s = WorldState::initial();
-        assert!(s.check(&Action::Grasp { hand: Hand::Left, thing: MUG }).is_err());
+        assert!(
+            s.check(&Action::Grasp {
+                hand: Hand::Left,
+                thing: MUG
+            })
+            .is_err()
+        );
         s.apply(&Action::Grasp {
             hand: Hand::Left,
             thing: DISHTOWEL,
@@ -604,8 +668,18 @@ mod tests {
             target: BOWL,
         })
         .unwrap();
-        assert!(s.check(&Action::Grasp { hand: Hand::Right, thing: BOWL }).is_err());
+        assert!(
+            s.check(&Action::Grasp {
+                hand: Hand::Right,
+                thing: BOWL
+            })
+            .is_err()
+        );
         assert_eq!(s.covered_by(BOWL), Some(DISHTOWEL));
-        assert!(s.possible_actions(Room::Kitchen).iter().all(|a| s.check(a).is_ok()));
+        assert!(
+            s.possible_actions(Room::Kitchen)
+                .iter()
+                .all(|a| s.check(a).is_ok())
+        );
     }
 }

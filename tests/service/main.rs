@@ -12,3 +12,4 @@ mod import;
 mod pages;
 mod score;
 mod submissions;
+mod world;
