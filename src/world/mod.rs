@@ -432,7 +432,7 @@ impl Simulation {
         for &frame in &frames {
             let path = sensor_dir.join(format!("{frame:05}.png"));
             let state = self.state_at(frame);
-            if !encoded.contains_key(&state) {
+            if let std::collections::btree_map::Entry::Vacant(slot) = encoded.entry(state) {
                 let mut bytes = Vec::new();
                 self.views[state]
                     .1
@@ -444,7 +444,7 @@ impl Simulation {
                         path: path.clone(),
                         source,
                     })?;
-                encoded.insert(state, bytes);
+                slot.insert(bytes);
             }
             std::fs::write(&path, &encoded[&state]).map_err(io(&path))?;
         }

@@ -384,8 +384,9 @@ impl Scene<'_> {
         }
         if let Some(target) = self.state.covers(thing) {
             let under = self.anchor(target, depth + 1)?;
+            // After the covered thing and everything resting on it.
             return Some(Anchor {
-                key: under.key - 0.0001,
+                key: under.key - 0.01,
                 ..under
             });
         }
@@ -1227,6 +1228,7 @@ fn covered_box(scene: &Scene, target: ThingId) -> Option<(f32, f32, f32, f32)> {
     let anchor = scene.anchor(target, 0)?;
     let (u, v, s) = cam.project(anchor.at)?;
     let [w, h, _] = spec.size;
-    let h = h.max(w * 0.2);
+    // Tall enough to hide what rests on a flat thing, such as food on a plate.
+    let h = h.max(0.1);
     Some((u - w * s / 2.0, v - h * s * 1.2, u + w * s / 2.0, v))
 }

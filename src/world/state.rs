@@ -350,18 +350,17 @@ impl WorldState {
                 Ok(())
             }
             Action::Cover { hand, target } => {
-                holds(hand, &things::is_cloth, "cloth")?;
+                let cloth = holds(hand, &things::is_cloth, "cloth")?;
                 present(target)?;
-                if things::is_cloth(target)
-                    || target == WATER
+                let spec = &CATALOGUE[target];
+                let coverable = !things::is_cloth(target)
+                    && target != WATER
+                    && spec.room == CATALOGUE[cloth].room
+                    && (!spec.is_furniture() || target == things::SOFA);
+                if !coverable
                     || self.is_carried(target)
                     || self.is_shut_away(target)
                     || self.covered_by(target).is_some()
-                    || CATALOGUE[target].room != CATALOGUE[self.held(hand).unwrap_or(0)].room
-                    || !(things::is_cookable(target)
-                        || things::surface_slots(target).is_some()
-                        || target == things::BASKET
-                        || target == things::BOWL)
                 {
                     return Err(format!("{} cannot be covered", name(target)));
                 }
@@ -554,22 +553,18 @@ impl WorldState {
                 edges.push(edge(ROBOT, CATALOGUE[t].name, hand.grasping_state()));
             }
         }
-        for t in 0..CATALOGUE.len() {
+        for (t, thing) in CATALOGUE.iter().enumerate() {
             if !self.present[t] {
                 continue;
             }
             if let Some((relation, target)) = self.support[t] {
-                edges.push(edge(
-                    CATALOGUE[t].name,
-                    CATALOGUE[target].name,
-                    relation.state(),
-                ));
+                edges.push(edge(thing.name, CATALOGUE[target].name, relation.state()));
             }
             if let Some(target) = self.covering[t] {
-                edges.push(edge(CATALOGUE[target].name, CATALOGUE[t].name, "Covered"));
+                edges.push(edge(CATALOGUE[target].name, thing.name, "Covered"));
             }
             if self.water[t] {
-                edges.push(edge(CATALOGUE[t].name, CATALOGUE[WATER].name, "Contains"));
+                edges.push(edge(thing.name, CATALOGUE[WATER].name, "Contains"));
             }
         }
         SceneGraph { nodes, edges }
