@@ -66,3 +66,64 @@ async fn the_demo_is_scored_from_its_scene_graphs() {
     assert!(report.rows >= 16, "{} rows", report.rows);
     assert_eq!(report.scene_graph_items, report.rows);
 }
+
+#[test]
+fn simulate_writes_replays_that_generate_reads_and_refuses_bad_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let replayed = dir.path().join("replayed");
+    let out = crate::helpers::enact_hub()
+        .args(["simulate", "--activity", "cook_bacon", "--length", "4"])
+        .args([
+            "--fov",
+            "45",
+            "--camera-height",
+            "1.3",
+            "--robot-colour",
+            "#ffffff",
+        ])
+        .args(["--image-size", "96", "--seed", "3", "--out"])
+        .arg(&replayed)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("cook_bacon_1700000000000003: 4 actions"),
+        "{stdout}"
+    );
+    let task = replayed.join("cook_bacon_1700000000000003");
+    assert!(task.join("scene_graph_0.json").is_file());
+    assert!(task.join("external_sensor1/00059.png").is_file());
+    let generated = crate::helpers::enact_hub()
+        .args(["generate", "--steps", "3..5", "--out"])
+        .arg(dir.path().join("data"))
+        .arg(&replayed)
+        .output()
+        .unwrap();
+    assert!(
+        generated.status.success(),
+        "{}",
+        String::from_utf8_lossy(&generated.stderr)
+    );
+
+    for (args, complaint) in [
+        (["--activity", "juggling"], "unknown activity \"juggling\""),
+        (["--robot-colour", "mauve"], "#rrggbb"),
+        (["--fov", "400"], "field of view 400"),
+    ] {
+        let out = crate::helpers::enact_hub()
+            .arg("simulate")
+            .args(args)
+            .arg("--out")
+            .arg(dir.path().join("bad"))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success());
+        assert!(stderr.contains(complaint), "{stderr}");
+    }
+}
