@@ -220,3 +220,30 @@ fn segmentation_finds_exactly_the_intended_key_frames() {
     }
     assert!(glitch_mattered, "no glitch would have fooled segmentation");
 }
+
+#[test]
+fn the_written_records_rebuild_every_frame_as_simulated() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut o = options(Activity::MakeTea, 6);
+    o.camera.image_size = 64;
+    let simulation = write(dir.path(), &o);
+    let timeline = timeline(dir.path(), &simulation);
+    assert_eq!(timeline.frame_ids().count() as u64, simulation.num_frames);
+    let sorted = |mut g: enact_hub::scene_graph::SceneGraph| {
+        g.nodes.sort_by(|a, b| a.name.cmp(&b.name));
+        g.edges
+            .sort_by(|a, b| (&a.from, &a.to).cmp(&(&b.from, &b.to)));
+        g
+    };
+    for frame in 0..simulation.num_frames {
+        let rebuilt = timeline
+            .scene_graph(&frame.to_string())
+            .unwrap()
+            .into_owned();
+        assert_eq!(
+            sorted(rebuilt),
+            sorted(simulation.scene_graph(frame)),
+            "frame {frame}"
+        );
+    }
+}
