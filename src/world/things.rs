@@ -372,3 +372,47 @@ pub fn is_cookable(thing: ThingId) -> bool {
 pub fn halves_of(thing: ThingId) -> Option<[ThingId; 2]> {
     (thing == APPLE).then_some([HALF_APPLE_0, HALF_APPLE_1])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_name_their_things_and_categories_are_distinct() {
+        for (id, name) in [
+            (COUNTERTOP, "countertop_0"),
+            (CABINET, "top_cabinet_0"),
+            (STOVE, "stove_0"),
+            (PLATE, "plate_0"),
+            (BOWL, "bowl_0"),
+            (MUG, "mug_0"),
+            (APPLE, "apple_0"),
+            (HALF_APPLE_0, "half_apple_0"),
+            (HALF_APPLE_1, "half_apple_1"),
+            (BOARD, "chopping_board_0"),
+            (KNIFE, "carving_knife_0"),
+            (PAN, "frying_pan_0"),
+            (BACON, "bacon_0"),
+            (KETTLE, "kettle_0"),
+            (DISHTOWEL, "dishtowel_0"),
+            (WATER, "water"),
+            (SOFA, "sofa_0"),
+            (COFFEE_TABLE, "coffee_table_0"),
+            (LAMP, "floor_lamp_0"),
+            (BOOK, "book_0"),
+            (REMOTE, "remote_control_0"),
+            (BASKET, "basket_0"),
+            (BLANKET, "blanket_0"),
+        ] {
+            assert_eq!(CATALOGUE[id].name, name);
+        }
+        let mut categories: Vec<&str> = CATALOGUE.iter().map(|t| t.category).collect();
+        categories.sort_unstable();
+        categories.dedup();
+        assert_eq!(
+            categories.len(),
+            CATALOGUE.len() - 1,
+            "only the halves share one"
+        );
+    }
+}
