@@ -11,7 +11,8 @@
 //! - [`web`]: the axum service: JSON API under `/api/v1`, HTML pages, frames.
 //! - [`annotation`]: human annotation without I/O: credentials, the balanced split, drafts,
 //!   scoring human answers; `store::annotations` and `web::{auth, annotate, admin}` serve it.
-//! - [`world`]: a synthetic household world that writes BEHAVIOR-format replays (pure).
+//! - [`world`]: a synthetic household world and its BEHAVIOR-format replays (pure but for the
+//!   replay writer and the `simulate` command).
 //! - [`demo`]: the built-in demo dataset, generated at start by `serve --demo`.
 //! - [`cli`]: the command line; `src/main.rs` only calls [`cli::main`].
 

@@ -171,10 +171,13 @@ pub fn simulate(options: &SimulateOptions) -> Result<Simulation, WorldError> {
 
     let mut state = WorldState::initial();
     let mut states = vec![state.clone()];
-    for action in &plan {
-        // `plan` only holds actions possible in turn.
-        if state.apply(action).is_ok() {
+    // `plan` only holds actions possible in turn; `played` keeps states and timing aligned
+    // even if one were not.
+    let mut played = Vec::with_capacity(plan.len());
+    for action in plan {
+        if state.apply(&action).is_ok() {
             states.push(state.clone());
+            played.push(action);
         }
     }
     // Renders once per distinct state (an action can bring an earlier state back).
@@ -200,9 +203,9 @@ pub fn simulate(options: &SimulateOptions) -> Result<Simulation, WorldError> {
 
     let mut starts = vec![0];
     let mut key_frames = vec![FIRST_KEY_FRAME];
-    let mut actions = Vec::with_capacity(plan.len());
+    let mut actions = Vec::with_capacity(played.len());
     let mut previous_key = FIRST_KEY_FRAME;
-    for action in &plan {
+    for action in &played {
         let frame = previous_key + MIN_HOLD + rng.random_range(20..=170);
         starts.push(frame);
         actions.push(TimedAction {
