@@ -1,5 +1,5 @@
 //! Benchmarks of the data pipeline: counting and sampling a million length-10 paths from a
-//! long synthetic trajectory, and (once, printed) segmentation and generation on the parity
+//! long trajectory of the synthetic household world, and (once, printed) segmentation and generation on the parity
 //! replays next to ENACT's timings.
 
 use std::path::PathBuf;
@@ -9,24 +9,45 @@ use criterion::{Criterion, criterion_group};
 use enact_hub::pipeline::{
     GenerateOptions, PathTable, TransitionGraph, sample_paths, segment_task, task_names,
 };
+use enact_hub::world::{Activity, CameraRig, FrameImages, SimulateOptions, simulate};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-/// 300 key frames; frame i has a valid transition to each of the next 120 frames (28,740
-/// edges), giving about 1.3·10^18 length-10 paths (close to u64::MAX).
+/// One long trajectory of the synthetic household world: the cook_bacon script continued by
+/// seeded random kitchen chores, 299 actions over about 92,000 frames, written as a replay,
+/// segmented (300 key frames) and turned into its transition graph like any other task
+/// (seed 7: 3,539 valid transitions, about 4·10^11 length-10 paths).
 fn long_trajectory() -> TransitionGraph {
-    let n = 300;
-    let frames = (0..n).map(|i| (59 + 211 * i).to_string()).collect();
-    let edges = (0..n).flat_map(move |i| (i + 1..n.min(i + 121)).map(move |j| (i, j)));
-    TransitionGraph::from_edges(frames, edges).expect("forward edges")
+    let dir = tempfile::tempdir().expect("temp dir");
+    let simulation = simulate(&SimulateOptions {
+        seed: 7,
+        activity: Activity::CookBacon,
+        length: Some(299),
+        camera: CameraRig {
+            image_size: 64,
+            ..CameraRig::default()
+        },
+    })
+    .expect("simulate");
+    simulation
+        .write_replay(dir.path(), FrameImages::KeyFrames)
+        .expect("write the replay");
+    let task =
+        segment_task(dir.path(), &simulation.task_name, &Default::default()).expect("segmentation");
+    assert_eq!(
+        task.segmentation.key_frames.len(),
+        simulation.key_frames.len()
+    );
+    TransitionGraph::build(&task.key_frame_graphs, &task.segmentation.key_frames)
+        .expect("transition graph")
 }
 
 fn sampling(c: &mut Criterion) {
     let graph = long_trajectory();
     let table = PathTable::count(&graph, 10).expect("no overflow");
     println!(
-        "synthetic DAG: {} frames, {} edges, {} length-10 paths",
+        "world trajectory: {} key frames, {} valid transitions, {} length-10 paths",
         graph.frames().len(),
         graph.edge_count(),
         table.total()

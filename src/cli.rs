@@ -47,6 +47,9 @@ enum Command {
     /// Run ENACT's data pipeline on BEHAVIOR-format replays: key-frame segmentation, then
     /// forward and inverse QA items in the ENACT release layout.
     Generate(GenerateArgs),
+    /// Simulate household activities in the built-in synthetic world and write them as
+    /// BEHAVIOR-format replays that `generate` reads.
+    Simulate(crate::world::command::SimulateArgs),
     /// Manage API tokens: create, list, revoke.
     #[command(subcommand)]
     Token(TokenCommand),
@@ -321,6 +324,7 @@ pub fn main() -> ExitCode {
             Command::AgreementProtocol(args) => stored::agreement_protocol(&args).await,
             Command::Report(args) => stored::report(&args).await,
             Command::Generate(args) => generate(args).await,
+            Command::Simulate(args) => crate::world::command::run(args),
             Command::Token(command) => token(command).await,
             Command::Annotator(AnnotatorCommand::Create(args)) => create_annotator(args).await,
         }
@@ -507,16 +511,17 @@ async fn token(command: TokenCommand) -> anyhow::Result<ExitCode> {
 pub async fn load_demo(pool: &SqlitePool) -> anyhow::Result<ImportReport> {
     let dir = tempfile::tempdir().context("cannot create a temporary directory")?;
     let out = dir.path().to_path_buf();
-    tokio::task::spawn_blocking(move || demo::write_demo_release(&out, demo::DEFAULT_SEED))
-        .await
-        .context("demo generation task failed")?
-        .context("cannot generate the demo dataset")?;
+    let written =
+        tokio::task::spawn_blocking(move || demo::write_demo_release(&out, demo::DEFAULT_SEED))
+            .await
+            .context("demo generation task failed")?
+            .context("cannot generate the demo dataset")?;
     let options = ImportOptions {
         dataset: "demo".to_owned(),
         skip_invalid: false,
         replace: true,
         progress: false,
-        scene_graphs: None,
+        scene_graphs: Some(written.replayed_dir),
     };
     let report = import_release(pool, dir.path(), &options)
         .await

@@ -3,6 +3,14 @@
 //! A tour, in reading order:
 //! - `migrations/` holds the SQLite schema; start there.
 //! - [`dataset`]: the ENACT QA record format, its validation and the item model (pure).
+//! - [`scene_graph`]: BEHAVIOR scene graphs: timelines, the transient filter, diffs, visibility,
+//!   transition signatures and action sentences (pure).
+//! - [`verifier`]: answer parsing and ENACT's verifier in its ENACT-compatible and strict
+//!   policies, with TA/PA tables (pure); [`semantics`] and [`scoring`] say where an item's
+//!   signatures come from and score a predictions file.
+//! - [`pipeline`]: ENACT's data pipeline: key-frame segmentation, the transition graph, uniform
+//!   path sampling and QA items.
+//! - [`agreement`]: Krippendorff's alpha, item bootstrap, ordering encodings, Welch (pure).
 //! - [`accounts`]: API tokens (format, hashing, constant-time checks), roles and scopes (pure).
 //! - [`submission`]: reading, refusing and scoring a leaderboard submission (pure).
 //! - [`leaderboard`]: leaderboard rows (Table 1 layout) and the TA-vs-L chart geometry (pure).
@@ -15,6 +23,8 @@
 //! - [`agreement_protocol`]: the paper's cross-annotation protocol: which items go to whom (pure).
 //! - [`agreement_report`]: the agreement report: alpha, pairs, exact agreement, TA/PA tables,
 //!   Welch comparisons, heatmap and bundle files (pure); `store::agreement` feeds it.
+//! - [`world`]: a synthetic household world and its BEHAVIOR-format replays (pure but for the
+//!   replay writer and the `simulate` command).
 //! - [`demo`]: the built-in demo dataset, generated at start by `serve --demo`.
 //! - [`cli`]: the command line; `src/main.rs` only calls [`cli::main`].
 
@@ -37,3 +47,4 @@ pub mod store;
 pub mod submission;
 pub mod verifier;
 pub mod web;
+pub mod world;

@@ -1,41 +1,28 @@
-//! The built-in demo dataset: a small ENACT-format release generated from a simulated kitchen,
-//! so that `enact-hub serve --demo` works without downloading anything.
+//! The built-in demo dataset, so that `enact-hub serve --demo` works without downloading
+//! anything: the synthetic household world ([`crate::world`]) plays four activities, and the
+//! real data pipeline ([`crate::pipeline::generate`]) segments the replays and writes forward
+//! and inverse items for every L in 3..=10 in ENACT's release layout, with the scene graphs
+//! the importer reads for semantic scoring.
 //!
-//! [`write_demo_release`] is the only entry point. It plays three scripted household
-//! activities on an explicit predicate state (`world`), derives each transition's action text
-//! from the state diff (`diff`, `narration`), draws every key frame (`kitchen`), and writes
-//! forward and inverse ordering items for every L in 3..=10 exactly as ENACT lays out a release:
-//! `QA/enact_ordering.jsonl` plus `QA/images/{type}/{task_name}/{id}_*.png` (`release`).
-//! The generator is self-contained so it can later be swapped for a simulated household world
-//! run through the real data pipeline.
-
-mod diff;
-mod kitchen;
-pub(crate) mod label;
-mod narration;
-mod paint;
-pub(crate) mod prompt;
-mod release;
-mod world;
+//! [`write_demo_release`] is the only entry point.
 
 use std::path::{Path, PathBuf};
 
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-
-use crate::demo::label::LabelFont;
-use crate::demo::release::{TaskRun, build_items, write_release};
+use crate::pipeline::{GenerateOptions, PipelineError, TypeNaming, generate};
+use crate::world::{Activity, CameraRig, FrameImages, SimulateOptions, WorldError, simulate};
 
 /// What [`write_demo_release`] wrote.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct DemoSummary {
     /// `out_dir/QA/enact_ordering.jsonl`.
     pub jsonl_path: PathBuf,
+    /// `out_dir/replayed_activities`: the key frames' scene graphs, for `--scene-graphs`.
+    pub replayed_dir: PathBuf,
     /// JSONL rows written.
     pub items: usize,
     pub forward_items: usize,
     pub inverse_items: usize,
-    /// PNG files written (one per image path in the JSONL).
+    /// Labelled PNG files the items name.
     pub images: usize,
     /// Task names (`{activity}_{16 digits}`) the items come from.
     pub task_names: Vec<String>,
@@ -44,50 +31,59 @@ pub struct DemoSummary {
 /// Why the demo release could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum DemoError {
-    #[error("cannot write {path}: {source}")]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error("cannot encode the PNG {path}: {source}")]
-    EncodePng {
-        path: PathBuf,
-        #[source]
-        source: image::ImageError,
-    },
-    #[error("cannot serialise item {id}: {source}")]
-    Serialize {
-        id: String,
-        #[source]
-        source: serde_json::Error,
-    },
-    #[error("the bundled label font assets/fonts/DejaVuSans-Bold.ttf is unreadable: {0}")]
-    Font(#[from] ab_glyph::InvalidFont),
-    #[error("demo activity {activity}, step {step}: {reason}")]
-    Script {
-        activity: &'static str,
-        step: usize,
-        reason: String,
-    },
-    #[error("item {id}: key frames {from} and {to} show the same world, so there is no action")]
-    Unchanged { id: String, from: usize, to: usize },
-    #[error("the demo activities have too few distinct key-frame sequences for {qa_type}")]
-    NotEnoughSequences { qa_type: String },
+    #[error("demo world: {0}")]
+    World(#[from] WorldError),
+    #[error("demo pipeline: {0}")]
+    Pipeline(#[from] PipelineError),
 }
 
 /// The seed `serve --demo` uses, so every demo start shows the same dataset.
 pub const DEFAULT_SEED: u64 = 42;
 
+/// The demo's activities: between them every predicate class the world has but `Contains`
+/// (make_tea, left out to keep the demo start short).
+const DEMO_ACTIVITIES: [Activity; 4] = [
+    Activity::PutDishesAway,
+    Activity::CookBacon,
+    Activity::SliceFruit,
+    Activity::TidyLivingRoom,
+];
+
+/// Items per (task, step length, direction): with four activities, four items of each kind.
+const ITEMS_PER_TASK: usize = 1;
+
 /// Writes the demo release under `out_dir` (created if missing; files already there are
-/// overwritten). The same seed always gives byte-identical files.
+/// overwritten): the simulated replays in `out_dir/simulated/`, then the pipeline's release
+/// (`QA/`, `segmented_activities/`, `replayed_activities/`, `generation_summary.json`). The
+/// same seed always gives byte-identical files.
 pub fn write_demo_release(out_dir: &Path, seed: u64) -> Result<DemoSummary, DemoError> {
-    let font = LabelFont::load()?;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let runs = world::activities()
-        .iter()
-        .map(|activity| TaskRun::record(activity, &mut rng))
-        .collect::<Result<Vec<_>, _>>()?;
-    let items = build_items(&runs, &mut rng)?;
-    write_release(out_dir, &runs, &items, &font)
+    let simulated = out_dir.join("simulated");
+    let mut task_names = Vec::new();
+    for activity in DEMO_ACTIVITIES {
+        let simulation = simulate(&SimulateOptions {
+            seed,
+            activity,
+            length: None,
+            camera: CameraRig::default(),
+        })?;
+        simulation.write_replay(&simulated, FrameImages::KeyFrames)?;
+        task_names.push(simulation.task_name);
+    }
+    task_names.sort();
+    let options = GenerateOptions {
+        seed,
+        num_to_sample: ITEMS_PER_TASK,
+        type_naming: TypeNaming::Ordering,
+        ..GenerateOptions::default()
+    };
+    let summary = generate(&simulated, out_dir, &options, &|_| {})?;
+    Ok(DemoSummary {
+        jsonl_path: summary.jsonl_path,
+        replayed_dir: out_dir.join("replayed_activities"),
+        items: summary.items,
+        forward_items: summary.forward_items,
+        inverse_items: summary.inverse_items,
+        images: summary.images,
+        task_names,
+    })
 }

@@ -7,6 +7,8 @@
 //! Python `random` stream (which is not reproducible across Python hash seeds anyway).
 
 pub mod kfts;
+pub(crate) mod label;
+pub(crate) mod prompt;
 pub mod qa;
 pub mod release;
 pub mod segment;
@@ -355,7 +357,7 @@ fn run_task(
     out: &Path,
     task: &str,
     options: &GenerateOptions,
-    font: &crate::demo::label::LabelFont,
+    font: &crate::pipeline::label::LabelFont,
     progress: &(dyn Fn(GenerateProgress) + Sync),
 ) -> Result<TaskOutcome, PipelineError> {
     let segmented = segment_task(replayed_dir, task, &options.segmentation)?;
@@ -433,7 +435,7 @@ pub fn generate(
     check_options(options)?;
     let tasks = task_names(replayed_dir)?;
     progress(GenerateProgress::Started { tasks: tasks.len() });
-    let font = crate::demo::label::LabelFont::load()?;
+    let font = crate::pipeline::label::LabelFont::load()?;
     let outcomes: Vec<TaskOutcome> = tasks
         .par_iter()
         .map(|task| run_task(replayed_dir, out, task, options, &font, progress))

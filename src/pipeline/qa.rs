@@ -7,7 +7,7 @@ use serde::Serialize;
 use sha2::{Digest, Sha256};
 
 use crate::dataset::{Direction, QaItem};
-use crate::demo::prompt::{forward_question, inverse_question};
+use crate::pipeline::prompt::{forward_question, inverse_question};
 use crate::scene_graph::sentence::NO_MEANINGFUL_CHANGE_TEXT;
 use crate::scene_graph::{SceneGraphTimeline, View, render_diff, visible_diff};
 

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use serde_json::{Map, Value};
 
-use crate::demo::label::LabelFont;
+use crate::pipeline::label::LabelFont;
 use crate::pipeline::qa::GeneratedItem;
 use crate::pipeline::{
     GenerationSummary, PipelineError, SegmentedTask, frame_image_path, scene_graph_path,
@@ -183,14 +183,50 @@ pub fn write_jsonl(out: &Path, items: &[&GeneratedItem]) -> Result<PathBuf, Pipe
     };
     let mut writer = BufWriter::new(std::fs::File::create(&path).map_err(write)?);
     for item in items {
-        serde_json::to_writer(&mut writer, item).map_err(|source| PipelineError::Serialize {
-            what: format!("item {}", item.id),
-            source,
-        })?;
+        let mut serializer = serde_json::Serializer::with_formatter(&mut writer, PythonJson);
+        item.serialize(&mut serializer)
+            .map_err(|source| PipelineError::Serialize {
+                what: format!("item {}", item.id),
+                source,
+            })?;
         writer.write_all(b"\n").map_err(write)?;
     }
     writer.flush().map_err(write)?;
     Ok(path)
+}
+
+/// ENACT quirk: ENACT writes its JSONL with Python's `json.dump`, whose separators are ", "
+/// and ": "; the generated file has the same layout as a released one.
+struct PythonJson;
+
+impl serde_json::ser::Formatter for PythonJson {
+    fn begin_array_value<W: ?Sized + Write>(
+        &mut self,
+        writer: &mut W,
+        first: bool,
+    ) -> std::io::Result<()> {
+        if first {
+            Ok(())
+        } else {
+            writer.write_all(b", ")
+        }
+    }
+
+    fn begin_object_key<W: ?Sized + Write>(
+        &mut self,
+        writer: &mut W,
+        first: bool,
+    ) -> std::io::Result<()> {
+        if first {
+            Ok(())
+        } else {
+            writer.write_all(b", ")
+        }
+    }
+
+    fn begin_object_value<W: ?Sized + Write>(&mut self, writer: &mut W) -> std::io::Result<()> {
+        writer.write_all(b": ")
+    }
 }
 
 /// Writes `generation_summary.json`.

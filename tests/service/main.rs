@@ -17,3 +17,4 @@ mod openapi;
 mod pages;
 mod score;
 mod submissions;
+mod world;

@@ -1,12 +1,13 @@
-//! Text on demo frames: ENACT's "Current State" / "Next State i" labels and the small gripper
-//! markers, rendered with the bundled DejaVu Sans Bold (see assets/fonts/LICENSE-DejaVu.txt).
+//! Text on item frames: ENACT's "Current State" / "Next State i" labels, rendered with the
+//! bundled DejaVu Sans Bold (see assets/fonts/LICENSE-DejaVu.txt).
 
 use ab_glyph::{Font, FontRef, PxScale, ScaleFont, point};
 use image::RgbImage;
 
-use crate::demo::paint::Colour;
+/// An RGB colour.
+type Colour = [u8; 3];
 
-/// The label font, embedded so that the demo reads no file at run time.
+/// The label font, embedded so that generation reads no file at run time.
 const FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-Bold.ttf");
 
 /// How ENACT draws a state label onto a frame.
@@ -105,7 +106,7 @@ impl Overlay {
     }
 }
 
-/// The bundled font and the text layouts the demo draws with it.
+/// The bundled font and the state labels drawn with it.
 pub(crate) struct LabelFont {
     font: FontRef<'static>,
 }
@@ -176,18 +177,6 @@ impl LabelFont {
             height,
             alpha,
         }
-    }
-
-    /// Plain text without outline (used for the gripper markers).
-    pub(crate) fn text(&self, text: &str, x: f32, y: f32, em_px: f32, colour: Colour) -> Overlay {
-        let coverage = self.coverage(text, x, y, em_px);
-        let keep: Vec<f32> = coverage.alpha.iter().map(|a| 1.0 - a).collect();
-        let paint: Vec<[f32; 3]> = coverage
-            .alpha
-            .iter()
-            .map(|a| colour.map(|c| c as f32 * a))
-            .collect();
-        Overlay::from_grid(coverage.left, coverage.top, coverage.width, &keep, &paint)
     }
 
     /// An ENACT state label ("Current State", "Next State 3") for a frame of the given height.
@@ -283,7 +272,7 @@ mod tests {
     fn empty_text_draws_nothing() {
         let font = LabelFont::load().unwrap();
         let mut image = RgbImage::from_pixel(8, 8, Rgb([1, 2, 3]));
-        font.text("", 0.0, 0.0, 20.0, [0, 0, 0]).apply(&mut image);
+        font.state_label("", 8).apply(&mut image);
         assert!(image.pixels().all(|p| p.0 == [1, 2, 3]));
     }
 }
