@@ -4,15 +4,14 @@
 
 use sqlx::{Row, SqliteConnection};
 
+use super::annotations::human_answer_from_row;
 use super::{corrupt, kind_from_row};
 
 use crate::agreement_protocol::{
     AssignmentKind, PrimaryAnswer, ProtocolError, ProtocolPlan, plan_cross_assignments,
 };
 use crate::agreement_report::{AnnotatorAnswer, dataset_content_hash};
-use crate::annotation::HumanAnswer;
 use crate::dataset::{Direction, StepLength};
-use crate::verifier::Permutation;
 
 /// [`dataset_content_hash`] of a stored dataset, from its items' ids and content hashes.
 pub async fn dataset_hash(
@@ -49,12 +48,6 @@ pub async fn annotator_answers(
     .await?;
     rows.iter()
         .map(|r| {
-            let (direction, step_length) = kind_from_row(r)?;
-            let permutation = |column: &str| -> Result<Permutation, sqlx::Error> {
-                let text: String = r.try_get(column)?;
-                serde_json::from_str(&text).map_err(|e| corrupt(column, e))
-            };
-            let signatures: Option<String> = r.try_get("signatures")?;
             let kind: String = r.try_get("kind")?;
             Ok(AnnotatorAnswer {
                 annotator_id: r.try_get("annotator")?,
@@ -62,15 +55,7 @@ pub async fn annotator_answers(
                 item_id: r.try_get("item_id")?,
                 kind: AssignmentKind::parse(&kind)
                     .ok_or_else(|| corrupt("kind", format!("unknown kind {kind:?}")))?,
-                human: HumanAnswer {
-                    direction,
-                    step_length,
-                    ground_truth: permutation("gt_answer")?,
-                    answer: permutation("answer")?,
-                    signatures: signatures
-                        .map(|s| serde_json::from_str(&s).map_err(|e| corrupt("signatures", e)))
-                        .transpose()?,
-                },
+                human: human_answer_from_row(r)?,
             })
         })
         .collect()

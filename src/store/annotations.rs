@@ -647,25 +647,29 @@ pub async fn human_answers(
     .bind(dataset_id)
     .fetch_all(conn)
     .await?;
-    rows.iter()
-        .map(|r| {
-            let (direction, step_length) = kind_from_row(r)?;
-            let permutation = |column: &str| -> Result<Permutation, sqlx::Error> {
-                let text: String = r.try_get(column)?;
-                serde_json::from_str(&text).map_err(|e| corrupt(column, e))
-            };
-            let signatures: Option<String> = r.try_get("signatures")?;
-            Ok(HumanAnswer {
-                direction,
-                step_length,
-                ground_truth: permutation("gt_answer")?,
-                answer: permutation("answer")?,
-                signatures: signatures
-                    .map(|s| serde_json::from_str(&s).map_err(|e| corrupt("signatures", e)))
-                    .transpose()?,
-            })
-        })
-        .collect()
+    rows.iter().map(human_answer_from_row).collect()
+}
+
+/// A human answer from a row holding the item's `direction`, `step_length`, `gt_answer` and
+/// `signatures`, and the annotation's `answer`.
+pub(crate) fn human_answer_from_row(
+    r: &sqlx::sqlite::SqliteRow,
+) -> Result<HumanAnswer, sqlx::Error> {
+    let (direction, step_length) = kind_from_row(r)?;
+    let permutation = |column: &str| -> Result<Permutation, sqlx::Error> {
+        let text: String = r.try_get(column)?;
+        serde_json::from_str(&text).map_err(|e| corrupt(column, e))
+    };
+    let signatures: Option<String> = r.try_get("signatures")?;
+    Ok(HumanAnswer {
+        direction,
+        step_length,
+        ground_truth: permutation("gt_answer")?,
+        answer: permutation("answer")?,
+        signatures: signatures
+            .map(|s| serde_json::from_str(&s).map_err(|e| corrupt("signatures", e)))
+            .transpose()?,
+    })
 }
 
 /// Human performance on a dataset: every submitted answer scored by the verifier models are

@@ -242,33 +242,6 @@ async fn agreement_without_overlapping_answers_says_so() {
     );
 }
 
-/// A release with `per_cell` items in every direction × L in `lengths`, imported as "mini".
-pub fn write_balanced_release(
-    root: &std::path::Path,
-    lengths: &[usize],
-    per_cell: u32,
-) -> Vec<Value> {
-    let mut records = Vec::new();
-    let mut n = 1;
-    for &l in lengths {
-        for forward in [true, false] {
-            for _ in 0..per_cell {
-                records.push(write_record(
-                    root,
-                    "cook_bacon_1749678308264596",
-                    forward,
-                    l,
-                    n,
-                ));
-                n += 1;
-            }
-        }
-    }
-    let lines: Vec<String> = records.iter().map(Value::to_string).collect();
-    write_qa_file(root, &lines);
-    records
-}
-
 async fn logged_in(server: &TestServer, name: &str) -> (Browser, String) {
     let mut browser = Browser::new(server);
     let r = browser.login(name, PASSWORD).await;

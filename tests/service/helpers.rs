@@ -115,18 +115,25 @@ pub fn write_qa_file(root: &Path, lines: &[String]) -> PathBuf {
 
 /// A valid release with one forward and one inverse item for each L in `lengths`.
 pub fn write_release(root: &Path, lengths: &[usize]) -> Vec<Value> {
+    write_balanced_release(root, lengths, 1)
+}
+
+/// A release with `per_cell` items in every direction × L in `lengths`.
+pub fn write_balanced_release(root: &Path, lengths: &[usize], per_cell: u32) -> Vec<Value> {
     let mut records = Vec::new();
     let mut n = 1;
     for &l in lengths {
         for forward in [true, false] {
-            records.push(write_record(
-                root,
-                "cook_bacon_1749678308264596",
-                forward,
-                l,
-                n,
-            ));
-            n += 1;
+            for _ in 0..per_cell {
+                records.push(write_record(
+                    root,
+                    "cook_bacon_1749678308264596",
+                    forward,
+                    l,
+                    n,
+                ));
+                n += 1;
+            }
         }
     }
     let lines: Vec<String> = records.iter().map(Value::to_string).collect();
