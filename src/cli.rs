@@ -527,7 +527,77 @@ pub async fn load_demo(pool: &SqlitePool) -> anyhow::Result<ImportReport> {
         .await
         .context("cannot import the demo dataset")?;
     tracing::info!("{}", report.summary_line());
+    submit_chance_baseline(pool, &options.dataset)
+        .await
+        .context("cannot add the demo's chance baseline")?;
     Ok(report)
+}
+
+/// The account the demo's baseline row is filed under.
+const DEMO_ACCOUNT: &str = "enact-hub demo";
+
+/// Puts the chance baseline on the demo leaderboard (once per database), scored and stored as
+/// any submission is, under an account whose only token is revoked at once: nobody can submit
+/// as it.
+async fn submit_chance_baseline(pool: &SqlitePool, dataset_name: &str) -> anyhow::Result<()> {
+    use crate::store::submissions::{NewSubmission, SubmissionMetadata};
+    use sha2::Digest;
+
+    let mut tx = pool.begin().await?;
+    let dataset = store::datasets::by_name(&mut tx, dataset_name)
+        .await?
+        .with_context(|| format!("no dataset named '{dataset_name}'"))?;
+    let already = store::submissions::published(&mut tx, dataset.id)
+        .await?
+        .iter()
+        .any(|s| s.model == demo::CHANCE_BASELINE_MODEL && s.account == DEMO_ACCOUNT);
+    if already {
+        return Ok(());
+    }
+    let rows = store::items::scoring_items(&mut tx, dataset.id).await?;
+    let body = demo::chance_baseline(
+        rows.iter().map(|r| (r.item_id.as_str(), r.gt_answer.len())),
+        demo::DEFAULT_SEED,
+    );
+    let item_rows: Vec<i64> = rows.iter().map(|r| r.row_id).collect();
+    let targets = scoring::targets_from_stored(rows).map_err(anyhow::Error::msg)?;
+    let scored = crate::submission::score_submission(&targets, &body)
+        .map_err(|e| anyhow::anyhow!("the baseline does not score: {e}"))?;
+    let account = store::accounts::ensure_account(&mut tx, DEMO_ACCOUNT, Role::Submitter)
+        .await?
+        .map_err(anyhow::Error::msg)?;
+    let token = NewToken::generate();
+    let token_id =
+        store::accounts::insert_token(&mut tx, account, Role::Submitter, &token, None, None)
+            .await?;
+    store::accounts::revoke_token(&mut tx, &token_id.to_string()).await?;
+    let metadata = SubmissionMetadata {
+        model: demo::CHANCE_BASELINE_MODEL.to_owned(),
+        description: "Every item answered with a uniformly random ordering (seeded); what \
+                      chance earns at each step length."
+            .to_owned(),
+        ..SubmissionMetadata::default()
+    };
+    let body_sha256 = hex::encode(sha2::Sha256::digest(body.as_bytes()));
+    let scores_json = serde_json::to_string(&scored.scores)?;
+    let id = store::submissions::insert(
+        &mut tx,
+        &NewSubmission {
+            dataset: dataset.id,
+            account,
+            token: token_id,
+            idempotency_key: None,
+            body_sha256: &body_sha256,
+            metadata: &metadata,
+            scores_json: &scores_json,
+        },
+    )
+    .await?
+    .context("the baseline's submission row was not written")?;
+    store::submissions::insert_items(&mut tx, id, &item_rows, &scored.items).await?;
+    store::submissions::update_listing(&mut tx, id, Some(true), None).await?;
+    tx.commit().await?;
+    Ok(())
 }
 
 /// The dataset name `import` uses when none is given: the release folder's name.

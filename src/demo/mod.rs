@@ -4,9 +4,14 @@
 //! and inverse items for every L in 3..=10 in ENACT's release layout, with the scene graphs
 //! the importer reads for semantic scoring.
 //!
-//! [`write_demo_release`] is the only entry point.
+//! [`write_demo_release`] writes the dataset; [`chance_baseline`] is the leaderboard row the
+//! demo starts with.
 
 use std::path::{Path, PathBuf};
+
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
 
 use crate::pipeline::{GenerateOptions, PipelineError, TypeNaming, generate};
 use crate::world::{Activity, CameraRig, FrameImages, SimulateOptions, WorldError, simulate};
@@ -86,4 +91,53 @@ pub fn write_demo_release(out_dir: &Path, seed: u64) -> Result<DemoSummary, Demo
         images: summary.images,
         task_names,
     })
+}
+
+/// The model name of the demo's chance baseline on the leaderboard.
+pub const CHANCE_BASELINE_MODEL: &str = "chance (uniformly random order)";
+
+/// The demo leaderboard's baseline, as a compact submission (one `{"id", "answer"}` line per
+/// item): every item answered with a uniformly random ordering of its `labels` (1-based, as
+/// ENACT's answers are), seeded. Scored like any submission, it shows what chance earns at
+/// each step length, which is the floor every model on the board should clear.
+pub fn chance_baseline<'a>(items: impl IntoIterator<Item = (&'a str, usize)>, seed: u64) -> String {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut body = String::new();
+    for (id, labels) in items {
+        let mut answer: Vec<usize> = (1..=labels).collect();
+        answer.shuffle(&mut rng);
+        body.push_str(&serde_json::json!({ "id": id, "answer": answer }).to_string());
+        body.push('\n');
+    }
+    body
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_chance_baseline_answers_every_item_with_a_seeded_permutation() {
+        let items = [("a", 2), ("b", 9), ("c", 9)];
+        let body = chance_baseline(items, 7);
+        let lines: Vec<serde_json::Value> = body
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        assert_eq!(lines.len(), 3);
+        for (line, (id, labels)) in lines.iter().zip(items) {
+            assert_eq!(line["id"], id);
+            let mut answer: Vec<u64> = line["answer"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_u64().unwrap())
+                .collect();
+            answer.sort_unstable();
+            assert_eq!(answer, (1..=labels as u64).collect::<Vec<_>>());
+        }
+        assert_ne!(lines[1]["answer"], lines[2]["answer"], "shuffled per item");
+        assert_eq!(body, chance_baseline(items, 7));
+        assert_ne!(body, chance_baseline(items, 8));
+    }
 }

@@ -620,6 +620,27 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
         enact_hub::cli::load_demo(&pool).await.expect("demo");
     })
     .await;
+    // A fresh demo already shows its chance baseline: a line per panel, marked as a baseline.
+    let (status, board) = server.get_json("/api/v1/datasets/demo/leaderboard").await;
+    assert_eq!(status, 200, "{board}");
+    let rows = board["rows"].as_array().expect("rows");
+    assert_eq!(rows.len(), 1, "{board}");
+    assert_eq!(rows[0]["model"], enact_hub::demo::CHANCE_BASELINE_MODEL);
+    assert_eq!(rows[0]["baseline"], true);
+    let html = server
+        .get("/leaderboard/demo")
+        .await
+        .text()
+        .await
+        .expect("html");
+    assert_eq!(html.matches("<polyline").count(), 2);
+    // Loading the demo again (a restart on the same database) does not add a second one.
+    enact_hub::cli::load_demo(&server.pool)
+        .await
+        .expect("demo again");
+    let (_, board) = server.get_json("/api/v1/datasets/demo/leaderboard").await;
+    assert_eq!(board["rows"].as_array().expect("rows").len(), 1, "{board}");
+
     let token = make_token(&server.pool, "alice", Role::Submitter, None).await;
     let mut conn = server.pool.acquire().await.expect("conn");
     let dataset = store::datasets::by_name(&mut conn, "demo")
@@ -653,9 +674,13 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
         .await
         .expect("html");
     assert!(html.contains("demo-half"));
-    assert_eq!(html.matches("<polyline").count(), 2);
+    assert_eq!(
+        html.matches("<polyline").count(),
+        4,
+        "two models, two panels"
+    );
     assert!(
-        html.matches("<circle").count() >= 16,
+        html.matches("<circle").count() >= 32,
         "a marker per step length and panel"
     );
     server.stop().await;
