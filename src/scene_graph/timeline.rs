@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use serde::de::{self, DeserializeSeed, IgnoredAny, MapAccess, Visitor};
 
 use crate::scene_graph::record::{FrameRecord, SceneGraph};
-use crate::scene_graph::transient::filtered_graphs;
+use crate::scene_graph::transient::for_each_filtered_graph;
 
 /// Which frames a loaded timeline can answer for.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -270,8 +270,9 @@ impl SceneGraphTimeline {
         Ok(Cow::Owned(graph))
     }
 
-    /// A copy of this timeline with ENACT's transient filter applied to every frame; every
-    /// frame is then stored as a full record (as ENACT's `_rebuild_data_from_graphs` does).
+    /// A copy of this timeline with ENACT's transient filter applied to every frame (as ENACT's
+    /// `_rebuild_data_from_graphs` does); a frame is stored as a full record where its graph
+    /// differs from the frame before, as an empty (unchanged) record where it does not.
     /// Needs every frame, see [`TransientFilter`]; on a selection-loaded timeline it fails
     /// with [`TimelineError::FrameNotLoaded`] naming the first missing frame.
     pub fn with_transients_filtered(&self) -> Result<SceneGraphTimeline, TimelineError> {
@@ -281,18 +282,30 @@ impl SceneGraphTimeline {
                 frame: missing.to_string(),
             });
         }
-        let graphs =
-            filtered_graphs(&self.records).map_err(|frame| TimelineError::NoFullRecordBefore {
-                path: self.source.clone(),
-                frame: frame.to_string(),
-            })?;
+        // A frame whose filtered graph equals the one before it is kept as an empty record
+        // (no change), so memory grows with the number of distinct states rather than frames:
+        // replays hold each state for hundreds of frames.
+        let mut records = BTreeMap::new();
+        let mut last_full: Option<u64> = None;
+        for_each_filtered_graph(&self.records, |id, graph| {
+            let unchanged = last_full
+                .and_then(|n| records.get(&n))
+                .is_some_and(|r| matches!(r, FrameRecord::Full(g) if *g == graph));
+            if unchanged {
+                records.insert(id, FrameRecord::Empty);
+            } else {
+                records.insert(id, FrameRecord::Full(graph));
+                last_full = Some(id);
+            }
+        })
+        .map_err(|frame| TimelineError::NoFullRecordBefore {
+            path: self.source.clone(),
+            frame: frame.to_string(),
+        })?;
         Ok(SceneGraphTimeline {
             source: self.source.clone(),
             known: self.known.clone(),
-            records: graphs
-                .into_iter()
-                .map(|(id, g)| (id, FrameRecord::Full(g)))
-                .collect(),
+            records,
         })
     }
 
@@ -648,6 +661,46 @@ mod tests {
             Err(TimelineError::FrameNotLoaded { .. })
         ));
         assert_eq!(all.loaded_frame_ids().count(), 12);
+        // Repaired, every frame equals the first, so only frame 0 holds a graph.
+        assert!(matches!(all.record("0"), Some(FrameRecord::Full(_))));
+        for f in (1..12).map(|f| f.to_string()) {
+            assert!(matches!(all.record(&f), Some(FrameRecord::Empty)), "{f}");
+            assert_eq!(
+                *all.scene_graph(&f).unwrap(),
+                *all.scene_graph("0").unwrap()
+            );
+        }
+    }
+
+    #[test]
+    fn a_filtered_timeline_stores_a_graph_only_where_the_state_changes() {
+        // The fridge opens at frame 6 and stays open: a real change, not a transient.
+        let frames: Vec<String> = (0..12)
+            .map(|i| {
+                let states = if i >= 6 { r#"["Open"]"# } else { "[]" };
+                format!(
+                    r#""{i}": {{"type": "full", "edges": [], "nodes": [
+                        {{"name": "fridge_1", "category": "fridge", "states": {states}}}]}}"#
+                )
+            })
+            .collect();
+        let text = format!("{{{}}}", frames.join(","));
+        let t = SceneGraphTimeline::from_json_slice(
+            text.as_bytes(),
+            Path::new("f.json"),
+            FrameSelection::All,
+            TransientFilter::Enact,
+        )
+        .unwrap();
+        for f in 0..12 {
+            let id = f.to_string();
+            let full = matches!(t.record(&id), Some(FrameRecord::Full(_)));
+            assert_eq!(full, f == 0 || f == 6, "frame {f}");
+            assert_eq!(
+                t.scene_graph(&id).unwrap().nodes[0].states.len(),
+                usize::from(f >= 6)
+            );
+        }
     }
 
     #[test]

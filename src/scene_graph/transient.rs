@@ -65,9 +65,22 @@ impl Interner {
 
 /// Every frame's graph after ENACT's transient filter, in numeric order. `Err(frame)` names
 /// the first frame with no `full` record at or before it (ENACT fails there too).
+#[cfg(test)]
 pub(crate) fn filtered_graphs(
     records: &BTreeMap<u64, FrameRecord>,
 ) -> Result<Vec<(u64, SceneGraph)>, u64> {
+    let mut out = Vec::with_capacity(records.len());
+    for_each_filtered_graph(records, |id, graph| out.push((id, graph)))?;
+    Ok(out)
+}
+
+/// Calls `emit` with every frame's graph after ENACT's transient filter, in numeric order,
+/// building one graph at a time so a caller can keep only what it needs. `Err(frame)` names
+/// the first frame with no `full` record at or before it (ENACT fails there too).
+pub(crate) fn for_each_filtered_graph(
+    records: &BTreeMap<u64, FrameRecord>,
+    mut emit: impl FnMut(u64, SceneGraph),
+) -> Result<(), u64> {
     let mut words = Interner::default();
     let mut edge_ids: HashMap<(u32, u32), u32> = HashMap::new();
     let mut edge_keys: Vec<(u32, u32)> = Vec::new();
@@ -128,10 +141,10 @@ pub(crate) fn filtered_graphs(
         }
     }
 
-    Ok(frames
-        .iter()
-        .map(|(id, f)| (*id, rebuild(f, &words.strings, &edge_keys)))
-        .collect())
+    for (id, frame) in &frames {
+        emit(*id, rebuild(frame, &words.strings, &edge_keys));
+    }
+    Ok(())
 }
 
 fn strings(ids: &[u32], rewritten: bool, words: &[String]) -> Vec<String> {
