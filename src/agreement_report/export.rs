@@ -327,6 +327,22 @@ pub fn csv_files(report: &AgreementReport) -> Vec<(&'static str, String)> {
     files
 }
 
+/// One comparison's overall row (a, b, items, Δ, SE, t, df, p) for the Markdown and LaTeX
+/// tables: labels through `escape`, an undefined p as `no_p`.
+fn welch_cells(c: &super::Comparison, escape: fn(&str) -> String, no_p: &str) -> [String; 8] {
+    let w = &c.overall;
+    [
+        escape(&c.a.label),
+        escape(&c.b.label),
+        c.items.to_string(),
+        fixed(w.delta, 4),
+        fixed(w.se, 4),
+        fixed(w.t, 3),
+        fixed(w.df, 1),
+        w.p.map_or_else(|| no_p.to_owned(), |p| format!("{p:.3e}")),
+    ]
+}
+
 fn md_escape(text: &str) -> String {
     text.replace('|', "\\|")
 }
@@ -424,18 +440,8 @@ pub fn markdown(report: &AgreementReport) -> String {
          | a | b | items | Δ | SE | t | df | p |\n|---|---|---|---|---|---|---|---|\n",
     );
     for c in &report.comparisons {
-        let w = &c.overall;
-        out.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
-            md_escape(&c.a.label),
-            md_escape(&c.b.label),
-            c.items,
-            fixed(w.delta, 4),
-            fixed(w.se, 4),
-            fixed(w.t, 3),
-            fixed(w.df, 1),
-            w.p.map_or_else(|| "n/a".to_owned(), |p| format!("{p:.3e}")),
-        ));
+        let cells = welch_cells(c, md_escape, "n/a");
+        out.push_str(&format!("| {} |\n", cells.join(" | ")));
     }
     out.push_str("\nPer direction and step length: `comparisons.csv` and `heatmap.svg`.\n");
     out
@@ -570,18 +576,8 @@ pub fn latex(report: &AgreementReport) -> String {
              \\textbf{a} & \\textbf{b} & $n$ & $\\Delta$ & SE & $t$ & df & $p$ \\\\\n\\midrule\n",
         );
         for c in &report.comparisons {
-            let w = &c.overall;
-            out.push_str(&format!(
-                "{} & {} & {} & {} & {} & {} & {} & {} \\\\\n",
-                tex_escape(&c.a.label),
-                tex_escape(&c.b.label),
-                c.items,
-                fixed(w.delta, 4),
-                fixed(w.se, 4),
-                fixed(w.t, 3),
-                fixed(w.df, 1),
-                w.p.map_or_else(|| "--".to_owned(), |p| format!("{p:.3e}")),
-            ));
+            let cells = welch_cells(c, tex_escape, "--");
+            out.push_str(&format!("{} \\\\\n", cells.join(" & ")));
         }
         out.push_str(
             "\\bottomrule\n\\end{tabular}\n\\caption{Per-item pairwise accuracy, two-tailed \

@@ -772,6 +772,19 @@ mod tests {
         }
         let tex = String::from_utf8(files[6].bytes.clone()).unwrap();
         assert!(tex.contains("\\toprule") && tex.contains("Human Performance"));
+        // The chosen pair's overall Welch row, in both table formats.
+        let chosen = report.comparisons.last().unwrap();
+        let delta = format!("{:.4}", chosen.overall.delta.unwrap());
+        let md = String::from_utf8(files[5].bytes.clone()).unwrap();
+        let md_row = format!("| {} | {} | 2 | {delta} |", chosen.a.label, chosen.b.label);
+        assert!(md.contains(&md_row), "{md}");
+        let tex_label = |label: &str| label.replace('#', "\\#");
+        let tex_row = format!(
+            "{} & {} & 2 & {delta} &",
+            tex_label(&chosen.a.label),
+            tex_label(&chosen.b.label)
+        );
+        assert!(tex.contains(&tex_row), "{tex}");
         let svg = String::from_utf8(files[7].bytes.clone()).unwrap();
         assert!(svg.starts_with("<svg") && svg.contains("m7 (#7) − Human"));
         let archive = export::tar_archive("bundle", &files).unwrap();

@@ -70,27 +70,7 @@ async fn a_public_dataset_archive_imports_back_to_the_same_items() {
         assert_eq!(line, record, "the record as it was imported, in file order");
     }
 
-    let db = out.path().join("copy.db");
-    let import = enact_hub()
-        .arg("import")
-        .arg(out.path())
-        .arg("--db")
-        .arg(&db)
-        .arg("--dataset")
-        .arg("mini")
-        .output()
-        .expect("run enact-hub import");
-    assert!(
-        import.status.success(),
-        "{}",
-        String::from_utf8_lossy(&import.stderr)
-    );
-    let copy = store::open(&db).await.expect("open copy");
-    // Content hashes cover every field and the bytes of every image.
-    assert_eq!(
-        content_hashes(&copy, "mini").await,
-        content_hashes(&server.pool, "mini").await
-    );
+    assert_reimports_identically(&server, out.path()).await;
     server.stop().await;
 }
 
@@ -168,10 +148,17 @@ async fn the_enact_sample_round_trips_through_its_archive() {
             .collect()
     };
     assert_eq!(parse(&written), parse(&original));
-    let db = out.path().join("copy.db");
+    assert_reimports_identically(&server, out.path()).await;
+    server.stop().await;
+}
+
+/// Imports the extracted archive in `dir` into a new database with the enact-hub binary and
+/// checks its items are those served (content hashes cover every field and every image byte).
+async fn assert_reimports_identically(server: &TestServer, dir: &std::path::Path) {
+    let db = dir.join("copy.db");
     let import = enact_hub()
         .arg("import")
-        .arg(out.path())
+        .arg(dir)
         .arg("--db")
         .arg(&db)
         .arg("--dataset")
@@ -188,5 +175,4 @@ async fn the_enact_sample_round_trips_through_its_archive() {
         content_hashes(&copy, "mini").await,
         content_hashes(&server.pool, "mini").await
     );
-    server.stop().await;
 }
