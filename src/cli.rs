@@ -547,10 +547,14 @@ async fn submit_chance_baseline(pool: &SqlitePool, dataset_name: &str) -> anyhow
     let dataset = store::datasets::by_name(&mut tx, dataset_name)
         .await?
         .with_context(|| format!("no dataset named '{dataset_name}'"))?;
-    let already = store::submissions::published(&mut tx, dataset.id)
-        .await?
-        .iter()
-        .any(|s| s.model == demo::CHANCE_BASELINE_MODEL && s.account == DEMO_ACCOUNT);
+    // Once per database, even if an admin has since hidden or withdrawn the row.
+    let already = store::submissions::has_submitted(
+        &mut tx,
+        dataset.id,
+        DEMO_ACCOUNT,
+        demo::CHANCE_BASELINE_MODEL,
+    )
+    .await?;
     if already {
         return Ok(());
     }

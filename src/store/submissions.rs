@@ -321,6 +321,25 @@ pub async fn update_listing(
     Ok(done.rows_affected() > 0)
 }
 
+/// Whether `account` has ever submitted `model` to the dataset, listed or not.
+pub async fn has_submitted(
+    conn: &mut SqliteConnection,
+    dataset: i64,
+    account: &str,
+    model: &str,
+) -> Result<bool, sqlx::Error> {
+    let found: Option<i64> = sqlx::query_scalar(
+        "SELECT s.id FROM submissions s JOIN accounts a ON a.id = s.account \
+         WHERE s.dataset = ? AND a.name = ? AND s.model = ? LIMIT 1",
+    )
+    .bind(dataset)
+    .bind(account)
+    .bind(model)
+    .fetch_optional(conn)
+    .await?;
+    Ok(found.is_some())
+}
+
 /// Counts used by tests and reports: submissions and verdict rows stored.
 pub async fn counts(conn: &mut SqliteConnection) -> Result<(i64, i64), sqlx::Error> {
     let submissions: i64 = sqlx::query_scalar("SELECT count(*) FROM submissions")

@@ -640,6 +640,30 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
         .expect("demo again");
     let (_, board) = server.get_json("/api/v1/datasets/demo/leaderboard").await;
     assert_eq!(board["rows"].as_array().expect("rows").len(), 1, "{board}");
+    // Nor after an admin has hidden it: the hidden row stays the only one.
+    let baseline_id = board["rows"][0]["submission"]
+        .as_i64()
+        .expect("submission id");
+    let mut conn = server.pool.acquire().await.expect("conn");
+    store::submissions::update_listing(&mut conn, baseline_id, None, Some("hidden"))
+        .await
+        .expect("hide");
+    drop(conn);
+    enact_hub::cli::load_demo(&server.pool)
+        .await
+        .expect("demo a third time");
+    let mut conn = server.pool.acquire().await.expect("conn");
+    assert_eq!(
+        store::submissions::counts(&mut conn)
+            .await
+            .expect("counts")
+            .0,
+        1
+    );
+    store::submissions::update_listing(&mut conn, baseline_id, None, Some("published"))
+        .await
+        .expect("publish again");
+    drop(conn);
 
     let token = make_token(&server.pool, "alice", Role::Submitter, None).await;
     let mut conn = server.pool.acquire().await.expect("conn");
