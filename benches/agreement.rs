@@ -6,7 +6,7 @@ use std::hint::black_box;
 use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use enact_hub::agreement::{
+use enact_hub::core::agreement::{
     BootstrapConfig, MeasurementLevel, PreparedAlpha, ReliabilityData, parse_reliability_json,
 };
 use rand::{Rng, SeedableRng};

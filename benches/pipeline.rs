@@ -6,10 +6,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use criterion::{Criterion, criterion_group};
-use enact_hub::pipeline::{
+use enact_hub::core::pipeline::{
     GenerateOptions, PathTable, TransitionGraph, sample_paths, segment_task, task_names,
 };
-use enact_hub::world::{Activity, CameraRig, FrameImages, SimulateOptions, simulate};
+use enact_hub::core::world::{Activity, CameraRig, FrameImages, SimulateOptions, simulate};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -98,8 +98,8 @@ fn parity_timings() {
         ..GenerateOptions::default()
     };
     let started = Instant::now();
-    let summary =
-        enact_hub::pipeline::generate(&replayed, out.path(), &options, &|_| {}).expect("generate");
+    let summary = enact_hub::core::pipeline::generate(&replayed, out.path(), &options, &|_| {})
+        .expect("generate");
     let generate = started.elapsed();
     println!(
         "parity replays ({} tasks): segmentation {:.2?}; segmentation + KFTS + {} items + {} images {:.2?} (ENACT: segment 177.85 s + qa 176.24 s)",

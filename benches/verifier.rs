@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use enact_hub::verifier::{
+use enact_hub::core::verifier::{
     Direction, ItemSignatures, ParsedAnswer, PerformanceReport, Permutation, PyValue, ScoredEntry,
     StepLength, StrictItem, View, VisibleCoverage, parse_answer_enact, score_strict_predictions,
     verify,

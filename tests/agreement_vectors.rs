@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-use enact_hub::agreement::{
+use enact_hub::core::agreement::{
     AlphaUndefined, AnnotatedOrdering, BootstrapConfig, MeasurementLevel, OrderingAnnotations,
     OrderingEncoding, PreparedAlpha, ReliabilityData, krippendorff_alpha, pairwise_alphas,
     parse_reliability_json,

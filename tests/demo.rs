@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use enact_hub::demo::{DemoSummary, write_demo_release};
+use enact_hub::core::demo::{DemoSummary, write_demo_release};
 use image::{ColorType, ImageReader, RgbImage};
 use regex::Regex;
 use serde_json::Value;

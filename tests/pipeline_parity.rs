@@ -4,8 +4,10 @@
 use std::collections::{BTreeMap, HashSet};
 use std::path::{Path, PathBuf};
 
-use enact_hub::pipeline::{GenerateOptions, PathTable, TransitionGraph, generate, segment_task};
-use enact_hub::scene_graph::{FrameSelection, SceneGraphTimeline, transition_signatures};
+use enact_hub::core::pipeline::{
+    GenerateOptions, PathTable, TransitionGraph, generate, segment_task,
+};
+use enact_hub::core::scene_graph::{FrameSelection, SceneGraphTimeline, transition_signatures};
 use serde_json::Value;
 
 #[path = "support/fixtures.rs"]
@@ -175,7 +177,7 @@ fn generated_release_is_valid_and_keeps_signatures() {
     let mut lines = 0;
     for line in jsonl.lines() {
         lines += 1;
-        let item = enact_hub::dataset::parse_release_line(line).unwrap();
+        let item = enact_hub::core::dataset::parse_release_line(line).unwrap();
         assert!(ids.insert(item.id.clone()), "duplicate id {}", item.id);
         let l = item.step_length.states();
         *per_bucket
@@ -233,10 +235,11 @@ fn generated_release_is_valid_and_keeps_signatures() {
         // ... and reads back as its transition's visible signature set C_i.
         for (j, sets) in ours.iter().enumerate() {
             let label = match item.direction {
-                enact_hub::dataset::Direction::Forward => j,
-                enact_hub::dataset::Direction::Inverse => usize::from(item.gt_answer[j]) - 1,
+                enact_hub::core::dataset::Direction::Forward => j,
+                enact_hub::core::dataset::Direction::Inverse => usize::from(item.gt_answer[j]) - 1,
             };
-            let read_back = enact_hub::scene_graph::parse_action(&item.actions[label]).unwrap();
+            let read_back =
+                enact_hub::core::scene_graph::parse_action(&item.actions[label]).unwrap();
             assert_eq!(read_back, sets.visible, "{} transition {j}", item.id);
         }
     }

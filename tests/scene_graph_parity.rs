@@ -5,7 +5,7 @@
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
-use enact_hub::scene_graph::{
+use enact_hub::core::scene_graph::{
     FrameSelection, SceneGraph, SceneGraphTimeline, TransientFilter, View, diff_signatures,
     pair_signatures, parse_action, render_diff, transition_signatures, visible_diff,
 };

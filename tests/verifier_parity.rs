@@ -7,7 +7,7 @@ use std::collections::{BTreeSet, HashMap, HashSet};
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use enact_hub::verifier::{
+use enact_hub::core::verifier::{
     EnactEvaluation, EnactRunError, EnactSignatureSource, ItemSignatures, View, VisibleCoverage,
     enact_model_name, python_text_lines, score_enact_predictions,
 };

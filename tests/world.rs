@@ -5,12 +5,12 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
-use enact_hub::pipeline::{SegmentationParams, segment_key_frames, segment_task};
-use enact_hub::scene_graph::visibility::node_is_visible;
-use enact_hub::scene_graph::{
+use enact_hub::core::pipeline::{SegmentationParams, segment_key_frames, segment_task};
+use enact_hub::core::scene_graph::visibility::node_is_visible;
+use enact_hub::core::scene_graph::{
     EVALUATION_SENSORS, FrameSelection, SceneGraphTimeline, transition_signatures,
 };
-use enact_hub::world::{
+use enact_hub::core::world::{
     Activity, CameraRig, FrameImages, SimulateOptions, Simulation, parse_colour, simulate,
 };
 
@@ -229,7 +229,7 @@ fn the_written_records_rebuild_every_frame_as_simulated() {
     let simulation = write(dir.path(), &o);
     let timeline = timeline(dir.path(), &simulation);
     assert_eq!(timeline.frame_ids().count() as u64, simulation.num_frames);
-    let sorted = |mut g: enact_hub::scene_graph::SceneGraph| {
+    let sorted = |mut g: enact_hub::core::scene_graph::SceneGraph| {
         g.nodes.sort_by(|a, b| a.name.cmp(&b.name));
         g.edges
             .sort_by(|a, b| (&a.from, &a.to).cmp(&(&b.from, &b.to)));

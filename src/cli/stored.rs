@@ -7,10 +7,10 @@ use std::process::ExitCode;
 use anyhow::Context;
 use serde_json::json;
 
-use crate::agreement::{BootstrapConfig, MeasurementLevel, OrderingEncoding};
-use crate::agreement_report::{
+use crate::core::agreement::report::{
     AgreementSection, REPORT_METRIC_VERSION, agreement_section, overlapping_answers,
 };
+use crate::core::agreement::{BootstrapConfig, MeasurementLevel, OrderingEncoding};
 use crate::store;
 
 /// What `agreement --db` computes.
@@ -112,10 +112,10 @@ pub struct ProtocolArgs {
     #[arg(long)]
     dataset: String,
     /// Items drawn per annotator, direction and step length (the paper: 5).
-    #[arg(long, default_value_t = crate::agreement_protocol::DEFAULT_ITEMS_PER_CELL)]
+    #[arg(long, default_value_t = crate::core::agreement::protocol::DEFAULT_ITEMS_PER_CELL)]
     items_per_cell: usize,
     /// Seed of the draw, recorded with the round.
-    #[arg(long, default_value_t = crate::agreement_protocol::DEFAULT_PROTOCOL_SEED)]
+    #[arg(long, default_value_t = crate::core::agreement::protocol::DEFAULT_PROTOCOL_SEED)]
     seed: u64,
 }
 
@@ -167,19 +167,19 @@ pub struct ReportArgs {
     #[arg(long, value_name = "DIR")]
     out: std::path::PathBuf,
     /// How an ordering answer becomes reliability data: answer, position or rank.
-    #[arg(long, default_value_t = crate::agreement::PAPER_COMPARABLE_ENCODING)]
+    #[arg(long, default_value_t = crate::core::agreement::PAPER_COMPARABLE_ENCODING)]
     encoding: OrderingEncoding,
     /// Level of measurement (default: the encoding's).
     #[arg(long)]
     level: Option<MeasurementLevel>,
     /// Bootstrap resamples of the overlapping items.
-    #[arg(long, default_value_t = crate::agreement::DEFAULT_REPLICATES)]
+    #[arg(long, default_value_t = crate::core::agreement::DEFAULT_REPLICATES)]
     bootstrap: usize,
     /// Seed of the bootstrap, recorded in every file.
-    #[arg(long, default_value_t = crate::agreement::DEFAULT_BOOTSTRAP_SEED)]
+    #[arg(long, default_value_t = crate::core::agreement::DEFAULT_BOOTSTRAP_SEED)]
     seed: u64,
     /// Coverage of the bootstrap interval.
-    #[arg(long, default_value_t = crate::agreement::DEFAULT_CONFIDENCE_LEVEL)]
+    #[arg(long, default_value_t = crate::core::agreement::DEFAULT_CONFIDENCE_LEVEL)]
     confidence: f64,
     /// Two published submission ids to compare with each other (a − b).
     #[arg(long, num_args = 2, value_names = ["A", "B"])]
@@ -188,7 +188,7 @@ pub struct ReportArgs {
 
 /// `report`: builds the dataset's report and writes the bundle's files into `--out`.
 pub async fn report(args: &ReportArgs) -> anyhow::Result<ExitCode> {
-    use crate::agreement_report::{build_report, export};
+    use crate::core::agreement::report::{build_report, export};
     let pool = super::open_db(&args.db).await?;
     let mut conn = pool.acquire().await?;
     let dataset = store::datasets::by_name(&mut conn, &args.dataset)

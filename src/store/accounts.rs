@@ -3,7 +3,9 @@
 use serde::Serialize;
 use sqlx::{Row, SqliteConnection};
 
-use crate::accounts::{NewToken, Role, Scope, scopes_from_text, scopes_to_text, token_matches};
+use crate::core::credentials::{
+    NewToken, Role, Scope, scopes_from_text, scopes_to_text, token_matches,
+};
 
 /// A token that authenticated a request.
 #[derive(Debug, Clone)]
@@ -99,7 +101,7 @@ pub async fn authenticate(
     conn: &mut SqliteConnection,
     presented: &str,
 ) -> Result<Option<Caller>, sqlx::Error> {
-    let prefix = crate::accounts::lookup_prefix(presented);
+    let prefix = crate::core::credentials::lookup_prefix(presented);
     let row = sqlx::query(
         "SELECT t.id, t.account, t.token_hash, t.scopes, t.daily_quota, t.total_quota, \
          t.revoked_at, a.name FROM api_tokens t JOIN accounts a ON a.id = t.account \

@@ -7,11 +7,11 @@ use sqlx::{Row, SqliteConnection};
 use super::annotations::human_answer_from_row;
 use super::{corrupt, kind_from_row};
 
-use crate::agreement_protocol::{
+use crate::core::agreement::protocol::{
     AssignmentKind, PrimaryAnswer, ProtocolError, ProtocolPlan, plan_cross_assignments,
 };
-use crate::agreement_report::{AnnotatorAnswer, dataset_content_hash};
-use crate::dataset::{Direction, StepLength};
+use crate::core::agreement::report::{AnnotatorAnswer, dataset_content_hash};
+use crate::core::dataset::{Direction, StepLength};
 
 /// [`dataset_content_hash`] of a stored dataset, from its items' ids and content hashes.
 pub async fn dataset_hash(
@@ -265,20 +265,20 @@ pub async fn run_protocol(
 /// How a report is computed: the admin's or the command line's choices.
 #[derive(Debug, Clone, Copy)]
 pub struct ReportSettings {
-    pub encoding: crate::agreement::OrderingEncoding,
-    pub level: Option<crate::agreement::MeasurementLevel>,
-    pub bootstrap: crate::agreement::BootstrapConfig,
+    pub encoding: crate::core::agreement::OrderingEncoding,
+    pub level: Option<crate::core::agreement::MeasurementLevel>,
+    pub bootstrap: crate::core::agreement::BootstrapConfig,
     pub chosen_pair: Option<(i64, i64)>,
 }
 
-/// Everything [`crate::agreement_report::build_report`] needs about a stored dataset.
+/// Everything [`crate::core::agreement::report::build_report`] needs about a stored dataset.
 pub async fn report_inputs(
     conn: &mut SqliteConnection,
     dataset: &crate::store::datasets::Dataset,
     settings: &ReportSettings,
-) -> Result<crate::agreement_report::ReportInputs, sqlx::Error> {
-    use crate::agreement_report::{ItemScore, ProtocolStamp, ReportInputs, SubmissionInput};
-    use crate::leaderboard::{LeaderboardRow, RowIdentity};
+) -> Result<crate::core::agreement::report::ReportInputs, sqlx::Error> {
+    use crate::core::agreement::report::{ItemScore, ProtocolStamp, ReportInputs, SubmissionInput};
+    use crate::core::leaderboard::{LeaderboardRow, RowIdentity};
     let (dataset_hash, dataset_items) = dataset_hash(&mut *conn, dataset.id).await?;
     let answers = annotator_answers(&mut *conn, dataset.id).await?;
     let mut submissions = Vec::new();

@@ -5,9 +5,9 @@ use sqlx::{Row, SqliteConnection};
 
 use super::{corrupt, kind_from_row};
 
-use crate::annotation::{Draft, HumanAnswer, SplitItem, human_entries};
-use crate::dataset::{Direction, StepLength};
-use crate::verifier::{PerformanceReport, Permutation};
+use crate::core::annotation::{Draft, HumanAnswer, SplitItem, human_entries};
+use crate::core::dataset::{Direction, StepLength};
+use crate::core::verifier::{PerformanceReport, Permutation};
 
 /// Milliseconds since the Unix epoch, the clock of sessions and drafts.
 pub fn now_ms() -> i64 {

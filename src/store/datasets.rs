@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 use sqlx::{Row, SqliteConnection};
 
-use crate::dataset::{Direction, StepLength};
+use crate::core::dataset::{Direction, StepLength};
 
 #[derive(Debug, Clone, Serialize)]
 pub struct Dataset {

@@ -7,7 +7,7 @@ use sqlx::{Row, SqliteConnection};
 
 use super::{corrupt, kind_from_row};
 
-use crate::dataset::{Direction, QaItem, StepLength};
+use crate::core::dataset::{Direction, QaItem, StepLength};
 
 /// What a list of items shows of each one.
 #[derive(Debug, Clone)]
@@ -335,7 +335,7 @@ pub async fn scoring_items(
 pub async fn release_items(
     conn: &mut SqliteConnection,
     dataset_id: i64,
-) -> Result<Vec<(i64, crate::release::ReleaseItem)>, sqlx::Error> {
+) -> Result<Vec<(i64, crate::core::release::ReleaseItem)>, sqlx::Error> {
     let mut paths: HashMap<i64, Vec<String>> = HashMap::new();
     let image_rows = sqlx::query(
         "SELECT ii.item, ii.path FROM item_images ii JOIN items i ON i.id = ii.item \
@@ -362,7 +362,7 @@ pub async fn release_items(
             let row_id: i64 = row.try_get("id")?;
             Ok((
                 row_id,
-                crate::release::ReleaseItem {
+                crate::core::release::ReleaseItem {
                     id: row.try_get("item_id")?,
                     item_type: row.try_get("item_type")?,
                     task_name: row.try_get("task_name")?,

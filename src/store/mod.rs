@@ -70,16 +70,22 @@ pub(crate) fn corrupt(column: &str, detail: impl std::fmt::Display) -> sqlx::Err
 /// The `direction` and `step_length` columns of an item row.
 pub(crate) fn kind_from_row(
     row: &sqlx::sqlite::SqliteRow,
-) -> Result<(crate::dataset::Direction, crate::dataset::StepLength), sqlx::Error> {
+) -> Result<
+    (
+        crate::core::dataset::Direction,
+        crate::core::dataset::StepLength,
+    ),
+    sqlx::Error,
+> {
     use sqlx::Row;
     let direction: String = row.try_get("direction")?;
     let step_length: i64 = row.try_get("step_length")?;
     Ok((
-        crate::dataset::Direction::parse(&direction)
+        crate::core::dataset::Direction::parse(&direction)
             .ok_or_else(|| corrupt("direction", format!("unknown direction {direction:?}")))?,
         usize::try_from(step_length)
             .ok()
-            .and_then(crate::dataset::StepLength::new)
+            .and_then(crate::core::dataset::StepLength::new)
             .ok_or_else(|| corrupt("step_length", format!("bad step length {step_length}")))?,
     ))
 }

@@ -3,8 +3,8 @@
 use serde::Serialize;
 use sqlx::{QueryBuilder, Row, Sqlite, SqliteConnection};
 
-use crate::submission::ItemVerdict;
-use crate::verifier::StrictOutcome;
+use crate::core::submission::ItemVerdict;
+use crate::core::verifier::StrictOutcome;
 
 /// Whether a dataset's ground truth and per-item correctness may be shown to submitters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]

@@ -12,10 +12,10 @@ use serde::Deserialize;
 use super::error::PageError;
 use super::session::{Admin, Protected};
 use super::{AppError, AppState, dataset_or_404};
-use crate::annotation::{balanced_split, new_token, token_hash};
-use crate::dataset::StepLength;
+use crate::core::annotation::{balanced_split, new_token, token_hash};
+use crate::core::dataset::StepLength;
+use crate::core::verifier::{GroupPerformance, PerformanceReport};
 use crate::store;
-use crate::verifier::{GroupPerformance, PerformanceReport};
 
 pub fn router() -> Router<AppState> {
     Router::new()

@@ -14,7 +14,7 @@ use super::error::PageError;
 use super::session::{Admin, Protected};
 use super::submissions::{CreatedToken, issue_token, parse_role};
 use super::{AppError, AppState};
-use crate::accounts::Role;
+use crate::core::credentials::Role;
 use crate::store;
 use crate::store::accounts::TokenListing;
 use crate::store::annotations::Session;

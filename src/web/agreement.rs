@@ -14,16 +14,16 @@ use super::admin::{render_admin, require_admin};
 use super::error::PageError;
 use super::session::{Admin, Protected};
 use super::{AppError, AppState, dataset_or_404};
-use crate::agreement::{
+use crate::core::agreement::protocol::DEFAULT_ITEMS_PER_CELL;
+use crate::core::agreement::report::export::{bundle_files, tar_archive};
+use crate::core::agreement::report::heatmap::Heatmap;
+use crate::core::agreement::report::{AgreementReport, ReportError, build_report};
+use crate::core::agreement::{
     BootstrapConfig, DEFAULT_BOOTSTRAP_SEED, DEFAULT_CONFIDENCE_LEVEL, DEFAULT_REPLICATES,
     MeasurementLevel, OrderingEncoding, PAPER_COMPARABLE_ENCODING, WelchComparison,
 };
-use crate::agreement_protocol::DEFAULT_ITEMS_PER_CELL;
-use crate::agreement_report::export::{bundle_files, tar_archive};
-use crate::agreement_report::heatmap::Heatmap;
-use crate::agreement_report::{AgreementReport, ReportError, build_report};
-use crate::dataset::{Direction, StepLength};
-use crate::leaderboard::{AccuracyChart, LeaderboardRow, RowSource};
+use crate::core::dataset::{Direction, StepLength};
+use crate::core::leaderboard::{AccuracyChart, LeaderboardRow, RowSource};
 use crate::store;
 use crate::store::agreement::{ProtocolRefusal, ReportSettings};
 
@@ -479,8 +479,8 @@ async fn report_page(
         } else {
             format!("?{query}")
         },
-        stamp: crate::agreement_report::export::stamp_lines(&report.stamp).join("; "),
-        stamp_lines: crate::agreement_report::export::stamp_lines(&report.stamp),
+        stamp: crate::core::agreement::report::export::stamp_lines(&report.stamp).join("; "),
+        stamp_lines: crate::core::agreement::report::export::stamp_lines(&report.stamp),
         agreement,
         agreement_unavailable: report.agreement_unavailable.clone(),
         step_lengths: StepLength::all().map(StepLength::get).collect(),

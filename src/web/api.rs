@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState, dataset_or_404};
-use crate::dataset::{Direction, StepLength};
+use crate::core::dataset::{Direction, StepLength};
 use crate::store;
 use crate::store::datasets::DatasetOverview;
 use crate::store::items::{ItemFilter, StoredItem};

@@ -1,7 +1,7 @@
 //! A dataset as one downloadable ENACT release archive (tar), streamed entry by entry.
 //!
 //! Ground truth (`gt_answer`, `key_frame_ids`) is written only for datasets whose answers are
-//! public; see [`crate::release`] for the layout.
+//! public; see [`crate::core::release`] for the layout.
 
 use std::collections::HashSet;
 
@@ -14,7 +14,7 @@ use tokio::sync::mpsc;
 
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState, dataset_or_404};
-use crate::release::{ArchiveWriter, QA_FILE, release_line};
+use crate::core::release::{ArchiveWriter, QA_FILE, release_line};
 use crate::store;
 use crate::store::submissions::AnswerVisibility;
 

@@ -5,7 +5,7 @@ use axum::http::header;
 use axum::http::request::Parts;
 
 use super::{AppError, AppState};
-use crate::accounts::Scope;
+use crate::core::credentials::Scope;
 use crate::store;
 use crate::store::accounts::Caller;
 

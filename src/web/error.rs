@@ -30,7 +30,7 @@ pub enum AppError {
     #[error("{message}")]
     Unprocessable {
         message: String,
-        problems: Vec<crate::submission::LineProblem>,
+        problems: Vec<crate::core::submission::LineProblem>,
     },
     /// A quota or rate limit. `retry_after` is set only when waiting helps: a used-up total
     /// quota never refills, so it sends no `Retry-After`.
@@ -81,7 +81,7 @@ impl From<askama::Error> for AppError {
 struct ErrorBody<'a> {
     error: String,
     #[serde(skip_serializing_if = "Option::is_none")]
-    problems: Option<&'a [crate::submission::LineProblem]>,
+    problems: Option<&'a [crate::core::submission::LineProblem]>,
 }
 
 impl IntoResponse for AppError {

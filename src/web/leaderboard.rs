@@ -12,8 +12,8 @@ use serde::Serialize;
 use super::error::PageError;
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState, dataset_or_404};
-use crate::dataset::StepLength;
-use crate::leaderboard::{
+use crate::core::dataset::StepLength;
+use crate::core::leaderboard::{
     AccuracyCell, AccuracyChart, Interval, LeaderboardRow, RowIdentity, rank,
 };
 use crate::store;

@@ -9,7 +9,7 @@ use axum::routing::get;
 use super::api::{ItemQuery, frame_url};
 use super::error::PageError;
 use super::{AppError, AppState, dataset_or_404};
-use crate::dataset::{Direction, StepLength};
+use crate::core::dataset::{Direction, StepLength};
 use crate::store;
 
 pub fn router() -> Router<AppState> {

@@ -26,7 +26,7 @@ use serde::de::DeserializeOwned;
 
 use super::error::PageError;
 use super::{AppError, AppState};
-use crate::annotation::{
+use crate::core::annotation::{
     hash_password, new_token, password_problem, token_hash, tokens_equal, verify_password,
 };
 use crate::store;
@@ -516,7 +516,7 @@ async fn invite_form(
         csrf: csrf.clone(),
         name: annotator.name,
         token,
-        min_chars: crate::annotation::MIN_PASSWORD_CHARS,
+        min_chars: crate::core::annotation::MIN_PASSWORD_CHARS,
         error,
     };
     let cookie = set_cookie(headers, LOGIN_CSRF_COOKIE, &csrf, Duration::from_secs(3600));

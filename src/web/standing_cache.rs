@@ -75,8 +75,8 @@ impl StandingCache {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::annotation::Draft;
-    use crate::dataset::StepLength;
+    use crate::core::annotation::Draft;
+    use crate::core::dataset::StepLength;
     use crate::store::annotations::StoredDraft;
 
     fn state(started_at_ms: i64) -> AssignmentState {

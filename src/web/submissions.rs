@@ -17,14 +17,14 @@ use sha2::{Digest, Sha256};
 use super::auth::require;
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState, dataset_or_404};
-use crate::accounts::{NewToken, Role, Scope};
-use crate::scoring::{self, ScoringTarget};
+use crate::core::credentials::{NewToken, Role, Scope};
+use crate::core::scoring::{self, ScoringTarget};
+use crate::core::submission::{SubmissionError, score_submission};
 use crate::store;
 use crate::store::accounts::{AttemptQuota, Caller};
 use crate::store::submissions::{
     AnswerVisibility, NewSubmission, SubmissionMetadata, SubmissionRow,
 };
-use crate::submission::{SubmissionError, score_submission};
 
 /// Submitting, reading scores, and the admin's controls (see [`super::openapi`]).
 pub fn routes() -> Vec<ApiRoute> {

@@ -1,13 +1,13 @@
 //! Agreement on stored annotations: `enact-hub agreement --db`, the cross-annotation protocol,
 //! and the report over HTTP and on the command line, checked against the pure core.
 
-use enact_hub::agreement::{
+use enact_hub::core::agreement::{
     AnnotatedOrdering, BootstrapConfig, OrderingAnnotations, OrderingEncoding, ordering_agreement,
 };
-use enact_hub::annotation::{new_token, token_hash};
+use enact_hub::core::annotation::{new_token, token_hash};
+use enact_hub::core::verifier::Permutation;
 use enact_hub::store;
 use enact_hub::store::annotations::{Outcome, Telemetry};
-use enact_hub::verifier::Permutation;
 use serde_json::Value;
 
 use crate::annotate::{Browser, PASSWORD, annotator};
@@ -501,7 +501,7 @@ async fn end_to_end_primary_split_protocol_answers_and_report() {
 
     // A model submission for the comparisons.
     let token = {
-        use enact_hub::accounts::{NewToken, Role};
+        use enact_hub::core::credentials::{NewToken, Role};
         let mut conn = server.pool.acquire().await.expect("conn");
         let account = store::accounts::ensure_account(&mut conn, "team", Role::Submitter)
             .await

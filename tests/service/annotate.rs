@@ -1,7 +1,7 @@
 //! Human annotation over HTTP: invites and login, CSRF, blind annotation and 403s, drafts,
 //! submissions scored like model answers, the admin page.
 
-use enact_hub::annotation::{hash_password, new_token, token_hash};
+use enact_hub::core::annotation::{hash_password, new_token, token_hash};
 use enact_hub::store;
 use reqwest::StatusCode;
 use reqwest::header::{COOKIE, SET_COOKIE};

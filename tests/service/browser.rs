@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use enact_hub::annotation::{new_token, token_hash};
+use enact_hub::core::annotation::{new_token, token_hash};
 use enact_hub::store;
 use serde_json::{Value, json};
 

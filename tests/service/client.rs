@@ -11,7 +11,7 @@ use axum::Json;
 use axum::extract::State;
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::{IntoResponse, Response};
-use enact_hub::accounts::{NewToken, Role};
+use enact_hub::core::credentials::{NewToken, Role};
 use enact_hub::store;
 use serde_json::{Value, json};
 

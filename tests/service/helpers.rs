@@ -5,7 +5,7 @@
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 
-use enact_hub::import::{ImportOptions, ImportReport, import_release};
+use enact_hub::app::import::{ImportOptions, ImportReport, import_release};
 use enact_hub::store;
 use enact_hub::web::{AppState, Server, WebConfig};
 use serde_json::{Value, json};

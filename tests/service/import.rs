@@ -1,6 +1,6 @@
 //! The importer: validation of every invalid-row class, all-or-nothing writes, re-imports.
 
-use enact_hub::import::{ImportError, import_release};
+use enact_hub::app::import::{ImportError, import_release};
 use enact_hub::store;
 use serde_json::{Value, json};
 use sqlx::SqlitePool;
@@ -408,7 +408,7 @@ async fn scene_graph_import_stores_enacts_transition_signatures_and_upgrades_on_
             .expect("q")
             .expect("stored");
         assert_eq!(source, "scene_graph");
-        let table: enact_hub::verifier::ItemSignatures =
+        let table: enact_hub::core::verifier::ItemSignatures =
             serde_json::from_str(&json).expect("table");
         for (i, t) in r["transitions"]
             .as_array()
@@ -417,8 +417,8 @@ async fn scene_graph_import_stores_enacts_transition_signatures_and_upgrades_on_
             .enumerate()
         {
             for (view, key) in [
-                (enact_hub::scene_graph::View::Visible, "visible"),
-                (enact_hub::scene_graph::View::Full, "full"),
+                (enact_hub::core::scene_graph::View::Visible, "visible"),
+                (enact_hub::core::scene_graph::View::Full, "full"),
             ] {
                 let expected: std::collections::BTreeSet<String> = t[key]
                     .as_array()

@@ -3,7 +3,7 @@
 
 use std::collections::BTreeSet;
 
-use enact_hub::accounts::{NewToken, Role};
+use enact_hub::core::credentials::{NewToken, Role};
 use enact_hub::store;
 use enact_hub::web::openapi::api_routes;
 use reqwest::Method;

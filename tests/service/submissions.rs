@@ -3,7 +3,7 @@
 
 use std::collections::HashMap;
 
-use enact_hub::accounts::{NewToken, Role};
+use enact_hub::core::credentials::{NewToken, Role};
 use enact_hub::store;
 use enact_hub::web::WebConfig;
 use serde_json::{Value, json};
@@ -243,7 +243,7 @@ async fn tokens_missing_unknown_or_revoked_get_401() {
     let (status, _, _) = post(&server, "mini", "model=m", Some(&token), body.clone(), None).await;
     assert_eq!(status, 201);
     let mut conn = server.pool.acquire().await.expect("conn");
-    let prefix = enact_hub::accounts::lookup_prefix(&token);
+    let prefix = enact_hub::core::credentials::lookup_prefix(&token);
     assert!(
         store::accounts::revoke_token(&mut conn, &prefix)
             .await
@@ -625,7 +625,10 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
     assert_eq!(status, 200, "{board}");
     let rows = board["rows"].as_array().expect("rows");
     assert_eq!(rows.len(), 1, "{board}");
-    assert_eq!(rows[0]["model"], enact_hub::demo::CHANCE_BASELINE_MODEL);
+    assert_eq!(
+        rows[0]["model"],
+        enact_hub::core::demo::CHANCE_BASELINE_MODEL
+    );
     assert_eq!(rows[0]["baseline"], true);
     let html = server
         .get("/leaderboard/demo")
@@ -755,7 +758,7 @@ async fn token_create_prints_the_token_last_and_revoke_takes_effect_at_once() {
         .output()
         .expect("list");
     let listing = String::from_utf8_lossy(&list.stdout);
-    let prefix = enact_hub::accounts::lookup_prefix(&token);
+    let prefix = enact_hub::core::credentials::lookup_prefix(&token);
     assert!(
         listing.contains(&prefix) && listing.contains("carol"),
         "{listing}"

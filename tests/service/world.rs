@@ -1,8 +1,8 @@
 //! The synthetic world's replays through the real pipeline and the importer: every generated
 //! item is valid and gets transition signatures from the scene graphs.
 
-use enact_hub::pipeline::{GenerateOptions, generate};
-use enact_hub::world::{Activity, CameraRig, FrameImages, SimulateOptions, simulate};
+use enact_hub::core::pipeline::{GenerateOptions, generate};
+use enact_hub::core::world::{Activity, CameraRig, FrameImages, SimulateOptions, simulate};
 
 use crate::helpers::{fresh_db, import, options};
 

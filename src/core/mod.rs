@@ -1,0 +1,38 @@
+//! The benchmark itself: plain synchronous Rust with no database, HTTP, async runtime or
+//! command line in it. Everything else calls in; nothing here calls out.
+//!
+//! - [`dataset`]: ENACT's QA record format, its validation, and the item model.
+//! - [`scene_graph`]: BEHAVIOR scene graphs: timelines, the transient filter, diffs,
+//!   visibility, transition signatures and action sentences.
+//! - [`verifier`]: answer parsing and ENACT's verifier in its ENACT-compatible and strict
+//!   policies, with TA/PA tables.
+//! - [`semantics`]: where an item's transition signatures come from (scene graphs or action
+//!   text); [`scoring`]: scoring whole prediction files and ENACT's output files.
+//! - [`submission`]: reading, refusing and scoring a leaderboard submission.
+//! - [`leaderboard`]: leaderboard rows (Table 1 layout) and the TA-vs-L chart geometry.
+//! - [`pipeline`]: ENACT's data pipeline: key-frame segmentation, the transition graph, path
+//!   sampling and QA items in the release layout.
+//! - [`agreement`]: Krippendorff's alpha, bootstrap, ordering encodings, Welch; the paper's
+//!   cross-annotation [`agreement::protocol`] and the agreement [`agreement::report`].
+//! - [`annotation`]: human annotation without I/O: the balanced split, drafts, queue
+//!   standing, telemetry, and human answers scored like model answers.
+//! - [`credentials`]: API tokens, session and invite tokens, passwords, roles, scopes and the
+//!   naming rules of accounts.
+//! - [`release`]: a stored dataset written back out as an ENACT release archive.
+//! - [`world`]: a synthetic household world and its BEHAVIOR-format replays; [`demo`] plays it
+//!   through the pipeline for `serve --demo`.
+
+pub mod agreement;
+pub mod annotation;
+pub mod credentials;
+pub mod dataset;
+pub mod demo;
+pub mod leaderboard;
+pub mod pipeline;
+pub mod release;
+pub mod scene_graph;
+pub mod scoring;
+pub mod semantics;
+pub mod submission;
+pub mod verifier;
+pub mod world;

@@ -1,0 +1,428 @@
+//! The architecture, checked: reads every `crate::`, `super::` and `self::` path in `src/`
+//! and fails when a layer reaches up (the core into the store, the store into the web, …) or
+//! when sibling modules anywhere in the tree use each other in a cycle.
+//!
+//! Layers, bottom to top: `core` (pure benchmark logic), `store` (rows), `app` (use cases),
+//! then the adapters `web` and `cli`. Each may use only what is listed for it in [`ALLOWED`].
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// Which top-level areas each area may use.
+const ALLOWED: &[(&str, &[&str])] = &[
+    ("core", &[]),
+    ("store", &["core"]),
+    ("app", &["core", "store"]),
+    ("web", &["core", "app"]),
+    ("cli", &["core", "app", "web"]),
+];
+
+/// A module path below the crate root: `["core", "verifier", "answer"]`.
+type ModulePath = Vec<String>;
+
+fn source_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let mut entries: Vec<_> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", dir.display()))
+        .map(|e| e.expect("directory entry").path())
+        .collect();
+    entries.sort();
+    for path in entries {
+        if path.is_dir() {
+            source_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+/// The module a file defines: `src/core/verifier/mod.rs` is `core::verifier`.
+fn module_of(src: &Path, file: &Path) -> ModulePath {
+    let relative = file.strip_prefix(src).expect("file under src");
+    let mut parts: Vec<String> = relative
+        .iter()
+        .map(|p| p.to_string_lossy().into_owned())
+        .collect();
+    let last = parts.pop().expect("a file name");
+    let stem = last.trim_end_matches(".rs");
+    if !matches!(stem, "mod" | "lib" | "main") {
+        parts.push(stem.to_owned());
+    }
+    parts
+}
+
+/// The text with comments, string and character literals blanked out, so that prose and
+/// strings mentioning `crate::…` do not count.
+fn code_only(text: &str) -> String {
+    let bytes = text.as_bytes();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let rest = &text[i..];
+        if rest.starts_with("//") {
+            let end = rest.find('\n').unwrap_or(rest.len());
+            i += end;
+        } else if rest.starts_with("/*") {
+            let end = rest.find("*/").map_or(rest.len(), |e| e + 2);
+            i += end;
+            out.push(' ');
+        } else if rest.starts_with("r#\"") {
+            let end = rest[3..].find("\"#").map_or(rest.len(), |e| e + 5);
+            i += end;
+            out.push_str("\"\"");
+        } else if rest.starts_with('"') {
+            let mut j = 1;
+            while j < rest.len() {
+                match rest.as_bytes()[j] {
+                    b'\\' => j += 2,
+                    b'"' => break,
+                    _ => j += 1,
+                }
+            }
+            i += (j + 1).min(rest.len());
+            out.push_str("\"\"");
+        } else if rest.starts_with('\'') && rest.len() >= 3 && {
+            // A character literal ('a', '\n', '\''), not a lifetime ('a).
+            let b = rest.as_bytes();
+            b[1] == b'\\' || b.get(2) == Some(&b'\'')
+        } {
+            let end = if rest.as_bytes()[1] == b'\\' {
+                rest[2..].find('\'').map_or(rest.len(), |e| e + 3)
+            } else {
+                3
+            };
+            i += end;
+            out.push_str("' '");
+        } else {
+            let c = rest.chars().next().expect("not empty");
+            out.push(c);
+            i += c.len_utf8();
+        }
+    }
+    out
+}
+
+/// Expands a use tree (`crate::a::{b, c::{d, e}}`) into its paths.
+fn expand_use_tree(tree: &str) -> Vec<String> {
+    let tree: String = tree.split_whitespace().collect();
+    let Some(open) = tree.find('{') else {
+        return vec![tree];
+    };
+    let prefix = &tree[..open];
+    let inner = &tree[open + 1..tree.rfind('}').unwrap_or(tree.len())];
+    let mut parts = Vec::new();
+    let (mut depth, mut start) = (0, 0);
+    for (i, c) in inner.char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' => depth -= 1,
+            ',' if depth == 0 => {
+                parts.push(&inner[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    parts.push(&inner[start..]);
+    parts
+        .into_iter()
+        .filter(|p| !p.is_empty())
+        .flat_map(|p| expand_use_tree(&format!("{prefix}{p}")))
+        .collect()
+}
+
+/// Every path that starts with `crate`, `super` or `self`, as written.
+fn referenced_paths(code: &str) -> Vec<String> {
+    let mut paths = Vec::new();
+    // `use` declarations, braces expanded.
+    let mut rest = code;
+    while let Some(at) = rest.find("use ") {
+        let boundary = at == 0 || !rest.as_bytes()[at - 1].is_ascii_alphanumeric();
+        let after = &rest[at + 4..];
+        if boundary && let Some(end) = after.find(';') {
+            let tree = &after[..end];
+            if tree.trim_start().starts_with("crate::")
+                || tree.trim_start().starts_with("super::")
+                || tree.trim_start().starts_with("self::")
+            {
+                paths.extend(expand_use_tree(tree));
+            }
+        }
+        rest = &rest[at + 4..];
+    }
+    // Paths written inline in code.
+    let bytes = code.as_bytes();
+    for start in ["crate::", "super::", "self::"] {
+        let mut from = 0;
+        while let Some(at) = code[from..].find(start) {
+            let at = from + at;
+            from = at + start.len();
+            if at > 0 && (bytes[at - 1].is_ascii_alphanumeric() || bytes[at - 1] == b'_') {
+                continue;
+            }
+            let mut end = at;
+            while end < bytes.len()
+                && (bytes[end].is_ascii_alphanumeric() || bytes[end] == b'_' || bytes[end] == b':')
+            {
+                end += 1;
+            }
+            paths.push(code[at..end].trim_end_matches(':').to_owned());
+        }
+    }
+    paths
+}
+
+/// The module a path names, as the longest known module prefix of its resolved form.
+fn resolve(
+    path: &str,
+    from: &ModulePath,
+    is_dir_module: bool,
+    known: &BTreeSet<ModulePath>,
+) -> Option<ModulePath> {
+    let mut segments = path.split("::").filter(|s| !s.is_empty());
+    let mut base: ModulePath = match segments.next()? {
+        "crate" => Vec::new(),
+        "self" => from.clone(),
+        "super" => {
+            let mut b = from.clone();
+            b.pop();
+            b
+        }
+        _ => return None,
+    };
+    let _ = is_dir_module;
+    for segment in segments {
+        if segment == "super" {
+            base.pop();
+        } else {
+            base.push(segment.to_owned());
+        }
+    }
+    while !base.is_empty() && !known.contains(&base) {
+        base.pop();
+    }
+    Some(base)
+}
+
+struct Graph {
+    /// (from module, to module) for every reference across modules.
+    edges: BTreeSet<(ModulePath, ModulePath)>,
+    /// Where each edge was seen first, for the failure message.
+    witness: BTreeMap<(ModulePath, ModulePath), String>,
+}
+
+fn build_graph() -> Graph {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    source_files(&src, &mut files);
+    let modules: Vec<(PathBuf, ModulePath)> = files
+        .iter()
+        .map(|f| (f.clone(), module_of(&src, f)))
+        .collect();
+    let known: BTreeSet<ModulePath> = modules.iter().map(|(_, m)| m.clone()).collect();
+    let mut edges = BTreeSet::new();
+    let mut witness = BTreeMap::new();
+    for (file, module) in &modules {
+        let text = std::fs::read_to_string(file).expect("readable source");
+        let is_dir_module = file.file_name().is_some_and(|n| n == "mod.rs");
+        for path in referenced_paths(&code_only(&text)) {
+            let Some(target) = resolve(&path, module, is_dir_module, &known) else {
+                continue;
+            };
+            if target != *module && !target.is_empty() {
+                let edge = (module.clone(), target);
+                witness.entry(edge.clone()).or_insert_with(|| {
+                    format!(
+                        "{} uses `{path}`",
+                        file.strip_prefix(&src).unwrap_or(file).display()
+                    )
+                });
+                edges.insert(edge);
+            }
+        }
+    }
+    Graph { edges, witness }
+}
+
+/// The child of `parent` that `module` lies in, if it lies strictly below `parent`.
+fn child_under(parent: &[String], module: &[String]) -> Option<String> {
+    (module.len() > parent.len() && module.starts_with(parent))
+        .then(|| module[parent.len()].clone())
+}
+
+/// Strongly connected components with more than one member (Tarjan's algorithm).
+fn cycles(nodes: &BTreeSet<String>, edges: &BTreeSet<(String, String)>) -> Vec<Vec<String>> {
+    struct State<'a> {
+        edges: &'a BTreeSet<(String, String)>,
+        index: BTreeMap<String, usize>,
+        low: BTreeMap<String, usize>,
+        stack: Vec<String>,
+        on_stack: BTreeSet<String>,
+        next: usize,
+        found: Vec<Vec<String>>,
+    }
+    fn visit(s: &mut State<'_>, v: &str) {
+        s.index.insert(v.to_owned(), s.next);
+        s.low.insert(v.to_owned(), s.next);
+        s.next += 1;
+        s.stack.push(v.to_owned());
+        s.on_stack.insert(v.to_owned());
+        let targets: Vec<String> = s
+            .edges
+            .iter()
+            .filter(|(a, _)| a == v)
+            .map(|(_, b)| b.clone())
+            .collect();
+        for w in targets {
+            if !s.index.contains_key(&w) {
+                visit(s, &w);
+                let low = s.low[v].min(s.low[&w]);
+                s.low.insert(v.to_owned(), low);
+            } else if s.on_stack.contains(&w) {
+                let low = s.low[v].min(s.index[&w]);
+                s.low.insert(v.to_owned(), low);
+            }
+        }
+        if s.low[v] == s.index[v] {
+            let mut component = Vec::new();
+            while let Some(w) = s.stack.pop() {
+                s.on_stack.remove(&w);
+                let done = w == v;
+                component.push(w);
+                if done {
+                    break;
+                }
+            }
+            if component.len() > 1 {
+                component.sort();
+                s.found.push(component);
+            }
+        }
+    }
+    let mut state = State {
+        edges,
+        index: BTreeMap::new(),
+        low: BTreeMap::new(),
+        stack: Vec::new(),
+        on_stack: BTreeSet::new(),
+        next: 0,
+        found: Vec::new(),
+    };
+    for n in nodes {
+        if !state.index.contains_key(n) {
+            visit(&mut state, n);
+        }
+    }
+    state.found
+}
+
+#[test]
+fn layers_only_use_the_layers_below_them() {
+    let graph = build_graph();
+    let allowed: BTreeMap<&str, &[&str]> = ALLOWED.iter().copied().collect();
+    let mut violations = Vec::new();
+    for (edge, how) in &graph.witness {
+        let (from, to) = (&edge.0[0], &edge.1[0]);
+        if from == to {
+            continue;
+        }
+        match allowed.get(from.as_str()) {
+            Some(may) if may.contains(&to.as_str()) => {}
+            Some(_) => violations.push(format!("{from} may not use {to}: {how}")),
+            None => violations.push(format!(
+                "top-level module `{from}` is in no layer (add it to ALLOWED): {how}"
+            )),
+        }
+    }
+    assert!(
+        violations.is_empty(),
+        "layering violations:\n{}",
+        violations.join("\n")
+    );
+}
+
+#[test]
+fn sibling_modules_never_use_each_other_in_a_cycle() {
+    let graph = build_graph();
+    let parents: BTreeSet<ModulePath> = graph
+        .edges
+        .iter()
+        .flat_map(|(a, b)| [a, b])
+        .flat_map(|m| (0..m.len()).map(move |k| m[..k].to_vec()))
+        .collect();
+    let mut found = Vec::new();
+    for parent in &parents {
+        let mut nodes = BTreeSet::new();
+        let mut edges = BTreeSet::new();
+        for (a, b) in &graph.edges {
+            if let (Some(x), Some(y)) = (child_under(parent, a), child_under(parent, b))
+                && x != y
+            {
+                nodes.insert(x.clone());
+                nodes.insert(y.clone());
+                edges.insert((x, y));
+            }
+        }
+        for cycle in cycles(&nodes, &edges) {
+            let within = if parent.is_empty() {
+                "crate".to_owned()
+            } else {
+                parent.join("::")
+            };
+            let examples: Vec<String> = graph
+                .witness
+                .iter()
+                .filter(|((a, b), _)| {
+                    matches!((child_under(parent, a), child_under(parent, b)),
+                        (Some(x), Some(y)) if x != y && cycle.contains(&x) && cycle.contains(&y))
+                })
+                .map(|(_, how)| format!("    {how}"))
+                .collect();
+            found.push(format!(
+                "cycle in {within} between {}:\n{}",
+                cycle.join(", "),
+                examples.join("\n")
+            ));
+        }
+    }
+    assert!(found.is_empty(), "module cycles:\n{}", found.join("\n"));
+}
+
+#[test]
+fn the_checker_sees_paths_in_every_form() {
+    let code = code_only(
+        "use crate::core::{dataset::X, verifier::{a, b}};\n// crate::web in a comment\n\
+         let s = \"crate::cli in a string\"; let c = '\"'; fn f() { crate::store::open(); }\n\
+         use super::sibling;",
+    );
+    let paths = referenced_paths(&code);
+    for expected in [
+        "crate::core::dataset::X",
+        "crate::core::verifier::a",
+        "crate::core::verifier::b",
+        "crate::store::open",
+        "super::sibling",
+    ] {
+        assert!(
+            paths.iter().any(|p| p == expected),
+            "{expected} not in {paths:?}"
+        );
+    }
+    assert!(!paths.iter().any(|p| p.contains("web") || p.contains("cli")));
+    let known: BTreeSet<ModulePath> = [vec!["core".to_owned()], vec!["store".to_owned()]]
+        .into_iter()
+        .collect();
+    let from = vec!["app".to_owned(), "import".to_owned()];
+    assert_eq!(
+        resolve("crate::store::items::get", &from, false, &known),
+        Some(vec!["store".to_owned()])
+    );
+    let mut edges = BTreeSet::new();
+    edges.insert(("a".to_owned(), "b".to_owned()));
+    edges.insert(("b".to_owned(), "a".to_owned()));
+    edges.insert(("b".to_owned(), "c".to_owned()));
+    let nodes = ["a", "b", "c"].iter().map(|s| (*s).to_owned()).collect();
+    assert_eq!(
+        cycles(&nodes, &edges),
+        vec![vec!["a".to_owned(), "b".to_owned()]]
+    );
+}
