@@ -65,8 +65,8 @@ fn code_only(text: &str) -> String {
             let end = rest.find("*/").map_or(rest.len(), |e| e + 2);
             i += end;
             out.push(' ');
-        } else if rest.starts_with("r#\"") {
-            let end = rest[3..].find("\"#").map_or(rest.len(), |e| e + 5);
+        } else if let Some(raw) = rest.strip_prefix("r#\"") {
+            let end = raw.find("\"#").map_or(rest.len(), |e| e + 5);
             i += end;
             out.push_str("\"\"");
         } else if rest.starts_with('"') {
@@ -172,12 +172,7 @@ fn referenced_paths(code: &str) -> Vec<String> {
 }
 
 /// The module a path names, as the longest known module prefix of its resolved form.
-fn resolve(
-    path: &str,
-    from: &ModulePath,
-    is_dir_module: bool,
-    known: &BTreeSet<ModulePath>,
-) -> Option<ModulePath> {
+fn resolve(path: &str, from: &ModulePath, known: &BTreeSet<ModulePath>) -> Option<ModulePath> {
     let mut segments = path.split("::").filter(|s| !s.is_empty());
     let mut base: ModulePath = match segments.next()? {
         "crate" => Vec::new(),
@@ -189,7 +184,6 @@ fn resolve(
         }
         _ => return None,
     };
-    let _ = is_dir_module;
     for segment in segments {
         if segment == "super" {
             base.pop();
@@ -223,9 +217,8 @@ fn build_graph() -> Graph {
     let mut witness = BTreeMap::new();
     for (file, module) in &modules {
         let text = std::fs::read_to_string(file).expect("readable source");
-        let is_dir_module = file.file_name().is_some_and(|n| n == "mod.rs");
         for path in referenced_paths(&code_only(&text)) {
-            let Some(target) = resolve(&path, module, is_dir_module, &known) else {
+            let Some(target) = resolve(&path, module, &known) else {
                 continue;
             };
             if target != *module && !target.is_empty() {
@@ -413,7 +406,7 @@ fn the_checker_sees_paths_in_every_form() {
         .collect();
     let from = vec!["app".to_owned(), "import".to_owned()];
     assert_eq!(
-        resolve("crate::store::items::get", &from, false, &known),
+        resolve("crate::store::items::get", &from, &known),
         Some(vec!["store".to_owned()])
     );
     let mut edges = BTreeSet::new();

@@ -15,7 +15,6 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
 use sha2::{Digest, Sha256};
-use sqlx::SqlitePool;
 
 use crate::core::dataset::{FieldProblem, QaItem, parse_release_line};
 use crate::core::semantics::{self, ItemSemantics, SignatureSource};
@@ -442,7 +441,7 @@ fn content_hash(row: &ValidRow) -> String {
 
 /// Imports a release into `options.dataset`. See the module documentation for the phases.
 pub async fn import_release(
-    pool: &SqlitePool,
+    hub: &super::Hub,
     path: &Path,
     options: &ImportOptions,
 ) -> Result<ImportReport, ImportError> {
@@ -465,7 +464,7 @@ pub async fn import_release(
         });
     }
 
-    let mut tx = pool.begin().await?;
+    let mut tx = hub.pool.begin().await?;
     let existing_dataset = store::datasets::by_name(&mut tx, &options.dataset).await?;
     let stored_hashes = match &existing_dataset {
         Some(d) => store::items::content_hashes(&mut tx, d.id).await?,

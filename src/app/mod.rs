@@ -1,4 +1,136 @@
 //! The use cases: one function each, called alike by the web handlers and the command line.
-//! They own the transactions and the decisions; the store only maps rows.
+//! They own the transactions and the decisions; [`crate::store`] only maps rows, and
+//! [`crate::core`] holds the benchmark's logic.
+//!
+//! - [`Hub`]: the database and the in-memory caches every use case shares ([`cache`],
+//!   [`standings`]), and the quotas submissions count against.
+//! - [`datasets`] and [`items`]: reading what is stored, frames and release archives included;
+//!   [`import`]: an ENACT release read from disk, all or nothing.
+//! - [`scoring`]: a prediction file scored against a stored dataset or a release folder.
+//! - [`submissions`]: submit, read and list a leaderboard submission; [`leaderboard`] builds
+//!   the rows, the Human row included.
+//! - [`tokens`]: API tokens and the accounts behind them; [`annotators`]: annotator accounts,
+//!   invites and login sessions.
+//! - [`annotation`]: assignments, the queue, drafts, answers, skips and flags.
+//! - [`agreement`]: the cross-annotation protocol, agreement statistics and the report.
+//! - [`demo`]: the built-in demo dataset and its chance baseline.
+//!
+//! Errors are [`AppError`]: each kind says what was wrong, in words a person can act on.
 
+pub mod agreement;
+pub mod annotation;
+pub mod annotators;
+pub mod cache;
+pub mod datasets;
+pub mod demo;
+mod error;
 pub mod import;
+pub mod items;
+pub mod leaderboard;
+pub mod scoring;
+pub mod standings;
+pub mod submissions;
+pub mod tokens;
+
+use std::path::Path;
+use std::sync::Arc;
+
+use sqlx::SqlitePool;
+
+pub use error::AppError;
+
+use crate::store;
+
+/// Submission attempts a token may make, unless the token sets its own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Quotas {
+    /// Per UTC day.
+    pub daily: i64,
+    /// In total.
+    pub total: i64,
+}
+
+impl Default for Quotas {
+    fn default() -> Self {
+        Quotas {
+            daily: 20,
+            total: 1000,
+        }
+    }
+}
+
+/// What every use case works with: the store and the caches in front of it. Cheap to clone.
+#[derive(Clone)]
+pub struct Hub {
+    pool: SqlitePool,
+    items: Arc<cache::ItemCache>,
+    standings: Arc<standings::StandingCache>,
+    targets: Arc<submissions::TargetCache>,
+    quotas: Quotas,
+}
+
+impl From<SqlitePool> for Hub {
+    fn from(pool: SqlitePool) -> Hub {
+        Hub::new(pool, Quotas::default())
+    }
+}
+
+impl Hub {
+    pub fn new(pool: SqlitePool, quotas: Quotas) -> Hub {
+        Hub {
+            pool,
+            items: Arc::default(),
+            standings: Arc::default(),
+            targets: Arc::default(),
+            quotas,
+        }
+    }
+
+    /// Opens (creating if missing) the database at `path`, migrated to this version.
+    pub async fn open(path: &Path) -> anyhow::Result<Hub> {
+        let pool = store::open(path)
+            .await
+            .map_err(|e| anyhow::anyhow!("cannot open database {}: {e}", path.display()))?;
+        Ok(Hub::new(pool, Quotas::default()))
+    }
+
+    pub fn with_quotas(mut self, quotas: Quotas) -> Hub {
+        self.quotas = quotas;
+        self
+    }
+
+    /// Waits for the connections in use and closes the database.
+    pub async fn close(&self) {
+        self.pool.close().await;
+    }
+
+    /// The item cache (hot read paths look here before the store).
+    pub fn items(&self) -> &cache::ItemCache {
+        &self.items
+    }
+
+    /// Whether the database answers.
+    pub async fn healthy(&self) -> bool {
+        match store::ping(&self.pool).await {
+            Ok(()) => true,
+            Err(e) => {
+                tracing::error!(error = %e, "health check: database unavailable");
+                false
+            }
+        }
+    }
+
+    /// Clears the caches whenever stored items change, also through another process's
+    /// import. Runs until the database is closed.
+    pub async fn watch_content(self) {
+        cache::watch_generation(self.pool, self.items, self.standings).await;
+    }
+
+    async fn conn(&self) -> Result<sqlx::pool::PoolConnection<sqlx::Sqlite>, AppError> {
+        Ok(self.pool.acquire().await?)
+    }
+
+    async fn begin(&self) -> Result<sqlx::Transaction<'static, sqlx::Sqlite>, AppError> {
+        Ok(self.pool.begin().await?)
+    }
+}

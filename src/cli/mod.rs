@@ -8,14 +8,12 @@ use std::time::Duration;
 
 use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
-use sqlx::SqlitePool;
 
-use crate::app::import::{ImportError, ImportOptions, ImportReport, SkippedLine, import_release};
-use crate::core::credentials::{NewToken, Role};
-use crate::core::demo;
+use crate::app::import::{ImportError, ImportOptions, SkippedLine, import_release};
+use crate::app::{self, AppError, Hub, Quotas};
+use crate::core::credentials::Role;
 use crate::core::scoring::{self, ScoringTarget, SemanticCoverage};
-use crate::store;
-use crate::web::{AppState, Server, WebConfig, shutdown_signal};
+use crate::web::{Server, WebConfig, shutdown_signal};
 
 mod simulate;
 mod stored;
@@ -162,7 +160,7 @@ enum TokenCommand {
         db: DbArg,
         /// submitter: submit and read own results; admin: everything.
         #[arg(long, value_enum, default_value = "submitter")]
-        role: Role,
+        role: RoleArg,
         /// The account's name (a person or team).
         #[arg(long)]
         name: String,
@@ -185,6 +183,21 @@ enum TokenCommand {
         /// The token's id or prefix, as `token list` shows them.
         token: String,
     },
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum RoleArg {
+    Submitter,
+    Admin,
+}
+
+impl From<RoleArg> for Role {
+    fn from(role: RoleArg) -> Role {
+        match role {
+            RoleArg::Submitter => Role::Submitter,
+            RoleArg::Admin => Role::Admin,
+        }
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -254,10 +267,10 @@ struct ServeArgs {
     #[arg(long, default_value_t = WebConfig::default().submission_body_limit)]
     submission_body_limit: usize,
     /// Submissions a token may make per UTC day (rejected ones count too).
-    #[arg(long, default_value_t = WebConfig::default().daily_quota)]
+    #[arg(long, default_value_t = Quotas::default().daily)]
     daily_quota: i64,
     /// Submissions a token may make in total (rejected ones count too).
-    #[arg(long, default_value_t = WebConfig::default().total_quota)]
+    #[arg(long, default_value_t = Quotas::default().total)]
     total_quota: i64,
 }
 
@@ -320,7 +333,7 @@ pub fn main() -> ExitCode {
             Command::Import(args) => import(args).await,
             Command::Score(args) => score(args).await,
             Command::Agreement(args) => match (&args.db, &args.dataset) {
-                (Some(db), Some(dataset)) => stored::agreement(db, dataset, &args.stored()).await,
+                (Some(db), Some(dataset)) => stored::agreement(db, dataset, args.stored()).await,
                 _ => agreement(&args),
             },
             Command::AgreementProtocol(args) => stored::agreement_protocol(&args).await,
@@ -340,10 +353,20 @@ pub fn main() -> ExitCode {
     }
 }
 
-async fn open_db(path: &Path) -> anyhow::Result<SqlitePool> {
-    store::open(path)
-        .await
-        .with_context(|| format!("cannot open database {}", path.display()))
+/// Opens the database a command works on.
+async fn open(db: &Path) -> anyhow::Result<Hub> {
+    Hub::open(db).await
+}
+
+/// Prints a use case's refusal as the command's error and fails.
+fn refused(e: AppError) -> anyhow::Result<ExitCode> {
+    match e {
+        AppError::Internal(e) => Err(e),
+        other => {
+            eprintln!("error: {other}");
+            Ok(ExitCode::FAILURE)
+        }
+    }
 }
 
 async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
@@ -359,64 +382,48 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         }
         (None, false) => PathBuf::from("enact-hub.db"),
     };
-    let pool = open_db(&db).await?;
+    let hub = open(&db).await?.with_quotas(Quotas {
+        daily: args.daily_quota,
+        total: args.total_quota,
+    });
     if args.demo {
-        load_demo(&pool).await?;
+        app::demo::load(&hub).await?;
     }
-    ensure_admin_token(&pool).await?;
+    ensure_admin_token(&hub).await?;
     let config = WebConfig {
         body_limit: args.body_limit,
         request_timeout: Duration::from_secs(args.request_timeout),
         frame_cache_bytes: args.frame_cache_mib * 1024 * 1024,
         submission_body_limit: args.submission_body_limit,
-        daily_quota: args.daily_quota,
-        total_quota: args.total_quota,
     };
-    let server = Server::bind(args.addr, AppState::new(pool.clone(), &config), &config)
+    let server = Server::bind(args.addr, hub.clone(), &config)
         .await
         .with_context(|| format!("cannot listen on {}", args.addr))?;
     let addr = server.local_addr()?;
     tracing::info!(%addr, db = %db.display(), "enact-hub is listening on http://{addr}/");
     server.run(shutdown_signal()).await?;
-    pool.close().await;
+    hub.close().await;
     Ok(ExitCode::SUCCESS)
 }
 
 /// The admin token: ENACT_HUB_ADMIN_TOKEN if set (stored hashed on first sight), otherwise one
 /// generated at the first start and printed once on standard output.
-async fn ensure_admin_token(pool: &SqlitePool) -> anyhow::Result<()> {
-    let mut tx = pool.begin().await?;
-    let from_env = std::env::var("ENACT_HUB_ADMIN_TOKEN")
+async fn ensure_admin_token(hub: &Hub) -> anyhow::Result<()> {
+    let operator = std::env::var("ENACT_HUB_ADMIN_TOKEN")
         .ok()
         .filter(|t| !t.is_empty());
-    let token = match from_env {
-        Some(text) => {
-            let token = NewToken::from_operator(&text)
-                .map_err(|e| anyhow::anyhow!("ENACT_HUB_ADMIN_TOKEN: {e}"))?;
-            if store::accounts::token_hash_exists(&mut tx, &token.hash).await? {
-                return Ok(());
-            }
-            Some((token, false))
+    match app::tokens::ensure_admin_token(hub, operator.as_deref()).await? {
+        app::tokens::AdminToken::Present => {}
+        app::tokens::AdminToken::StoredFromOperator(prefix) => {
+            tracing::info!(%prefix, "admin token from ENACT_HUB_ADMIN_TOKEN stored");
         }
-        None if store::accounts::has_admin_token(&mut tx).await? => None,
-        None => Some((NewToken::generate(), true)),
-    };
-    let Some((token, generated)) = token else {
-        return Ok(());
-    };
-    let account = store::accounts::ensure_account(&mut tx, "admin", Role::Admin)
-        .await?
-        .map_err(anyhow::Error::msg)?;
-    store::accounts::insert_token(&mut tx, account, Role::Admin, &token, None, None).await?;
-    tx.commit().await?;
-    if generated {
-        eprintln!(
-            "created the admin API token (shown only this once; set ENACT_HUB_ADMIN_TOKEN to \
-             choose your own):"
-        );
-        println!("{}", token.token);
-    } else {
-        tracing::info!(prefix = %token.prefix, "admin token from ENACT_HUB_ADMIN_TOKEN stored");
+        app::tokens::AdminToken::Generated(token) => {
+            eprintln!(
+                "created the admin API token (shown only this once; set ENACT_HUB_ADMIN_TOKEN to \
+                 choose your own):"
+            );
+            println!("{token}");
+        }
     }
     Ok(())
 }
@@ -430,180 +437,81 @@ async fn token(command: TokenCommand) -> anyhow::Result<ExitCode> {
             daily_quota,
             total_quota,
         } => {
-            let name = name.trim();
-            anyhow::ensure!(
-                !name.is_empty() && name.chars().count() <= 100,
-                "--name must be 1 to 100 characters"
-            );
-            let pool = open_db(&db.db).await?;
-            let token = NewToken::generate();
-            let mut tx = pool.begin().await?;
-            let account = match store::accounts::ensure_account(&mut tx, name, role).await? {
-                Ok(id) => id,
-                Err(message) => {
-                    eprintln!("error: {message}");
-                    return Ok(ExitCode::FAILURE);
-                }
-            };
-            let id = store::accounts::insert_token(
-                &mut tx,
-                account,
-                role,
-                &token,
-                daily_quota.map(i64::from),
-                total_quota.map(i64::from),
-            )
-            .await?;
-            tx.commit().await?;
-            pool.close().await;
-            println!(
-                "created token {id} (prefix {}) for {} account '{name}'; it is shown only once:",
-                token.prefix,
-                role.as_str()
-            );
-            println!("{}", token.token);
-            Ok(ExitCode::SUCCESS)
+            let quotas = (daily_quota.map(i64::from), total_quota.map(i64::from));
+            create_token(&db.db, &name, role.into(), quotas).await
         }
-        TokenCommand::List { db } => {
-            let pool = open_db(&db.db).await?;
-            let mut conn = pool.acquire().await?;
-            let tokens = store::accounts::list_tokens(&mut conn).await?;
-            drop(conn);
-            pool.close().await;
-            println!(
-                "{:>4}  {:<14} {:<20} {:<9} {:<20} {:<21} status",
-                "id", "prefix", "account", "role", "quota (day/total)", "created"
-            );
-            for t in tokens {
-                let quota = format!(
-                    "{}/{}",
-                    t.daily_quota
-                        .map_or("default".to_owned(), |q| q.to_string()),
-                    t.total_quota
-                        .map_or("default".to_owned(), |q| q.to_string())
-                );
-                let status = t
-                    .revoked_at
-                    .map_or_else(|| "live".to_owned(), |at| format!("revoked {at}"));
-                println!(
-                    "{:>4}  {:<14} {:<20} {:<9} {:<20} {:<21} {status}",
-                    t.id, t.prefix, t.account, t.role, quota, t.created_at
-                );
-            }
-            Ok(ExitCode::SUCCESS)
-        }
-        TokenCommand::Revoke { db, token } => {
-            let pool = open_db(&db.db).await?;
-            let mut conn = pool.acquire().await?;
-            let revoked = store::accounts::revoke_token(&mut conn, &token).await?;
-            drop(conn);
-            pool.close().await;
-            if revoked {
-                println!("revoked token {token}");
-                Ok(ExitCode::SUCCESS)
-            } else {
-                eprintln!("error: no live token with id or prefix {token:?}");
-                Ok(ExitCode::FAILURE)
-            }
-        }
+        TokenCommand::List { db } => list_tokens(&db.db).await,
+        TokenCommand::Revoke { db, token } => revoke_token(&db.db, &token).await,
     }
 }
 
-/// Writes the demo release to a temporary folder and imports it as dataset "demo".
-pub async fn load_demo(pool: &SqlitePool) -> anyhow::Result<ImportReport> {
-    let dir = tempfile::tempdir().context("cannot create a temporary directory")?;
-    let out = dir.path().to_path_buf();
-    let written =
-        tokio::task::spawn_blocking(move || demo::write_demo_release(&out, demo::DEFAULT_SEED))
-            .await
-            .context("demo generation task failed")?
-            .context("cannot generate the demo dataset")?;
-    let options = ImportOptions {
-        dataset: "demo".to_owned(),
-        skip_invalid: false,
-        replace: true,
-        progress: false,
-        scene_graphs: Some(written.replayed_dir),
+/// `token create`: the secret alone on the last line.
+async fn create_token(
+    db: &Path,
+    name: &str,
+    role: Role,
+    (daily_quota, total_quota): (Option<i64>, Option<i64>),
+) -> anyhow::Result<ExitCode> {
+    let hub = open(db).await?;
+    let created = app::tokens::issue(&hub, name, role, daily_quota, total_quota).await;
+    hub.close().await;
+    let created = match created {
+        Ok(c) => c,
+        Err(e) => return refused(e),
     };
-    let report = import_release(pool, dir.path(), &options)
-        .await
-        .context("cannot import the demo dataset")?;
-    tracing::info!("{}", report.summary_line());
-    submit_chance_baseline(pool, &options.dataset)
-        .await
-        .context("cannot add the demo's chance baseline")?;
-    Ok(report)
-}
-
-/// The account the demo's baseline row is filed under.
-const DEMO_ACCOUNT: &str = "enact-hub demo";
-
-/// Puts the chance baseline on the demo leaderboard (once per database), scored and stored as
-/// any submission is, under an account whose only token is revoked at once: nobody can submit
-/// as it.
-async fn submit_chance_baseline(pool: &SqlitePool, dataset_name: &str) -> anyhow::Result<()> {
-    use crate::store::submissions::{NewSubmission, SubmissionMetadata};
-    use sha2::Digest;
-
-    let mut tx = pool.begin().await?;
-    let dataset = store::datasets::by_name(&mut tx, dataset_name)
-        .await?
-        .with_context(|| format!("no dataset named '{dataset_name}'"))?;
-    // Once per database, even if an admin has since hidden or withdrawn the row.
-    let already = store::submissions::has_submitted(
-        &mut tx,
-        dataset.id,
-        DEMO_ACCOUNT,
-        demo::CHANCE_BASELINE_MODEL,
-    )
-    .await?;
-    if already {
-        return Ok(());
-    }
-    let rows = store::items::scoring_items(&mut tx, dataset.id).await?;
-    let body = demo::chance_baseline(
-        rows.iter().map(|r| (r.item_id.as_str(), r.gt_answer.len())),
-        demo::DEFAULT_SEED,
+    println!(
+        "created token {} (prefix {}) for {} account '{}'; it is shown only once:",
+        created.id, created.prefix, created.role, created.account
     );
-    let item_rows: Vec<i64> = rows.iter().map(|r| r.row_id).collect();
-    let targets = scoring::targets_from_stored(rows).map_err(anyhow::Error::msg)?;
-    let scored = crate::core::submission::score_submission(&targets, &body)
-        .map_err(|e| anyhow::anyhow!("the baseline does not score: {e}"))?;
-    let account = store::accounts::ensure_account(&mut tx, DEMO_ACCOUNT, Role::Submitter)
-        .await?
-        .map_err(anyhow::Error::msg)?;
-    let token = NewToken::generate();
-    let token_id =
-        store::accounts::insert_token(&mut tx, account, Role::Submitter, &token, None, None)
-            .await?;
-    store::accounts::revoke_token(&mut tx, &token_id.to_string()).await?;
-    let metadata = SubmissionMetadata {
-        model: demo::CHANCE_BASELINE_MODEL.to_owned(),
-        description: "Every item answered with a uniformly random ordering (seeded); what \
-                      chance earns at each step length."
-            .to_owned(),
-        ..SubmissionMetadata::default()
-    };
-    let body_sha256 = hex::encode(sha2::Sha256::digest(body.as_bytes()));
-    let scores_json = serde_json::to_string(&scored.scores)?;
-    let id = store::submissions::insert(
-        &mut tx,
-        &NewSubmission {
-            dataset: dataset.id,
-            account,
-            token: token_id,
-            idempotency_key: None,
-            body_sha256: &body_sha256,
-            metadata: &metadata,
-            scores_json: &scores_json,
-        },
-    )
-    .await?
-    .context("the baseline's submission row was not written")?;
-    store::submissions::insert_items(&mut tx, id, &item_rows, &scored.items).await?;
-    store::submissions::update_listing(&mut tx, id, Some(true), None).await?;
-    tx.commit().await?;
-    Ok(())
+    println!("{}", created.token);
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `token list`: one line per token, never a secret.
+async fn list_tokens(db: &Path) -> anyhow::Result<ExitCode> {
+    let hub = open(db).await?;
+    let tokens = app::tokens::list(&hub).await;
+    hub.close().await;
+    println!(
+        "{:>4}  {:<14} {:<20} {:<9} {:<20} {:<21} status",
+        "id", "prefix", "account", "role", "quota (day/total)", "created"
+    );
+    for t in tokens? {
+        let quota = format!(
+            "{}/{}",
+            t.daily_quota
+                .map_or("default".to_owned(), |q| q.to_string()),
+            t.total_quota
+                .map_or("default".to_owned(), |q| q.to_string())
+        );
+        let status = t
+            .revoked_at
+            .map_or_else(|| "live".to_owned(), |at| format!("revoked {at}"));
+        println!(
+            "{:>4}  {:<14} {:<20} {:<9} {:<20} {:<21} {status}",
+            t.id,
+            t.prefix,
+            t.account,
+            t.role.as_str(),
+            quota,
+            t.created_at
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `token revoke`: by id or prefix, effective at once.
+async fn revoke_token(db: &Path, token: &str) -> anyhow::Result<ExitCode> {
+    let hub = open(db).await?;
+    let revoked = app::tokens::revoke(&hub, token).await;
+    hub.close().await;
+    match revoked {
+        Ok(()) => {
+            println!("revoked token {token}");
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(e) => refused(e),
+    }
 }
 
 /// The dataset name `import` uses when none is given: the release folder's name.
@@ -649,7 +557,7 @@ async fn import(args: ImportArgs) -> anyhow::Result<ExitCode> {
         .dataset
         .clone()
         .unwrap_or_else(|| default_dataset_name(&args.data));
-    let pool = open_db(&args.db.db).await?;
+    let hub = open(&args.db.db).await?;
     let options = ImportOptions {
         dataset,
         skip_invalid: args.skip_invalid,
@@ -657,8 +565,8 @@ async fn import(args: ImportArgs) -> anyhow::Result<ExitCode> {
         progress: std::io::stderr().is_terminal(),
         scene_graphs: args.scene_graphs.clone(),
     };
-    let result = import_release(&pool, &args.data, &options).await;
-    pool.close().await;
+    let result = import_release(&hub, &args.data, &options).await;
+    hub.close().await;
     match result {
         Ok(report) => {
             if !report.skipped.is_empty() {
@@ -723,62 +631,29 @@ async fn scoring_targets(
                  at import (enact-hub import DATA_DIR --scene-graphs REPLAYED_DIR)"
             );
         }
-        let rows = stored_scoring_items(db, dataset).await?;
-        let targets = scoring::targets_from_stored(rows).map_err(anyhow::Error::msg)?;
-        return Ok(Ok(targets));
+        let hub = open(db).await?;
+        let targets = app::scoring::stored_targets(&hub, dataset).await;
+        hub.close().await;
+        return Ok(Ok(in_database(targets, db)?));
     }
     let data = args
         .data
         .clone()
         .context("give --data DATA_DIR, or --db PATH --dataset NAME")?;
     let scene_graphs = args.scene_graphs.clone();
-    tokio::task::spawn_blocking(move || read_release_targets(&data, scene_graphs.as_deref()))
-        .await
-        .context("reading the release failed")?
+    tokio::task::spawn_blocking(move || {
+        app::scoring::release_targets(&data, scene_graphs.as_deref())
+    })
+    .await
+    .context("reading the release failed")?
 }
 
-/// Reads a release's QA file (images are not needed to score) and computes signatures.
-fn read_release_targets(
-    data: &Path,
-    scene_graphs: Option<&Path>,
-) -> anyhow::Result<Result<Vec<ScoringTarget>, Vec<String>>> {
-    let location = crate::app::import::ReleaseLocation::resolve(data)?;
-    let text = std::fs::read_to_string(&location.qa_file)
-        .with_context(|| format!("cannot read {}", location.qa_file.display()))?;
-    let file = location.qa_file.display().to_string();
-    let mut items = Vec::new();
-    let mut problems = Vec::new();
-    for (index, line) in text.lines().enumerate() {
-        if line.trim().is_empty() {
-            continue;
-        }
-        match crate::core::dataset::parse_release_line(line) {
-            Ok(item) => items.push((index + 1, item)),
-            Err(ps) => problems.extend(
-                ps.iter()
-                    .map(|p| format!("{file}: line {}: {p}", index + 1)),
-            ),
-        }
-    }
-    if !problems.is_empty() {
-        return Ok(Err(problems));
-    }
-    let refs: Vec<&crate::core::dataset::QaItem> = items.iter().map(|(_, i)| i).collect();
-    let semantics = crate::core::semantics::for_items(scene_graphs, &refs);
-    let mut targets = Vec::with_capacity(items.len());
-    for ((line, item), semantics) in items.iter().zip(semantics) {
-        match semantics {
-            Ok(s) => targets.push(ScoringTarget::from_item(item, s).map_err(anyhow::Error::msg)?),
-            Err(ps) => problems.extend(
-                ps.iter()
-                    .map(|p| format!("{file}: line {line} ({}): {p}", item.id)),
-            ),
-        }
-    }
-    Ok(if problems.is_empty() {
-        Ok(targets)
-    } else {
-        Err(problems)
+/// A use case's result on a database the user named: what was not found says where it looked.
+fn in_database<T>(result: Result<T, AppError>, db: &Path) -> anyhow::Result<T> {
+    result.map_err(|e| match e {
+        AppError::Internal(e) => e,
+        AppError::NotFound(what) => anyhow::anyhow!("{what} in {}", db.display()),
+        other => anyhow::anyhow!("{other}"),
     })
 }
 
@@ -802,175 +677,189 @@ async fn score(args: ScoreArgs) -> anyhow::Result<ExitCode> {
     });
 
     match args.policy {
-        PolicyArg::Enact => {
-            let source: Box<dyn crate::core::verifier::EnactSignatureSource + Send> = match (
-                &args.scene_graphs,
-                &args.db,
-                &args.dataset,
-            ) {
-                (Some(replayed), _, _) => {
-                    let replayed = replayed.clone();
-                    let text = text.clone();
-                    Box::new(
-                        tokio::task::spawn_blocking(move || {
-                            scoring::SceneGraphSignatures::for_predictions(
-                                &replayed,
-                                crate::core::verifier::python_text_lines(&text).map(|(_, l)| l),
-                            )
-                        })
-                        .await
-                        .context("loading scene graphs failed")??,
-                    )
-                }
-                (None, Some(db), Some(dataset)) => Box::new(stored_signatures(db, dataset).await?),
-                _ => anyhow::bail!(
-                    "the enact policy scores as ENACT's evaluator does, which needs scene \
-                         graphs: give --scene-graphs REPLAYED_DIR, or a --db dataset imported with them"
-                ),
-            };
-            let evaluation = tokio::task::spawn_blocking(move || {
-                let lines: Vec<(usize, &str)> =
-                    crate::core::verifier::python_text_lines(&text).collect();
-                crate::core::verifier::score_enact_predictions(lines, &model, source.as_ref())
-            })
-            .await
-            .context("scoring task failed")?;
-            let evaluation = match evaluation {
-                Ok(e) => e,
-                Err(e) => {
-                    eprintln!("error: {file}: {e}");
-                    return Ok(ExitCode::FAILURE);
-                }
-            };
-            if !evaluation.skipped.is_empty() {
-                eprintln!(
-                    "skipped {} lines (ENACT leaves them out of every metric):",
-                    evaluation.skipped.len()
-                );
-                for s in &evaluation.skipped {
-                    eprintln!("  {file}: line {}: {}", s.line, s.reason);
-                }
-            }
-            print!("{}", scoring::performance_table(&evaluation.report));
-            println!(
-                "model {}: {} items evaluated, {} lines skipped (policy enact)",
-                evaluation.model_name,
-                evaluation.evaluated.len(),
-                evaluation.skipped.len()
-            );
-            if let Some(out) = &args.out {
-                write_enact_outputs(
-                    out,
-                    &evaluation.model_name,
-                    &evaluation.meta_performance_json(),
-                    &evaluation.detailed_eval_jsonl(),
-                )?;
-            }
-            Ok(ExitCode::SUCCESS)
-        }
-        PolicyArg::Strict => {
-            let targets = match scoring_targets(&args).await? {
-                Ok(t) => t,
-                Err(problems) => {
-                    for p in &problems {
-                        eprintln!("{p}");
-                    }
-                    eprintln!(
-                        "error: the dataset has {} problems; nothing was scored",
-                        problems.len()
-                    );
-                    return Ok(ExitCode::FAILURE);
-                }
-            };
-            let semantic = SemanticCoverage::of(&targets);
-            let scored = tokio::task::spawn_blocking(move || {
-                let items: Vec<crate::core::verifier::StrictItem<'_>> =
-                    targets.iter().map(ScoringTarget::strict_item).collect();
-                let scoring = crate::core::verifier::score_strict_predictions(
-                    &items,
-                    crate::core::verifier::python_text_lines(&text),
-                );
-                (targets, scoring)
-            })
-            .await
-            .context("scoring task failed")?;
-            let (targets, scoring) = scored;
-            let scoring = scoring?;
-            if !scoring.problems.is_empty() {
-                for p in &scoring.problems {
-                    eprintln!("{file}: {p}");
-                }
-                eprintln!(
-                    "error: {file}: {} problems; nothing was scored",
-                    scoring.problems.len()
-                );
-                return Ok(ExitCode::FAILURE);
-            }
-            let c = &scoring.coverage;
-            print!("{}", scoring::performance_table(&scoring.report));
-            println!(
-                "model {model}: {} of {} items answered (coverage {:.2}%), {} unparseable \
-                 (parse-failure rate {:.2}%), {} missing (policy strict)",
-                c.answered,
-                c.dataset_items,
-                c.coverage * 100.0,
-                c.unparseable,
-                c.parse_failure_rate * 100.0,
-                c.missing
-            );
-            println!("{}", semantic.describe());
-            if let Some(out) = &args.out {
-                let meta =
-                    crate::core::verifier::enact_meta_performance_json(&model, &scoring.report);
-                write_enact_outputs(
-                    out,
-                    &model,
-                    &meta,
-                    &scoring::strict_detailed_jsonl(&targets, &scoring),
-                )?;
-            }
-            Ok(ExitCode::SUCCESS)
-        }
+        PolicyArg::Enact => score_enact(&args, &file, text, model).await,
+        PolicyArg::Strict => score_strict(&args, &file, text, model).await,
     }
 }
 
-async fn create_annotator(args: CreateAnnotatorArgs) -> anyhow::Result<ExitCode> {
-    if let Err(problem) = crate::web::check_annotator_name(&args.name) {
-        eprintln!("error: --name: {problem}");
-        return Ok(ExitCode::FAILURE);
-    }
-    let pool = open_db(&args.db.db).await?;
-    let token = crate::core::annotation::new_token();
-    let mut conn = pool.acquire().await?;
-    let created = store::annotations::create_annotator(
-        &mut conn,
-        &args.name,
-        args.admin,
-        &crate::core::annotation::token_hash(&token),
-    )
-    .await?;
-    drop(conn);
-    pool.close().await;
-    if created.is_none() {
+/// `score --policy enact`: ENACT's evaluator, quirks included, with its skipped lines listed.
+async fn score_enact(
+    args: &ScoreArgs,
+    file: &str,
+    text: String,
+    model: String,
+) -> anyhow::Result<ExitCode> {
+    let source: Box<dyn crate::core::verifier::EnactSignatureSource + Send> =
+        match (&args.scene_graphs, &args.db, &args.dataset) {
+            (Some(replayed), _, _) => {
+                let replayed = replayed.clone();
+                let text = text.clone();
+                Box::new(
+                    tokio::task::spawn_blocking(move || {
+                        scoring::SceneGraphSignatures::for_predictions(
+                            &replayed,
+                            crate::core::verifier::python_text_lines(&text).map(|(_, l)| l),
+                        )
+                    })
+                    .await
+                    .context("loading scene graphs failed")??,
+                )
+            }
+            (None, Some(db), Some(dataset)) => {
+                let hub = open(db).await?;
+                let signatures = app::scoring::stored_signatures(&hub, dataset).await;
+                hub.close().await;
+                Box::new(in_database(signatures, db)?)
+            }
+            _ => anyhow::bail!(
+                "the enact policy scores as ENACT's evaluator does, which needs scene \
+                 graphs: give --scene-graphs REPLAYED_DIR, or a --db dataset imported with them"
+            ),
+        };
+    let evaluation = tokio::task::spawn_blocking(move || {
+        let lines: Vec<(usize, &str)> = crate::core::verifier::python_text_lines(&text).collect();
+        crate::core::verifier::score_enact_predictions(lines, &model, source.as_ref())
+    })
+    .await
+    .context("scoring task failed")?;
+    let evaluation = match evaluation {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: {file}: {e}");
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    if !evaluation.skipped.is_empty() {
         eprintln!(
-            "error: an annotator named '{}' already exists in {}",
-            args.name,
-            args.db.db.display()
+            "skipped {} lines (ENACT leaves them out of every metric):",
+            evaluation.skipped.len()
+        );
+        for s in &evaluation.skipped {
+            eprintln!("  {file}: line {}: {}", s.line, s.reason);
+        }
+    }
+    print!("{}", scoring::performance_table(&evaluation.report));
+    println!(
+        "model {}: {} items evaluated, {} lines skipped (policy enact)",
+        evaluation.model_name,
+        evaluation.evaluated.len(),
+        evaluation.skipped.len()
+    );
+    if let Some(out) = &args.out {
+        write_enact_outputs(
+            out,
+            &evaluation.model_name,
+            &evaluation.meta_performance_json(),
+            &evaluation.detailed_eval_jsonl(),
+        )?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `score --policy strict`: every dataset item counts; problems refuse the whole file.
+async fn score_strict(
+    args: &ScoreArgs,
+    file: &str,
+    text: String,
+    model: String,
+) -> anyhow::Result<ExitCode> {
+    let targets = match scoring_targets(args).await? {
+        Ok(t) => t,
+        Err(problems) => {
+            for p in &problems {
+                eprintln!("{p}");
+            }
+            eprintln!(
+                "error: the dataset has {} problems; nothing was scored",
+                problems.len()
+            );
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    let semantic = SemanticCoverage::of(&targets);
+    let scored = tokio::task::spawn_blocking(move || {
+        let items: Vec<crate::core::verifier::StrictItem<'_>> =
+            targets.iter().map(ScoringTarget::strict_item).collect();
+        let scoring = crate::core::verifier::score_strict_predictions(
+            &items,
+            crate::core::verifier::python_text_lines(&text),
+        );
+        (targets, scoring)
+    })
+    .await
+    .context("scoring task failed")?;
+    let (targets, scoring) = scored;
+    let scoring = scoring?;
+    if !scoring.problems.is_empty() {
+        for p in &scoring.problems {
+            eprintln!("{file}: {p}");
+        }
+        eprintln!(
+            "error: {file}: {} problems; nothing was scored",
+            scoring.problems.len()
         );
         return Ok(ExitCode::FAILURE);
     }
-    let role = if args.admin { "admin" } else { "annotator" };
+    let c = &scoring.coverage;
+    print!("{}", scoring::performance_table(&scoring.report));
+    println!(
+        "model {model}: {} of {} items answered (coverage {:.2}%), {} unparseable \
+         (parse-failure rate {:.2}%), {} missing (policy strict)",
+        c.answered,
+        c.dataset_items,
+        c.coverage * 100.0,
+        c.unparseable,
+        c.parse_failure_rate * 100.0,
+        c.missing
+    );
+    println!("{}", semantic.describe());
+    if let Some(out) = &args.out {
+        let meta = crate::core::verifier::enact_meta_performance_json(&model, &scoring.report);
+        write_enact_outputs(
+            out,
+            &model,
+            &meta,
+            &scoring::strict_detailed_jsonl(&targets, &scoring),
+        )?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+async fn create_annotator(args: CreateAnnotatorArgs) -> anyhow::Result<ExitCode> {
+    let hub = open(&args.db.db).await?;
+    let created = app::annotators::create(&hub, &args.name, args.admin).await;
+    hub.close().await;
+    let invited = match created {
+        Ok(invited) => invited,
+        Err(AppError::BadRequest(problem)) => {
+            eprintln!("error: --name: {problem}");
+            return Ok(ExitCode::FAILURE);
+        }
+        Err(AppError::Conflict(problem)) => {
+            eprintln!("error: {problem} in {}", args.db.db.display());
+            return Ok(ExitCode::FAILURE);
+        }
+        Err(e) => return refused(e),
+    };
+    let role = if invited.is_admin {
+        "admin"
+    } else {
+        "annotator"
+    };
     println!(
         "created {role} '{}'; send them this single-use link to set a password:",
-        args.name
+        invited.name
     );
-    println!("{}", crate::web::invite_url(&args.base_url, &token));
+    println!(
+        "{}",
+        app::annotators::invite_url(&args.base_url, &invited.invite_token)
+    );
     Ok(ExitCode::SUCCESS)
 }
 
 impl AgreementArgs {
-    fn stored(&self) -> stored::AgreementOptions {
-        stored::AgreementOptions {
+    fn stored(&self) -> app::agreement::AgreementOptions {
+        app::agreement::AgreementOptions {
             encoding: self.encoding,
             level: self.level,
             bootstrap: crate::core::agreement::BootstrapConfig {
@@ -1026,24 +915,6 @@ fn agreement(args: &AgreementArgs) -> anyhow::Result<ExitCode> {
     }
     println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(ExitCode::SUCCESS)
-}
-
-/// The scene-graph signatures stored for a dataset's items, for the enact policy.
-async fn stored_signatures(db: &Path, dataset: &str) -> anyhow::Result<scoring::StoredSignatures> {
-    let rows = stored_scoring_items(db, dataset).await?;
-    let mut tables = Vec::new();
-    for row in rows {
-        let Some((source, json)) = row.semantics else {
-            continue;
-        };
-        if source != crate::core::semantics::SignatureSource::SceneGraph.as_str() {
-            continue;
-        }
-        let table = serde_json::from_str(&json)
-            .with_context(|| format!("item {}: stored signatures are unreadable", row.item_id))?;
-        tables.push((row.task_name, row.key_frame_ids, table));
-    }
-    Ok(scoring::StoredSignatures::new(tables))
 }
 
 /// `3..10`, `3..=10` or `3,5,7` into step lengths, each checked to lie in 3..10.
@@ -1142,20 +1013,4 @@ async fn generate(args: GenerateArgs) -> anyhow::Result<ExitCode> {
         args.out.join("replayed_activities").display()
     );
     Ok(ExitCode::SUCCESS)
-}
-
-/// Every item of a stored dataset with what scoring needs (ground truth, signatures).
-async fn stored_scoring_items(
-    db: &Path,
-    dataset: &str,
-) -> anyhow::Result<Vec<store::items::ScoringItem>> {
-    let pool = open_db(db).await?;
-    let mut conn = pool.acquire().await?;
-    let stored = store::datasets::by_name(&mut conn, dataset)
-        .await?
-        .with_context(|| format!("no dataset named '{dataset}' in {}", db.display()))?;
-    let rows = store::items::scoring_items(&mut conn, stored.id).await?;
-    drop(conn);
-    pool.close().await;
-    Ok(rows)
 }

@@ -7,30 +7,11 @@ use std::process::ExitCode;
 use anyhow::Context;
 use serde_json::json;
 
-use crate::core::agreement::report::{
-    AgreementSection, REPORT_METRIC_VERSION, agreement_section, overlapping_answers,
-};
+use super::{in_database, open};
+use crate::app;
+use crate::app::agreement::{AgreementOptions, ReportSettings};
+use crate::core::agreement::report::{AgreementSection, REPORT_METRIC_VERSION};
 use crate::core::agreement::{BootstrapConfig, MeasurementLevel, OrderingEncoding};
-use crate::store;
-
-/// What `agreement --db` computes.
-pub struct AgreementOptions {
-    pub encoding: OrderingEncoding,
-    pub level: Option<MeasurementLevel>,
-    pub bootstrap: BootstrapConfig,
-}
-
-/// The dataset's id, or an error naming the dataset and the database.
-async fn dataset_id(
-    conn: &mut sqlx::SqliteConnection,
-    db: &Path,
-    name: &str,
-) -> anyhow::Result<i64> {
-    Ok(store::datasets::by_name(conn, name)
-        .await?
-        .with_context(|| format!("no dataset named '{name}' in {}", db.display()))?
-        .id)
-}
 
 /// The JSON `agreement --db` prints for one agreement section.
 pub fn agreement_json(
@@ -80,22 +61,12 @@ pub fn agreement_json(
 pub async fn agreement(
     db: &Path,
     dataset: &str,
-    options: &AgreementOptions,
+    options: AgreementOptions,
 ) -> anyhow::Result<ExitCode> {
-    let pool = super::open_db(db).await?;
-    let mut conn = pool.acquire().await?;
-    let id = dataset_id(&mut conn, db, dataset).await?;
-    let answers = store::agreement::annotator_answers(&mut conn, id).await?;
-    let (hash, _) = store::agreement::dataset_hash(&mut conn, id).await?;
-    drop(conn);
-    pool.close().await;
-    let overlap = overlapping_answers(&answers).with_context(|| format!("dataset '{dataset}'"))?;
-    let (encoding, level, config) = (options.encoding, options.level, options.bootstrap);
-    let section =
-        tokio::task::spawn_blocking(move || agreement_section(&overlap, encoding, level, &config))
-            .await
-            .context("agreement task failed")?
-            .with_context(|| format!("dataset '{dataset}'"))?;
+    let hub = open(db).await?;
+    let computed = app::agreement::agreement(&hub, dataset, options).await;
+    hub.close().await;
+    let (hash, section) = in_database(computed, db)?;
     println!(
         "{}",
         serde_json::to_string_pretty(&agreement_json(dataset, &hash, &section))?
@@ -121,25 +92,12 @@ pub struct ProtocolArgs {
 
 /// `agreement-protocol`: runs the protocol once and prints what it drew as JSON.
 pub async fn agreement_protocol(args: &ProtocolArgs) -> anyhow::Result<ExitCode> {
-    let pool = super::open_db(&args.db).await?;
-    let mut conn = pool.acquire().await?;
-    let id = dataset_id(&mut conn, &args.db, &args.dataset).await?;
-    drop(conn);
-    let mut tx = pool.begin().await?;
+    let hub = open(&args.db).await?;
     let run =
-        store::agreement::run_protocol(&mut tx, id, args.items_per_cell, args.seed, None).await?;
-    let run = match run {
-        Ok(run) => {
-            tx.commit().await?;
-            run
-        }
-        Err(refusal) => {
-            tx.rollback().await?;
-            pool.close().await;
-            anyhow::bail!("dataset '{}': {refusal}", args.dataset);
-        }
-    };
-    pool.close().await;
+        app::agreement::run_protocol(&hub, &args.dataset, args.items_per_cell, args.seed, None)
+            .await;
+    hub.close().await;
+    let run = in_database(run, &args.db)?;
     println!(
         "{}",
         serde_json::to_string_pretty(&json!({
@@ -188,19 +146,8 @@ pub struct ReportArgs {
 
 /// `report`: builds the dataset's report and writes the bundle's files into `--out`.
 pub async fn report(args: &ReportArgs) -> anyhow::Result<ExitCode> {
-    use crate::core::agreement::report::{build_report, export};
-    let pool = super::open_db(&args.db).await?;
-    let mut conn = pool.acquire().await?;
-    let dataset = store::datasets::by_name(&mut conn, &args.dataset)
-        .await?
-        .with_context(|| {
-            format!(
-                "no dataset named '{}' in {}",
-                args.dataset,
-                args.db.display()
-            )
-        })?;
-    let settings = store::agreement::ReportSettings {
+    use crate::core::agreement::report::export;
+    let settings = ReportSettings {
         encoding: args.encoding,
         level: args.level,
         bootstrap: BootstrapConfig {
@@ -213,13 +160,10 @@ pub async fn report(args: &ReportArgs) -> anyhow::Result<ExitCode> {
             _ => None,
         }),
     };
-    let inputs = store::agreement::report_inputs(&mut conn, &dataset, &settings).await?;
-    drop(conn);
-    pool.close().await;
-    let report = tokio::task::spawn_blocking(move || build_report(&inputs))
-        .await
-        .context("report task failed")?
-        .with_context(|| format!("dataset '{}'", args.dataset))?;
+    let hub = open(&args.db).await?;
+    let report = app::agreement::report(&hub, &args.dataset, &settings).await;
+    hub.close().await;
+    let report = in_database(report, &args.db)?;
     let files = export::bundle_files(&report)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;

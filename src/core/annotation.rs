@@ -1,64 +1,14 @@
-//! Human annotation, the parts without HTTP or SQL: credentials, the balanced split of a dataset
-//! over annotators, the draft an annotator is working on, and the scoring of submitted answers
-//! into the same report models get.
+//! Human annotation, the parts without HTTP or SQL: the balanced split of a dataset over
+//! annotators, the draft an annotator is working on, where each assigned item stands, the
+//! telemetry of a finished item, and the scoring of submitted answers into the same report
+//! models get. Passwords and tokens are in [`crate::core::credentials`].
 
 use std::collections::BTreeMap;
 
-use argon2::Argon2;
-use argon2::password_hash::{PasswordHash, PasswordHasher, PasswordVerifier, SaltString};
-use rand::RngCore;
 use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::verifier::{ItemSignatures, ParsedAnswer, Permutation, ScoredEntry, verify};
-
-/// Shortest password accepted when an invite is used.
-pub const MIN_PASSWORD_CHARS: usize = 10;
-
-/// A fresh random token (256 bits, hex): session cookies, invite links, CSRF tokens.
-pub fn new_token() -> String {
-    let mut bytes = [0u8; 32];
-    rand::rng().fill_bytes(&mut bytes);
-    hex::encode(bytes)
-}
-
-/// What the store keeps of a token: its sha256, so a leaked database opens no session.
-pub fn token_hash(token: &str) -> String {
-    hex::encode(Sha256::digest(token.as_bytes()))
-}
-
-/// Constant-time comparison of two tokens, so timing does not reveal a CSRF token prefix.
-pub fn tokens_equal(a: &str, b: &str) -> bool {
-    let (a, b) = (a.as_bytes(), b.as_bytes());
-    a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
-}
-
-/// argon2id with the crate's default cost. Slow on purpose: call it from `spawn_blocking`.
-pub fn hash_password(password: &str) -> Result<String, argon2::password_hash::Error> {
-    let mut salt = [0u8; 16];
-    rand::rng().fill_bytes(&mut salt);
-    let salt = SaltString::encode_b64(&salt)?;
-    Ok(Argon2::default()
-        .hash_password(password.as_bytes(), &salt)?
-        .to_string())
-}
-
-/// Whether `password` matches a stored PHC string. Slow on purpose: call it from `spawn_blocking`.
-pub fn verify_password(password: &str, stored: &str) -> bool {
-    PasswordHash::new(stored).is_ok_and(|hash| {
-        Argon2::default()
-            .verify_password(password.as_bytes(), &hash)
-            .is_ok()
-    })
-}
-
-/// Why a new password is refused.
-pub fn password_problem(password: &str) -> Option<String> {
-    let chars = password.chars().count();
-    (chars < MIN_PASSWORD_CHARS)
-        .then(|| format!("the password has {chars} characters; use at least {MIN_PASSWORD_CHARS}"))
-}
 
 /// An item to deal out: its store id and its kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -210,6 +160,124 @@ pub fn human_entries(answers: &[HumanAnswer]) -> Result<Vec<ScoredEntry>, String
         .collect()
 }
 
+/// An annotator logged in: who, and the CSRF token their forms must carry.
+#[derive(Debug, Clone)]
+pub struct Session {
+    pub annotator: i64,
+    pub name: String,
+    pub is_admin: bool,
+    pub csrf_token: String,
+}
+
+/// Where an assigned item stands for its annotator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum QueueStatus {
+    Todo,
+    /// A draft exists: the annotator has opened the item.
+    Started,
+    Answered,
+    Skipped,
+    Flagged,
+}
+
+impl QueueStatus {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            QueueStatus::Todo => "to do",
+            QueueStatus::Started => "in progress",
+            QueueStatus::Answered => "answered",
+            QueueStatus::Skipped => "skipped",
+            QueueStatus::Flagged => "flagged",
+        }
+    }
+
+    pub fn is_done(self) -> bool {
+        matches!(
+            self,
+            QueueStatus::Answered | QueueStatus::Skipped | QueueStatus::Flagged
+        )
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct QueueEntry {
+    pub dataset: String,
+    pub item_id: String,
+    pub direction: Direction,
+    pub step_length: StepLength,
+    pub status: QueueStatus,
+}
+
+/// The item an annotator should work on next: one already started, else the first to do.
+pub fn next_in_queue(queue: &[QueueEntry]) -> Option<&QueueEntry> {
+    queue
+        .iter()
+        .find(|e| e.status == QueueStatus::Started)
+        .or_else(|| queue.iter().find(|e| e.status == QueueStatus::Todo))
+}
+
+/// An annotator's standing on one item: whether it is finished, and the draft if one exists.
+#[derive(Debug, Clone)]
+pub struct AssignmentState {
+    pub finished: bool,
+    pub draft: Option<StoredDraft>,
+}
+
+/// A stored draft with its timing.
+#[derive(Debug, Clone)]
+pub struct StoredDraft {
+    pub draft: Draft,
+    pub started_at_ms: i64,
+    pub first_placement_at_ms: Option<i64>,
+}
+
+/// How an item was finished.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Outcome {
+    Answered(Permutation),
+    Skipped(String),
+    Flagged(String),
+}
+
+/// Telemetry stored with each finished item.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Telemetry {
+    pub time_on_item_ms: i64,
+    pub time_to_first_placement_ms: Option<i64>,
+    pub placements: u32,
+    pub swaps: u32,
+    pub clears: u32,
+    pub undos: u32,
+}
+
+impl Telemetry {
+    /// An item finished without ever being opened.
+    pub fn none() -> Telemetry {
+        Telemetry {
+            time_on_item_ms: 0,
+            time_to_first_placement_ms: None,
+            placements: 0,
+            swaps: 0,
+            clears: 0,
+            undos: 0,
+        }
+    }
+
+    /// Times run from the item's first opening to `now_ms`.
+    pub fn of(draft: &StoredDraft, now_ms: i64) -> Telemetry {
+        Telemetry {
+            time_on_item_ms: (now_ms - draft.started_at_ms).max(0),
+            time_to_first_placement_ms: draft
+                .first_placement_at_ms
+                .map(|t| (t - draft.started_at_ms).max(0)),
+            placements: draft.draft.counts.placements,
+            swaps: draft.draft.counts.swaps,
+            clears: draft.draft.counts.clears,
+            undos: draft.draft.counts.undos,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -292,22 +360,6 @@ mod tests {
         );
         d.slots = vec![Some(3), Some(1), Some(2)];
         assert_eq!(d.answer().expect("full").labels(), &[3, 1, 2]);
-    }
-
-    #[test]
-    fn passwords_and_tokens() {
-        let hash = hash_password("correct horse").expect("hash");
-        assert!(verify_password("correct horse", &hash));
-        assert!(!verify_password("wrong horse", &hash));
-        assert!(!verify_password("correct horse", "not a phc string"));
-        assert!(password_problem("short").is_some());
-        assert!(password_problem("long enough!").is_none());
-        let (a, b) = (new_token(), new_token());
-        assert_eq!(a.len(), 64);
-        assert_ne!(a, b);
-        assert!(tokens_equal(&a, &a.clone()));
-        assert!(!tokens_equal(&a, &b));
-        assert_ne!(token_hash(&a), a);
     }
 
     #[test]

@@ -1,11 +1,15 @@
-//! API tokens: their format, hashing, constant-time comparison, roles and scopes (pure).
+//! Who may do what, and the secrets that prove it (pure): API tokens (format, hashing,
+//! constant-time comparison), roles and scopes; the random tokens of annotator sessions,
+//! invites and CSRF; passwords; and the naming rules of accounts.
 //!
-//! A token reads `ehub_{prefix}_{secret}`. The prefix is its public part (shown by
-//! `token list`, used to find the row); only the SHA-256 of the whole token is stored, so the
+//! An API token reads `ehub_{prefix}_{secret}`. The prefix is its public part (shown by
+//! `token list`, used to find the row). Only SHA-256 hashes of tokens are stored, so the
 //! database never holds a usable secret.
 
 use std::fmt;
 
+use argon2::Argon2;
+use argon2::password_hash::{PasswordHash, PasswordHasher, PasswordVerifier, SaltString};
 use rand::RngCore;
 use serde::Serialize;
 use sha2::{Digest, Sha256};
@@ -48,7 +52,7 @@ impl Scope {
 }
 
 /// The kind of account a token belongs to; it fixes the token's scopes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Role {
     Submitter,
@@ -76,6 +80,12 @@ impl Role {
             Role::Submitter => &[Scope::Submit, Scope::ReadOwn],
             Role::Admin => &[Scope::Admin, Scope::Submit, Scope::ReadOwn],
         }
+    }
+}
+
+impl fmt::Display for Role {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
     }
 }
 
@@ -145,6 +155,7 @@ fn operator_prefix(hash: &str) -> String {
     format!("op{}", &hash[..PREFIX_HEX - 2])
 }
 
+/// What the store keeps of any token: its SHA-256, so a leaked database opens nothing.
 pub fn token_hash(token: &str) -> String {
     hex::encode(Sha256::digest(token.as_bytes()))
 }
@@ -178,6 +189,69 @@ pub fn constant_time_eq(a: &[u8], b: &[u8]) -> bool {
 /// Whether `presented` is the token whose hash is `stored_hash`.
 pub fn token_matches(presented: &str, stored_hash: &str) -> bool {
     constant_time_eq(token_hash(presented).as_bytes(), stored_hash.as_bytes())
+}
+
+/// Shortest password accepted when an invite is used.
+pub const MIN_PASSWORD_CHARS: usize = 10;
+
+/// A fresh random token (256 bits, hex): session cookies, invite links, CSRF tokens.
+pub fn random_token() -> String {
+    let mut bytes = [0u8; 32];
+    rand::rng().fill_bytes(&mut bytes);
+    hex::encode(bytes)
+}
+
+/// argon2id with the crate's default cost. Slow on purpose: call it from `spawn_blocking`.
+pub fn hash_password(password: &str) -> Result<String, argon2::password_hash::Error> {
+    let mut salt = [0u8; 16];
+    rand::rng().fill_bytes(&mut salt);
+    let salt = SaltString::encode_b64(&salt)?;
+    Ok(Argon2::default()
+        .hash_password(password.as_bytes(), &salt)?
+        .to_string())
+}
+
+/// Whether `password` matches a stored PHC string. Slow on purpose: call it from `spawn_blocking`.
+pub fn verify_password(password: &str, stored: &str) -> bool {
+    PasswordHash::new(stored).is_ok_and(|hash| {
+        Argon2::default()
+            .verify_password(password.as_bytes(), &hash)
+            .is_ok()
+    })
+}
+
+/// Why a new password is refused.
+pub fn password_problem(password: &str) -> Option<String> {
+    let chars = password.chars().count();
+    (chars < MIN_PASSWORD_CHARS)
+        .then(|| format!("the password has {chars} characters; use at least {MIN_PASSWORD_CHARS}"))
+}
+
+/// The name of an API account (a person or team), trimmed: 1 to 100 characters.
+pub fn account_name(name: &str) -> Result<&str, String> {
+    let name = name.trim();
+    if name.is_empty() || name.chars().count() > 100 {
+        return Err("an account name has 1 to 100 characters".to_owned());
+    }
+    Ok(name)
+}
+
+/// The login name of an annotator, trimmed. Names are shown on pages and typed at login, so
+/// they stay plain: 1 to 64 letters, digits, `.`, `_` and `-`.
+pub fn annotator_name(name: &str) -> Result<&str, String> {
+    let name = name.trim();
+    if name.is_empty() || name.chars().count() > 64 {
+        return Err("an annotator name has 1 to 64 characters".to_owned());
+    }
+    if let Some(c) = name
+        .chars()
+        .find(|c| !(c.is_alphanumeric() || matches!(c, '.' | '_' | '-')))
+    {
+        return Err(format!(
+            "annotator name '{name}': character {c:?} is not allowed (letters, digits, . _ -)"
+        ));
+    }
+    Ok(name)
 }
 
 #[cfg(test)]
@@ -216,5 +290,32 @@ mod tests {
         let text = scopes_to_text(Role::Admin.scopes());
         assert_eq!(scopes_from_text(&text), Role::Admin.scopes());
         assert_eq!(scopes_from_text("submit,root"), vec![Scope::Submit]);
+    }
+
+    #[test]
+    fn passwords_and_random_tokens() {
+        let hash = hash_password("correct horse").expect("hash");
+        assert!(verify_password("correct horse", &hash));
+        assert!(!verify_password("wrong horse", &hash));
+        assert!(!verify_password("correct horse", "not a phc string"));
+        assert!(password_problem("short").is_some());
+        assert!(password_problem("long enough!").is_none());
+        let (a, b) = (random_token(), random_token());
+        assert_eq!(a.len(), 64);
+        assert_ne!(a, b);
+        assert!(constant_time_eq(a.as_bytes(), a.clone().as_bytes()));
+        assert!(!constant_time_eq(a.as_bytes(), b.as_bytes()));
+        assert_ne!(token_hash(&a), a);
+    }
+
+    #[test]
+    fn names_follow_one_rule_each() {
+        assert_eq!(account_name("  team-a "), Ok("team-a"));
+        assert!(account_name("   ").is_err());
+        assert!(account_name(&"x".repeat(101)).is_err());
+        assert_eq!(annotator_name(" ann.o_t-1 "), Ok("ann.o_t-1"));
+        let e = annotator_name("ann ot").expect_err("a space is refused");
+        assert!(e.contains("' '"), "{e}");
+        assert!(annotator_name(&"a".repeat(65)).is_err());
     }
 }

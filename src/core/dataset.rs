@@ -465,6 +465,31 @@ fn check_permutation(gt: &[u8], actions: usize, problems: &mut Vec<FieldProblem>
     }
 }
 
+/// Whether a dataset's ground truth and per-item correctness may be shown to submitters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AnswerVisibility {
+    Public,
+    Hidden,
+}
+
+impl AnswerVisibility {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            AnswerVisibility::Public => "public",
+            AnswerVisibility::Hidden => "hidden",
+        }
+    }
+
+    pub fn parse(text: &str) -> Option<AnswerVisibility> {
+        match text {
+            "public" => Some(AnswerVisibility::Public),
+            "hidden" => Some(AnswerVisibility::Hidden),
+            _ => None,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

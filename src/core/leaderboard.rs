@@ -3,9 +3,12 @@
 //! accuracy-against-step-length chart (pure; templates draw it).
 
 use serde::Serialize;
-use serde_json::Value;
 
 use crate::core::dataset::StepLength;
+use crate::core::submission::SubmissionScores;
+use crate::core::verifier::{
+    ConfidenceInterval, GroupPerformance, PerformanceReport, StepPerformance,
+};
 
 /// Where a row comes from. Human performance rows (from annotations) will be a second kind:
 /// they carry the same cells, so the table and chart draw them without change.
@@ -56,41 +59,32 @@ pub struct LeaderboardRow {
     pub parse_failure_rate: f64,
 }
 
-fn cell(group: &Value) -> AccuracyCell {
-    AccuracyCell {
-        task_accuracy: group.get("task_accuracy").and_then(Value::as_f64),
-        pairwise_accuracy: group.get("pairwise_accuracy").and_then(Value::as_f64),
-        count: group
-            .get("count")
-            .and_then(Value::as_u64)
-            .map_or(0, |c| c as usize),
-    }
+fn cell(group: Option<&StepPerformance>) -> AccuracyCell {
+    group.map_or_else(AccuracyCell::default, |g| AccuracyCell {
+        task_accuracy: Some(g.task_accuracy),
+        pairwise_accuracy: g.pairwise_accuracy,
+        count: g.count,
+    })
 }
 
-fn columns(group: &Value) -> DirectionColumns {
+fn columns(group: Option<&GroupPerformance>) -> DirectionColumns {
     DirectionColumns {
-        total: cell(group),
+        total: cell(group.map(|g| &g.totals)),
         per_step: StepLength::all()
             .map(|l| {
-                let key = l.states().to_string();
                 (
                     l.get(),
-                    group
-                        .get("per_step")
-                        .and_then(|p| p.get(&key))
-                        .map(cell)
-                        .unwrap_or_default(),
+                    cell(group.and_then(|g| g.per_step.get(&l.states()))),
                 )
             })
             .collect(),
     }
 }
 
-fn interval(v: Option<&Value>) -> Option<Interval> {
-    let v = v?;
-    Some(Interval {
-        low: v.get("low")?.as_f64()?,
-        high: v.get("high")?.as_f64()?,
+fn interval(v: Option<ConfidenceInterval>) -> Option<Interval> {
+    v.map(|v| Interval {
+        low: v.low,
+        high: v.high,
     })
 }
 
@@ -104,10 +98,9 @@ pub struct RowIdentity<'a> {
 }
 
 impl LeaderboardRow {
-    /// A row from a submission's stored scores (`SubmissionScores` as JSON).
-    pub fn from_scores(who: &RowIdentity<'_>, scores: &Value) -> LeaderboardRow {
-        let report = &scores["report"];
-        let coverage = &scores["coverage"];
+    /// A row from a submission's scores.
+    pub fn from_scores(who: &RowIdentity<'_>, scores: &SubmissionScores) -> LeaderboardRow {
+        let report = &scores.report;
         LeaderboardRow {
             source: RowSource::Submission,
             submission: Some(who.submission),
@@ -115,27 +108,20 @@ impl LeaderboardRow {
             account: who.account.to_owned(),
             baseline: who.baseline,
             submitted_at: who.submitted_at.to_owned(),
-            overall: cell(&report["overall"]),
-            overall_task_accuracy_ci: interval(scores["confidence"].get("task_accuracy")),
-            overall_pairwise_accuracy_ci: interval(scores["confidence"].get("pairwise_accuracy")),
-            forward: columns(&report["forward_world_modeling"]),
-            inverse: columns(&report["inverse_world_modeling"]),
-            coverage: coverage["coverage"].as_f64().unwrap_or(0.0),
-            parse_failure_rate: coverage["parse_failure_rate"].as_f64().unwrap_or(0.0),
+            overall: cell(report.overall.as_ref().map(|g| &g.totals)),
+            overall_task_accuracy_ci: interval(scores.confidence.task_accuracy),
+            overall_pairwise_accuracy_ci: interval(scores.confidence.pairwise_accuracy),
+            forward: columns(report.forward_world_modeling.as_ref()),
+            inverse: columns(report.inverse_world_modeling.as_ref()),
+            coverage: scores.coverage.coverage,
+            parse_failure_rate: scores.coverage.parse_failure_rate,
         }
     }
-}
 
-impl LeaderboardRow {
     /// The Human row: `report` over the annotators' submitted answers; `dataset_items` gives
     /// its coverage.
-    pub fn human(
-        report: &crate::core::verifier::PerformanceReport,
-        dataset_items: usize,
-    ) -> LeaderboardRow {
-        // The report serialises to the same shape as stored submission scores.
-        let report = serde_json::to_value(report).unwrap_or(Value::Null);
-        let overall = cell(&report["overall"]);
+    pub fn human(report: &PerformanceReport, dataset_items: usize) -> LeaderboardRow {
+        let overall = cell(report.overall.as_ref().map(|g| &g.totals));
         LeaderboardRow {
             source: RowSource::Human,
             submission: None,
@@ -151,8 +137,8 @@ impl LeaderboardRow {
             overall,
             overall_task_accuracy_ci: None,
             overall_pairwise_accuracy_ci: None,
-            forward: columns(&report["forward_world_modeling"]),
-            inverse: columns(&report["inverse_world_modeling"]),
+            forward: columns(report.forward_world_modeling.as_ref()),
+            inverse: columns(report.inverse_world_modeling.as_ref()),
             parse_failure_rate: 0.0,
         }
     }
@@ -317,19 +303,31 @@ fn round1(v: f64) -> f64 {
 mod tests {
     use super::*;
 
-    fn scores(forward_l3: f64, overall: f64) -> Value {
-        serde_json::json!({
+    /// Scores as stored (JSON), read back into the typed value as the store does.
+    fn scores(forward_l3: f64, overall: f64) -> SubmissionScores {
+        let group = |count: usize, ta: f64, pa: f64| {
+            serde_json::json!({"count": count, "task_accuracy": ta, "pairwise_accuracy": pa,
+                "pairwise_count": count})
+        };
+        let mut forward = group(2, forward_l3, 0.5);
+        forward["per_step"] = serde_json::json!({"3": group(2, forward_l3, 0.5)});
+        let mut inverse = group(2, 0.0, 0.0);
+        inverse["per_step"] = serde_json::json!({"4": group(2, 0.0, 0.0)});
+        let mut all = group(4, overall, 0.5);
+        all["per_step"] = serde_json::json!({});
+        serde_json::from_value(serde_json::json!({
+            "policy": "strict",
             "report": {
-                "overall": {"count": 4, "task_accuracy": overall, "pairwise_accuracy": 0.5},
-                "forward_world_modeling": {"count": 2, "task_accuracy": forward_l3,
-                    "pairwise_accuracy": 0.5,
-                    "per_step": {"3": {"count": 2, "task_accuracy": forward_l3, "pairwise_accuracy": 0.5}}},
-                "inverse_world_modeling": {"count": 2, "task_accuracy": 0.0, "pairwise_accuracy": 0.0,
-                    "per_step": {"4": {"count": 2, "task_accuracy": 0.0, "pairwise_accuracy": 0.0}}}
+                "overall": all,
+                "forward_world_modeling": forward,
+                "inverse_world_modeling": inverse,
             },
-            "coverage": {"coverage": 1.0, "parse_failure_rate": 0.25},
-            "confidence": {"task_accuracy": {"low": 0.1, "high": 0.9}, "pairwise_accuracy": null}
-        })
+            "coverage": {"dataset_items": 4, "answered": 4, "missing": 0, "unparseable": 1,
+                "coverage": 1.0, "parse_failure_rate": 0.25, "exact_only": 0},
+            "confidence": {"level": 0.95, "resamples": 1000, "seed": 0,
+                "task_accuracy": {"low": 0.1, "high": 0.9}, "pairwise_accuracy": null}
+        }))
+        .expect("scores in the stored layout")
     }
 
     fn row(id: i64, forward_l3: f64, overall: f64) -> LeaderboardRow {

@@ -306,10 +306,24 @@ fn failed_metrics() -> Value {
     })
 }
 
-/// Scoring targets from stored items (`store::items::scoring_items`), in dataset order.
-pub fn targets_from_stored(
-    rows: Vec<crate::store::items::ScoringItem>,
-) -> Result<Vec<ScoringTarget>, String> {
+/// Everything scoring needs of a stored item: its ground truth and, as stored, its signatures.
+#[derive(Debug, Clone)]
+pub struct ScoringItem {
+    /// The row id in `items`.
+    pub row_id: i64,
+    pub item_id: String,
+    pub item_type: String,
+    pub direction: Direction,
+    pub step_length: StepLength,
+    pub task_name: String,
+    pub key_frame_ids: Vec<String>,
+    pub gt_answer: Vec<u8>,
+    /// `(source, ItemSignatures JSON)`.
+    pub semantics: Option<(String, String)>,
+}
+
+/// Scoring targets from stored items, in dataset order.
+pub fn targets_from_stored(rows: Vec<ScoringItem>) -> Result<Vec<ScoringTarget>, String> {
     let mut targets = Vec::with_capacity(rows.len());
     for row in rows {
         let semantics = match &row.semantics {

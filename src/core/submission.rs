@@ -7,7 +7,7 @@
 use std::collections::HashMap;
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use serde_json::value::RawValue;
 
 use crate::core::scoring::ScoringTarget;
@@ -80,7 +80,7 @@ pub fn submission_records(text: &str) -> Result<Vec<(usize, String)>, Vec<LinePr
 }
 
 /// Bootstrap intervals on the overall means.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ConfidenceIntervals {
     pub level: f64,
     pub resamples: usize,
@@ -90,12 +90,88 @@ pub struct ConfidenceIntervals {
 }
 
 /// What a submission's scores are, as stored and served.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SubmissionScores {
     pub policy: ScoringPolicy,
     pub report: PerformanceReport,
     pub coverage: Coverage,
     pub confidence: ConfidenceIntervals,
+}
+
+/// Metadata given with a submission.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct SubmissionMetadata {
+    pub model: String,
+    pub description: String,
+    pub url: String,
+    pub prompt_version: String,
+    pub notes: String,
+}
+
+impl SubmissionMetadata {
+    /// The metadata with its model name trimmed and checked (1 to 200 characters).
+    pub fn checked(mut self) -> Result<SubmissionMetadata, String> {
+        self.model = self.model.trim().to_owned();
+        if self.model.is_empty() {
+            return Err("`model` is required (the model's name for the leaderboard)".to_owned());
+        }
+        if self.model.chars().count() > 200 {
+            return Err("`model` is longer than 200 characters".to_owned());
+        }
+        Ok(self)
+    }
+}
+
+/// Where a submission stands on its dataset's leaderboard; admins change it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Visibility {
+    /// Listed (the state every submission starts in).
+    Published,
+    /// Kept but not listed, until an admin publishes it again.
+    Hidden,
+    /// Taken back by its submitter or an admin.
+    Withdrawn,
+}
+
+impl Visibility {
+    pub const ALL: [Visibility; 3] = [
+        Visibility::Published,
+        Visibility::Hidden,
+        Visibility::Withdrawn,
+    ];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Visibility::Published => "published",
+            Visibility::Hidden => "hidden",
+            Visibility::Withdrawn => "withdrawn",
+        }
+    }
+
+    pub fn parse(text: &str) -> Option<Visibility> {
+        Visibility::ALL.into_iter().find(|v| v.as_str() == text)
+    }
+}
+
+/// What has happened to a submission. Scoring is synchronous, so a stored submission is
+/// always scored; the state is kept so that queued scoring can be added without a new column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SubmissionStatus {
+    Scored,
+}
+
+impl SubmissionStatus {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SubmissionStatus::Scored => "scored",
+        }
+    }
+
+    pub fn parse(text: &str) -> Option<SubmissionStatus> {
+        (text == "scored").then_some(SubmissionStatus::Scored)
+    }
 }
 
 /// One dataset item's verdict, with the answer as submitted.

@@ -3,26 +3,7 @@
 use serde::Serialize;
 use sqlx::{Row, SqliteConnection};
 
-use crate::core::credentials::{
-    NewToken, Role, Scope, scopes_from_text, scopes_to_text, token_matches,
-};
-
-/// A token that authenticated a request.
-#[derive(Debug, Clone)]
-pub struct Caller {
-    pub token_id: i64,
-    pub account_id: i64,
-    pub account_name: String,
-    pub scopes: Vec<Scope>,
-    pub daily_quota: Option<i64>,
-    pub total_quota: Option<i64>,
-}
-
-impl Caller {
-    pub fn has(&self, scope: Scope) -> bool {
-        self.scopes.contains(&scope)
-    }
-}
+use crate::core::credentials::{NewToken, Role, Scope, scopes_from_text, scopes_to_text};
 
 /// A token as `token list` shows it: never its secret.
 #[derive(Debug, Clone, Serialize)]
@@ -30,7 +11,7 @@ pub struct TokenListing {
     pub id: i64,
     pub prefix: String,
     pub account: String,
-    pub role: String,
+    pub role: Role,
     pub scopes: String,
     pub daily_quota: Option<i64>,
     pub total_quota: Option<i64>,
@@ -40,35 +21,31 @@ pub struct TokenListing {
     pub revoked_at: Option<String>,
 }
 
-/// The account named `name`, created with `role` if missing. An existing account keeps its
-/// role; asking for another is an error.
+/// The id and role of the account named `name`.
+pub async fn account_by_name(
+    conn: &mut SqliteConnection,
+    name: &str,
+) -> Result<Option<(i64, Role)>, sqlx::Error> {
+    sqlx::query_as("SELECT id, role FROM accounts WHERE name = ?")
+        .bind(name)
+        .fetch_optional(conn)
+        .await
+}
+
 #[tracing::instrument(skip_all)]
-pub async fn ensure_account(
+pub async fn insert_account(
     conn: &mut SqliteConnection,
     name: &str,
     role: Role,
-) -> Result<Result<i64, String>, sqlx::Error> {
-    let existing = sqlx::query("SELECT id, role FROM accounts WHERE name = ?")
-        .bind(name)
-        .fetch_optional(&mut *conn)
-        .await?;
-    if let Some(row) = existing {
-        let stored: String = row.try_get("role")?;
-        if stored != role.as_str() {
-            return Ok(Err(format!(
-                "account '{name}' exists with role {stored}, not {}",
-                role.as_str()
-            )));
-        }
-        return Ok(Ok(row.try_get("id")?));
-    }
-    let id = sqlx::query("INSERT INTO accounts (name, role) VALUES (?, ?)")
-        .bind(name)
-        .bind(role.as_str())
-        .execute(conn)
-        .await?
-        .last_insert_rowid();
-    Ok(Ok(id))
+) -> Result<i64, sqlx::Error> {
+    Ok(
+        sqlx::query("INSERT INTO accounts (name, role) VALUES (?, ?)")
+            .bind(name)
+            .bind(role)
+            .execute(conn)
+            .await?
+            .last_insert_rowid(),
+    )
 }
 
 #[tracing::instrument(skip_all)]
@@ -95,38 +72,45 @@ pub async fn insert_token(
     .last_insert_rowid())
 }
 
-/// The live (unrevoked) token `presented` stands for, if any.
-#[tracing::instrument(skip_all)]
-pub async fn authenticate(
+/// A stored token with its account, as found by its public prefix.
+#[derive(Debug, Clone)]
+pub struct TokenRow {
+    pub id: i64,
+    pub account_id: i64,
+    pub account_name: String,
+    pub token_hash: String,
+    pub scopes: Vec<Scope>,
+    pub daily_quota: Option<i64>,
+    pub total_quota: Option<i64>,
+    pub revoked: bool,
+}
+
+pub async fn token_by_prefix(
     conn: &mut SqliteConnection,
-    presented: &str,
-) -> Result<Option<Caller>, sqlx::Error> {
-    let prefix = crate::core::credentials::lookup_prefix(presented);
+    prefix: &str,
+) -> Result<Option<TokenRow>, sqlx::Error> {
     let row = sqlx::query(
         "SELECT t.id, t.account, t.token_hash, t.scopes, t.daily_quota, t.total_quota, \
          t.revoked_at, a.name FROM api_tokens t JOIN accounts a ON a.id = t.account \
          WHERE t.prefix = ?",
     )
-    .bind(&prefix)
+    .bind(prefix)
     .fetch_optional(conn)
     .await?;
-    let Some(row) = row else {
-        return Ok(None);
-    };
-    let hash: String = row.try_get("token_hash")?;
-    let revoked: Option<String> = row.try_get("revoked_at")?;
-    if !token_matches(presented, &hash) || revoked.is_some() {
-        return Ok(None);
-    }
-    let scopes: String = row.try_get("scopes")?;
-    Ok(Some(Caller {
-        token_id: row.try_get("id")?,
-        account_id: row.try_get("account")?,
-        account_name: row.try_get("name")?,
-        scopes: scopes_from_text(&scopes),
-        daily_quota: row.try_get("daily_quota")?,
-        total_quota: row.try_get("total_quota")?,
-    }))
+    row.map(|row| {
+        let scopes: String = row.try_get("scopes")?;
+        Ok(TokenRow {
+            id: row.try_get("id")?,
+            account_id: row.try_get("account")?,
+            account_name: row.try_get("name")?,
+            token_hash: row.try_get("token_hash")?,
+            scopes: scopes_from_text(&scopes),
+            daily_quota: row.try_get("daily_quota")?,
+            total_quota: row.try_get("total_quota")?,
+            revoked: row.try_get::<Option<String>, _>("revoked_at")?.is_some(),
+        })
+    })
+    .transpose()
 }
 
 pub async fn list_tokens(conn: &mut SqliteConnection) -> Result<Vec<TokenListing>, sqlx::Error> {

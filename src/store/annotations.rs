@@ -5,16 +5,11 @@ use sqlx::{Row, SqliteConnection};
 
 use super::{corrupt, kind_from_row};
 
-use crate::core::annotation::{Draft, HumanAnswer, SplitItem, human_entries};
-use crate::core::dataset::{Direction, StepLength};
-use crate::core::verifier::{PerformanceReport, Permutation};
-
-/// Milliseconds since the Unix epoch, the clock of sessions and drafts.
-pub fn now_ms() -> i64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| i64::try_from(d.as_millis()).unwrap_or(i64::MAX))
-}
+use crate::core::annotation::{
+    AssignmentState, Draft, HumanAnswer, Outcome, QueueEntry, QueueStatus, Session, SplitItem,
+    StoredDraft, Telemetry,
+};
+use crate::core::verifier::Permutation;
 
 #[derive(Debug, Clone)]
 pub struct Annotator {
@@ -126,15 +121,6 @@ pub async fn credentials(
     .await?;
     row.map(|r| Ok((r.try_get("id")?, r.try_get("password_hash")?)))
         .transpose()
-}
-
-/// A logged-in session as handlers see it.
-#[derive(Debug, Clone)]
-pub struct Session {
-    pub annotator: i64,
-    pub name: String,
-    pub is_admin: bool,
-    pub csrf_token: String,
 }
 
 pub async fn create_session(
@@ -268,45 +254,6 @@ pub async fn assign(conn: &mut SqliteConnection, pairs: &[(i64, i64)]) -> Result
     Ok(added)
 }
 
-/// Where an assigned item stands for its annotator.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum QueueStatus {
-    Todo,
-    /// A draft exists: the annotator has opened the item.
-    Started,
-    Answered,
-    Skipped,
-    Flagged,
-}
-
-impl QueueStatus {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            QueueStatus::Todo => "to do",
-            QueueStatus::Started => "in progress",
-            QueueStatus::Answered => "answered",
-            QueueStatus::Skipped => "skipped",
-            QueueStatus::Flagged => "flagged",
-        }
-    }
-
-    pub fn is_done(self) -> bool {
-        matches!(
-            self,
-            QueueStatus::Answered | QueueStatus::Skipped | QueueStatus::Flagged
-        )
-    }
-}
-
-#[derive(Debug, Clone)]
-pub struct QueueEntry {
-    pub dataset: String,
-    pub item_id: String,
-    pub direction: Direction,
-    pub step_length: StepLength,
-    pub status: QueueStatus,
-}
-
 /// An annotator's assigned items in queue order, with where each stands.
 pub async fn queue(
     conn: &mut SqliteConnection,
@@ -347,21 +294,6 @@ pub async fn queue(
         .collect()
 }
 
-/// The item an annotator should work on next: one already started, else the first to do.
-pub fn next_in_queue(queue: &[QueueEntry]) -> Option<&QueueEntry> {
-    queue
-        .iter()
-        .find(|e| e.status == QueueStatus::Started)
-        .or_else(|| queue.iter().find(|e| e.status == QueueStatus::Todo))
-}
-
-/// An annotator's standing on one item: whether it is finished, and the draft if one exists.
-#[derive(Debug, Clone)]
-pub struct AssignmentState {
-    pub finished: bool,
-    pub draft: Option<StoredDraft>,
-}
-
 /// The annotator's standing on `item` in one query (the item page's hot path), or `None` when
 /// the item is not assigned to them.
 pub async fn assignment_state(
@@ -392,14 +324,6 @@ pub async fn assignment_state(
         })
     })
     .transpose()
-}
-
-/// A stored draft with its timing.
-#[derive(Debug, Clone)]
-pub struct StoredDraft {
-    pub draft: Draft,
-    pub started_at_ms: i64,
-    pub first_placement_at_ms: Option<i64>,
 }
 
 /// The annotator's draft of an item, creating an empty one (which starts the item's clock).
@@ -483,41 +407,6 @@ pub async fn save_draft(
     .execute(conn)
     .await?;
     Ok(())
-}
-
-/// How an item was finished.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Outcome {
-    Answered(Permutation),
-    Skipped(String),
-    Flagged(String),
-}
-
-/// Telemetry stored with each finished item.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Telemetry {
-    pub time_on_item_ms: i64,
-    pub time_to_first_placement_ms: Option<i64>,
-    pub placements: u32,
-    pub swaps: u32,
-    pub clears: u32,
-    pub undos: u32,
-}
-
-impl Telemetry {
-    /// Times run from the item's first opening to `now_ms`.
-    pub fn of(draft: &StoredDraft, now_ms: i64) -> Telemetry {
-        Telemetry {
-            time_on_item_ms: (now_ms - draft.started_at_ms).max(0),
-            time_to_first_placement_ms: draft
-                .first_placement_at_ms
-                .map(|t| (t - draft.started_at_ms).max(0)),
-            placements: draft.draft.counts.placements,
-            swaps: draft.draft.counts.swaps,
-            clears: draft.draft.counts.clears,
-            undos: draft.draft.counts.undos,
-        }
-    }
 }
 
 /// Records a finished item and drops its draft. `Ok(false)` if it was already finished.
@@ -670,25 +559,6 @@ pub(crate) fn human_answer_from_row(
             .map(|s| serde_json::from_str(&s).map_err(|e| corrupt("signatures", e)))
             .transpose()?,
     })
-}
-
-/// Human performance on a dataset: every submitted answer scored by the verifier models are
-/// scored with (the item's stored signatures, exact match where there are none), aggregated
-/// into TA/PA by direction and step length. `None` when nobody has answered an item yet.
-///
-/// This is the "Human" row of the leaderboard and of reports. Skipped and flagged items are not
-/// answers and are left out; an item answered by several annotators counts once per answer.
-/// Verification is cheap (microseconds per answer), so it runs inline.
-pub async fn human_performance(
-    conn: &mut SqliteConnection,
-    dataset_id: i64,
-) -> Result<Option<PerformanceReport>, sqlx::Error> {
-    let answers = human_answers(conn, dataset_id).await?;
-    if answers.is_empty() {
-        return Ok(None);
-    }
-    let entries = human_entries(&answers).map_err(|e| corrupt("annotations", e))?;
-    Ok(Some(PerformanceReport::from_entries(&entries)))
 }
 
 /// Per annotator: assigned, finished and answered items.

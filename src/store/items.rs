@@ -8,6 +8,7 @@ use sqlx::{Row, SqliteConnection};
 use super::{corrupt, kind_from_row};
 
 use crate::core::dataset::{Direction, QaItem, StepLength};
+use crate::core::scoring::ScoringItem;
 
 /// What a list of items shows of each one.
 #[derive(Debug, Clone)]
@@ -282,21 +283,6 @@ pub async fn set_semantics(
 }
 
 /// Everything scoring needs of every item of a dataset, in import order.
-#[derive(Debug, Clone)]
-pub struct ScoringItem {
-    /// The row id in `items`.
-    pub row_id: i64,
-    pub item_id: String,
-    pub item_type: String,
-    pub direction: Direction,
-    pub step_length: StepLength,
-    pub task_name: String,
-    pub key_frame_ids: Vec<String>,
-    pub gt_answer: Vec<u8>,
-    /// `(source, ItemSignatures JSON)`.
-    pub semantics: Option<(String, String)>,
-}
-
 pub async fn scoring_items(
     conn: &mut SqliteConnection,
     dataset_id: i64,

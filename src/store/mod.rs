@@ -89,3 +89,54 @@ pub(crate) fn kind_from_row(
             .ok_or_else(|| corrupt("step_length", format!("bad step length {step_length}")))?,
     ))
 }
+
+/// One round trip to the database.
+pub async fn ping(pool: &SqlitePool) -> Result<(), sqlx::Error> {
+    sqlx::query("SELECT 1").execute(pool).await?;
+    Ok(())
+}
+
+/// Maps an enum of the benchmark to a TEXT column through its `as_str` and `parse`, so rows
+/// carry the enum and the column's CHECK constraint stays the one list of spellings on disk.
+macro_rules! text_column {
+    ($($ty:ty),* $(,)?) => {$(
+        impl sqlx::Type<sqlx::Sqlite> for $ty {
+            fn type_info() -> sqlx::sqlite::SqliteTypeInfo {
+                <str as sqlx::Type<sqlx::Sqlite>>::type_info()
+            }
+
+            fn compatible(ty: &sqlx::sqlite::SqliteTypeInfo) -> bool {
+                <str as sqlx::Type<sqlx::Sqlite>>::compatible(ty)
+            }
+        }
+
+        impl<'q> sqlx::Encode<'q, sqlx::Sqlite> for $ty {
+            fn encode_by_ref(
+                &self,
+                buf: &mut Vec<sqlx::sqlite::SqliteArgumentValue<'q>>,
+            ) -> Result<sqlx::encode::IsNull, sqlx::error::BoxDynError> {
+                let text: &'q str = self.as_str();
+                <&str as sqlx::Encode<'q, sqlx::Sqlite>>::encode(text, buf)
+            }
+        }
+
+        impl<'r> sqlx::Decode<'r, sqlx::Sqlite> for $ty {
+            fn decode(
+                value: sqlx::sqlite::SqliteValueRef<'r>,
+            ) -> Result<Self, sqlx::error::BoxDynError> {
+                let text = <&str as sqlx::Decode<'r, sqlx::Sqlite>>::decode(value)?;
+                <$ty>::parse(text).ok_or_else(|| {
+                    format!("unknown {} {text:?}", stringify!($ty)).into()
+                })
+            }
+        }
+    )*};
+}
+
+text_column!(
+    crate::core::credentials::Role,
+    crate::core::dataset::AnswerVisibility,
+    crate::core::submission::SubmissionStatus,
+    crate::core::submission::Visibility,
+    crate::core::verifier::ScoringPolicy,
+);

@@ -1,41 +1,25 @@
 //! Submissions, their per-item verdicts, and the per-dataset answer visibility.
 
-use serde::Serialize;
 use sqlx::{QueryBuilder, Row, Sqlite, SqliteConnection};
 
-use crate::core::submission::ItemVerdict;
-use crate::core::verifier::StrictOutcome;
-
-/// Whether a dataset's ground truth and per-item correctness may be shown to submitters.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum AnswerVisibility {
-    Public,
-    Hidden,
-}
-
-impl AnswerVisibility {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            AnswerVisibility::Public => "public",
-            AnswerVisibility::Hidden => "hidden",
-        }
-    }
-}
+use super::{corrupt, kind_from_row};
+use crate::core::dataset::{AnswerVisibility, Direction, StepLength};
+use crate::core::submission::{
+    ItemVerdict, SubmissionMetadata, SubmissionScores, SubmissionStatus, Visibility,
+};
+use crate::core::verifier::{ScoringPolicy, StrictOutcome};
 
 pub async fn answer_visibility(
     conn: &mut SqliteConnection,
     dataset: i64,
 ) -> Result<AnswerVisibility, sqlx::Error> {
-    let answers: Option<String> =
+    let answers: Option<AnswerVisibility> =
         sqlx::query_scalar("SELECT answers FROM dataset_settings WHERE dataset = ?")
             .bind(dataset)
             .fetch_optional(conn)
             .await?;
-    Ok(match answers.as_deref() {
-        Some("public") => AnswerVisibility::Public,
-        _ => AnswerVisibility::Hidden,
-    })
+    // A dataset without a setting keeps its answers hidden.
+    Ok(answers.unwrap_or(AnswerVisibility::Hidden))
 }
 
 pub async fn set_answer_visibility(
@@ -48,24 +32,14 @@ pub async fn set_answer_visibility(
          ON CONFLICT (dataset) DO UPDATE SET answers = excluded.answers",
     )
     .bind(dataset)
-    .bind(answers.as_str())
+    .bind(answers)
     .execute(conn)
     .await?;
     Ok(())
 }
 
-/// Metadata given with a submission.
-#[derive(Debug, Clone, Default)]
-pub struct SubmissionMetadata {
-    pub model: String,
-    pub description: String,
-    pub url: String,
-    pub prompt_version: String,
-    pub notes: String,
-}
-
 /// A stored submission.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone)]
 pub struct SubmissionRow {
     pub id: i64,
     pub dataset_id: i64,
@@ -77,14 +51,12 @@ pub struct SubmissionRow {
     pub url: String,
     pub prompt_version: String,
     pub notes: String,
-    pub policy: String,
-    pub status: String,
-    pub visibility: String,
+    pub policy: ScoringPolicy,
+    pub status: SubmissionStatus,
+    pub visibility: Visibility,
     pub baseline: bool,
-    /// The serialised `SubmissionScores`.
-    pub scores: String,
+    pub scores: SubmissionScores,
     pub created_at: String,
-    #[serde(skip)]
     pub body_sha256: String,
 }
 
@@ -94,8 +66,16 @@ const SUBMISSION_COLUMNS: &str = "s.id, s.dataset, d.name AS dataset_name, s.acc
     FROM submissions s JOIN datasets d ON d.id = s.dataset JOIN accounts a ON a.id = s.account";
 
 fn submission_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<SubmissionRow, sqlx::Error> {
+    let id: i64 = row.try_get("id")?;
+    let scores: String = row.try_get("scores")?;
+    let scores = serde_json::from_str(&scores).map_err(|e| {
+        corrupt(
+            "scores",
+            format!("submission {id}: stored scores unreadable: {e}"),
+        )
+    })?;
     Ok(SubmissionRow {
-        id: row.try_get("id")?,
+        id,
         dataset_id: row.try_get("dataset")?,
         dataset: row.try_get("dataset_name")?,
         account_id: row.try_get("account")?,
@@ -109,7 +89,7 @@ fn submission_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<SubmissionRow, s
         status: row.try_get("status")?,
         visibility: row.try_get("visibility")?,
         baseline: row.try_get::<i64, _>("baseline")? != 0,
-        scores: row.try_get("scores")?,
+        scores,
         created_at: row.try_get("created_at")?,
         body_sha256: row.try_get("body_sha256")?,
     })
@@ -164,7 +144,7 @@ pub struct NewSubmission<'a> {
     pub idempotency_key: Option<&'a str>,
     pub body_sha256: &'a str,
     pub metadata: &'a SubmissionMetadata,
-    pub scores_json: &'a str,
+    pub scores: &'a SubmissionScores,
 }
 
 /// Inserts the submission; call inside the transaction that also stores its items. A reused
@@ -174,6 +154,7 @@ pub async fn insert(
     conn: &mut SqliteConnection,
     new: &NewSubmission<'_>,
 ) -> Result<Option<i64>, sqlx::Error> {
+    let scores = serde_json::to_string(new.scores).map_err(|e| corrupt("scores", e))?;
     let result = sqlx::query(
         "INSERT INTO submissions (dataset, account, token, idempotency_key, body_sha256, model, \
          description, url, prompt_version, notes, scores) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
@@ -188,7 +169,7 @@ pub async fn insert(
     .bind(&new.metadata.url)
     .bind(&new.metadata.prompt_version)
     .bind(&new.metadata.notes)
-    .bind(new.scores_json)
+    .bind(scores)
     .execute(conn)
     .await;
     match result {
@@ -250,11 +231,11 @@ pub async fn insert_items(
 }
 
 /// One stored verdict, with the item it is about.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone)]
 pub struct StoredVerdict {
     pub id: String,
-    pub direction: String,
-    pub step_length: i64,
+    pub direction: Direction,
+    pub step_length: StepLength,
     pub line: Option<i64>,
     pub raw_answer: Option<String>,
     pub permutation: Option<String>,
@@ -282,10 +263,11 @@ pub async fn verdicts(
     .await?;
     rows.iter()
         .map(|row| {
+            let (direction, step_length) = kind_from_row(row)?;
             Ok(StoredVerdict {
                 id: row.try_get("item_id")?,
-                direction: row.try_get("direction")?,
-                step_length: row.try_get("step_length")?,
+                direction,
+                step_length,
                 line: row.try_get("line")?,
                 raw_answer: row.try_get("raw_answer")?,
                 permutation: row.try_get("permutation")?,
@@ -307,7 +289,7 @@ pub async fn update_listing(
     conn: &mut SqliteConnection,
     id: i64,
     baseline: Option<bool>,
-    visibility: Option<&str>,
+    visibility: Option<Visibility>,
 ) -> Result<bool, sqlx::Error> {
     let done = sqlx::query(
         "UPDATE submissions SET baseline = coalesce(?, baseline), \

@@ -11,22 +11,18 @@ use serde::Deserialize;
 
 use super::error::PageError;
 use super::session::{Admin, Protected};
-use super::{AppError, AppState, dataset_or_404};
-use crate::core::annotation::{balanced_split, new_token, token_hash};
+use super::{AppError, AppState};
+use crate::app::annotation::{self, Assignment};
+use crate::app::{annotators, datasets, leaderboard};
+use crate::core::annotation::Session;
 use crate::core::dataset::StepLength;
 use crate::core::verifier::{GroupPerformance, PerformanceReport};
-use crate::store;
 
 pub fn router() -> Router<AppState> {
     Router::new()
         .route("/admin", get(admin_page))
         .route("/admin/annotators", post(create_annotator))
         .route("/admin/assign", post(assign))
-}
-
-/// The invite link an annotator opens to set a password.
-pub fn invite_url(base: &str, token: &str) -> String {
-    format!("{}/invite/{token}", base.trim_end_matches('/'))
 }
 
 /// `scheme://host` the request was made to, for links shown to the admin.
@@ -136,44 +132,43 @@ fn performance_rows(report: &PerformanceReport) -> Vec<PerformanceRow> {
 
 pub(super) async fn render_admin(
     state: &AppState,
-    session: store::annotations::Session,
+    session: Session,
     notice: Option<String>,
     invite: Option<(String, String)>,
 ) -> Result<Html<String>, PageError> {
-    let mut conn = state.pool.acquire().await?;
-    let accounts = store::annotations::annotators(&mut conn).await?;
-    let progress = store::annotations::progress_by_annotator(&mut conn).await?;
-    let overview = store::datasets::overview(&mut conn).await?;
+    let accounts = annotators::with_progress(&state.hub).await?;
+    let overview = datasets::overview(&state.hub).await?;
     let mut human = Vec::new();
     for o in &overview {
-        if let Some(report) = store::annotations::human_performance(&mut conn, o.dataset.id).await?
-        {
+        if let Some(report) = leaderboard::human_performance(&state.hub, &o.dataset).await? {
             human.push(HumanTable {
                 dataset: o.dataset.name.clone(),
                 rows: performance_rows(&report),
             });
         }
     }
-    let flags = store::annotations::flags(&mut conn).await?;
+    let flags = annotation::flags(&state.hub).await?;
     let page = AdminPage {
         name: session.name,
         csrf: session.csrf_token,
         annotators: accounts
             .into_iter()
-            .map(|a| {
-                let (assigned, finished, answered) = progress
-                    .iter()
-                    .find(|p| p.0 == a.id)
-                    .map_or((0, 0, 0), |p| (p.1, p.2, p.3));
-                AnnotatorRow {
-                    id: a.id,
-                    name: a.name,
-                    role: if a.is_admin { "admin" } else { "annotator" },
-                    status: if a.active { "active" } else { "invite pending" },
-                    assigned,
-                    finished,
-                    answered,
-                }
+            .map(|a| AnnotatorRow {
+                id: a.annotator.id,
+                name: a.annotator.name,
+                role: if a.annotator.is_admin {
+                    "admin"
+                } else {
+                    "annotator"
+                },
+                status: if a.annotator.active {
+                    "active"
+                } else {
+                    "invite pending"
+                },
+                assigned: a.assigned,
+                finished: a.finished,
+                answered: a.answered,
             })
             .collect(),
         datasets: overview.into_iter().map(|o| o.dataset.name).collect(),
@@ -211,56 +206,28 @@ struct NewAnnotator {
     admin: Option<String>,
 }
 
-/// Names are shown on pages and typed at login: keep them plain.
-pub fn check_annotator_name(name: &str) -> Result<(), String> {
-    if name.is_empty() || name.chars().count() > 64 {
-        return Err("an annotator name has 1 to 64 characters".to_owned());
-    }
-    if let Some(c) = name
-        .chars()
-        .find(|c| !(c.is_alphanumeric() || matches!(c, '.' | '_' | '-')))
-    {
-        return Err(format!(
-            "annotator name '{name}': character {c:?} is not allowed (letters, digits, . _ -)"
-        ));
-    }
-    Ok(())
-}
-
 async fn create_annotator(
     State(state): State<AppState>,
     headers: HeaderMap,
     request: Protected<NewAnnotator>,
 ) -> Result<Html<String>, PageError> {
     require_admin(&request.session)?;
-    let name = request.body.name.trim().to_owned();
-    check_annotator_name(&name).map_err(AppError::BadRequest)?;
-    let token = new_token();
-    let mut conn = state.pool.acquire().await?;
-    let created = store::annotations::create_annotator(
-        &mut conn,
-        &name,
-        request.body.admin.is_some(),
-        &token_hash(&token),
-    )
-    .await?;
-    drop(conn);
-    if created.is_none() {
-        return Err(
-            AppError::Conflict(format!("an annotator named '{name}' already exists")).into(),
-        );
-    }
-    let url = invite_url(&request_base(&headers), &token);
+    let invited =
+        annotators::create(&state.hub, &request.body.name, request.body.admin.is_some()).await?;
+    let url = annotators::invite_url(&request_base(&headers), &invited.invite_token);
     render_admin(
         &state,
         request.session,
-        Some(format!("Created '{name}'. The invite link works once.")),
-        Some((name, url)),
+        Some(format!(
+            "Created '{}'. The invite link works once.",
+            invited.name
+        )),
+        Some((invited.name, url)),
     )
     .await
 }
 
-pub(super) fn require_admin(session: &store::annotations::Session) -> Result<(), AppError> {
+pub(super) fn require_admin(session: &Session) -> Result<(), AppError> {
     if session.is_admin {
         Ok(())
     } else {
@@ -309,64 +276,31 @@ async fn assign(
 ) -> Result<Html<String>, PageError> {
     require_admin(&request.session)?;
     let form = &AssignForm::from_fields(request.body);
-    let dataset = dataset_or_404(&state.pool, form.dataset.trim()).await?;
-    let mut annotators = Vec::new();
+    let mut chosen = Vec::new();
     for part in &form.annotators {
-        annotators.push(part.trim().parse::<i64>().map_err(|_| {
+        chosen.push(part.trim().parse::<i64>().map_err(|_| {
             AppError::BadRequest(format!("annotator: '{part}' is not an annotator id"))
         })?);
     }
-    let mut conn = state.pool.acquire().await?;
-    let known: Vec<i64> = store::annotations::annotators(&mut conn)
-        .await?
-        .iter()
-        .map(|a| a.id)
-        .collect();
-    if let Some(unknown) = annotators.iter().find(|a| !known.contains(a)) {
-        return Err(
-            AppError::BadRequest(format!("annotator: no annotator has id {unknown}")).into(),
-        );
-    }
-    let pairs = match form.mode.as_str() {
-        "split" => {
-            if annotators.is_empty() {
-                return Err(AppError::BadRequest(
-                    "choose at least one annotator to split the dataset over".to_owned(),
-                )
-                .into());
-            }
-            let items = store::annotations::unassigned_items(&mut conn, dataset.id).await?;
-            balanced_split(&items, &annotators)
-        }
+    let how = match form.mode.as_str() {
+        "split" => Assignment::Split(chosen),
         "list" => {
-            let [annotator] = annotators[..] else {
+            let [annotator] = chosen[..] else {
                 return Err(AppError::BadRequest(format!(
                     "an id list goes to exactly one annotator; {} were chosen",
-                    annotators.len()
+                    chosen.len()
                 ))
                 .into());
             };
-            let ids: Vec<String> = form
+            let item_ids = form
                 .items
                 .split(|c: char| c.is_whitespace() || c == ',')
                 .filter(|s| !s.is_empty())
                 .map(str::to_owned)
                 .collect();
-            if ids.is_empty() {
-                return Err(
-                    AppError::BadRequest("items: give at least one item id".to_owned()).into(),
-                );
-            }
-            match store::annotations::item_rowids(&mut conn, dataset.id, &ids).await? {
-                Ok(rows) => rows.into_iter().map(|r| (annotator, r)).collect(),
-                Err(missing) => {
-                    return Err(AppError::BadRequest(format!(
-                        "items: not in dataset '{}': {}",
-                        dataset.name,
-                        missing.join(", ")
-                    ))
-                    .into());
-                }
+            Assignment::List {
+                annotator,
+                item_ids,
             }
         }
         other => {
@@ -376,17 +310,16 @@ async fn assign(
             .into());
         }
     };
-    drop(conn);
-    let mut tx = state.pool.begin().await?;
-    let added = store::annotations::assign(&mut tx, &pairs).await?;
-    tx.commit().await?;
+    let dataset = form.dataset.trim();
+    let done = annotation::assign(&state.hub, dataset, &how).await?;
+    let added = done.added;
     render_admin(
         &state,
         request.session,
         Some(format!(
-            "Assigned {added} items of '{}' ({} already assigned were left as they were).",
-            dataset.name,
-            pairs.len() as u64 - added
+            "Assigned {added} items of '{dataset}' ({} already assigned were left as they \
+             were).",
+            done.requested - added
         )),
         None,
     )

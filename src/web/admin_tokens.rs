@@ -12,12 +12,11 @@ use serde::Deserialize;
 
 use super::error::PageError;
 use super::session::{Admin, Protected};
-use super::submissions::{CreatedToken, issue_token, parse_role};
+use super::submissions::parse_role;
 use super::{AppError, AppState};
+use crate::app::tokens::{self, CreatedToken, TokenListing};
+use crate::core::annotation::Session;
 use crate::core::credentials::Role;
-use crate::store;
-use crate::store::accounts::TokenListing;
-use crate::store::annotations::Session;
 
 pub fn router() -> Router<AppState> {
     Router::new()
@@ -42,8 +41,7 @@ async fn render(
     notice: Option<String>,
     created: Option<CreatedToken>,
 ) -> Result<Response, PageError> {
-    let mut conn = state.pool.acquire().await?;
-    let tokens = store::accounts::list_tokens(&mut conn).await?;
+    let tokens = tokens::list(&state.hub).await?;
     let page = TokensPage {
         name: session.name,
         csrf: session.csrf_token,
@@ -111,7 +109,7 @@ async fn create(
     };
     let daily = optional_quota("daily quota", &form.daily_quota)?;
     let total = optional_quota("total quota", &form.total_quota)?;
-    let created = issue_token(&state, &form.name, role, daily, total).await?;
+    let created = tokens::issue(&state.hub, &form.name, role, daily, total).await?;
     tracing::info!(
         token = created.id,
         account = %created.account,
@@ -137,14 +135,7 @@ async fn revoke(
 ) -> Result<Response, PageError> {
     require_admin(&request.session)?;
     let which = request.body.token.trim().to_owned();
-    let mut conn = state.pool.acquire().await?;
-    let revoked = store::accounts::revoke_token(&mut conn, &which).await?;
-    drop(conn);
-    if !revoked {
-        return Err(
-            AppError::NotFound(format!("no live token with id or prefix {which:?}")).into(),
-        );
-    }
+    tokens::revoke(&state.hub, &which).await?;
     tracing::info!(token = %which, by = %request.session.name, "API token revoked on the admin page");
     render(
         &state,

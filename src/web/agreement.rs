@@ -2,9 +2,8 @@
 //! (page, JSON and the downloadable bundle).
 
 use askama::Template;
-use axum::Json;
 use axum::Router;
-use axum::extract::{Path, RawQuery, State};
+use axum::extract::{RawQuery, State};
 use axum::http::{HeaderValue, header};
 use axum::response::{Html, IntoResponse, Response};
 use axum::routing::{get, post};
@@ -12,20 +11,20 @@ use serde::Deserialize;
 
 use super::admin::{render_admin, require_admin};
 use super::error::PageError;
+use super::extract::{Json, Path};
 use super::session::{Admin, Protected};
-use super::{AppError, AppState, dataset_or_404};
+use super::{AppError, AppState};
+use crate::app::agreement::{self, ReportSettings};
 use crate::core::agreement::protocol::DEFAULT_ITEMS_PER_CELL;
 use crate::core::agreement::report::export::{bundle_files, tar_archive};
 use crate::core::agreement::report::heatmap::Heatmap;
-use crate::core::agreement::report::{AgreementReport, ReportError, build_report};
+use crate::core::agreement::report::{AgreementReport, AgreementSection};
 use crate::core::agreement::{
     BootstrapConfig, DEFAULT_BOOTSTRAP_SEED, DEFAULT_CONFIDENCE_LEVEL, DEFAULT_REPLICATES,
     MeasurementLevel, OrderingEncoding, PAPER_COMPARABLE_ENCODING, WelchComparison,
 };
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::leaderboard::{AccuracyChart, LeaderboardRow, RowSource};
-use crate::store;
-use crate::store::agreement::{ProtocolRefusal, ReportSettings};
 
 pub fn router() -> Router<AppState> {
     Router::new()
@@ -65,35 +64,20 @@ async fn run_protocol(
     request: Protected<ProtocolForm>,
 ) -> Result<Html<String>, PageError> {
     require_admin(&request.session)?;
-    let dataset = dataset_or_404(&state.pool, &name).await?;
     let items_per_cell = parse_field(
         "items_per_cell",
         &request.body.items_per_cell,
         DEFAULT_ITEMS_PER_CELL,
     )?;
     let seed = parse_field("seed", &request.body.seed, rand::random::<u64>())?;
-    let mut tx = state.pool.begin().await?;
-    let run = store::agreement::run_protocol(
-        &mut tx,
-        dataset.id,
+    let run = agreement::run_protocol(
+        &state.hub,
+        &name,
         items_per_cell,
         seed,
         Some(request.session.annotator),
     )
     .await?;
-    let run = match run {
-        Ok(run) => run,
-        Err(refusal) => {
-            tx.rollback().await?;
-            let message = format!("dataset '{}': {refusal}", dataset.name);
-            return Err(match refusal {
-                ProtocolRefusal::AlreadyRan(_) => AppError::Conflict(message),
-                ProtocolRefusal::Plan(_) => AppError::BadRequest(message),
-            }
-            .into());
-        }
-    };
-    tx.commit().await?;
     let short = if run.plan.shortfalls.is_empty() {
         String::new()
     } else {
@@ -106,7 +90,7 @@ async fn run_protocol(
     let notice = format!(
         "Agreement protocol on '{}': drew {} items (k = {items_per_cell}, seed = {seed}) from \
          the completed primary items of {} annotators and added {} assignments.{short}",
-        dataset.name,
+        run.dataset,
         run.plan.samples.len(),
         run.annotators.len(),
         run.assignments_added,
@@ -203,23 +187,7 @@ async fn dataset_report(
     raw: Option<&str>,
 ) -> Result<(AgreementReport, ReportSettings), AppError> {
     let settings = ReportQuery::parse(raw)?.settings()?;
-    let dataset = dataset_or_404(&state.pool, name).await?;
-    let mut conn = state.pool.acquire().await?;
-    let inputs = store::agreement::report_inputs(&mut conn, &dataset, &settings).await?;
-    drop(conn);
-    let report = tokio::task::spawn_blocking(move || build_report(&inputs))
-        .await
-        .map_err(|e| AppError::Internal(e.into()))?
-        .map_err(|e| match e {
-            // The admin's choices: a submission id or a level that does not apply.
-            ReportError::UnknownSubmission(_) | ReportError::Agreement(_) => {
-                AppError::BadRequest(format!("dataset '{}': {e}", dataset.name))
-            }
-            // Stored answers the verifier or the test cannot use: our side.
-            ReportError::Unscorable { .. } | ReportError::Comparison { .. } => {
-                AppError::Internal(anyhow::anyhow!("dataset '{}': {e}", dataset.name))
-            }
-        })?;
+    let report = agreement::report(&state.hub, name, &settings).await?;
     Ok((report, settings))
 }
 
@@ -241,9 +209,9 @@ async fn report_bundle(
     let (report, _) = dataset_report(&state, &name, raw.as_deref()).await?;
     let folder = bundle_folder(&report);
     let files = bundle_files(&report).map_err(AppError::from)?;
-    let archive = tar_archive(&folder, &files).map_err(|e| AppError::Internal(e.into()))?;
+    let archive = tar_archive(&folder, &files).map_err(AppError::from)?;
     let disposition = HeaderValue::from_str(&format!("attachment; filename=\"{folder}.tar\""))
-        .map_err(|e| AppError::Internal(e.into()))?;
+        .map_err(anyhow::Error::from)?;
     Ok((
         [
             (
@@ -419,106 +387,120 @@ async fn report_page(
     RawQuery(raw): RawQuery,
 ) -> Result<Html<String>, PageError> {
     let (report, settings) = dataset_report(&state, &name, raw.as_deref()).await?;
-    let agreement = report.agreement.as_ref().map(|a| AgreementText {
-        encoding: a.encoding.to_string(),
-        level: a.level.to_string(),
-        alpha: fixed(a.alpha.estimate.alpha, 4),
-        ci: format!(
-            "{}% CI [{}, {}] ({} resamples of {} items, seed {})",
-            a.alpha.confidence_level * 100.0,
-            fixed(a.alpha.ci_low, 4),
-            fixed(a.alpha.ci_high, 4),
-            a.alpha.replicates,
-            a.alpha.items,
-            settings.bootstrap.seed
-        ),
-        items: a.items,
-        answers: a.answers,
-        annotators: a
-            .annotators
-            .iter()
-            .map(|r| format!("{} (#{})", r.name, r.id))
-            .collect::<Vec<_>>()
-            .join(", "),
-        exact: format!(
-            "{} of {} items ({}%)",
-            a.exact_agreement.agreeing_items,
-            a.exact_agreement.compared_items,
-            percent(a.exact_agreement.rate)
-        ),
-        pairs: a
-            .pairwise
-            .iter()
-            .map(|p| PairText {
-                a: p.a.name.clone(),
-                b: p.b.name.clone(),
-                alpha: p.alpha.map_or_else(
-                    || format!("undefined: {}", p.reason.clone().unwrap_or_default()),
-                    |v| format!("{v:.4}"),
-                ),
-                shared_units: p.shared_units,
-            })
-            .collect(),
-        counts: a
-            .counts
-            .iter()
-            .map(|c| CountText {
-                direction: c.direction.as_str(),
-                step_length: c.step_length.get(),
-                items: c.items,
-                answers: c.answers,
-                all_agree: c.all_agree,
-            })
-            .collect(),
-    });
-    let query = raw.unwrap_or_default();
-    let page = ReportPage {
-        dataset: report.stamp.dataset.clone(),
-        query: if query.is_empty() {
-            String::new()
-        } else {
-            format!("?{query}")
-        },
-        stamp: crate::core::agreement::report::export::stamp_lines(&report.stamp).join("; "),
-        stamp_lines: crate::core::agreement::report::export::stamp_lines(&report.stamp),
-        agreement,
-        agreement_unavailable: report.agreement_unavailable.clone(),
-        step_lengths: StepLength::all().map(StepLength::get).collect(),
-        tables: vec![
-            (
-                "Pairwise accuracy (%), Table 1 layout",
-                table_rows(&report.rows, false),
-            ),
-            (
-                "Task accuracy (%), Table 3 layout",
-                table_rows(&report.rows, true),
-            ),
-        ],
-        comparisons: report
-            .comparisons
-            .iter()
-            .map(|c| comparison_text(&c.a.label, &c.b.label, c.items, &c.overall))
-            .collect(),
-        heatmap: Heatmap::of_comparisons(&report.comparisons),
-        chart: AccuracyChart::task_accuracy_by_step_length(&report.rows),
-        submissions: report
-            .rows
-            .iter()
-            .filter_map(|r| {
-                r.submission.map(|id| SubmissionChoice {
-                    id,
-                    label: format!("{} (#{id})", r.model),
-                    as_a: settings.chosen_pair.is_some_and(|(a, _)| a == id),
-                    as_b: settings.chosen_pair.is_some_and(|(_, b)| b == id),
-                })
-            })
-            .collect(),
-        encodings: OrderingEncoding::ALL
-            .iter()
-            .map(|e| (e.name(), *e == settings.encoding))
-            .collect(),
-        seed: settings.bootstrap.seed,
-        bootstrap: settings.bootstrap.replicates,
-    };
+    let page = ReportPage::new(&report, &settings, raw.as_deref().unwrap_or_default());
     Ok(Html(page.render()?))
+}
+
+impl AgreementText {
+    fn new(a: &AgreementSection, seed: u64) -> AgreementText {
+        AgreementText {
+            encoding: a.encoding.to_string(),
+            level: a.level.to_string(),
+            alpha: fixed(a.alpha.estimate.alpha, 4),
+            ci: format!(
+                "{}% CI [{}, {}] ({} resamples of {} items, seed {})",
+                a.alpha.confidence_level * 100.0,
+                fixed(a.alpha.ci_low, 4),
+                fixed(a.alpha.ci_high, 4),
+                a.alpha.replicates,
+                a.alpha.items,
+                seed
+            ),
+            items: a.items,
+            answers: a.answers,
+            annotators: a
+                .annotators
+                .iter()
+                .map(|r| format!("{} (#{})", r.name, r.id))
+                .collect::<Vec<_>>()
+                .join(", "),
+            exact: format!(
+                "{} of {} items ({}%)",
+                a.exact_agreement.agreeing_items,
+                a.exact_agreement.compared_items,
+                percent(a.exact_agreement.rate)
+            ),
+            pairs: a
+                .pairwise
+                .iter()
+                .map(|p| PairText {
+                    a: p.a.name.clone(),
+                    b: p.b.name.clone(),
+                    alpha: p.alpha.map_or_else(
+                        || format!("undefined: {}", p.reason.clone().unwrap_or_default()),
+                        |v| format!("{v:.4}"),
+                    ),
+                    shared_units: p.shared_units,
+                })
+                .collect(),
+            counts: a
+                .counts
+                .iter()
+                .map(|c| CountText {
+                    direction: c.direction.as_str(),
+                    step_length: c.step_length.get(),
+                    items: c.items,
+                    answers: c.answers,
+                    all_agree: c.all_agree,
+                })
+                .collect(),
+        }
+    }
+}
+
+impl ReportPage {
+    fn new(report: &AgreementReport, settings: &ReportSettings, query: &str) -> ReportPage {
+        let agreement = report
+            .agreement
+            .as_ref()
+            .map(|a| AgreementText::new(a, settings.bootstrap.seed));
+        ReportPage {
+            dataset: report.stamp.dataset.clone(),
+            query: if query.is_empty() {
+                String::new()
+            } else {
+                format!("?{query}")
+            },
+            stamp: crate::core::agreement::report::export::stamp_lines(&report.stamp).join("; "),
+            stamp_lines: crate::core::agreement::report::export::stamp_lines(&report.stamp),
+            agreement,
+            agreement_unavailable: report.agreement_unavailable.clone(),
+            step_lengths: StepLength::all().map(StepLength::get).collect(),
+            tables: vec![
+                (
+                    "Pairwise accuracy (%), Table 1 layout",
+                    table_rows(&report.rows, false),
+                ),
+                (
+                    "Task accuracy (%), Table 3 layout",
+                    table_rows(&report.rows, true),
+                ),
+            ],
+            comparisons: report
+                .comparisons
+                .iter()
+                .map(|c| comparison_text(&c.a.label, &c.b.label, c.items, &c.overall))
+                .collect(),
+            heatmap: Heatmap::of_comparisons(&report.comparisons),
+            chart: AccuracyChart::task_accuracy_by_step_length(&report.rows),
+            submissions: report
+                .rows
+                .iter()
+                .filter_map(|r| {
+                    r.submission.map(|id| SubmissionChoice {
+                        id,
+                        label: format!("{} (#{id})", r.model),
+                        as_a: settings.chosen_pair.is_some_and(|(a, _)| a == id),
+                        as_b: settings.chosen_pair.is_some_and(|(_, b)| b == id),
+                    })
+                })
+                .collect(),
+            encodings: OrderingEncoding::ALL
+                .iter()
+                .map(|e| (e.name(), *e == settings.encoding))
+                .collect(),
+            seed: settings.bootstrap.seed,
+            bootstrap: settings.bootstrap.replicates,
+        }
+    }
 }

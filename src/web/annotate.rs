@@ -4,25 +4,22 @@
 //! Blind by construction: nothing here reads an item's ground truth or score, and an item not
 //! assigned to the session's annotator is 403 on every route.
 
-use std::sync::Arc;
-
 use askama::Template;
-use axum::Json;
 use axum::Router;
-use axum::extract::{Path, State};
+use axum::extract::State;
 use axum::response::{Html, IntoResponse, Redirect, Response};
 use axum::routing::{get, post};
 use serde::{Deserialize, Serialize};
 
 use super::api::frame_url;
 use super::error::PageError;
+use super::extract::{Json, Path};
 use super::session::{LoggedIn, Protected};
 use super::{AppError, AppState};
-use crate::core::annotation::Draft;
+use crate::app::annotation::{self, AssignedItem};
+use crate::app::items::StoredItem;
+use crate::core::annotation::{Draft, QueueStatus, next_in_queue};
 use crate::core::dataset::{Direction, StepLength};
-use crate::store;
-use crate::store::annotations::{Outcome, QueueStatus, Session, StoredDraft, Telemetry, now_ms};
-use crate::store::items::StoredItem;
 
 pub fn router() -> Router<AppState> {
     Router::new()
@@ -78,8 +75,7 @@ async fn queue_page(
     State(state): State<AppState>,
     LoggedIn(session): LoggedIn,
 ) -> Result<Html<String>, PageError> {
-    let mut conn = state.pool.acquire().await?;
-    let queue = store::annotations::queue(&mut conn, session.annotator).await?;
+    let queue = annotation::queue(&state.hub, session.annotator).await?;
     let lengths: Vec<StepLength> = StepLength::all()
         .filter(|l| queue.iter().any(|e| e.step_length == *l))
         .collect();
@@ -101,7 +97,7 @@ async fn queue_page(
                 .collect(),
         })
         .collect();
-    let next = store::annotations::next_in_queue(&queue);
+    let next = next_in_queue(&queue);
     let page = QueuePage {
         name: session.name,
         is_admin: session.is_admin,
@@ -132,82 +128,12 @@ async fn next_item(
     State(state): State<AppState>,
     LoggedIn(session): LoggedIn,
 ) -> Result<Redirect, PageError> {
-    let mut conn = state.pool.acquire().await?;
-    let queue = store::annotations::queue(&mut conn, session.annotator).await?;
-    Ok(match store::annotations::next_in_queue(&queue) {
-        Some(e) => Redirect::to(&item_href(&e.dataset, &e.item_id)),
-        None => Redirect::to("/annotate"),
-    })
-}
-
-/// An item assigned to the session's annotator, with the annotator's standing on it.
-struct Assigned {
-    item: Arc<StoredItem>,
-    finished: bool,
-    draft: Option<StoredDraft>,
-}
-
-impl Assigned {
-    fn rowid(&self) -> i64 {
-        self.item.rowid
-    }
-}
-
-/// The item a URL names, from memory when it was read before (the item page is the hot path).
-async fn cached_item(
-    state: &AppState,
-    dataset: &str,
-    item_id: &str,
-) -> Result<Arc<StoredItem>, AppError> {
-    if let Some(found) = state.items.stored(dataset, item_id) {
-        return Ok(found);
-    }
-    let conn = &mut *state.pool.acquire().await?;
-    let stored = store::datasets::by_name(conn, dataset)
-        .await?
-        .ok_or_else(|| AppError::NotFound(format!("no dataset named '{dataset}'")))?;
-    let item = store::items::get(conn, stored.id, item_id)
-        .await?
-        .ok_or_else(|| AppError::NotFound(format!("no item '{item_id}' in dataset '{dataset}'")))?;
-    let found = Arc::new(item);
-    state.items.insert_stored(dataset, item_id, found.clone());
-    Ok(found)
-}
-
-/// Looks up an item assigned to the session's annotator: 404 for an unknown dataset or item,
-/// 403 for an item that exists but is someone else's (or no one's).
-/// Touches the store only for what is not already in memory.
-async fn assigned(
-    state: &AppState,
-    session: &Session,
-    dataset: &str,
-    item_id: &str,
-) -> Result<Assigned, AppError> {
-    let item = cached_item(state, dataset, item_id).await?;
-    let standing = match state.standings.get(session.annotator, item.rowid) {
-        Some(known) => known,
-        None => {
-            let ticket = state.standings.ticket();
-            let mut conn = state.pool.acquire().await?;
-            let read =
-                store::annotations::assignment_state(&mut conn, session.annotator, item.rowid)
-                    .await?
-                    .ok_or_else(|| {
-                        AppError::Forbidden(format!(
-                            "item '{item_id}' of dataset '{dataset}' is not assigned to you"
-                        ))
-                    })?;
-            state
-                .standings
-                .remember(ticket, session.annotator, item.rowid, read.clone());
-            read
-        }
-    };
-    Ok(Assigned {
-        item,
-        finished: standing.finished,
-        draft: standing.draft,
-    })
+    Ok(
+        match annotation::next(&state.hub, session.annotator).await? {
+            Some(e) => Redirect::to(&item_href(&e.dataset, &e.item_id)),
+            None => Redirect::to("/annotate"),
+        },
+    )
 }
 
 /// A card of the library: an image or an action, with the label the item gives it.
@@ -256,35 +182,22 @@ async fn item_page(
     LoggedIn(session): LoggedIn,
     Path((dataset, item_id)): Path<(String, String)>,
 ) -> Result<Html<String>, PageError> {
-    let found = assigned(&state, &session, &dataset, &item_id).await?;
-    let item = &found.item;
-    let finished = found.finished;
-    let step_length = item.summary.step_length;
-    let draft = match (finished, found.draft) {
-        (true, _) => Draft::empty(step_length),
-        (false, Some(stored)) => stored.draft,
-        (false, None) => {
-            let mut conn = state.pool.acquire().await?;
-            let opened = store::annotations::open_draft(
-                &mut conn,
-                session.annotator,
-                item.rowid,
-                &Draft::empty(step_length),
-                now_ms(),
-            )
-            .await?;
-            state.standings.forget(session.annotator, item.rowid);
-            opened.draft
-        }
-    };
-    let frame = |position: usize| -> Option<Frame> {
-        item.images.get(position).map(|img| Frame {
-            name: img.label(),
-            src: frame_url(&img.sha256),
-        })
-    };
-    let forward = item.summary.direction == Direction::Forward;
-    let library: Vec<Card> = if forward {
+    let opened = annotation::open(&state.hub, &session, &dataset, &item_id).await?;
+    let page = ItemPage::new(&opened, session.csrf_token, dataset)?;
+    Ok(Html(page.render()?))
+}
+
+/// A state image of `item` by position.
+fn frame(item: &StoredItem, position: usize) -> Option<Frame> {
+    item.images.get(position).map(|img| Frame {
+        name: img.label(),
+        src: frame_url(&img.sha256),
+    })
+}
+
+/// The cards to order: the future images (forward) or the action texts (inverse).
+fn library(item: &StoredItem) -> Vec<Card> {
+    if item.summary.direction == Direction::Forward {
         item.images
             .iter()
             .skip(1)
@@ -306,60 +219,51 @@ async fn item_page(
                 text: Some(text.clone()),
             })
             .collect()
-    };
-    let transitions = if forward {
-        Vec::new()
-    } else {
-        (0..step_length.actions())
-            .filter_map(|i| {
-                Some(Transition {
-                    from: frame(i)?,
-                    to: frame(i + 1)?,
-                })
-            })
-            .collect()
-    };
-    let page = ItemPage {
-        csrf: session.csrf_token,
-        base: item_href(&dataset, &item_id),
-        dataset,
-        item_id: item.summary.item_id.clone(),
-        forward,
-        step_length: step_length.get(),
-        slots: (1..=step_length.actions()).collect(),
-        current: if forward { frame(0) } else { None },
-        actions: if forward {
-            item.actions.clone()
-        } else {
-            Vec::new()
-        },
-        transitions,
-        library,
-        question: item.question.clone(),
-        draft_json: serde_json::to_string(&draft).map_err(|e| AppError::Internal(e.into()))?,
-        finished,
-    };
-    Ok(Html(page.render()?))
+    }
 }
 
-/// Checks a draft against the item it is for; 409 once the item is finished.
-async fn checked_draft(
-    state: &AppState,
-    session: &Session,
-    dataset: &str,
-    item_id: &str,
-    draft: &Draft,
-) -> Result<i64, AppError> {
-    let found = assigned(state, session, dataset, item_id).await?;
-    if found.finished {
-        return Err(AppError::Conflict(format!(
-            "item '{item_id}' is already finished; its answer can no longer change"
-        )));
+impl ItemPage {
+    fn new(opened: &AssignedItem, csrf: String, dataset: String) -> Result<ItemPage, AppError> {
+        let item = &opened.item;
+        let step_length = item.summary.step_length;
+        let forward = item.summary.direction == Direction::Forward;
+        let draft = match &opened.draft {
+            Some(draft) => serde_json::to_string(draft)?,
+            None => serde_json::to_string(&Draft::empty(step_length))?,
+        };
+        let transitions = if forward {
+            Vec::new()
+        } else {
+            (0..step_length.actions())
+                .filter_map(|i| {
+                    Some(Transition {
+                        from: frame(item, i)?,
+                        to: frame(item, i + 1)?,
+                    })
+                })
+                .collect()
+        };
+        Ok(ItemPage {
+            csrf,
+            base: item_href(&dataset, &item.summary.item_id),
+            dataset,
+            item_id: item.summary.item_id.clone(),
+            forward,
+            step_length: step_length.get(),
+            slots: (1..=step_length.actions()).collect(),
+            current: if forward { frame(item, 0) } else { None },
+            actions: if forward {
+                item.actions.clone()
+            } else {
+                Vec::new()
+            },
+            transitions,
+            library: library(item),
+            question: item.question.clone(),
+            draft_json: draft,
+            finished: opened.finished,
+        })
     }
-    draft
-        .check(found.item.summary.step_length)
-        .map_err(|e| AppError::BadRequest(format!("draft of item '{item_id}': {e}")))?;
-    Ok(found.rowid())
 }
 
 #[derive(Serialize)]
@@ -372,17 +276,14 @@ async fn save_draft(
     Path((dataset, item_id)): Path<(String, String)>,
     request: Protected<Draft>,
 ) -> Result<Json<Saved>, AppError> {
-    let rowid = checked_draft(&state, &request.session, &dataset, &item_id, &request.body).await?;
-    let mut conn = state.pool.acquire().await?;
-    store::annotations::save_draft(
-        &mut conn,
-        request.session.annotator,
-        rowid,
+    annotation::save_draft(
+        &state.hub,
+        &request.session,
+        &dataset,
+        &item_id,
         &request.body,
-        now_ms(),
     )
     .await?;
-    state.standings.forget(request.session.annotator, rowid);
     Ok(Json(Saved { saved: true }))
 }
 
@@ -396,43 +297,14 @@ async fn submit(
     Path((dataset, item_id)): Path<(String, String)>,
     request: Protected<Draft>,
 ) -> Result<Json<Submitted>, AppError> {
-    let session = &request.session;
-    let draft = &request.body;
-    let rowid = checked_draft(&state, session, &dataset, &item_id, draft).await?;
-    let Some(answer) = draft.answer() else {
-        let empty: Vec<String> = draft
-            .slots
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| s.is_none())
-            .map(|(i, _)| (i + 1).to_string())
-            .collect();
-        return Err(AppError::BadRequest(format!(
-            "item '{item_id}': slots {} are empty; fill every slot before submitting",
-            empty.join(", ")
-        )));
-    };
-    let now = now_ms();
-    let mut tx = state.pool.begin().await?;
-    store::annotations::save_draft(&mut tx, session.annotator, rowid, draft, now).await?;
-    let stored = store::annotations::draft(&mut tx, session.annotator, rowid)
-        .await?
-        .ok_or_else(|| AppError::Internal(anyhow::anyhow!("draft missing after save")))?;
-    let finished = store::annotations::finish(
-        &mut tx,
-        session.annotator,
-        rowid,
-        &Outcome::Answered(answer),
-        &Telemetry::of(&stored, now),
+    annotation::answer(
+        &state.hub,
+        &request.session,
+        &dataset,
+        &item_id,
+        &request.body,
     )
     .await?;
-    if !finished {
-        return Err(AppError::Conflict(format!(
-            "item '{item_id}' is already finished"
-        )));
-    }
-    tx.commit().await?;
-    state.standings.forget(session.annotator, rowid);
     Ok(Json(Submitted {
         next: "/annotate/next".to_owned(),
     }))
@@ -452,54 +324,16 @@ async fn skip(
     Path((dataset, item_id)): Path<(String, String)>,
     request: Protected<SkipForm>,
 ) -> Result<Response, PageError> {
-    let session = &request.session;
-    let found = assigned(&state, session, &dataset, &item_id).await?;
-    let (rowid, finished) = (found.rowid(), found.finished);
-    if finished {
-        return Err(AppError::Conflict(format!("item '{item_id}' is already finished")).into());
-    }
-    let reason = request.body.reason.trim().to_owned();
-    if reason.is_empty() {
-        return Err(AppError::BadRequest(format!(
-            "to {} item '{item_id}', say why in the reason field",
-            if request.body.action == "flag" {
-                "flag"
-            } else {
-                "skip"
-            }
-        ))
-        .into());
-    }
-    if reason.chars().count() > 2000 {
-        return Err(AppError::BadRequest("the reason is over 2000 characters".to_owned()).into());
-    }
-    let outcome = match request.body.action.as_str() {
-        "skip" => Outcome::Skipped(reason),
-        "flag" => Outcome::Flagged(reason),
-        other => {
-            return Err(AppError::BadRequest(format!(
-                "form field `action` is {other:?}; expected \"skip\" or \"flag\""
-            ))
-            .into());
-        }
-    };
-    let now = now_ms();
-    let mut tx = state.pool.begin().await?;
-    let stored = store::annotations::draft(&mut tx, session.annotator, rowid).await?;
-    let telemetry = stored.as_ref().map_or(
-        Telemetry {
-            time_on_item_ms: 0,
-            time_to_first_placement_ms: None,
-            placements: 0,
-            swaps: 0,
-            clears: 0,
-            undos: 0,
-        },
-        |d| Telemetry::of(d, now),
-    );
-    store::annotations::finish(&mut tx, session.annotator, rowid, &outcome, &telemetry).await?;
-    tx.commit().await?;
-    state.standings.forget(session.annotator, rowid);
+    let form = &request.body;
+    annotation::skip(
+        &state.hub,
+        &request.session,
+        &dataset,
+        &item_id,
+        &form.action,
+        &form.reason,
+    )
+    .await?;
     Ok(Redirect::to("/annotate/next").into_response())
 }
 
@@ -525,13 +359,7 @@ async fn own_answer(
     LoggedIn(session): LoggedIn,
     Path((dataset, item_id)): Path<(String, String)>,
 ) -> Result<Json<OwnAnswer>, AppError> {
-    let found = assigned(&state, &session, &dataset, &item_id).await?;
-    let mut conn = state.pool.acquire().await?;
-    let a = store::annotations::annotation(&mut conn, session.annotator, found.rowid())
-        .await?
-        .ok_or_else(|| {
-            AppError::NotFound(format!("item '{item_id}' has no answer from you yet"))
-        })?;
+    let a = annotation::own_answer(&state.hub, &session, &dataset, &item_id).await?;
     Ok(Json(OwnAnswer {
         dataset: a.dataset,
         item_id: a.item_id,

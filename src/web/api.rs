@@ -2,19 +2,18 @@
 
 use std::collections::BTreeMap;
 
-use axum::Json;
 use axum::body::{Body, Bytes};
-use axum::extract::{Path, Query, State};
+use axum::extract::State;
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde::{Deserialize, Serialize};
 
+use super::extract::{Json, Path, Query};
 use super::openapi::{ApiRoute, Verb};
-use super::{AppError, AppState, dataset_or_404};
+use super::{AppError, AppState};
+use crate::app::datasets::{self, DatasetOverview};
+use crate::app::items::{self, ItemFilter, ItemSummary, StoredItem};
 use crate::core::dataset::{Direction, StepLength};
-use crate::store;
-use crate::store::datasets::DatasetOverview;
-use crate::store::items::{ItemFilter, StoredItem};
 
 /// The read API's routes (see [`super::openapi`]).
 pub fn routes() -> Vec<ApiRoute> {
@@ -105,10 +104,9 @@ struct DatasetList {
 }
 
 async fn list_datasets(State(state): State<AppState>) -> Result<Json<DatasetList>, AppError> {
-    let mut conn = state.pool.acquire().await?;
-    let datasets = store::datasets::overview(&mut conn).await?;
+    let all = datasets::overview(&state.hub).await?;
     Ok(Json(DatasetList {
-        datasets: datasets.into_iter().map(DatasetView::from).collect(),
+        datasets: all.into_iter().map(DatasetView::from).collect(),
     }))
 }
 
@@ -116,14 +114,7 @@ async fn get_dataset(
     State(state): State<AppState>,
     Path(name): Path<String>,
 ) -> Result<Json<DatasetView>, AppError> {
-    let dataset = dataset_or_404(&state.pool, &name).await?;
-    let mut conn = state.pool.acquire().await?;
-    let overview = store::datasets::overview(&mut conn)
-        .await?
-        .into_iter()
-        .find(|o| o.dataset.id == dataset.id)
-        .ok_or_else(|| AppError::NotFound(format!("no dataset named '{name}'")))?;
-    Ok(Json(overview.into()))
+    Ok(Json(datasets::overview_of(&state.hub, &name).await?.into()))
 }
 
 /// Query parameters of item lists, as typed by people: parsed by hand for clear messages.
@@ -172,17 +163,15 @@ impl ItemSelection {
         &self,
         state: &AppState,
         dataset: &str,
-    ) -> Result<(Vec<store::items::ItemSummary>, i64), AppError> {
-        let dataset = dataset_or_404(&state.pool, dataset).await?;
-        let mut conn = state.pool.acquire().await?;
-        Ok(store::items::list(
-            &mut conn,
-            dataset.id,
+    ) -> Result<(Vec<ItemSummary>, i64), AppError> {
+        items::list(
+            &state.hub,
+            dataset,
             &self.filter,
             self.per_page,
             self.offset(),
         )
-        .await?)
+        .await
     }
 }
 
@@ -324,20 +313,23 @@ struct ItemView {
 }
 
 impl ItemView {
-    fn new(dataset: String, item: StoredItem) -> Self {
+    fn new(dataset: String, item: &StoredItem) -> Self {
         ItemView {
-            id: item.summary.item_id,
+            id: item.summary.item_id.clone(),
             dataset,
-            item_type: item.summary.item_type,
+            item_type: item.summary.item_type.clone(),
             direction: item.summary.direction,
             step_length: item.summary.step_length,
-            task_name: item.summary.task_name,
-            question: item.question,
+            task_name: item.summary.task_name.clone(),
+            question: item.question.clone(),
             actions: item
                 .actions
-                .into_iter()
+                .iter()
                 .enumerate()
-                .map(|(i, text)| ActionView { label: i + 1, text })
+                .map(|(i, text)| ActionView {
+                    label: i + 1,
+                    text: text.clone(),
+                })
                 .collect(),
             images: item
                 .images
@@ -356,21 +348,13 @@ async fn get_item(
     State(state): State<AppState>,
     Path((name, item_id)): Path<(String, String)>,
 ) -> Result<Response, AppError> {
-    let json = match state.items.json(&name, &item_id) {
+    let cache = state.hub.items();
+    let json = match cache.json(&name, &item_id) {
         Some(json) => json,
         None => {
-            let dataset = dataset_or_404(&state.pool, &name).await?;
-            let mut conn = state.pool.acquire().await?;
-            let item = store::items::get(&mut conn, dataset.id, &item_id)
-                .await?
-                .ok_or_else(|| {
-                    AppError::NotFound(format!("no item '{item_id}' in dataset '{name}'"))
-                })?;
-            let json = Bytes::from(
-                serde_json::to_vec(&ItemView::new(name.clone(), item))
-                    .map_err(|e| AppError::Internal(e.into()))?,
-            );
-            state.items.insert_json(&name, &item_id, json.clone());
+            let item = items::get(&state.hub, &name, &item_id).await?;
+            let json = Bytes::from(serde_json::to_vec(&ItemView::new(name.to_string(), &item))?);
+            cache.insert_json(&name, &item_id, json.clone());
             json
         }
     };
@@ -415,12 +399,7 @@ async fn get_frame(
     let png = match state.frames.get(&sha256) {
         Some(png) => png,
         None => {
-            let mut conn = state.pool.acquire().await?;
-            let png = Bytes::from(
-                store::frames::png(&mut conn, &sha256)
-                    .await?
-                    .ok_or_else(not_found)?,
-            );
+            let png = Bytes::from(items::frame_png(&state.hub, &sha256).await?);
             state.frames.insert(&sha256, png.clone());
             png
         }

@@ -3,23 +3,15 @@
 //! Ground truth (`gt_answer`, `key_frame_ids`) is written only for datasets whose answers are
 //! public; see [`crate::core::release`] for the layout.
 
-use std::collections::HashSet;
-
-use axum::body::{Body, Bytes};
-use axum::extract::{Path, State};
+use axum::body::Body;
+use axum::extract::State;
 use axum::http::{HeaderValue, header};
 use axum::response::{IntoResponse, Response};
-use sqlx::SqlitePool;
-use tokio::sync::mpsc;
 
+use super::extract::Path;
 use super::openapi::{ApiRoute, Verb};
-use super::{AppError, AppState, dataset_or_404};
-use crate::core::release::{ArchiveWriter, QA_FILE, release_line};
-use crate::store;
-use crate::store::submissions::AnswerVisibility;
-
-/// Items whose frames are read from the database at a time.
-const ITEMS_PER_BATCH: usize = 16;
+use super::{AppError, AppState};
+use crate::app::datasets;
 
 pub fn routes() -> Vec<ApiRoute> {
     vec![
@@ -60,42 +52,14 @@ async fn download(
     State(state): State<AppState>,
     Path(name): Path<String>,
 ) -> Result<Response, AppError> {
-    let dataset = dataset_or_404(&state.pool, &name).await?;
-    let mut conn = state.pool.acquire().await?;
-    let with_truth = store::submissions::answer_visibility(&mut conn, dataset.id).await?
-        == AnswerVisibility::Public;
-    let items = store::items::release_items(&mut conn, dataset.id).await?;
-    drop(conn);
-
-    // The QA file goes first and its size is in its header, so it is built whole; it is small
-    // beside the frames (about 27 MB for a full release), which are streamed.
-    let mut qa = String::new();
-    for (_, item) in &items {
-        qa.push_str(&release_line(item, with_truth));
-        qa.push('\n');
-    }
-    let mut writer = ArchiveWriter::default();
-    let head = writer
-        .file(QA_FILE, qa.as_bytes())
-        .map_err(|e| AppError::Internal(e.into()))?;
-    let rows: Vec<i64> = items.iter().map(|(row, _)| *row).collect();
-    drop(items);
-
-    let (tx, rx) = mpsc::channel(4);
-    tokio::spawn(stream_frames(
-        state.pool.clone(),
-        dataset.name.clone(),
-        rows,
-        writer,
-        head,
-        tx,
-    ));
+    let archive = datasets::release_archive(&state.hub, &name).await?;
     let disposition = format!(
         "attachment; filename=\"{}\"",
-        archive_file_name(&dataset.name)
+        archive_file_name(&archive.dataset.name)
     );
     let mut response =
-        Body::from_stream(tokio_stream::wrappers::ReceiverStream::new(rx)).into_response();
+        Body::from_stream(tokio_stream::wrappers::ReceiverStream::new(archive.chunks))
+            .into_response();
     let headers = response.headers_mut();
     headers.insert(
         header::CONTENT_TYPE,
@@ -106,54 +70,11 @@ async fn download(
     }
     headers.insert(
         "x-enact-ground-truth",
-        HeaderValue::from_static(if with_truth { "included" } else { "omitted" }),
+        HeaderValue::from_static(if archive.with_truth {
+            "included"
+        } else {
+            "omitted"
+        }),
     );
     Ok(response)
-}
-
-type Chunk = Result<Bytes, std::io::Error>;
-
-/// Sends the archive's remaining entries. A failure ends the body with an error, so the client
-/// sees a broken transfer rather than a short archive that looks complete.
-async fn stream_frames(
-    pool: SqlitePool,
-    dataset: String,
-    rows: Vec<i64>,
-    mut writer: ArchiveWriter,
-    head: Vec<u8>,
-    tx: mpsc::Sender<Chunk>,
-) {
-    if tx.send(Ok(Bytes::from(head))).await.is_err() {
-        return;
-    }
-    let mut written: HashSet<String> = HashSet::new();
-    for batch in rows.chunks(ITEMS_PER_BATCH) {
-        let images = match pool.acquire().await {
-            Ok(mut conn) => store::items::release_images(&mut conn, batch).await,
-            Err(e) => Err(e),
-        };
-        let images = match images {
-            Ok(images) => images,
-            Err(e) => {
-                tracing::error!(error = %e, dataset, "archive: reading frames failed");
-                let _ = tx.send(Err(std::io::Error::other(e))).await;
-                return;
-            }
-        };
-        for (path, png) in images {
-            // Two records naming one file hold the same bytes (the importer read one file).
-            if !written.insert(path.clone()) {
-                continue;
-            }
-            let chunk = writer.file(&path, &png);
-            let failed = chunk.is_err();
-            if let Err(e) = &chunk {
-                tracing::error!(error = %e, dataset, path, "archive: cannot write entry");
-            }
-            if tx.send(chunk.map(Bytes::from)).await.is_err() || failed {
-                return;
-            }
-        }
-    }
-    let _ = tx.send(writer.finish().map(Bytes::from)).await;
 }

@@ -5,9 +5,7 @@ use axum::http::header;
 use axum::http::request::Parts;
 
 use super::{AppError, AppState};
-use crate::core::credentials::Scope;
-use crate::store;
-use crate::store::accounts::Caller;
+use crate::app::tokens::{self, Caller};
 
 impl FromRequestParts<AppState> for Caller {
     type Rejection = AppError;
@@ -36,23 +34,6 @@ impl FromRequestParts<AppState> for Caller {
                     "the Authorization header must read `Bearer TOKEN`".to_owned(),
                 )
             })?;
-        let mut conn = state.pool.acquire().await?;
-        store::accounts::authenticate(&mut conn, token)
-            .await?
-            .ok_or_else(|| {
-                AppError::Unauthorized("the API token is unknown or has been revoked".to_owned())
-            })
-    }
-}
-
-/// Refuses a caller without `scope`.
-pub fn require(caller: &Caller, scope: Scope) -> Result<(), AppError> {
-    if caller.has(scope) {
-        Ok(())
-    } else {
-        Err(AppError::Forbidden(format!(
-            "this token lacks the `{}` scope",
-            scope.as_str()
-        )))
+        tokens::authenticate(&state.hub, token).await
     }
 }

@@ -1,7 +1,6 @@
-//! The one error type at the HTTP boundary.
-//!
-//! Client mistakes carry a message a person can act on. Everything else is `Internal`: the
-//! details go to the log, the client sees only that something failed on our side.
+//! The one error type at the HTTP boundary, [`AppError`] (defined with the use cases in
+//! [`crate::app`]), as a JSON body or as a page: its status codes, headers and rendering.
+//! Internal details go to the log only.
 
 use askama::Template;
 use axum::Json;
@@ -9,39 +8,7 @@ use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{Html, IntoResponse, Response};
 use serde::Serialize;
 
-#[derive(Debug, thiserror::Error)]
-pub enum AppError {
-    #[error("{0}")]
-    NotFound(String),
-    #[error("{0}")]
-    BadRequest(String),
-    /// No valid bearer token (missing, unknown or revoked), or no login session.
-    #[error("{0}")]
-    Unauthorized(String),
-    /// A token without the scope the request needs, or a page or item that is not this
-    /// annotator's (or a wrong CSRF token).
-    #[error("{0}")]
-    Forbidden(String),
-    #[error("{0}")]
-    Conflict(String),
-    #[error("{0}")]
-    PayloadTooLarge(String),
-    /// The body was read but refused; `problems` says where.
-    #[error("{message}")]
-    Unprocessable {
-        message: String,
-        problems: Vec<crate::core::submission::LineProblem>,
-    },
-    /// A quota or rate limit. `retry_after` is set only when waiting helps: a used-up total
-    /// quota never refills, so it sends no `Retry-After`.
-    #[error("{message}")]
-    TooManyRequests {
-        message: String,
-        retry_after: Option<u64>,
-    },
-    #[error("internal error")]
-    Internal(#[source] anyhow::Error),
-}
+pub use crate::app::AppError;
 
 impl AppError {
     pub fn status(&self) -> StatusCode {
@@ -52,6 +19,7 @@ impl AppError {
             AppError::Forbidden(_) => StatusCode::FORBIDDEN,
             AppError::Conflict(_) => StatusCode::CONFLICT,
             AppError::PayloadTooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
+            AppError::UnsupportedMediaType(_) => StatusCode::UNSUPPORTED_MEDIA_TYPE,
             AppError::Unprocessable { .. } => StatusCode::UNPROCESSABLE_ENTITY,
             AppError::TooManyRequests { .. } => StatusCode::TOO_MANY_REQUESTS,
             AppError::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
@@ -62,12 +30,6 @@ impl AppError {
         if let AppError::Internal(e) = self {
             tracing::error!(error = ?e, "request failed");
         }
-    }
-}
-
-impl From<sqlx::Error> for AppError {
-    fn from(e: sqlx::Error) -> Self {
-        AppError::Internal(e.into())
     }
 }
 

@@ -2,21 +2,19 @@
 //! chart (`/leaderboard/{dataset}`).
 
 use askama::Template;
-use axum::Json;
 use axum::Router;
-use axum::extract::{Path, State};
+use axum::extract::State;
 use axum::response::Html;
 use axum::routing::get;
 use serde::Serialize;
 
 use super::error::PageError;
+use super::extract::{Json, Path};
 use super::openapi::{ApiRoute, Verb};
-use super::{AppError, AppState, dataset_or_404};
+use super::{AppError, AppState};
+use crate::app::leaderboard;
 use crate::core::dataset::StepLength;
-use crate::core::leaderboard::{
-    AccuracyCell, AccuracyChart, Interval, LeaderboardRow, RowIdentity, rank,
-};
-use crate::store;
+use crate::core::leaderboard::{AccuracyCell, AccuracyChart, Interval, LeaderboardRow};
 
 pub fn api_routes() -> Vec<ApiRoute> {
     vec![
@@ -40,39 +38,6 @@ pub fn page_router() -> Router<AppState> {
     Router::new().route("/leaderboard/{dataset}", get(leaderboard_page))
 }
 
-async fn leaderboard_rows(state: &AppState, dataset: i64) -> Result<Vec<LeaderboardRow>, AppError> {
-    let mut conn = state.pool.acquire().await?;
-    let submissions = store::submissions::published(&mut conn, dataset).await?;
-    let mut rows = Vec::with_capacity(submissions.len());
-    for s in &submissions {
-        let scores: serde_json::Value = serde_json::from_str(&s.scores).map_err(|e| {
-            AppError::Internal(anyhow::anyhow!(
-                "submission {}: scores unreadable: {e}",
-                s.id
-            ))
-        })?;
-        rows.push(LeaderboardRow::from_scores(
-            &RowIdentity {
-                submission: s.id,
-                model: &s.model,
-                account: &s.account,
-                baseline: s.baseline,
-                submitted_at: &s.created_at,
-            },
-            &scores,
-        ));
-    }
-    if let Some(report) = store::annotations::human_performance(&mut conn, dataset).await? {
-        let items = store::datasets::counts(&mut conn, dataset).await?.total;
-        rows.push(LeaderboardRow::human(
-            &report,
-            usize::try_from(items).unwrap_or(0),
-        ));
-    }
-    rank(&mut rows);
-    Ok(rows)
-}
-
 #[derive(Serialize)]
 struct LeaderboardView {
     dataset: String,
@@ -85,8 +50,7 @@ async fn leaderboard_json(
     State(state): State<AppState>,
     Path(name): Path<String>,
 ) -> Result<Json<LeaderboardView>, AppError> {
-    let dataset = dataset_or_404(&state.pool, &name).await?;
-    let rows = leaderboard_rows(&state, dataset.id).await?;
+    let (dataset, rows) = leaderboard::of(&state.hub, &name).await?;
     Ok(Json(LeaderboardView {
         dataset: dataset.name,
         policy: "strict",
@@ -148,8 +112,7 @@ async fn leaderboard_page(
     State(state): State<AppState>,
     Path(name): Path<String>,
 ) -> Result<Html<String>, PageError> {
-    let dataset = dataset_or_404(&state.pool, &name).await?;
-    let rows = leaderboard_rows(&state, dataset.id).await?;
+    let (dataset, rows) = leaderboard::of(&state.hub, &name).await?;
     let chart = AccuracyChart::task_accuracy_by_step_length(&rows);
     let texts = rows
         .iter()

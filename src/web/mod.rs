@@ -15,13 +15,12 @@ mod archive;
 mod assets;
 mod auth;
 pub mod error;
+mod extract;
 mod frame_cache;
-mod item_cache;
 mod leaderboard;
 pub mod openapi;
 mod pages;
 pub mod session;
-mod standing_cache;
 mod submissions;
 
 use std::future::Future;
@@ -32,18 +31,14 @@ use std::time::Duration;
 use axum::Router;
 use axum::extract::{DefaultBodyLimit, MatchedPath, Request};
 use axum::http::StatusCode;
-use sqlx::SqlitePool;
 use tokio::net::TcpListener;
 use tower_http::timeout::TimeoutLayer;
 use tower_http::trace::TraceLayer;
 
-pub use admin::{check_annotator_name, invite_url};
 pub use error::AppError;
 use frame_cache::FrameCache;
-use item_cache::ItemCache;
-use standing_cache::StandingCache;
 
-use crate::store;
+use crate::app::Hub;
 
 /// Settings of a running server that handlers may need.
 #[derive(Debug, Clone)]
@@ -56,10 +51,6 @@ pub struct WebConfig {
     pub frame_cache_bytes: usize,
     /// Largest submission body accepted, in bytes (other routes use `body_limit`).
     pub submission_body_limit: usize,
-    /// Submission attempts a token may make per UTC day, unless the token sets its own.
-    pub daily_quota: i64,
-    /// Submission attempts a token may make in total, unless the token sets its own.
-    pub total_quota: i64,
 }
 
 impl Default for WebConfig {
@@ -70,62 +61,60 @@ impl Default for WebConfig {
             frame_cache_bytes: 256 * 1024 * 1024,
             // A full ENACT-format file (8,972 QA records with answers) is about 27 MB.
             submission_body_limit: 64 * 1024 * 1024,
-            daily_quota: 20,
-            total_quota: 1000,
         }
     }
 }
 
+/// What handlers share: the use cases' [`Hub`], and what only HTTP needs.
 #[derive(Clone)]
 pub struct AppState {
-    pub pool: SqlitePool,
+    pub hub: Hub,
     frames: Arc<FrameCache>,
-    items: Arc<ItemCache>,
-    standings: Arc<StandingCache>,
-    targets: Arc<submissions::TargetCache>,
     submission_body_limit: usize,
-    daily_quota: i64,
-    total_quota: i64,
     logins: Arc<session::LoginLimiter>,
     sessions: Arc<session::SessionCache>,
 }
 
 impl AppState {
-    pub fn new(pool: SqlitePool, config: &WebConfig) -> Self {
+    pub fn new(hub: Hub, config: &WebConfig) -> Self {
         AppState {
-            pool,
+            hub,
             frames: Arc::new(FrameCache::new(config.frame_cache_bytes)),
-            items: Arc::new(ItemCache::default()),
-            standings: Arc::new(StandingCache::default()),
-            targets: Arc::new(submissions::TargetCache::default()),
             submission_body_limit: config.submission_body_limit,
-            daily_quota: config.daily_quota,
-            total_quota: config.total_quota,
             logins: Arc::new(session::LoginLimiter::default()),
             sessions: Arc::new(session::SessionCache::default()),
         }
     }
 }
 
-/// Looks up a dataset by name, or says which name was not found.
-async fn dataset_or_404(
-    pool: &SqlitePool,
-    name: &str,
-) -> Result<store::datasets::Dataset, AppError> {
-    let mut conn = pool.acquire().await?;
-    store::datasets::by_name(&mut conn, name)
-        .await?
-        .ok_or_else(|| AppError::NotFound(format!("no dataset named '{name}'")))
+async fn healthz(axum::extract::State(state): axum::extract::State<AppState>) -> StatusCode {
+    if state.hub.healthy().await {
+        StatusCode::OK
+    } else {
+        StatusCode::SERVICE_UNAVAILABLE
+    }
 }
 
-async fn healthz(axum::extract::State(state): axum::extract::State<AppState>) -> StatusCode {
-    match sqlx::query("SELECT 1").execute(&state.pool).await {
-        Ok(_) => StatusCode::OK,
-        Err(e) => {
-            tracing::error!(error = %e, "health check: database unavailable");
-            StatusCode::SERVICE_UNAVAILABLE
-        }
-    }
+/// Every route of the JSON API, in the order the document lists them.
+pub fn api_routes() -> Vec<openapi::ApiRoute> {
+    let mut routes = api::routes();
+    routes.extend(archive::routes());
+    routes.extend(submissions::routes());
+    routes.extend(leaderboard::api_routes());
+    routes.push(
+        openapi::ApiRoute::new(
+            openapi::Verb::Get,
+            "/openapi.json",
+            openapi::openapi_json,
+            "This document",
+        )
+        .describe(
+            "The OpenAPI 3.1 description of every route under /api/v1, built from the same \
+                 table the router is built from. Rendered as HTML at /api/docs.",
+        )
+        .responds(200, Some("application/json"), "The OpenAPI document."),
+    );
+    routes
 }
 
 /// The whole application with its middleware.
@@ -149,10 +138,7 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
         .merge(admin_tokens::router())
         .merge(assets::router())
         .merge(openapi::page_router())
-        .nest(
-            openapi::API_PREFIX,
-            openapi::api_router(openapi::api_routes()),
-        )
+        .nest(openapi::API_PREFIX, openapi::api_router(api_routes()))
         .with_state(state)
         .layer(DefaultBodyLimit::max(config.body_limit))
         .layer(TimeoutLayer::with_status_code(
@@ -171,11 +157,8 @@ pub struct Server {
 }
 
 impl Server {
-    pub async fn bind(
-        addr: SocketAddr,
-        state: AppState,
-        config: &WebConfig,
-    ) -> std::io::Result<Server> {
+    pub async fn bind(addr: SocketAddr, hub: Hub, config: &WebConfig) -> std::io::Result<Server> {
+        let state = AppState::new(hub, config);
         let listener = TcpListener::bind(addr).await?;
         Ok(Server {
             listener,
@@ -193,11 +176,7 @@ impl Server {
         self,
         shutdown: impl Future<Output = ()> + Send + 'static,
     ) -> std::io::Result<()> {
-        let watcher = tokio::spawn(item_cache::watch_generation(
-            self.state.pool.clone(),
-            self.state.items.clone(),
-            self.state.standings.clone(),
-        ));
+        let watcher = tokio::spawn(self.state.hub.clone().watch_content());
         // Connection info gives the login rate limit the client's address.
         let result = axum::serve(
             self.listener,

@@ -1,7 +1,8 @@
 //! The `/api/v1` route table, and the OpenAPI document and docs page built from it.
 //!
 //! Every JSON API route is an [`ApiRoute`]: its method, path, handler and documentation in one
-//! value. [`api_router`] mounts exactly the table and [`document`] describes exactly the table,
+//! value. The table itself is [`super::api_routes`]; [`api_router`] mounts exactly it and
+//! [`document`] describes exactly it,
 //! so a route cannot be served without being documented, nor documented with another method
 //! than the one it answers to.
 
@@ -16,8 +17,8 @@ use axum::response::Html;
 use axum::routing::{MethodFilter, MethodRouter, get, on};
 use serde_json::{Map, Value, json};
 
+use super::AppState;
 use super::error::PageError;
-use super::{AppState, api, archive, leaderboard, submissions};
 
 /// Where the table is mounted.
 pub const API_PREFIX: &str = "/api/v1";
@@ -251,23 +252,6 @@ impl ApiRoute {
     }
 }
 
-/// Every route of the JSON API, in the order the document lists them.
-pub fn api_routes() -> Vec<ApiRoute> {
-    let mut routes = api::routes();
-    routes.extend(archive::routes());
-    routes.extend(submissions::routes());
-    routes.extend(leaderboard::api_routes());
-    routes.push(
-        ApiRoute::new(Verb::Get, "/openapi.json", openapi_json, "This document")
-            .describe(
-                "The OpenAPI 3.1 description of every route under /api/v1, built from the same \
-                 table the router is built from. Rendered as HTML at /api/docs.",
-            )
-            .responds(200, Some("application/json"), "The OpenAPI document."),
-    );
-    routes
-}
-
 /// The router of exactly the routes in `routes` (to be nested under [`API_PREFIX`]).
 pub fn api_router(routes: Vec<ApiRoute>) -> Router<AppState> {
     // Two methods on one path merge into one method router; a method given twice panics at
@@ -431,10 +415,10 @@ pub fn document(routes: &[ApiRoute]) -> Value {
 /// The document never changes while the server runs: build it once.
 fn cached_document() -> &'static Value {
     static DOCUMENT: OnceLock<Value> = OnceLock::new();
-    DOCUMENT.get_or_init(|| document(&api_routes()))
+    DOCUMENT.get_or_init(|| document(&super::api_routes()))
 }
 
-async fn openapi_json() -> Json<Value> {
+pub(super) async fn openapi_json() -> Json<Value> {
     Json(cached_document().clone())
 }
 

@@ -2,15 +2,17 @@
 
 use askama::Template;
 use axum::Router;
-use axum::extract::{Path, Query, State};
+use axum::extract::State;
 use axum::response::Html;
 use axum::routing::get;
 
+use super::AppState;
 use super::api::{ItemQuery, frame_url};
 use super::error::PageError;
-use super::{AppError, AppState, dataset_or_404};
+use super::extract::{Path, Query};
+use crate::app::datasets;
+use crate::app::items::{self, StoredItem};
 use crate::core::dataset::{Direction, StepLength};
-use crate::store;
 
 pub fn router() -> Router<AppState> {
     Router::new()
@@ -49,8 +51,7 @@ struct HomePage {
 }
 
 async fn home(State(state): State<AppState>) -> Result<Html<String>, PageError> {
-    let mut conn = state.pool.acquire().await?;
-    let overview = store::datasets::overview(&mut conn).await?;
+    let overview = datasets::overview(&state.hub).await?;
     let datasets = overview
         .into_iter()
         .map(|o| {
@@ -124,9 +125,8 @@ async fn browse(
 ) -> Result<Html<String>, PageError> {
     let selection = query.selection()?;
     let (items, total) = selection.fetch(&state, &name).await?;
-    let dataset = dataset_or_404(&state.pool, &name).await?;
-    let mut conn = state.pool.acquire().await?;
-    let task_names = store::items::task_names(&mut conn, dataset.id).await?;
+    let dataset = datasets::by_name(&state.hub, &name).await?;
+    let task_names = datasets::task_names(&state.hub, &dataset).await?;
     let filter = &selection.filter;
     let offset = selection.offset();
     let page_href = |page: u32| format!("/datasets/{name}?{}", selection.query_string(page));
@@ -205,11 +205,7 @@ async fn item(
     State(state): State<AppState>,
     Path((name, item_id)): Path<(String, String)>,
 ) -> Result<Html<String>, PageError> {
-    let dataset = dataset_or_404(&state.pool, &name).await?;
-    let mut conn = state.pool.acquire().await?;
-    let item = store::items::get(&mut conn, dataset.id, &item_id)
-        .await?
-        .ok_or_else(|| AppError::NotFound(format!("no item '{item_id}' in dataset '{name}'")))?;
+    let item = StoredItem::clone(&*items::get(&state.hub, &name, &item_id).await?);
     let page = ItemPage {
         dataset_href: format!(
             "/datasets/{name}?direction={}&step_length={}",

@@ -26,16 +26,12 @@ use serde::de::DeserializeOwned;
 
 use super::error::PageError;
 use super::{AppError, AppState};
-use crate::core::annotation::{
-    hash_password, new_token, password_problem, token_hash, tokens_equal, verify_password,
-};
-use crate::store;
-use crate::store::annotations::{Session, now_ms};
+use crate::app::annotators::{self, SESSION_LIFETIME, now_ms};
+use crate::core::annotation::Session;
+use crate::core::credentials::{MIN_PASSWORD_CHARS, constant_time_eq, random_token, token_hash};
 
 pub const SESSION_COOKIE: &str = "enact_session";
 const LOGIN_CSRF_COOKIE: &str = "enact_login_csrf";
-/// How long a login lasts.
-const SESSION_LIFETIME: Duration = Duration::from_secs(12 * 3600);
 /// Failed logins allowed per window: per account, and per client address.
 const ACCOUNT_FAILURES: usize = 5;
 const ADDRESS_FAILURES: usize = 20;
@@ -225,12 +221,7 @@ impl FromRequestParts<AppState> for LoggedIn {
                 match state.sessions.get(&hash, now) {
                     Some(session) => Some(session),
                     None => {
-                        let mut conn = state
-                            .pool
-                            .acquire()
-                            .await
-                            .map_err(|e| PageError::from(e).into_response())?;
-                        let found = store::annotations::session(&mut conn, &hash, now)
+                        let found = annotators::session(&state.hub, &hash)
                             .await
                             .map_err(|e| PageError::from(e).into_response())?;
                         if let Some((session, expires)) = &found {
@@ -322,8 +313,9 @@ impl<T: DeserializeOwned + Send> FromRequest<AppState> for Protected<T> {
         let bytes = Bytes::from_request(Request::from_parts(parts, body), state)
             .await
             .map_err(IntoResponse::into_response)?;
-        let token_ok =
-            |token: Option<&str>| token.is_some_and(|t| tokens_equal(t, &session.csrf_token));
+        let token_ok = |token: Option<&str>| {
+            token.is_some_and(|t| constant_time_eq(t.as_bytes(), session.csrf_token.as_bytes()))
+        };
         // The token is checked before the body is read, so a forged request learns nothing.
         let body = if json {
             if !token_ok(header_token.as_deref()) {
@@ -365,7 +357,7 @@ fn login_form(
     name: String,
     error: Option<String>,
 ) -> Result<Response, PageError> {
-    let csrf = new_token();
+    let csrf = random_token();
     let page = LoginPage {
         csrf: csrf.clone(),
         name,
@@ -391,7 +383,7 @@ struct LoginForm {
 
 fn login_csrf_ok(headers: &HeaderMap, form_token: &str) -> bool {
     cookie(headers, LOGIN_CSRF_COOKIE)
-        .is_some_and(|c| !c.is_empty() && tokens_equal(&c, form_token))
+        .is_some_and(|c| !c.is_empty() && constant_time_eq(c.as_bytes(), form_token.as_bytes()))
 }
 
 /// Starts a session for `annotator` and redirects to `to`.
@@ -401,16 +393,7 @@ async fn start_session(
     annotator: i64,
     to: &str,
 ) -> Result<Response, AppError> {
-    let token = new_token();
-    let mut conn = state.pool.acquire().await?;
-    store::annotations::create_session(
-        &mut conn,
-        &token_hash(&token),
-        annotator,
-        &new_token(),
-        now_ms() + i64::try_from(SESSION_LIFETIME.as_millis()).unwrap_or(i64::MAX),
-    )
-    .await?;
+    let token = annotators::start_session(&state.hub, annotator).await?;
     let cookie = set_cookie(headers, SESSION_COOKIE, &token, SESSION_LIFETIME);
     Ok(([(header::SET_COOKIE, cookie)], Redirect::to(to)).into_response())
 }
@@ -442,18 +425,7 @@ async fn login(
     if let Err(e) = state.logins.check(&name, address) {
         return login_form(&headers, e.status(), name, Some(e.to_string()));
     }
-    let mut conn = state.pool.acquire().await?;
-    let stored = store::annotations::credentials(&mut conn, &name).await?;
-    drop(conn);
-    let password = form.password;
-    let matched = match stored {
-        Some((id, hash)) => {
-            tokio::task::spawn_blocking(move || verify_password(&password, &hash).then_some(id))
-                .await
-                .map_err(|e| AppError::Internal(e.into()))?
-        }
-        None => None,
-    };
+    let matched = annotators::check_password(&state.hub, &name, &form.password).await?;
     let Some(annotator) = matched else {
         state.logins.record_failure(&name, address);
         return login_form(
@@ -478,8 +450,7 @@ async fn logout(
     if let Some(token) = cookie(&headers, SESSION_COOKIE) {
         let hash = token_hash(&token);
         state.sessions.remove(&hash);
-        let mut conn = state.pool.acquire().await?;
-        store::annotations::delete_session(&mut conn, &hash, now_ms()).await?;
+        annotators::end_session(&state.hub, &hash).await?;
     }
     let cookie = set_cookie(&headers, SESSION_COOKIE, "", Duration::ZERO);
     Ok(([(header::SET_COOKIE, cookie)], Redirect::to("/login")).into_response())
@@ -502,21 +473,13 @@ async fn invite_form(
     status: axum::http::StatusCode,
     error: Option<String>,
 ) -> Result<Response, PageError> {
-    let mut conn = state.pool.acquire().await?;
-    let annotator = store::annotations::annotator_by_invite(&mut conn, &token_hash(&token))
-        .await?
-        .ok_or_else(|| {
-            AppError::NotFound(
-                "this invite link is unknown or has already been used: ask an admin for a new one"
-                    .to_owned(),
-            )
-        })?;
-    let csrf = new_token();
+    let annotator = annotators::invited(&state.hub, &token).await?;
+    let csrf = random_token();
     let page = InvitePage {
         csrf: csrf.clone(),
         name: annotator.name,
         token,
-        min_chars: crate::core::annotation::MIN_PASSWORD_CHARS,
+        min_chars: MIN_PASSWORD_CHARS,
         error,
     };
     let cookie = set_cookie(headers, LOGIN_CSRF_COOKIE, &csrf, Duration::from_secs(3600));
@@ -548,36 +511,30 @@ async fn accept_invite(
     axum::Form(form): axum::Form<InviteForm>,
 ) -> Result<Response, PageError> {
     use axum::http::StatusCode;
-    let problem = if !login_csrf_ok(&headers, &form.csrf) {
-        Some((
+    if !login_csrf_ok(&headers, &form.csrf) {
+        let message = "the form expired or lacks its CSRF token: please try again".to_owned();
+        return invite_form(
+            &state,
+            &headers,
+            token,
             StatusCode::FORBIDDEN,
-            "the form expired or lacks its CSRF token: please try again".to_owned(),
-        ))
-    } else if form.password != form.repeat {
-        Some((
-            StatusCode::BAD_REQUEST,
-            "the two passwords differ".to_owned(),
-        ))
-    } else {
-        password_problem(&form.password).map(|p| (StatusCode::BAD_REQUEST, p))
-    };
-    if let Some((status, message)) = problem {
-        return invite_form(&state, &headers, token, status, Some(message)).await;
-    }
-    let password = form.password;
-    let hash = tokio::task::spawn_blocking(move || hash_password(&password))
-        .await
-        .map_err(|e| AppError::Internal(e.into()))?
-        .map_err(|e| AppError::Internal(anyhow::anyhow!("argon2: {e}")))?;
-    let mut conn = state.pool.acquire().await?;
-    let accepted = store::annotations::accept_invite(&mut conn, &token_hash(&token), &hash).await?;
-    drop(conn);
-    let Some(annotator) = accepted else {
-        return Err(AppError::NotFound(
-            "this invite link is unknown or has already been used: ask an admin for a new one"
-                .to_owned(),
+            Some(message),
         )
-        .into());
-    };
-    Ok(start_session(&state, &headers, annotator, "/annotate").await?)
+        .await;
+    }
+    match annotators::accept_invite(&state.hub, &token, &form.password, &form.repeat).await {
+        Ok(annotator) => Ok(start_session(&state, &headers, annotator, "/annotate").await?),
+        // A password the rules refuse: the form again, saying why.
+        Err(AppError::BadRequest(message)) => {
+            invite_form(
+                &state,
+                &headers,
+                token,
+                StatusCode::BAD_REQUEST,
+                Some(message),
+            )
+            .await
+        }
+        Err(e) => Err(e.into()),
+    }
 }

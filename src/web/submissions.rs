@@ -1,30 +1,23 @@
 //! Submissions over HTTP: posting a prediction file, reading its scores, and the admin's
 //! controls (tokens, dataset answer visibility, leaderboard rows).
 
-use std::collections::HashMap;
-use std::pin::Pin;
-use std::sync::{Arc, Mutex};
-
-use axum::Json;
-use axum::body::{Body, HttpBody};
-use axum::extract::{Path, Query, State};
+use axum::body::Body;
+use axum::extract::State;
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
-use sha2::{Digest, Sha256};
 
-use super::auth::require;
+use super::extract::{IdempotencyKey, Json, Path, Query};
 use super::openapi::{ApiRoute, Verb};
-use super::{AppError, AppState, dataset_or_404};
-use crate::core::credentials::{NewToken, Role, Scope};
-use crate::core::scoring::{self, ScoringTarget};
-use crate::core::submission::{SubmissionError, score_submission};
-use crate::store;
-use crate::store::accounts::{AttemptQuota, Caller};
-use crate::store::submissions::{
-    AnswerVisibility, NewSubmission, SubmissionMetadata, SubmissionRow,
-};
+use super::{AppError, AppState};
+use crate::app::datasets;
+use crate::app::submissions::{self, StoredVerdict, SubmissionRow, Submitted};
+use crate::app::tokens::{self, Caller, CreatedToken, TokenListing};
+use crate::core::credentials::{Role, Scope};
+use crate::core::dataset::AnswerVisibility;
+use crate::core::submission::{SubmissionMetadata, SubmissionScores, SubmissionStatus, Visibility};
+use crate::core::verifier::ScoringPolicy;
 
 /// Submitting, reading scores, and the admin's controls (see [`super::openapi`]).
 pub fn routes() -> Vec<ApiRoute> {
@@ -135,58 +128,6 @@ pub fn routes() -> Vec<ApiRoute> {
     ]
 }
 
-/// A dataset's scoring targets and their `items` row ids, in dataset order.
-pub struct DatasetTargets {
-    pub targets: Vec<ScoringTarget>,
-    pub item_rows: Vec<i64>,
-}
-
-/// Scoring targets per dataset, kept until the stored items change: deserialising the
-/// signature tables of a full dataset costs more than scoring a submission against them.
-#[derive(Default)]
-pub struct TargetCache {
-    entries: Mutex<HashMap<i64, (i64, Arc<DatasetTargets>)>>,
-}
-
-impl TargetCache {
-    fn get(&self, dataset: i64, generation: i64) -> Option<Arc<DatasetTargets>> {
-        let entries = self.entries.lock().ok()?;
-        entries
-            .get(&dataset)
-            .filter(|(g, _)| *g == generation)
-            .map(|(_, t)| t.clone())
-    }
-
-    fn put(&self, dataset: i64, generation: i64, targets: Arc<DatasetTargets>) {
-        if let Ok(mut entries) = self.entries.lock() {
-            entries.insert(dataset, (generation, targets));
-        }
-    }
-}
-
-pub async fn dataset_targets(
-    state: &AppState,
-    dataset: i64,
-) -> Result<Arc<DatasetTargets>, AppError> {
-    let mut conn = state.pool.acquire().await?;
-    let generation = store::content_generation(&mut conn).await?;
-    if let Some(t) = state.targets.get(dataset, generation) {
-        return Ok(t);
-    }
-    let rows = store::items::scoring_items(&mut conn, dataset).await?;
-    drop(conn);
-    let targets = tokio::task::spawn_blocking(move || {
-        let item_rows = rows.iter().map(|r| r.row_id).collect();
-        scoring::targets_from_stored(rows).map(|targets| DatasetTargets { targets, item_rows })
-    })
-    .await
-    .map_err(|e| AppError::Internal(e.into()))?
-    .map_err(|e| AppError::Internal(anyhow::anyhow!(e)))?;
-    let targets = Arc::new(targets);
-    state.targets.put(dataset, generation, targets.clone());
-    Ok(targets)
-}
-
 /// Metadata of a submission, as query parameters.
 #[derive(Debug, Default, Deserialize)]
 struct SubmitQuery {
@@ -197,44 +138,21 @@ struct SubmitQuery {
     notes: Option<String>,
 }
 
-impl SubmitQuery {
-    fn metadata(self) -> Result<SubmissionMetadata, AppError> {
-        let model = self
-            .model
-            .map(|m| m.trim().to_owned())
-            .filter(|m| !m.is_empty())
-            .ok_or_else(|| {
-                AppError::BadRequest(
-                    "query parameter `model` is required (the model's name for the leaderboard)"
-                        .to_owned(),
-                )
-            })?;
-        if model.chars().count() > 200 {
-            return Err(AppError::BadRequest(
-                "query parameter `model` is longer than 200 characters".to_owned(),
-            ));
+impl From<SubmitQuery> for SubmissionMetadata {
+    fn from(q: SubmitQuery) -> Self {
+        SubmissionMetadata {
+            model: q.model.unwrap_or_default(),
+            description: q.description.unwrap_or_default(),
+            url: q.url.unwrap_or_default(),
+            prompt_version: q.prompt_version.unwrap_or_default(),
+            notes: q.notes.unwrap_or_default(),
         }
-        Ok(SubmissionMetadata {
-            model,
-            description: self.description.unwrap_or_default(),
-            url: self.url.unwrap_or_default(),
-            prompt_version: self.prompt_version.unwrap_or_default(),
-            notes: self.notes.unwrap_or_default(),
-        })
     }
 }
 
-/// Seconds until the next UTC midnight, when daily quotas reset.
-fn seconds_until_utc_midnight() -> u64 {
-    let now = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs())
-        .unwrap_or(0);
-    86_400 - now % 86_400
-}
-
-/// Reads the body frame by frame, refusing it as soon as it passes `limit`.
-async fn read_body(mut body: Body, headers: &HeaderMap, limit: usize) -> Result<Vec<u8>, AppError> {
+/// Reads a submission body up to `limit` bytes: a declared length over the limit is refused
+/// before reading, and a body that grows past it as soon as it does.
+async fn read_body(body: Body, headers: &HeaderMap, limit: usize) -> Result<Vec<u8>, AppError> {
     let too_large = || {
         AppError::PayloadTooLarge(format!(
             "the submission body is larger than the limit of {limit} bytes"
@@ -247,19 +165,25 @@ async fn read_body(mut body: Body, headers: &HeaderMap, limit: usize) -> Result<
     if declared.is_some_and(|n| n > limit) {
         return Err(too_large());
     }
-    let mut bytes = Vec::with_capacity(declared.unwrap_or(0));
-    while let Some(frame) = std::future::poll_fn(|cx| Pin::new(&mut body).poll_frame(cx)).await {
-        let frame = frame.map_err(|e| {
-            AppError::BadRequest(format!("the request body could not be read: {e}"))
-        })?;
-        if let Ok(data) = frame.into_data() {
-            if bytes.len() + data.len() > limit {
-                return Err(too_large());
-            }
-            bytes.extend_from_slice(&data);
-        }
+    match axum::body::to_bytes(body, limit).await {
+        Ok(bytes) => Ok(bytes.into()),
+        Err(e) if is_length_limit(&e) => Err(too_large()),
+        Err(e) => Err(AppError::BadRequest(format!(
+            "the request body could not be read: {e}"
+        ))),
     }
-    Ok(bytes)
+}
+
+/// Whether a body error is `to_bytes` stopping at its limit.
+fn is_length_limit(e: &axum::Error) -> bool {
+    let mut source: Option<&(dyn std::error::Error + 'static)> = Some(e);
+    while let Some(s) = source {
+        if s.is::<http_body_util::LengthLimitError>() {
+            return true;
+        }
+        source = s.source();
+    }
+    false
 }
 
 /// What the API says about a submission.
@@ -274,12 +198,12 @@ struct SubmissionView {
     url: String,
     prompt_version: String,
     notes: String,
-    status: String,
-    policy: String,
-    visibility: String,
+    status: SubmissionStatus,
+    policy: ScoringPolicy,
+    visibility: Visibility,
     baseline: bool,
     created_at: String,
-    scores: Value,
+    scores: SubmissionScores,
     /// Per-item verdicts: only for the owner, and only if the dataset's answers are public.
     #[serde(skip_serializing_if = "Option::is_none")]
     items: Option<Vec<ItemVerdictView>>,
@@ -291,7 +215,7 @@ struct SubmissionView {
 struct ItemVerdictView {
     id: String,
     direction: String,
-    step_length: i64,
+    step_length: u8,
     line: Option<i64>,
     outcome: String,
     answer: Option<Value>,
@@ -308,15 +232,29 @@ fn parse_json_column(text: Option<&str>) -> Option<Value> {
     text.and_then(|t| serde_json::from_str(t).ok())
 }
 
-impl SubmissionView {
-    fn new(row: SubmissionRow) -> Result<SubmissionView, AppError> {
-        let scores = serde_json::from_str(&row.scores).map_err(|e| {
-            AppError::Internal(anyhow::anyhow!(
-                "submission {}: scores unreadable: {e}",
-                row.id
-            ))
-        })?;
-        Ok(SubmissionView {
+impl From<StoredVerdict> for ItemVerdictView {
+    fn from(v: StoredVerdict) -> Self {
+        ItemVerdictView {
+            answer: parse_json_column(v.raw_answer.as_deref()),
+            permutation: parse_json_column(v.permutation.as_deref()),
+            ground_truth: parse_json_column(Some(&v.gt_answer)).unwrap_or(Value::Null),
+            id: v.id,
+            direction: v.direction.as_str().to_owned(),
+            step_length: v.step_length.get(),
+            line: v.line,
+            outcome: v.outcome,
+            failure: v.failure,
+            exact_match: v.exact_match,
+            semantic_match: v.semantic_match,
+            task_accuracy: v.task_accuracy,
+            pairwise_accuracy: v.pairwise_accuracy,
+        }
+    }
+}
+
+impl From<SubmissionRow> for SubmissionView {
+    fn from(row: SubmissionRow) -> Self {
+        SubmissionView {
             href: format!("/api/v1/submissions/{}", row.id),
             id: row.id,
             dataset: row.dataset,
@@ -331,239 +269,58 @@ impl SubmissionView {
             visibility: row.visibility,
             baseline: row.baseline,
             created_at: row.created_at,
-            scores,
+            scores: row.scores,
             items: None,
             items_withheld: None,
-        })
+        }
     }
 }
 
 async fn submit(
     State(state): State<AppState>,
-    Path(dataset_name): Path<String>,
+    Path(dataset): Path<String>,
     Query(query): Query<SubmitQuery>,
+    IdempotencyKey(key): IdempotencyKey,
     caller: Caller,
     headers: HeaderMap,
     body: Body,
 ) -> Result<Response, AppError> {
-    require(&caller, Scope::Submit)?;
-    let dataset = dataset_or_404(&state.pool, &dataset_name).await?;
-    let metadata = query.metadata()?;
-    let idempotency_key = match headers.get("idempotency-key") {
-        None => None,
-        Some(v) => Some(
-            v.to_str()
-                .ok()
-                .map(str::trim)
-                .filter(|k| !k.is_empty() && k.len() <= 200)
-                .ok_or_else(|| {
-                    AppError::BadRequest(
-                        "the Idempotency-Key header must be 1 to 200 printable characters"
-                            .to_owned(),
-                    )
-                })?
-                .to_owned(),
-        ),
+    let limit = state.submission_body_limit;
+    let read = read_body(body, &headers, limit);
+    let submitted = submissions::submit(
+        &state.hub,
+        &caller,
+        &dataset,
+        query.into(),
+        key.as_deref(),
+        read,
+    )
+    .await?;
+    let (status, row) = match submitted {
+        Submitted::Created(row) => (StatusCode::CREATED, row),
+        Submitted::Repeated(row) => (StatusCode::OK, row),
     };
-    if let Some(key) = &idempotency_key {
-        let mut conn = state.pool.acquire().await?;
-        if let Some(existing) =
-            store::submissions::by_idempotency_key(&mut conn, caller.token_id, key).await?
-        {
-            drop(conn);
-            let bytes = read_body(body, &headers, state.submission_body_limit).await?;
-            return idempotent_repeat(existing, &bytes);
-        }
-    }
-
-    // Every authenticated attempt counts against the quota, refused ones too.
-    let exempt = caller.has(Scope::Admin);
-    if !exempt {
-        let mut conn = state.pool.acquire().await?;
-        let daily = caller.daily_quota.unwrap_or(state.daily_quota);
-        let total = caller.total_quota.unwrap_or(state.total_quota);
-        match store::accounts::record_attempt(&mut conn, caller.token_id, daily, total).await? {
-            AttemptQuota::Granted => {}
-            AttemptQuota::DailyExhausted { limit } => {
-                let retry_after = seconds_until_utc_midnight();
-                return Err(AppError::TooManyRequests {
-                    message: format!(
-                        "this token has used its {limit} submissions for today (UTC); \
-                         try again in {retry_after} s"
-                    ),
-                    retry_after: Some(retry_after),
-                });
-            }
-            AttemptQuota::TotalExhausted { used, limit } => {
-                // No Retry-After: the total never refills, so waiting would not help.
-                return Err(AppError::TooManyRequests {
-                    message: format!(
-                        "this token's total quota is used up: {used} of {limit} submissions \
-                         made; waiting will not help, ask an admin for a new token or a larger \
-                         total quota"
-                    ),
-                    retry_after: None,
-                });
-            }
-        }
-    }
-
-    let bytes = read_body(body, &headers, state.submission_body_limit).await?;
-    let targets = dataset_targets(&state, dataset.id).await?;
-    let scored = tokio::task::spawn_blocking({
-        let targets = targets.clone();
-        let dataset_name = dataset.name.clone();
-        move || {
-            let body_sha256 = hex::encode(Sha256::digest(&bytes));
-            let text = std::str::from_utf8(&bytes).map_err(|e| {
-                let line = bytes[..e.valid_up_to()]
-                    .iter()
-                    .filter(|b| **b == b'\n')
-                    .count()
-                    + 1;
-                AppError::Unprocessable {
-                    message: format!(
-                        "line {line}: the body is not UTF-8 text (byte {} is invalid)",
-                        e.valid_up_to()
-                    ),
-                    problems: Vec::new(),
-                }
-            })?;
-            let scored = match score_submission(&targets.targets, text) {
-                Ok(s) => s,
-                Err(SubmissionError::Rejected(problems)) => {
-                    let first: Vec<String> =
-                        problems.iter().take(5).map(|p| p.message.clone()).collect();
-                    return Err(AppError::Unprocessable {
-                        message: format!(
-                            "{} problems; nothing was stored: {}{}",
-                            problems.len(),
-                            first.join("; "),
-                            if problems.len() > 5 { "; …" } else { "" }
-                        ),
-                        problems,
-                    });
-                }
-                Err(SubmissionError::Dataset(e)) => {
-                    return Err(AppError::Internal(anyhow::anyhow!(
-                        "dataset {dataset_name} cannot be scored: {e}"
-                    )));
-                }
-            };
-            let scores_json =
-                serde_json::to_string(&scored.scores).map_err(|e| AppError::Internal(e.into()))?;
-            Ok((body_sha256, scored, scores_json))
-        }
-    })
-    .await
-    .map_err(|e| AppError::Internal(e.into()))??;
-    let (body_sha256, scored, scores_json) = scored;
-
-    let mut tx = state.pool.begin().await?;
-    let new = NewSubmission {
-        dataset: dataset.id,
-        account: caller.account_id,
-        token: caller.token_id,
-        idempotency_key: idempotency_key.as_deref(),
-        body_sha256: &body_sha256,
-        metadata: &metadata,
-        scores_json: &scores_json,
-    };
-    let Some(id) = store::submissions::insert(&mut tx, &new).await? else {
-        // A twin request with the same key committed first.
-        tx.rollback().await?;
-        let mut conn = state.pool.acquire().await?;
-        let key = idempotency_key.as_deref().unwrap_or_default();
-        let existing = store::submissions::by_idempotency_key(&mut conn, caller.token_id, key)
-            .await?
-            .ok_or_else(|| AppError::Internal(anyhow::anyhow!("idempotent twin vanished")))?;
-        return respond(existing, StatusCode::OK);
-    };
-    store::submissions::insert_items(&mut tx, id, &targets.item_rows, &scored.items).await?;
-    tx.commit().await?;
-    tracing::info!(
-        submission = id,
-        dataset = %dataset.name,
-        account = %caller.account_name,
-        model = %metadata.model,
-        "submission scored"
-    );
-    let mut conn = state.pool.acquire().await?;
-    let row = store::submissions::by_id(&mut conn, id)
-        .await?
-        .ok_or_else(|| AppError::Internal(anyhow::anyhow!("submission {id} vanished")))?;
-    respond(row, StatusCode::CREATED)
-}
-
-fn idempotent_repeat(existing: SubmissionRow, bytes: &[u8]) -> Result<Response, AppError> {
-    if hex::encode(Sha256::digest(bytes)) != existing.body_sha256 {
-        return Err(AppError::Conflict(format!(
-            "this Idempotency-Key was used for submission {} with a different body",
-            existing.id
-        )));
-    }
-    respond(existing, StatusCode::OK)
-}
-
-fn respond(row: SubmissionRow, status: StatusCode) -> Result<Response, AppError> {
     let location = format!("/api/v1/submissions/{}", row.id);
-    let view = SubmissionView::new(row)?;
-    Ok((status, [(header::LOCATION, location)], Json(view)).into_response())
-}
-
-fn parse_submission_id(raw: &str) -> Result<i64, AppError> {
-    raw.parse::<i64>()
-        .map_err(|_| AppError::NotFound(format!("no submission {raw}")))
+    Ok((
+        status,
+        [(header::LOCATION, location)],
+        Json(SubmissionView::from(row)),
+    )
+        .into_response())
 }
 
 async fn get_submission(
     State(state): State<AppState>,
-    Path(raw_id): Path<String>,
+    Path(id): Path<String>,
     caller: Caller,
 ) -> Result<Json<SubmissionView>, AppError> {
-    if !caller.has(Scope::ReadOwn) && !caller.has(Scope::Admin) {
-        return Err(AppError::Forbidden(
-            "this token lacks the `read_own` scope".to_owned(),
-        ));
-    }
-    let id = parse_submission_id(&raw_id)?;
-    let mut conn = state.pool.acquire().await?;
-    let row = store::submissions::by_id(&mut conn, id)
-        .await?
-        // Another account's submission is answered like a missing one: ids reveal nothing.
-        .filter(|r| r.account_id == caller.account_id || caller.has(Scope::Admin))
-        .ok_or_else(|| AppError::NotFound(format!("no submission {raw_id}")))?;
-    let visibility = store::submissions::answer_visibility(&mut conn, row.dataset_id).await?;
-    let owner = row.account_id == caller.account_id;
-    let mut view = SubmissionView::new(row)?;
-    if visibility == AnswerVisibility::Public && (owner || caller.has(Scope::Admin)) {
-        let verdicts = store::submissions::verdicts(&mut conn, id).await?;
-        view.items = Some(
-            verdicts
-                .into_iter()
-                .map(|v| ItemVerdictView {
-                    answer: parse_json_column(v.raw_answer.as_deref()),
-                    permutation: parse_json_column(v.permutation.as_deref()),
-                    ground_truth: parse_json_column(Some(&v.gt_answer)).unwrap_or(Value::Null),
-                    id: v.id,
-                    direction: v.direction,
-                    step_length: v.step_length,
-                    line: v.line,
-                    outcome: v.outcome,
-                    failure: v.failure,
-                    exact_match: v.exact_match,
-                    semantic_match: v.semantic_match,
-                    task_accuracy: v.task_accuracy,
-                    pairwise_accuracy: v.pairwise_accuracy,
-                })
-                .collect(),
-        );
-    } else {
-        view.items_withheld = Some(format!(
-            "per-item verdicts are not shown: the answers of dataset '{}' are {}",
-            view.dataset,
-            visibility.as_str()
-        ));
+    let detail = submissions::read(&state.hub, &caller, &id).await?;
+    let mut view = SubmissionView::from(detail.row);
+    match detail.verdicts {
+        Ok(verdicts) => {
+            view.items = Some(verdicts.into_iter().map(ItemVerdictView::from).collect());
+        }
+        Err(withheld) => view.items_withheld = Some(withheld),
     }
     Ok(Json(view))
 }
@@ -577,34 +334,19 @@ struct ListingChange {
 
 async fn update_listing(
     State(state): State<AppState>,
-    Path(raw_id): Path<String>,
+    Path(id): Path<String>,
     caller: Caller,
     Json(change): Json<ListingChange>,
 ) -> Result<Json<SubmissionView>, AppError> {
-    require(&caller, Scope::Admin)?;
-    let id = parse_submission_id(&raw_id)?;
-    if let Some(v) = change.visibility.as_deref()
-        && !matches!(v, "published" | "hidden" | "withdrawn")
-    {
-        return Err(AppError::BadRequest(format!(
-            "visibility must be 'published', 'hidden' or 'withdrawn', not {v:?}"
-        )));
-    }
-    let mut conn = state.pool.acquire().await?;
-    if !store::submissions::update_listing(
-        &mut conn,
-        id,
+    caller.require(Scope::Admin)?;
+    let row = submissions::update_listing(
+        &state.hub,
+        &id,
         change.baseline,
         change.visibility.as_deref(),
     )
-    .await?
-    {
-        return Err(AppError::NotFound(format!("no submission {raw_id}")));
-    }
-    let row = store::submissions::by_id(&mut conn, id)
-        .await?
-        .ok_or_else(|| AppError::NotFound(format!("no submission {raw_id}")))?;
-    Ok(Json(SubmissionView::new(row)?))
+    .await?;
+    Ok(Json(row.into()))
 }
 
 #[derive(Deserialize)]
@@ -621,14 +363,12 @@ struct AnswersView {
 
 async fn set_answers(
     State(state): State<AppState>,
-    Path(dataset_name): Path<String>,
+    Path(dataset): Path<String>,
     caller: Caller,
     Json(change): Json<AnswersChange>,
 ) -> Result<Json<AnswersView>, AppError> {
-    require(&caller, Scope::Admin)?;
-    let dataset = dataset_or_404(&state.pool, &dataset_name).await?;
-    let mut conn = state.pool.acquire().await?;
-    store::submissions::set_answer_visibility(&mut conn, dataset.id, change.answers).await?;
+    caller.require(Scope::Admin)?;
+    let dataset = datasets::set_answer_visibility(&state.hub, &dataset, change.answers).await?;
     Ok(Json(AnswersView {
         dataset: dataset.name,
         answers: change.answers,
@@ -644,28 +384,18 @@ struct TokenRequest {
     total_quota: Option<i64>,
 }
 
-#[derive(Serialize)]
-pub(super) struct CreatedToken {
-    pub id: i64,
-    pub prefix: String,
-    pub account: String,
-    pub role: &'static str,
-    /// The secret, shown this once.
-    pub token: String,
-}
-
 async fn create_token(
     State(state): State<AppState>,
     caller: Caller,
     Json(request): Json<TokenRequest>,
 ) -> Result<(StatusCode, Json<CreatedToken>), AppError> {
-    require(&caller, Scope::Admin)?;
+    caller.require(Scope::Admin)?;
     let role = match request.role.as_deref() {
         None => Role::Submitter,
         Some(r) => parse_role(r)?,
     };
-    let created = issue_token(
-        &state,
+    let created = tokens::issue(
+        &state.hub,
         &request.name,
         role,
         request.daily_quota,
@@ -681,52 +411,12 @@ pub(super) fn parse_role(text: &str) -> Result<Role, AppError> {
     })
 }
 
-/// Creates a token (and its account if new) for the JSON API and the admin page alike.
-pub(super) async fn issue_token(
-    state: &AppState,
-    name: &str,
-    role: Role,
-    daily_quota: Option<i64>,
-    total_quota: Option<i64>,
-) -> Result<CreatedToken, AppError> {
-    let name = name.trim();
-    if name.is_empty() || name.chars().count() > 100 {
-        return Err(AppError::BadRequest(
-            "`name` must be 1 to 100 characters".to_owned(),
-        ));
-    }
-    for (field, quota) in [("daily_quota", daily_quota), ("total_quota", total_quota)] {
-        if quota.is_some_and(|q| q < 0) {
-            return Err(AppError::BadRequest(format!(
-                "`{field}` must not be negative"
-            )));
-        }
-    }
-    let token = NewToken::generate();
-    let mut tx = state.pool.begin().await?;
-    let account = store::accounts::ensure_account(&mut tx, name, role)
-        .await?
-        .map_err(AppError::Conflict)?;
-    let id =
-        store::accounts::insert_token(&mut tx, account, role, &token, daily_quota, total_quota)
-            .await?;
-    tx.commit().await?;
-    Ok(CreatedToken {
-        id,
-        prefix: token.prefix.clone(),
-        account: name.to_owned(),
-        role: role.as_str(),
-        token: token.token,
-    })
-}
-
 async fn list_tokens(
     State(state): State<AppState>,
     caller: Caller,
-) -> Result<Json<Vec<store::accounts::TokenListing>>, AppError> {
-    require(&caller, Scope::Admin)?;
-    let mut conn = state.pool.acquire().await?;
-    Ok(Json(store::accounts::list_tokens(&mut conn).await?))
+) -> Result<Json<Vec<TokenListing>>, AppError> {
+    caller.require(Scope::Admin)?;
+    Ok(Json(tokens::list(&state.hub).await?))
 }
 
 async fn revoke_token(
@@ -734,13 +424,7 @@ async fn revoke_token(
     Path(which): Path<String>,
     caller: Caller,
 ) -> Result<StatusCode, AppError> {
-    require(&caller, Scope::Admin)?;
-    let mut conn = state.pool.acquire().await?;
-    if store::accounts::revoke_token(&mut conn, &which).await? {
-        Ok(StatusCode::NO_CONTENT)
-    } else {
-        Err(AppError::NotFound(format!(
-            "no live token with id or prefix {which:?}"
-        )))
-    }
+    caller.require(Scope::Admin)?;
+    tokens::revoke(&state.hub, &which).await?;
+    Ok(StatusCode::NO_CONTENT)
 }

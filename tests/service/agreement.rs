@@ -4,10 +4,10 @@
 use enact_hub::core::agreement::{
     AnnotatedOrdering, BootstrapConfig, OrderingAnnotations, OrderingEncoding, ordering_agreement,
 };
-use enact_hub::core::annotation::{new_token, token_hash};
+use enact_hub::core::annotation::{Outcome, Telemetry};
+use enact_hub::core::credentials::{random_token as new_token, token_hash};
 use enact_hub::core::verifier::Permutation;
 use enact_hub::store;
-use enact_hub::store::annotations::{Outcome, Telemetry};
 use serde_json::Value;
 
 use crate::annotate::{Browser, PASSWORD, annotator};
@@ -500,19 +500,15 @@ async fn end_to_end_primary_split_protocol_answers_and_report() {
     assert_eq!(sent.len(), 12 + 24);
 
     // A model submission for the comparisons.
-    let token = {
-        use enact_hub::core::credentials::{NewToken, Role};
-        let mut conn = server.pool.acquire().await.expect("conn");
-        let account = store::accounts::ensure_account(&mut conn, "team", Role::Submitter)
-            .await
-            .expect("account")
-            .expect("role");
-        let token = NewToken::generate();
-        store::accounts::insert_token(&mut conn, account, Role::Submitter, &token, None, None)
-            .await
-            .expect("token");
-        token.token
-    };
+    let token = api_token(
+        &server.pool,
+        "team",
+        enact_hub::core::credentials::Role::Submitter,
+        None,
+        None,
+    )
+    .await
+    .1;
     let mut item_ids: Vec<String> = sent.iter().map(|(item, _, _)| item.clone()).collect();
     item_ids.sort();
     item_ids.dedup();

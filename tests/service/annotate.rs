@@ -1,7 +1,7 @@
 //! Human annotation over HTTP: invites and login, CSRF, blind annotation and 403s, drafts,
 //! submissions scored like model answers, the admin page.
 
-use enact_hub::core::annotation::{hash_password, new_token, token_hash};
+use enact_hub::core::credentials::{hash_password, random_token as new_token, token_hash};
 use enact_hub::store;
 use reqwest::StatusCode;
 use reqwest::header::{COOKIE, SET_COOKIE};
@@ -626,10 +626,11 @@ async fn drafts_resume_submissions_are_checked_and_scored_for_the_human_row() {
         .await
         .expect("q")
         .expect("mini");
-    let report = store::annotations::human_performance(&mut conn, dataset.id)
-        .await
-        .expect("query")
-        .expect("two answers");
+    let report =
+        enact_hub::app::leaderboard::human_performance(&server.pool.clone().into(), &dataset)
+            .await
+            .expect("query")
+            .expect("two answers");
     let overall = report.overall.as_ref().expect("overall");
     assert_eq!(overall.totals.count, 2, "the flagged item is not an answer");
     assert_eq!(overall.totals.task_accuracy, 0.5);

@@ -4,8 +4,8 @@
 use std::collections::HashMap;
 use std::path::Path;
 
+use enact_hub::core::dataset::AnswerVisibility;
 use enact_hub::store;
-use enact_hub::store::submissions::AnswerVisibility;
 
 use crate::helpers::*;
 

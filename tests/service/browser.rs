@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use enact_hub::core::annotation::{new_token, token_hash};
+use enact_hub::core::credentials::{random_token as new_token, token_hash};
 use enact_hub::store;
 use serde_json::{Value, json};
 
@@ -123,10 +123,11 @@ async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
         .await
         .expect("q")
         .expect("mini");
-    let report = store::annotations::human_performance(&mut conn, dataset.id)
-        .await
-        .expect("query")
-        .expect("answers");
+    let report =
+        enact_hub::app::leaderboard::human_performance(&server.pool.clone().into(), &dataset)
+            .await
+            .expect("query")
+            .expect("answers");
     let overall = report.overall.expect("overall");
     assert_eq!(
         (overall.totals.count, overall.totals.task_accuracy),

@@ -11,7 +11,7 @@ use axum::Json;
 use axum::extract::State;
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::{IntoResponse, Response};
-use enact_hub::core::credentials::{NewToken, Role};
+use enact_hub::core::credentials::Role;
 use enact_hub::store;
 use serde_json::{Value, json};
 
@@ -114,16 +114,9 @@ fn python_with_requests() -> bool {
 }
 
 async fn submitter_token(server: &TestServer) -> String {
-    let mut conn = server.pool.acquire().await.expect("conn");
-    let account = store::accounts::ensure_account(&mut conn, "team-a", Role::Submitter)
+    api_token(&server.pool, "team-a", Role::Submitter, None, None)
         .await
-        .expect("account")
-        .expect("role");
-    let token = NewToken::generate();
-    store::accounts::insert_token(&mut conn, account, Role::Submitter, &token, None, None)
-        .await
-        .expect("token");
-    token.token
+        .1
 }
 
 /// A fake chat endpoint for `records`. Items 0 and 1 get the right order, item 2 prose with no
@@ -233,7 +226,7 @@ async fn the_example_client_answers_through_a_chat_endpoint_and_submits() {
         .expect("query")
         .expect("stored");
     assert_eq!(row.model, "Fake VLM");
-    let scores: Value = serde_json::from_str(&row.scores).expect("scores");
+    let scores: Value = serde_json::to_value(&row.scores).expect("scores");
     assert_eq!(scores, printed["scores"]);
     let coverage = &scores["coverage"];
     assert_eq!(coverage["answered"], 4);

@@ -5,9 +5,11 @@
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 
+use enact_hub::app::Hub;
 use enact_hub::app::import::{ImportOptions, ImportReport, import_release};
+use enact_hub::core::credentials::Role;
 use enact_hub::store;
-use enact_hub::web::{AppState, Server, WebConfig};
+use enact_hub::web::{Server, WebConfig};
 use serde_json::{Value, json};
 use sqlx::SqlitePool;
 use tempfile::TempDir;
@@ -32,7 +34,7 @@ pub fn options(dataset: &str) -> ImportOptions {
 }
 
 pub async fn import(pool: &SqlitePool, path: &Path, options: &ImportOptions) -> ImportReport {
-    import_release(pool, path, options)
+    import_release(&Hub::from(pool.clone()), path, options)
         .await
         .unwrap_or_else(|e| {
             panic!(
@@ -208,7 +210,7 @@ where
     setup(pool.clone(), dir.path().to_path_buf()).await;
     let server = Server::bind(
         "127.0.0.1:0".parse().expect("addr"),
-        AppState::new(pool.clone(), &config),
+        Hub::from(pool.clone()),
         &config,
     )
     .await
@@ -246,6 +248,27 @@ pub async fn spawn_app_with_release() -> (TestServer, Vec<Value>) {
     .await;
     let records = records.lock().expect("lock").clone();
     (server, records)
+}
+
+/// A new API token for the account `name` (created with `role` if new), as the admin
+/// endpoints issue them: its id and secret.
+pub async fn api_token(
+    pool: &SqlitePool,
+    name: &str,
+    role: Role,
+    daily_quota: Option<i64>,
+    total_quota: Option<i64>,
+) -> (i64, String) {
+    let created = enact_hub::app::tokens::issue(
+        &Hub::from(pool.clone()),
+        name,
+        role,
+        daily_quota,
+        total_quota,
+    )
+    .await
+    .expect("token issued");
+    (created.id, created.token)
 }
 
 /// The `enact-hub` binary built for these tests.

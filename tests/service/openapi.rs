@@ -3,25 +3,15 @@
 
 use std::collections::BTreeSet;
 
-use enact_hub::core::credentials::{NewToken, Role};
-use enact_hub::store;
-use enact_hub::web::openapi::api_routes;
+use enact_hub::core::credentials::Role;
+use enact_hub::web::api_routes;
 use reqwest::Method;
 use serde_json::{Value, json};
 
 use crate::helpers::*;
 
 async fn token(server: &TestServer, name: &str, role: Role) -> (i64, String) {
-    let mut conn = server.pool.acquire().await.expect("conn");
-    let account = store::accounts::ensure_account(&mut conn, name, role)
-        .await
-        .expect("account")
-        .expect("role");
-    let token = NewToken::generate();
-    let id = store::accounts::insert_token(&mut conn, account, role, &token, None, None)
-        .await
-        .expect("token");
-    (id, token.token)
+    api_token(&server.pool, name, role, None, None).await
 }
 
 const METHODS: [&str; 5] = ["get", "post", "put", "patch", "delete"];

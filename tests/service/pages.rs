@@ -104,7 +104,9 @@ async fn item_page_shows_images_in_order_actions_and_question() {
 #[tokio::test]
 async fn every_demo_item_page_shows_its_images() {
     let server = spawn_app_with(|pool, _| async move {
-        enact_hub::cli::load_demo(&pool).await.expect("demo loads");
+        enact_hub::app::demo::load(&pool.clone().into())
+            .await
+            .expect("demo loads");
     })
     .await;
     let (_, list) = server

@@ -3,7 +3,8 @@
 
 use std::collections::HashMap;
 
-use enact_hub::core::credentials::{NewToken, Role};
+use enact_hub::core::credentials::Role;
+use enact_hub::core::submission::Visibility;
 use enact_hub::store;
 use enact_hub::web::WebConfig;
 use serde_json::{Value, json};
@@ -11,18 +12,9 @@ use sqlx::SqlitePool;
 
 use crate::helpers::*;
 
-/// A token for a fresh (or existing) account, straight into the store.
+/// A token for a fresh (or existing) account.
 async fn make_token(pool: &SqlitePool, name: &str, role: Role, daily: Option<i64>) -> String {
-    let mut conn = pool.acquire().await.expect("conn");
-    let account = store::accounts::ensure_account(&mut conn, name, role)
-        .await
-        .expect("account")
-        .expect("role");
-    let token = NewToken::generate();
-    store::accounts::insert_token(&mut conn, account, role, &token, daily, None)
-        .await
-        .expect("token");
-    token.token
+    api_token(pool, name, role, daily, None).await.1
 }
 
 async fn post(
@@ -391,26 +383,10 @@ async fn quotas_count_rejected_attempts_and_answer_429_with_retry_after() {
 #[tokio::test]
 async fn a_used_up_total_quota_answers_429_without_retry_after() {
     let (server, records) = spawn_app_with_release().await;
-    let token = {
-        let mut conn = server.pool.acquire().await.expect("conn");
-        let account = store::accounts::ensure_account(&mut conn, "carol", Role::Submitter)
-            .await
-            .expect("account")
-            .expect("role");
-        let token = NewToken::generate();
-        // A generous daily quota, so the total is what runs out.
-        store::accounts::insert_token(
-            &mut conn,
-            account,
-            Role::Submitter,
-            &token,
-            Some(50),
-            Some(2),
-        )
+    // A generous daily quota, so the total is what runs out.
+    let token = api_token(&server.pool, "carol", Role::Submitter, Some(50), Some(2))
         .await
-        .expect("token");
-        token.token
-    };
+        .1;
     let (status, _, _) = post(&server, "mini", "model=m", Some(&token), "{oops", None).await;
     assert_eq!(status, 422);
     let body = answers(&records, &[]);
@@ -617,7 +593,9 @@ async fn the_leaderboard_lists_published_rows_and_admins_curate_them() {
 #[tokio::test]
 async fn the_demo_leaderboard_shows_table_and_chart() {
     let server = spawn_app_with(|pool, _| async move {
-        enact_hub::cli::load_demo(&pool).await.expect("demo");
+        enact_hub::app::demo::load(&pool.clone().into())
+            .await
+            .expect("demo");
     })
     .await;
     // A fresh demo already shows its chance baseline: a line per panel, marked as a baseline.
@@ -638,7 +616,7 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
         .expect("html");
     assert_eq!(html.matches("<polyline").count(), 2);
     // Loading the demo again (a restart on the same database) does not add a second one.
-    enact_hub::cli::load_demo(&server.pool)
+    enact_hub::app::demo::load(&server.pool.clone().into())
         .await
         .expect("demo again");
     let (_, board) = server.get_json("/api/v1/datasets/demo/leaderboard").await;
@@ -648,11 +626,11 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
         .as_i64()
         .expect("submission id");
     let mut conn = server.pool.acquire().await.expect("conn");
-    store::submissions::update_listing(&mut conn, baseline_id, None, Some("hidden"))
+    store::submissions::update_listing(&mut conn, baseline_id, None, Some(Visibility::Hidden))
         .await
         .expect("hide");
     drop(conn);
-    enact_hub::cli::load_demo(&server.pool)
+    enact_hub::app::demo::load(&server.pool.clone().into())
         .await
         .expect("demo a third time");
     let mut conn = server.pool.acquire().await.expect("conn");
@@ -663,7 +641,7 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
             .0,
         1
     );
-    store::submissions::update_listing(&mut conn, baseline_id, None, Some("published"))
+    store::submissions::update_listing(&mut conn, baseline_id, None, Some(Visibility::Published))
         .await
         .expect("publish again");
     drop(conn);

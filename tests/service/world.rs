@@ -61,7 +61,9 @@ async fn simulated_replays_generate_items_that_import_with_scene_graph_semantics
 async fn the_demo_is_scored_from_its_scene_graphs() {
     let dir = tempfile::tempdir().unwrap();
     let pool = fresh_db(&dir).await;
-    let report = enact_hub::cli::load_demo(&pool).await.unwrap();
+    let report = enact_hub::app::demo::load(&pool.clone().into())
+        .await
+        .unwrap();
     assert!(report.skipped.is_empty());
     assert!(report.rows >= 16, "{} rows", report.rows);
     assert_eq!(report.scene_graph_items, report.rows);

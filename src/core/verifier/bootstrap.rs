@@ -2,7 +2,7 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Resamples the leaderboard uses.
 pub const BOOTSTRAP_RESAMPLES: usize = 1000;
@@ -12,7 +12,7 @@ pub const BOOTSTRAP_SEED: u64 = 0x0045_4e41_4354;
 /// Two-sided confidence level.
 pub const BOOTSTRAP_LEVEL: f64 = 0.95;
 
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ConfidenceInterval {
     pub low: f64,
     pub high: f64,

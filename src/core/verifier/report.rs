@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::core::verifier::answer::Direction;
 use crate::core::verifier::pyint::PyInt;
@@ -22,7 +22,7 @@ pub struct ScoredEntry {
 }
 
 /// Counts and means over one set of items.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StepPerformance {
     pub count: usize,
     /// Fraction in [0, 1].
@@ -34,7 +34,7 @@ pub struct StepPerformance {
 }
 
 /// A report group: its totals plus a breakdown by step length L (ascending).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GroupPerformance {
     #[serde(flatten)]
     pub totals: StepPerformance,
@@ -42,7 +42,7 @@ pub struct GroupPerformance {
 }
 
 /// ENACT's `report_overall_score()`: groups with no items are absent.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct PerformanceReport {
     pub overall: Option<GroupPerformance>,
     pub forward_world_modeling: Option<GroupPerformance>,

@@ -29,6 +29,23 @@ pub enum ScoringPolicy {
     Strict,
 }
 
+impl ScoringPolicy {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ScoringPolicy::Enact => "enact",
+            ScoringPolicy::Strict => "strict",
+        }
+    }
+
+    pub fn parse(text: &str) -> Option<ScoringPolicy> {
+        match text {
+            "enact" => Some(ScoringPolicy::Enact),
+            "strict" => Some(ScoringPolicy::Strict),
+            _ => None,
+        }
+    }
+}
+
 /// One dataset item as the strict policy needs it.
 #[derive(Debug, Clone, Copy)]
 pub struct StrictItem<'a> {
@@ -100,7 +117,7 @@ pub enum SubmissionProblem {
 }
 
 /// How much of the dataset the submission answered.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Coverage {
     pub dataset_items: usize,
     /// Items with a prediction line (readable or not).

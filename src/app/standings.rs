@@ -10,7 +10,7 @@
 use std::collections::HashMap;
 use std::sync::Mutex;
 
-use crate::store::annotations::AssignmentState;
+use crate::core::annotation::AssignmentState;
 
 /// Entries kept at most; past this the cache starts over.
 const MAX_ENTRIES: usize = 100_000;
@@ -76,8 +76,8 @@ impl StandingCache {
 mod tests {
     use super::*;
     use crate::core::annotation::Draft;
+    use crate::core::annotation::StoredDraft;
     use crate::core::dataset::StepLength;
-    use crate::store::annotations::StoredDraft;
 
     fn state(started_at_ms: i64) -> AssignmentState {
         AssignmentState {

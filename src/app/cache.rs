@@ -9,10 +9,10 @@ use std::collections::HashMap;
 use std::sync::{Arc, RwLock};
 use std::time::Duration;
 
-use axum::body::Bytes;
+use bytes::Bytes;
 use sqlx::SqlitePool;
 
-use super::standing_cache::StandingCache;
+use super::standings::StandingCache;
 use crate::store;
 use crate::store::items::StoredItem;
 

@@ -1,0 +1,325 @@
+//! Human annotation: assigning items to annotators, each annotator's queue, opening an item,
+//! saving drafts, and finishing an item with an answer, a skip or a flag.
+//!
+//! Blind by construction: nothing here hands an annotator an item's ground truth or score, and
+//! an item not assigned to the annotator is 403 on every use case.
+
+use std::sync::Arc;
+
+use super::annotators::now_ms;
+use super::{AppError, Hub, datasets};
+use crate::core::annotation::{
+    AssignmentState, Draft, Outcome, QueueEntry, Session, Telemetry, balanced_split, next_in_queue,
+};
+use crate::store;
+use crate::store::annotations::StoredAnnotation;
+use crate::store::items::StoredItem;
+
+/// How items go to annotators.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Assignment {
+    /// A balanced split of the dataset's unassigned items over these annotators.
+    Split(Vec<i64>),
+    /// These item ids to one annotator.
+    List {
+        annotator: i64,
+        item_ids: Vec<String>,
+    },
+}
+
+/// What an assignment did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Assigned {
+    /// Pairs asked for.
+    pub requested: u64,
+    /// Pairs new to the queues (the others were assigned already and left as they were).
+    pub added: u64,
+}
+
+/// Appends items of `dataset` to annotators' queues.
+pub async fn assign(hub: &Hub, dataset: &str, how: &Assignment) -> Result<Assigned, AppError> {
+    let dataset = datasets::by_name(hub, dataset).await?;
+    let mut conn = hub.conn().await?;
+    let known: Vec<i64> = store::annotations::annotators(&mut conn)
+        .await?
+        .iter()
+        .map(|a| a.id)
+        .collect();
+    let chosen: &[i64] = match how {
+        Assignment::Split(annotators) => annotators,
+        Assignment::List { annotator, .. } => std::slice::from_ref(annotator),
+    };
+    if let Some(unknown) = chosen.iter().find(|a| !known.contains(a)) {
+        return Err(AppError::BadRequest(format!(
+            "annotator: no annotator has id {unknown}"
+        )));
+    }
+    let pairs = match how {
+        Assignment::Split(annotators) => {
+            if annotators.is_empty() {
+                return Err(AppError::BadRequest(
+                    "choose at least one annotator to split the dataset over".to_owned(),
+                ));
+            }
+            let items = store::annotations::unassigned_items(&mut conn, dataset.id).await?;
+            balanced_split(&items, annotators)
+        }
+        Assignment::List {
+            annotator,
+            item_ids,
+        } => {
+            if item_ids.is_empty() {
+                return Err(AppError::BadRequest(
+                    "items: give at least one item id".to_owned(),
+                ));
+            }
+            match store::annotations::item_rowids(&mut conn, dataset.id, item_ids).await? {
+                Ok(rows) => rows.into_iter().map(|r| (*annotator, r)).collect(),
+                Err(missing) => {
+                    return Err(AppError::BadRequest(format!(
+                        "items: not in dataset '{}': {}",
+                        dataset.name,
+                        missing.join(", ")
+                    )));
+                }
+            }
+        }
+    };
+    drop(conn);
+    let mut tx = hub.begin().await?;
+    let added = store::annotations::assign(&mut tx, &pairs).await?;
+    tx.commit().await?;
+    Ok(Assigned {
+        requested: pairs.len() as u64,
+        added,
+    })
+}
+
+/// An annotator's assigned items in queue order, with where each stands.
+pub async fn queue(hub: &Hub, annotator: i64) -> Result<Vec<QueueEntry>, AppError> {
+    let mut conn = hub.conn().await?;
+    Ok(store::annotations::queue(&mut conn, annotator).await?)
+}
+
+/// The item an annotator should work on next: one already started, else the first to do.
+pub async fn next(hub: &Hub, annotator: i64) -> Result<Option<QueueEntry>, AppError> {
+    Ok(next_in_queue(&queue(hub, annotator).await?).cloned())
+}
+
+/// An item assigned to the session's annotator, with the annotator's standing on it.
+pub struct AssignedItem {
+    pub item: Arc<StoredItem>,
+    pub finished: bool,
+    /// The draft, when one exists (always after [`open`] on an unfinished item).
+    pub draft: Option<Draft>,
+}
+
+/// Looks up an item assigned to the session's annotator: 404 for an unknown dataset or item,
+/// 403 for an item that exists but is someone else's (or no one's). Touches the store only
+/// for what is not already in memory.
+async fn assigned(
+    hub: &Hub,
+    session: &Session,
+    dataset: &str,
+    item_id: &str,
+) -> Result<(Arc<StoredItem>, AssignmentState), AppError> {
+    let item = super::items::get(hub, dataset, item_id).await?;
+    if let Some(known) = hub.standings.get(session.annotator, item.rowid) {
+        return Ok((item, known));
+    }
+    let ticket = hub.standings.ticket();
+    let mut conn = hub.conn().await?;
+    let read = store::annotations::assignment_state(&mut conn, session.annotator, item.rowid)
+        .await?
+        .ok_or_else(|| {
+            AppError::Forbidden(format!(
+                "item '{item_id}' of dataset '{dataset}' is not assigned to you"
+            ))
+        })?;
+    hub.standings
+        .remember(ticket, session.annotator, item.rowid, read.clone());
+    Ok((item, read))
+}
+
+/// Opens an assigned item: its first opening creates an empty draft, which starts the item's
+/// clock.
+pub async fn open(
+    hub: &Hub,
+    session: &Session,
+    dataset: &str,
+    item_id: &str,
+) -> Result<AssignedItem, AppError> {
+    let (item, standing) = assigned(hub, session, dataset, item_id).await?;
+    let draft = match (standing.finished, standing.draft) {
+        (true, _) => None,
+        (false, Some(stored)) => Some(stored.draft),
+        (false, None) => {
+            let mut conn = hub.conn().await?;
+            let opened = store::annotations::open_draft(
+                &mut conn,
+                session.annotator,
+                item.rowid,
+                &Draft::empty(item.summary.step_length),
+                now_ms(),
+            )
+            .await?;
+            hub.standings.forget(session.annotator, item.rowid);
+            Some(opened.draft)
+        }
+    };
+    Ok(AssignedItem {
+        item,
+        finished: standing.finished,
+        draft,
+    })
+}
+
+/// Checks a draft against the item it is for; 409 once the item is finished.
+async fn unfinished(
+    hub: &Hub,
+    session: &Session,
+    dataset: &str,
+    item_id: &str,
+) -> Result<Arc<StoredItem>, AppError> {
+    let (item, standing) = assigned(hub, session, dataset, item_id).await?;
+    if standing.finished {
+        return Err(AppError::Conflict(format!(
+            "item '{item_id}' is already finished; its answer can no longer change"
+        )));
+    }
+    Ok(item)
+}
+
+fn checked(item: &StoredItem, draft: &Draft) -> Result<(), AppError> {
+    draft
+        .check(item.summary.step_length)
+        .map_err(|e| AppError::BadRequest(format!("draft of item '{}': {e}", item.summary.item_id)))
+}
+
+/// Saves the annotator's draft of an unfinished item.
+pub async fn save_draft(
+    hub: &Hub,
+    session: &Session,
+    dataset: &str,
+    item_id: &str,
+    draft: &Draft,
+) -> Result<(), AppError> {
+    let item = unfinished(hub, session, dataset, item_id).await?;
+    checked(&item, draft)?;
+    let mut conn = hub.conn().await?;
+    store::annotations::save_draft(&mut conn, session.annotator, item.rowid, draft, now_ms())
+        .await?;
+    hub.standings.forget(session.annotator, item.rowid);
+    Ok(())
+}
+
+/// Finishes an item with the draft's answer (every slot filled) and its telemetry.
+pub async fn answer(
+    hub: &Hub,
+    session: &Session,
+    dataset: &str,
+    item_id: &str,
+    draft: &Draft,
+) -> Result<(), AppError> {
+    let item = unfinished(hub, session, dataset, item_id).await?;
+    checked(&item, draft)?;
+    let Some(answer) = draft.answer() else {
+        let empty: Vec<String> = draft
+            .slots
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.is_none())
+            .map(|(i, _)| (i + 1).to_string())
+            .collect();
+        return Err(AppError::BadRequest(format!(
+            "item '{item_id}': slots {} are empty; fill every slot before submitting",
+            empty.join(", ")
+        )));
+    };
+    let now = now_ms();
+    let mut tx = hub.begin().await?;
+    store::annotations::save_draft(&mut tx, session.annotator, item.rowid, draft, now).await?;
+    let stored = store::annotations::draft(&mut tx, session.annotator, item.rowid)
+        .await?
+        .ok_or_else(|| AppError::internal("draft missing after save"))?;
+    let finished = store::annotations::finish(
+        &mut tx,
+        session.annotator,
+        item.rowid,
+        &Outcome::Answered(answer),
+        &Telemetry::of(&stored, now),
+    )
+    .await?;
+    if !finished {
+        return Err(AppError::Conflict(format!(
+            "item '{item_id}' is already finished"
+        )));
+    }
+    tx.commit().await?;
+    hub.standings.forget(session.annotator, item.rowid);
+    Ok(())
+}
+
+/// Finishes an item without an answer: `action` is "skip" or "flag", with a reason.
+pub async fn skip(
+    hub: &Hub,
+    session: &Session,
+    dataset: &str,
+    item_id: &str,
+    action: &str,
+    reason: &str,
+) -> Result<(), AppError> {
+    let item = unfinished(hub, session, dataset, item_id).await?;
+    let reason = reason.trim().to_owned();
+    if reason.is_empty() {
+        return Err(AppError::BadRequest(format!(
+            "to {} item '{item_id}', say why in the reason field",
+            if action == "flag" { "flag" } else { "skip" }
+        )));
+    }
+    if reason.chars().count() > 2000 {
+        return Err(AppError::BadRequest(
+            "the reason is over 2000 characters".to_owned(),
+        ));
+    }
+    let outcome = match action {
+        "skip" => Outcome::Skipped(reason),
+        "flag" => Outcome::Flagged(reason),
+        other => {
+            return Err(AppError::BadRequest(format!(
+                "form field `action` is {other:?}; expected \"skip\" or \"flag\""
+            )));
+        }
+    };
+    let now = now_ms();
+    let mut tx = hub.begin().await?;
+    let stored = store::annotations::draft(&mut tx, session.annotator, item.rowid).await?;
+    let telemetry = stored
+        .as_ref()
+        .map_or_else(Telemetry::none, |d| Telemetry::of(d, now));
+    store::annotations::finish(&mut tx, session.annotator, item.rowid, &outcome, &telemetry)
+        .await?;
+    tx.commit().await?;
+    hub.standings.forget(session.annotator, item.rowid);
+    Ok(())
+}
+
+/// The annotator's own finished item: their answer and telemetry, never a score.
+pub async fn own_answer(
+    hub: &Hub,
+    session: &Session,
+    dataset: &str,
+    item_id: &str,
+) -> Result<StoredAnnotation, AppError> {
+    let (item, _) = assigned(hub, session, dataset, item_id).await?;
+    let mut conn = hub.conn().await?;
+    store::annotations::annotation(&mut conn, session.annotator, item.rowid)
+        .await?
+        .ok_or_else(|| AppError::NotFound(format!("item '{item_id}' has no answer from you yet")))
+}
+
+/// Skipped and flagged items with their reasons, newest first.
+pub async fn flags(hub: &Hub) -> Result<Vec<StoredAnnotation>, AppError> {
+    let mut conn = hub.conn().await?;
+    Ok(store::annotations::flags(&mut conn).await?)
+}

@@ -1,0 +1,170 @@
+//! Annotator accounts: creating one with its single-use invite, setting a password through the
+//! invite, logging in and out, and the sessions that prove a login.
+
+use std::time::Duration;
+
+use super::{AppError, Hub};
+use crate::core::annotation::Session;
+use crate::core::credentials::{
+    self, hash_password, password_problem, random_token, token_hash, verify_password,
+};
+use crate::store;
+use crate::store::annotations::Annotator;
+
+/// How long a login lasts.
+pub const SESSION_LIFETIME: Duration = Duration::from_secs(12 * 3600);
+
+/// Milliseconds since the Unix epoch, the clock of sessions and drafts.
+pub fn now_ms() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| i64::try_from(d.as_millis()).unwrap_or(i64::MAX))
+}
+
+/// The invite link an annotator opens to set a password.
+pub fn invite_url(base: &str, token: &str) -> String {
+    format!("{}/invite/{token}", base.trim_end_matches('/'))
+}
+
+/// A new account and the secret of its single-use invite.
+#[derive(Debug)]
+pub struct Invited {
+    pub name: String,
+    pub is_admin: bool,
+    pub invite_token: String,
+}
+
+/// Creates an annotator (an admin with `is_admin`) with a pending invite. The name follows
+/// [`credentials::annotator_name`]; a name in use is a conflict.
+pub async fn create(hub: &Hub, name: &str, is_admin: bool) -> Result<Invited, AppError> {
+    let name = credentials::annotator_name(name).map_err(AppError::BadRequest)?;
+    let token = random_token();
+    let mut conn = hub.conn().await?;
+    let created =
+        store::annotations::create_annotator(&mut conn, name, is_admin, &token_hash(&token))
+            .await?;
+    if created.is_none() {
+        return Err(AppError::Conflict(format!(
+            "an annotator named '{name}' already exists"
+        )));
+    }
+    Ok(Invited {
+        name: name.to_owned(),
+        is_admin,
+        invite_token: token,
+    })
+}
+
+fn unknown_invite() -> AppError {
+    AppError::NotFound(
+        "this invite link is unknown or has already been used: ask an admin for a new one"
+            .to_owned(),
+    )
+}
+
+/// The account an unused invite is for.
+pub async fn invited(hub: &Hub, invite_token: &str) -> Result<Annotator, AppError> {
+    let mut conn = hub.conn().await?;
+    store::annotations::annotator_by_invite(&mut conn, &token_hash(invite_token))
+        .await?
+        .ok_or_else(unknown_invite)
+}
+
+/// Sets the password of the invite's account and uses the invite up; returns the annotator.
+pub async fn accept_invite(
+    hub: &Hub,
+    invite_token: &str,
+    password: &str,
+    repeat: &str,
+) -> Result<i64, AppError> {
+    if password != repeat {
+        return Err(AppError::BadRequest("the two passwords differ".to_owned()));
+    }
+    if let Some(problem) = password_problem(password) {
+        return Err(AppError::BadRequest(problem));
+    }
+    let password = password.to_owned();
+    let hash = tokio::task::spawn_blocking(move || hash_password(&password))
+        .await?
+        .map_err(|e| AppError::internal(format!("argon2: {e}")))?;
+    let mut conn = hub.conn().await?;
+    store::annotations::accept_invite(&mut conn, &token_hash(invite_token), &hash)
+        .await?
+        .ok_or_else(unknown_invite)
+}
+
+/// The annotator whose password this is, if the name and password match.
+pub async fn check_password(
+    hub: &Hub,
+    name: &str,
+    password: &str,
+) -> Result<Option<i64>, AppError> {
+    let mut conn = hub.conn().await?;
+    let stored = store::annotations::credentials(&mut conn, name).await?;
+    drop(conn);
+    let Some((id, hash)) = stored else {
+        return Ok(None);
+    };
+    let password = password.to_owned();
+    Ok(
+        tokio::task::spawn_blocking(move || verify_password(&password, &hash).then_some(id))
+            .await?,
+    )
+}
+
+/// Starts a session for `annotator`; returns its secret token (for the cookie).
+pub async fn start_session(hub: &Hub, annotator: i64) -> Result<String, AppError> {
+    let token = random_token();
+    let mut conn = hub.conn().await?;
+    store::annotations::create_session(
+        &mut conn,
+        &token_hash(&token),
+        annotator,
+        &random_token(),
+        now_ms() + i64::try_from(SESSION_LIFETIME.as_millis()).unwrap_or(i64::MAX),
+    )
+    .await?;
+    Ok(token)
+}
+
+/// The unexpired session whose token hashes to `token_hash`, and when it expires.
+pub async fn session(hub: &Hub, token_hash: &str) -> Result<Option<(Session, i64)>, AppError> {
+    let mut conn = hub.conn().await?;
+    Ok(store::annotations::session(&mut conn, token_hash, now_ms()).await?)
+}
+
+/// Ends the session whose token hashes to `token_hash` (and any expired ones).
+pub async fn end_session(hub: &Hub, token_hash: &str) -> Result<(), AppError> {
+    let mut conn = hub.conn().await?;
+    Ok(store::annotations::delete_session(&mut conn, token_hash, now_ms()).await?)
+}
+
+/// An annotator with their progress, as the admin page lists them.
+pub struct AnnotatorProgress {
+    pub annotator: Annotator,
+    pub assigned: i64,
+    pub finished: i64,
+    pub answered: i64,
+}
+
+/// Every annotator, by name, with their progress.
+pub async fn with_progress(hub: &Hub) -> Result<Vec<AnnotatorProgress>, AppError> {
+    let mut conn = hub.conn().await?;
+    let accounts = store::annotations::annotators(&mut conn).await?;
+    let progress = store::annotations::progress_by_annotator(&mut conn).await?;
+    Ok(accounts
+        .into_iter()
+        .map(|annotator| {
+            let (assigned, finished, answered) = progress
+                .iter()
+                .find(|p| p.0 == annotator.id)
+                .map_or((0, 0, 0), |p| (p.1, p.2, p.3));
+            AnnotatorProgress {
+                annotator,
+                assigned,
+                finished,
+                answered,
+            }
+        })
+        .collect())
+}

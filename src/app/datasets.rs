@@ -1,0 +1,151 @@
+//! Reading datasets: by name, their overview and counts, whether their answers are public,
+//! and the whole dataset as a streamed ENACT release archive.
+
+use std::collections::HashSet;
+
+use bytes::Bytes;
+use tokio::sync::mpsc;
+
+use super::{AppError, Hub};
+use crate::core::dataset::AnswerVisibility;
+use crate::core::release::{ArchiveWriter, QA_FILE, release_line};
+use crate::store;
+pub use crate::store::datasets::{Dataset, DatasetOverview, ItemCounts};
+
+/// Items whose frames are read from the database at a time while an archive streams.
+const ITEMS_PER_BATCH: usize = 16;
+
+/// The dataset named `name`, or a 404 that names it.
+pub async fn by_name(hub: &Hub, name: &str) -> Result<Dataset, AppError> {
+    let mut conn = hub.conn().await?;
+    store::datasets::by_name(&mut conn, name)
+        .await?
+        .ok_or_else(|| AppError::NotFound(format!("no dataset named '{name}'")))
+}
+
+/// Every dataset with its item counts.
+pub async fn overview(hub: &Hub) -> Result<Vec<DatasetOverview>, AppError> {
+    let mut conn = hub.conn().await?;
+    Ok(store::datasets::overview(&mut conn).await?)
+}
+
+/// One dataset with its item counts.
+pub async fn overview_of(hub: &Hub, name: &str) -> Result<DatasetOverview, AppError> {
+    overview(hub)
+        .await?
+        .into_iter()
+        .find(|o| o.dataset.name == name)
+        .ok_or_else(|| AppError::NotFound(format!("no dataset named '{name}'")))
+}
+
+/// The tasks a dataset's items come from, for filters.
+pub async fn task_names(hub: &Hub, dataset: &Dataset) -> Result<Vec<String>, AppError> {
+    let mut conn = hub.conn().await?;
+    Ok(store::items::task_names(&mut conn, dataset.id).await?)
+}
+
+pub async fn answer_visibility(hub: &Hub, dataset: &Dataset) -> Result<AnswerVisibility, AppError> {
+    let mut conn = hub.conn().await?;
+    Ok(store::submissions::answer_visibility(&mut conn, dataset.id).await?)
+}
+
+/// Makes a dataset's ground truth and per-item verdicts public, or hides them again.
+pub async fn set_answer_visibility(
+    hub: &Hub,
+    name: &str,
+    answers: AnswerVisibility,
+) -> Result<Dataset, AppError> {
+    let dataset = by_name(hub, name).await?;
+    let mut conn = hub.conn().await?;
+    store::submissions::set_answer_visibility(&mut conn, dataset.id, answers).await?;
+    Ok(dataset)
+}
+
+/// A release archive on its way out: whether it holds ground truth, and its bytes in order.
+pub struct ReleaseArchive {
+    pub dataset: Dataset,
+    pub with_truth: bool,
+    /// The tar stream. A failure ends it with an error, so a reader sees a broken transfer
+    /// rather than a short archive that looks complete.
+    pub chunks: mpsc::Receiver<Result<Bytes, std::io::Error>>,
+}
+
+/// The dataset in ENACT's release layout, as a tar stream: ground truth only when its answers
+/// are public. The QA file is built whole (it is small beside the frames); frames stream.
+pub async fn release_archive(hub: &Hub, name: &str) -> Result<ReleaseArchive, AppError> {
+    let dataset = by_name(hub, name).await?;
+    let mut conn = hub.conn().await?;
+    let with_truth = store::submissions::answer_visibility(&mut conn, dataset.id).await?
+        == AnswerVisibility::Public;
+    let items = store::items::release_items(&mut conn, dataset.id).await?;
+    drop(conn);
+    let mut qa = String::new();
+    for (_, item) in &items {
+        qa.push_str(&release_line(item, with_truth));
+        qa.push('\n');
+    }
+    let mut writer = ArchiveWriter::default();
+    let head = writer.file(QA_FILE, qa.as_bytes())?;
+    let rows: Vec<i64> = items.iter().map(|(row, _)| *row).collect();
+    drop(items);
+    let (tx, rx) = mpsc::channel(4);
+    tokio::spawn(stream_frames(
+        hub.clone(),
+        dataset.name.clone(),
+        rows,
+        writer,
+        head,
+        tx,
+    ));
+    Ok(ReleaseArchive {
+        dataset,
+        with_truth,
+        chunks: rx,
+    })
+}
+
+type Chunk = Result<Bytes, std::io::Error>;
+
+/// Sends the archive's remaining entries.
+async fn stream_frames(
+    hub: Hub,
+    dataset: String,
+    rows: Vec<i64>,
+    mut writer: ArchiveWriter,
+    head: Vec<u8>,
+    tx: mpsc::Sender<Chunk>,
+) {
+    if tx.send(Ok(Bytes::from(head))).await.is_err() {
+        return;
+    }
+    let mut written: HashSet<String> = HashSet::new();
+    for batch in rows.chunks(ITEMS_PER_BATCH) {
+        let images = match hub.pool.acquire().await {
+            Ok(mut conn) => store::items::release_images(&mut conn, batch).await,
+            Err(e) => Err(e),
+        };
+        let images = match images {
+            Ok(images) => images,
+            Err(e) => {
+                tracing::error!(error = %e, dataset, "archive: reading frames failed");
+                let _ = tx.send(Err(std::io::Error::other(e))).await;
+                return;
+            }
+        };
+        for (path, png) in images {
+            // Two records naming one file hold the same bytes (the importer read one file).
+            if !written.insert(path.clone()) {
+                continue;
+            }
+            let chunk = writer.file(&path, &png);
+            let failed = chunk.is_err();
+            if let Err(e) = &chunk {
+                tracing::error!(error = %e, dataset, path, "archive: cannot write entry");
+            }
+            if tx.send(chunk.map(Bytes::from)).await.is_err() || failed {
+                return;
+            }
+        }
+    }
+    let _ = tx.send(writer.finish().map(Bytes::from)).await;
+}

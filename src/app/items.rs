@@ -1,0 +1,45 @@
+//! Reading items and frames, from memory when they were read before (the item JSON and the
+//! annotation item page are the hot paths).
+
+use std::sync::Arc;
+
+use super::{AppError, Hub, datasets};
+use crate::store;
+pub use crate::store::items::{ItemFilter, ItemImage, ItemSummary, StoredItem};
+
+/// One page of a dataset's items in import order, and how many items the filter matches.
+pub async fn list(
+    hub: &Hub,
+    dataset: &str,
+    filter: &ItemFilter,
+    per_page: u32,
+    offset: u32,
+) -> Result<(Vec<ItemSummary>, i64), AppError> {
+    let dataset = datasets::by_name(hub, dataset).await?;
+    let mut conn = hub.conn().await?;
+    Ok(store::items::list(&mut conn, dataset.id, filter, per_page, offset).await?)
+}
+
+/// The item a URL names (ground truth included: callers choose what to show), or a 404 that
+/// names the dataset or the item.
+pub async fn get(hub: &Hub, dataset: &str, item_id: &str) -> Result<Arc<StoredItem>, AppError> {
+    if let Some(found) = hub.items.stored(dataset, item_id) {
+        return Ok(found);
+    }
+    let stored = datasets::by_name(hub, dataset).await?;
+    let mut conn = hub.conn().await?;
+    let item = store::items::get(&mut conn, stored.id, item_id)
+        .await?
+        .ok_or_else(|| AppError::NotFound(format!("no item '{item_id}' in dataset '{dataset}'")))?;
+    let found = Arc::new(item);
+    hub.items.insert_stored(dataset, item_id, found.clone());
+    Ok(found)
+}
+
+/// A frame's PNG bytes by content hash, or a 404 that names the hash.
+pub async fn frame_png(hub: &Hub, sha256: &str) -> Result<Vec<u8>, AppError> {
+    let mut conn = hub.conn().await?;
+    store::frames::png(&mut conn, sha256)
+        .await?
+        .ok_or_else(|| AppError::NotFound(format!("no frame with hash '{sha256}'")))
+}

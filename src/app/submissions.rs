@@ -1,0 +1,368 @@
+//! Leaderboard submissions: submitting (quota, idempotency, scoring and storing, all or
+//! nothing), reading one back with what its reader may see, and the admin's listing controls.
+
+use std::collections::HashMap;
+use std::future::Future;
+use std::sync::{Arc, Mutex};
+
+use sha2::{Digest, Sha256};
+
+use super::tokens::Caller;
+use super::{AppError, Hub, datasets};
+use crate::core::credentials::{NewToken, Role, Scope};
+use crate::core::dataset::AnswerVisibility;
+use crate::core::scoring::{self, ScoringTarget};
+use crate::core::submission::{
+    ScoredSubmission, SubmissionError, SubmissionMetadata, Visibility, score_submission,
+};
+use crate::store;
+use crate::store::accounts::AttemptQuota;
+use crate::store::submissions::NewSubmission;
+pub use crate::store::submissions::{StoredVerdict, SubmissionRow};
+
+/// A dataset's scoring targets and their `items` row ids, in dataset order.
+pub struct DatasetTargets {
+    pub targets: Vec<ScoringTarget>,
+    pub item_rows: Vec<i64>,
+}
+
+/// Scoring targets per dataset, kept until the stored items change: deserialising the
+/// signature tables of a full dataset costs more than scoring a submission against them.
+#[derive(Default)]
+pub struct TargetCache {
+    entries: Mutex<HashMap<i64, (i64, Arc<DatasetTargets>)>>,
+}
+
+impl TargetCache {
+    fn get(&self, dataset: i64, generation: i64) -> Option<Arc<DatasetTargets>> {
+        let entries = self.entries.lock().ok()?;
+        entries
+            .get(&dataset)
+            .filter(|(g, _)| *g == generation)
+            .map(|(_, t)| t.clone())
+    }
+
+    fn put(&self, dataset: i64, generation: i64, targets: Arc<DatasetTargets>) {
+        if let Ok(mut entries) = self.entries.lock() {
+            entries.insert(dataset, (generation, targets));
+        }
+    }
+}
+
+/// What every submission to `dataset` is scored against.
+pub async fn dataset_targets(hub: &Hub, dataset: i64) -> Result<Arc<DatasetTargets>, AppError> {
+    let mut conn = hub.conn().await?;
+    let generation = store::content_generation(&mut conn).await?;
+    if let Some(t) = hub.targets.get(dataset, generation) {
+        return Ok(t);
+    }
+    let rows = store::items::scoring_items(&mut conn, dataset).await?;
+    drop(conn);
+    let targets = tokio::task::spawn_blocking(move || {
+        let item_rows = rows.iter().map(|r| r.row_id).collect();
+        scoring::targets_from_stored(rows).map(|targets| DatasetTargets { targets, item_rows })
+    })
+    .await?
+    .map_err(AppError::internal)?;
+    let targets = Arc::new(targets);
+    hub.targets.put(dataset, generation, targets.clone());
+    Ok(targets)
+}
+
+/// Seconds until the next UTC midnight, when daily quotas reset.
+fn seconds_until_utc_midnight() -> u64 {
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0);
+    86_400 - now % 86_400
+}
+
+/// How a submission request ended.
+#[derive(Debug)]
+pub enum Submitted {
+    /// Scored and stored.
+    Created(SubmissionRow),
+    /// A repeat of an earlier request with the same idempotency key and body.
+    Repeated(SubmissionRow),
+}
+
+/// Takes one attempt from the caller's quotas, refused ones counted too; admins are exempt.
+async fn take_attempt(hub: &Hub, caller: &Caller) -> Result<(), AppError> {
+    if caller.has(Scope::Admin) {
+        return Ok(());
+    }
+    let daily = caller.daily_quota.unwrap_or(hub.quotas.daily);
+    let total = caller.total_quota.unwrap_or(hub.quotas.total);
+    let mut conn = hub.conn().await?;
+    match store::accounts::record_attempt(&mut conn, caller.token_id, daily, total).await? {
+        AttemptQuota::Granted => Ok(()),
+        AttemptQuota::DailyExhausted { limit } => {
+            let retry_after = seconds_until_utc_midnight();
+            Err(AppError::TooManyRequests {
+                message: format!(
+                    "this token has used its {limit} submissions for today (UTC); \
+                     try again in {retry_after} s"
+                ),
+                retry_after: Some(retry_after),
+            })
+        }
+        // No Retry-After: the total never refills, so waiting would not help.
+        AttemptQuota::TotalExhausted { used, limit } => Err(AppError::TooManyRequests {
+            message: format!(
+                "this token's total quota is used up: {used} of {limit} submissions made; \
+                 waiting will not help, ask an admin for a new token or a larger total quota"
+            ),
+            retry_after: None,
+        }),
+    }
+}
+
+fn body_sha256(body: &[u8]) -> String {
+    hex::encode(Sha256::digest(body))
+}
+
+/// Scores `body` against every item of the dataset (off the async workers): 422 with every
+/// problem when the body is refused.
+async fn score_body(
+    targets: Arc<DatasetTargets>,
+    dataset_name: &str,
+    body: Vec<u8>,
+) -> Result<ScoredSubmission, AppError> {
+    let dataset_name = dataset_name.to_owned();
+    tokio::task::spawn_blocking(move || {
+        let text = std::str::from_utf8(&body).map_err(|e| {
+            let line = body[..e.valid_up_to()]
+                .iter()
+                .filter(|b| **b == b'\n')
+                .count()
+                + 1;
+            AppError::Unprocessable {
+                message: format!(
+                    "line {line}: the body is not UTF-8 text (byte {} is invalid)",
+                    e.valid_up_to()
+                ),
+                problems: Vec::new(),
+            }
+        })?;
+        match score_submission(&targets.targets, text) {
+            Ok(scored) => Ok(scored),
+            Err(SubmissionError::Rejected(problems)) => {
+                let first: Vec<String> =
+                    problems.iter().take(5).map(|p| p.message.clone()).collect();
+                Err(AppError::Unprocessable {
+                    message: format!(
+                        "{} problems; nothing was stored: {}{}",
+                        problems.len(),
+                        first.join("; "),
+                        if problems.len() > 5 { "; …" } else { "" }
+                    ),
+                    problems,
+                })
+            }
+            Err(SubmissionError::Dataset(e)) => Err(AppError::internal(format!(
+                "dataset {dataset_name} cannot be scored: {e}"
+            ))),
+        }
+    })
+    .await?
+}
+
+async fn by_id(hub: &Hub, id: i64) -> Result<Option<SubmissionRow>, AppError> {
+    let mut conn = hub.conn().await?;
+    Ok(store::submissions::by_id(&mut conn, id).await?)
+}
+
+/// Submits a model's answers to `dataset`: counts the attempt against the caller's quotas,
+/// reads the body (only then, so an attempt over quota never uploads), scores it against
+/// every item and stores the submission with every verdict in one transaction.
+///
+/// With an `idempotency_key` already used by this token, the first submission is returned
+/// when the body is the same, and 409 when it differs.
+pub async fn submit<B>(
+    hub: &Hub,
+    caller: &Caller,
+    dataset_name: &str,
+    metadata: SubmissionMetadata,
+    idempotency_key: Option<&str>,
+    body: B,
+) -> Result<Submitted, AppError>
+where
+    B: Future<Output = Result<Vec<u8>, AppError>>,
+{
+    caller.require(Scope::Submit)?;
+    let dataset = datasets::by_name(hub, dataset_name).await?;
+    let metadata = metadata.checked().map_err(AppError::BadRequest)?;
+    if let Some(key) = idempotency_key {
+        let mut conn = hub.conn().await?;
+        let existing =
+            store::submissions::by_idempotency_key(&mut conn, caller.token_id, key).await?;
+        drop(conn);
+        if let Some(existing) = existing {
+            let body = body.await?;
+            return repeat_of(existing, &body);
+        }
+    }
+    take_attempt(hub, caller).await?;
+    let body = body.await?;
+    let targets = dataset_targets(hub, dataset.id).await?;
+    let sha256 = body_sha256(&body);
+    let scored = score_body(targets.clone(), &dataset.name, body).await?;
+
+    let mut tx = hub.begin().await?;
+    let new = NewSubmission {
+        dataset: dataset.id,
+        account: caller.account_id,
+        token: caller.token_id,
+        idempotency_key,
+        body_sha256: &sha256,
+        metadata: &metadata,
+        scores: &scored.scores,
+    };
+    let Some(id) = store::submissions::insert(&mut tx, &new).await? else {
+        // A twin request with the same key committed first.
+        tx.rollback().await?;
+        let mut conn = hub.conn().await?;
+        let existing = store::submissions::by_idempotency_key(
+            &mut conn,
+            caller.token_id,
+            idempotency_key.unwrap_or_default(),
+        )
+        .await?
+        .ok_or_else(|| AppError::internal("an idempotent twin submission vanished"))?;
+        return Ok(Submitted::Repeated(existing));
+    };
+    store::submissions::insert_items(&mut tx, id, &targets.item_rows, &scored.items).await?;
+    tx.commit().await?;
+    tracing::info!(
+        submission = id,
+        dataset = %dataset.name,
+        account = %caller.account_name,
+        model = %metadata.model,
+        "submission scored"
+    );
+    let row = by_id(hub, id)
+        .await?
+        .ok_or_else(|| AppError::internal(format!("submission {id} vanished")))?;
+    Ok(Submitted::Created(row))
+}
+
+fn repeat_of(existing: SubmissionRow, body: &[u8]) -> Result<Submitted, AppError> {
+    if body_sha256(body) != existing.body_sha256 {
+        return Err(AppError::Conflict(format!(
+            "this Idempotency-Key was used for submission {} with a different body",
+            existing.id
+        )));
+    }
+    Ok(Submitted::Repeated(existing))
+}
+
+/// A submission as its reader may see it: per-item verdicts only for its owner or an admin,
+/// and only when the dataset's answers are public; otherwise why they are withheld.
+pub struct SubmissionDetail {
+    pub row: SubmissionRow,
+    pub verdicts: Result<Vec<StoredVerdict>, String>,
+}
+
+/// Reads a submission. Another account's submission is answered like a missing one, so ids
+/// reveal nothing.
+pub async fn read(hub: &Hub, caller: &Caller, id: &str) -> Result<SubmissionDetail, AppError> {
+    if !caller.has(Scope::ReadOwn) && !caller.has(Scope::Admin) {
+        return Err(AppError::Forbidden(
+            "this token lacks the `read_own` scope".to_owned(),
+        ));
+    }
+    let not_found = || AppError::NotFound(format!("no submission {id}"));
+    let numeric: i64 = id.parse().map_err(|_| not_found())?;
+    let admin = caller.has(Scope::Admin);
+    let row = by_id(hub, numeric)
+        .await?
+        .filter(|r| r.account_id == caller.account_id || admin)
+        .ok_or_else(not_found)?;
+    let mut conn = hub.conn().await?;
+    let visibility = store::submissions::answer_visibility(&mut conn, row.dataset_id).await?;
+    let verdicts = if visibility == AnswerVisibility::Public {
+        Ok(store::submissions::verdicts(&mut conn, numeric).await?)
+    } else {
+        Err(format!(
+            "per-item verdicts are not shown: the answers of dataset '{}' are {}",
+            row.dataset,
+            visibility.as_str()
+        ))
+    };
+    Ok(SubmissionDetail { row, verdicts })
+}
+
+/// An admin's change to a leaderboard row: mark a baseline, or hide, publish or withdraw it.
+pub async fn update_listing(
+    hub: &Hub,
+    id: &str,
+    baseline: Option<bool>,
+    visibility: Option<&str>,
+) -> Result<SubmissionRow, AppError> {
+    let not_found = || AppError::NotFound(format!("no submission {id}"));
+    let numeric: i64 = id.parse().map_err(|_| not_found())?;
+    let visibility = visibility
+        .map(|v| {
+            Visibility::parse(v).ok_or_else(|| {
+                AppError::BadRequest(format!(
+                    "visibility must be 'published', 'hidden' or 'withdrawn', not {v:?}"
+                ))
+            })
+        })
+        .transpose()?;
+    let mut conn = hub.conn().await?;
+    if !store::submissions::update_listing(&mut conn, numeric, baseline, visibility).await? {
+        return Err(not_found());
+    }
+    drop(conn);
+    by_id(hub, numeric).await?.ok_or_else(not_found)
+}
+
+/// Files a baseline on a dataset's leaderboard (once per account and model, even if an admin
+/// has since hidden or withdrawn it), scored and stored as any submission is. Its account's
+/// only token is revoked at once, so nobody can submit as it. Returns whether it was added.
+pub async fn file_baseline(
+    hub: &Hub,
+    dataset_name: &str,
+    account_name: &str,
+    metadata: SubmissionMetadata,
+    answer_body: impl FnOnce(&DatasetTargets) -> String,
+) -> Result<bool, AppError> {
+    let dataset = datasets::by_name(hub, dataset_name).await?;
+    let mut conn = hub.conn().await?;
+    let already =
+        store::submissions::has_submitted(&mut conn, dataset.id, account_name, &metadata.model)
+            .await?;
+    drop(conn);
+    if already {
+        return Ok(false);
+    }
+    let targets = dataset_targets(hub, dataset.id).await?;
+    let body = answer_body(&targets);
+    let sha256 = body_sha256(body.as_bytes());
+    let scored = score_body(targets.clone(), &dataset.name, body.into_bytes()).await?;
+    let mut tx = hub.begin().await?;
+    let account = super::tokens::ensure_account(&mut tx, account_name, Role::Submitter).await?;
+    let token = NewToken::generate();
+    let token_id =
+        store::accounts::insert_token(&mut tx, account, Role::Submitter, &token, None, None)
+            .await?;
+    store::accounts::revoke_token(&mut tx, &token_id.to_string()).await?;
+    let new = NewSubmission {
+        dataset: dataset.id,
+        account,
+        token: token_id,
+        idempotency_key: None,
+        body_sha256: &sha256,
+        metadata: &metadata,
+        scores: &scored.scores,
+    };
+    let id = store::submissions::insert(&mut tx, &new)
+        .await?
+        .ok_or_else(|| AppError::internal("the baseline's submission row was not written"))?;
+    store::submissions::insert_items(&mut tx, id, &targets.item_rows, &scored.items).await?;
+    store::submissions::update_listing(&mut tx, id, Some(true), None).await?;
+    tx.commit().await?;
+    Ok(true)
+}

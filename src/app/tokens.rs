@@ -1,0 +1,178 @@
+//! API tokens and the accounts behind them: issuing, listing and revoking tokens, the admin
+//! token a server starts with, and who a presented token stands for.
+
+use serde::Serialize;
+
+use super::{AppError, Hub};
+use crate::core::credentials::{self, NewToken, Role, Scope};
+use crate::store;
+pub use crate::store::accounts::TokenListing;
+
+/// A token that authenticated a request.
+#[derive(Debug, Clone)]
+pub struct Caller {
+    pub token_id: i64,
+    pub account_id: i64,
+    pub account_name: String,
+    pub scopes: Vec<Scope>,
+    pub daily_quota: Option<i64>,
+    pub total_quota: Option<i64>,
+}
+
+impl Caller {
+    pub fn has(&self, scope: Scope) -> bool {
+        self.scopes.contains(&scope)
+    }
+
+    /// Refuses a caller without `scope`.
+    pub fn require(&self, scope: Scope) -> Result<(), AppError> {
+        if self.has(scope) {
+            Ok(())
+        } else {
+            Err(AppError::Forbidden(format!(
+                "this token lacks the `{}` scope",
+                scope.as_str()
+            )))
+        }
+    }
+}
+
+/// The live (unrevoked) token `presented` stands for; 401 otherwise.
+pub async fn authenticate(hub: &Hub, presented: &str) -> Result<Caller, AppError> {
+    let refused =
+        || AppError::Unauthorized("the API token is unknown or has been revoked".to_owned());
+    let mut conn = hub.conn().await?;
+    let row = store::accounts::token_by_prefix(&mut conn, &credentials::lookup_prefix(presented))
+        .await?
+        .ok_or_else(refused)?;
+    if row.revoked || !credentials::token_matches(presented, &row.token_hash) {
+        return Err(refused());
+    }
+    Ok(Caller {
+        token_id: row.id,
+        account_id: row.account_id,
+        account_name: row.account_name,
+        scopes: row.scopes,
+        daily_quota: row.daily_quota,
+        total_quota: row.total_quota,
+    })
+}
+
+/// A token just created: its secret is in this value only.
+#[derive(Debug, Serialize)]
+pub struct CreatedToken {
+    pub id: i64,
+    pub prefix: String,
+    pub account: String,
+    pub role: Role,
+    /// The secret, shown this once.
+    pub token: String,
+}
+
+/// The account named `name` with `role`, created if missing, inside `tx`. An existing account
+/// keeps its role: asking for another is a conflict.
+pub(super) async fn ensure_account(
+    conn: &mut sqlx::SqliteConnection,
+    name: &str,
+    role: Role,
+) -> Result<i64, AppError> {
+    match store::accounts::account_by_name(&mut *conn, name).await? {
+        Some((id, stored)) if stored == role => Ok(id),
+        Some((_, stored)) => Err(AppError::Conflict(format!(
+            "account '{name}' exists with role {}, not {}",
+            stored.as_str(),
+            role.as_str()
+        ))),
+        None => Ok(store::accounts::insert_account(conn, name, role).await?),
+    }
+}
+
+/// Creates a token for the account `name` (created with `role` if new). Quotas left out are
+/// the server's.
+pub async fn issue(
+    hub: &Hub,
+    name: &str,
+    role: Role,
+    daily_quota: Option<i64>,
+    total_quota: Option<i64>,
+) -> Result<CreatedToken, AppError> {
+    let name = credentials::account_name(name).map_err(AppError::BadRequest)?;
+    for (field, quota) in [("daily_quota", daily_quota), ("total_quota", total_quota)] {
+        if quota.is_some_and(|q| q < 0) {
+            return Err(AppError::BadRequest(format!(
+                "`{field}` must not be negative"
+            )));
+        }
+    }
+    let token = NewToken::generate();
+    let mut tx = hub.begin().await?;
+    let account = ensure_account(&mut tx, name, role).await?;
+    let id =
+        store::accounts::insert_token(&mut tx, account, role, &token, daily_quota, total_quota)
+            .await?;
+    tx.commit().await?;
+    Ok(CreatedToken {
+        id,
+        prefix: token.prefix.clone(),
+        account: name.to_owned(),
+        role,
+        token: token.token,
+    })
+}
+
+/// Every token with its account, quotas and use; never a secret.
+pub async fn list(hub: &Hub) -> Result<Vec<TokenListing>, AppError> {
+    let mut conn = hub.conn().await?;
+    Ok(store::accounts::list_tokens(&mut conn).await?)
+}
+
+/// Revokes the live token with this id or prefix; it stops working at once.
+pub async fn revoke(hub: &Hub, which: &str) -> Result<(), AppError> {
+    let mut conn = hub.conn().await?;
+    if store::accounts::revoke_token(&mut conn, which).await? {
+        Ok(())
+    } else {
+        Err(AppError::NotFound(format!(
+            "no live token with id or prefix {which:?}"
+        )))
+    }
+}
+
+/// What [`ensure_admin_token`] did.
+#[derive(Debug)]
+pub enum AdminToken {
+    /// A live admin token exists, or the operator's token is stored already.
+    Present,
+    /// The operator's token (ENACT_HUB_ADMIN_TOKEN) was stored; its prefix.
+    StoredFromOperator(String),
+    /// A new token was generated: show its secret once.
+    Generated(String),
+}
+
+/// Makes sure an admin can reach the API: the operator's chosen token when given (stored
+/// hashed on first sight), otherwise a generated one when no live admin token exists.
+pub async fn ensure_admin_token(hub: &Hub, operator: Option<&str>) -> Result<AdminToken, AppError> {
+    let mut tx = hub.begin().await?;
+    let (token, generated) = match operator {
+        Some(text) => {
+            let token = NewToken::from_operator(text)
+                .map_err(|e| AppError::BadRequest(format!("ENACT_HUB_ADMIN_TOKEN: {e}")))?;
+            if store::accounts::token_hash_exists(&mut tx, &token.hash).await? {
+                return Ok(AdminToken::Present);
+            }
+            (token, false)
+        }
+        None if store::accounts::has_admin_token(&mut tx).await? => {
+            return Ok(AdminToken::Present);
+        }
+        None => (NewToken::generate(), true),
+    };
+    let account = ensure_account(&mut tx, "admin", Role::Admin).await?;
+    store::accounts::insert_token(&mut tx, account, Role::Admin, &token, None, None).await?;
+    tx.commit().await?;
+    Ok(if generated {
+        AdminToken::Generated(token.token)
+    } else {
+        AdminToken::StoredFromOperator(token.prefix)
+    })
+}
