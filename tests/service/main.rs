@@ -5,6 +5,7 @@ mod admin_tokens;
 mod agreement;
 mod annotate;
 mod api;
+mod app_layer;
 mod archive;
 mod browser;
 mod cli;

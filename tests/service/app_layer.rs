@@ -1,0 +1,167 @@
+//! What the application layer promises both adapters: one naming rule for the web and the
+//! command line, stored scores read back typed (and never read as zero when unreadable), and
+//! every refusal of a JSON route as the JSON error body.
+
+use enact_hub::app::{self, AppError, Hub};
+use enact_hub::core::credentials::Role;
+use serde_json::{Value, json};
+
+use crate::helpers::*;
+
+/// Posts the compact answers of every record (the ground truth, so TA is 1) and returns the
+/// new submission's id.
+async fn submit_ground_truth(server: &TestServer, token: &str, records: &[Value]) -> i64 {
+    let body: String = records
+        .iter()
+        .map(|r| format!("{}\n", json!({"id": r["id"], "answer": r["gt_answer"]})))
+        .collect();
+    let response = server
+        .client
+        .post(server.url("/api/v1/datasets/mini/submissions?model=oracle"))
+        .bearer_auth(token)
+        .body(body)
+        .send()
+        .await
+        .expect("request");
+    assert_eq!(response.status(), 201);
+    let created: Value = response.json().await.expect("json");
+    created["id"].as_i64().expect("id")
+}
+
+#[tokio::test]
+async fn stored_scores_come_back_typed_and_an_unreadable_one_names_its_submission() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let id = submit_ground_truth(&server, &token, &records).await;
+
+    let hub = Hub::from(server.pool.clone());
+    let (_, rows) = app::leaderboard::of(&hub, "mini")
+        .await
+        .expect("leaderboard");
+    assert_eq!(rows.len(), 1);
+    assert_eq!(rows[0].submission, Some(id));
+    assert_eq!(rows[0].overall.task_accuracy, Some(1.0));
+    assert_eq!(rows[0].overall.count, records.len());
+
+    // A score this version cannot read is an error about that submission, not a row of zeros.
+    sqlx::query("UPDATE submissions SET scores = '{\"report\": {}}' WHERE id = ?")
+        .bind(id)
+        .execute(&server.pool)
+        .await
+        .expect("corrupt the stored scores");
+    let Err(AppError::Internal(e)) = app::leaderboard::of(&hub, "mini").await else {
+        panic!("an unreadable score must fail the leaderboard");
+    };
+    let message = format!("{e:#}");
+    assert!(message.contains(&format!("submission {id}")), "{message}");
+    assert!(message.contains("scores"), "{message}");
+    let response = server.get("/api/v1/datasets/mini/leaderboard").await;
+    assert_eq!(response.status(), 500);
+    let body: Value = response.json().await.expect("json error");
+    assert_eq!(body["error"], "internal error", "details stay in the log");
+}
+
+#[tokio::test]
+async fn json_routes_refuse_bad_bodies_with_the_json_error_body() {
+    let (server, _) = spawn_app_with_release().await;
+    let (_, admin) = api_token(&server.pool, "root", Role::Admin, None, None).await;
+    let send = |body: &'static str, content_type: &'static str| {
+        server
+            .client
+            .post(server.url("/api/v1/admin/tokens"))
+            .bearer_auth(&admin)
+            .header("content-type", content_type)
+            .body(body)
+            .send()
+    };
+    for (body, content_type, status, says) in [
+        ("{not json", "application/json", 400, "not valid JSON"),
+        ("{\"name\": 7}", "application/json", 422, "does not fit"),
+        (
+            "{\"name\": \"a\", \"colour\": 1}",
+            "application/json",
+            422,
+            "colour",
+        ),
+        (
+            "name=a",
+            "application/x-www-form-urlencoded",
+            415,
+            "application/json",
+        ),
+    ] {
+        let response = send(body, content_type).await.expect("request");
+        assert_eq!(response.status(), status, "{body}");
+        assert_eq!(
+            response.headers()["content-type"],
+            "application/json",
+            "{body}"
+        );
+        let error: Value = response.json().await.expect("a JSON error body");
+        let message = error["error"].as_str().expect("an error message");
+        assert!(message.contains(says), "{body}: {message}");
+    }
+    let response = server
+        .client
+        .post(server.url("/api/v1/datasets/mini/submissions?model=m"))
+        .bearer_auth(&admin)
+        .header("idempotency-key", "")
+        .body("")
+        .send()
+        .await
+        .expect("request");
+    assert_eq!(response.status(), 400);
+    let error: Value = response.json().await.expect("json");
+    assert!(
+        error["error"]
+            .as_str()
+            .is_some_and(|m| m.contains("Idempotency-Key")),
+        "{error}"
+    );
+}
+
+#[tokio::test]
+async fn the_web_and_the_command_line_share_one_naming_rule() {
+    let (server, _) = spawn_app_with_release().await;
+    let (_, admin) = api_token(&server.pool, "root", Role::Admin, None, None).await;
+    let long = "x".repeat(101);
+    let response = server
+        .client
+        .post(server.url("/api/v1/admin/tokens"))
+        .bearer_auth(&admin)
+        .json(&json!({"name": long}))
+        .send()
+        .await
+        .expect("request");
+    assert_eq!(response.status(), 400);
+    let error: Value = response.json().await.expect("json");
+    let web = error["error"].as_str().expect("message").to_owned();
+
+    let db = server.db_path();
+    let output = enact_hub()
+        .args(["token", "create", "--name", &long, "--db"])
+        .arg(&db)
+        .output()
+        .expect("run enact-hub");
+    assert!(!output.status.success());
+    let cli = String::from_utf8_lossy(&output.stderr);
+    assert!(cli.contains(&web), "the CLI says {cli:?}, the API {web:?}");
+
+    // Annotator names: the same rule from both sides too.
+    let output = enact_hub()
+        .args(["annotator", "create", "--name", "two words", "--db"])
+        .arg(&db)
+        .output()
+        .expect("run enact-hub");
+    assert!(!output.status.success());
+    let cli = String::from_utf8_lossy(&output.stderr);
+    let hub = Hub::from(server.pool.clone());
+    let Err(AppError::BadRequest(rule)) = app::annotators::create(&hub, "two words", false).await
+    else {
+        panic!("a name with a space is refused");
+    };
+    assert!(
+        cli.contains(&rule),
+        "the CLI says {cli:?}, the use case {rule:?}"
+    );
+}
