@@ -236,23 +236,34 @@ pub async fn answer(
             empty.join(", ")
         )));
     };
+    finish(hub, session, &item, Some(draft), Outcome::Answered(answer)).await
+}
+
+/// Records a finished item with its telemetry and drops its draft, in one transaction; `save`
+/// is written first, so the telemetry counts its last moves. 409 if it was finished meanwhile.
+async fn finish(
+    hub: &Hub,
+    session: &Session,
+    item: &StoredItem,
+    save: Option<&Draft>,
+    outcome: Outcome,
+) -> Result<(), AppError> {
     let now = now_ms();
     let mut tx = hub.begin().await?;
-    store::annotations::save_draft(&mut tx, session.annotator, item.rowid, draft, now).await?;
-    let stored = store::annotations::draft(&mut tx, session.annotator, item.rowid)
-        .await?
-        .ok_or_else(|| AppError::internal("draft missing after save"))?;
-    let finished = store::annotations::finish(
-        &mut tx,
-        session.annotator,
-        item.rowid,
-        &Outcome::Answered(answer),
-        &Telemetry::of(&stored, now),
-    )
-    .await?;
+    if let Some(draft) = save {
+        store::annotations::save_draft(&mut tx, session.annotator, item.rowid, draft, now).await?;
+    }
+    let stored = store::annotations::draft(&mut tx, session.annotator, item.rowid).await?;
+    let telemetry = stored
+        .as_ref()
+        .map_or_else(Telemetry::none, |d| Telemetry::of(d, now));
+    let finished =
+        store::annotations::finish(&mut tx, session.annotator, item.rowid, &outcome, &telemetry)
+            .await?;
     if !finished {
         return Err(AppError::Conflict(format!(
-            "item '{item_id}' is already finished"
+            "item '{}' is already finished",
+            item.summary.item_id
         )));
     }
     tx.commit().await?;
@@ -291,17 +302,7 @@ pub async fn skip(
             )));
         }
     };
-    let now = now_ms();
-    let mut tx = hub.begin().await?;
-    let stored = store::annotations::draft(&mut tx, session.annotator, item.rowid).await?;
-    let telemetry = stored
-        .as_ref()
-        .map_or_else(Telemetry::none, |d| Telemetry::of(d, now));
-    store::annotations::finish(&mut tx, session.annotator, item.rowid, &outcome, &telemetry)
-        .await?;
-    tx.commit().await?;
-    hub.standings.forget(session.annotator, item.rowid);
-    Ok(())
+    finish(hub, session, &item, None, outcome).await
 }
 
 /// The annotator's own finished item: their answer and telemetry, never a score.

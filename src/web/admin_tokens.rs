@@ -10,6 +10,7 @@ use axum::response::{Html, IntoResponse, Response};
 use axum::routing::{get, post};
 use serde::Deserialize;
 
+use super::admin::require_admin;
 use super::error::PageError;
 use super::session::{Admin, Protected};
 use super::submissions::parse_role;
@@ -58,17 +59,6 @@ async fn tokens_page(
     Admin(session): Admin,
 ) -> Result<Response, PageError> {
     render(&state, session, None, None).await
-}
-
-fn require_admin(session: &Session) -> Result<(), AppError> {
-    if session.is_admin {
-        Ok(())
-    } else {
-        Err(AppError::Forbidden(format!(
-            "only admins may manage API tokens; '{}' is an annotator",
-            session.name
-        )))
-    }
 }
 
 #[derive(Deserialize)]

@@ -228,18 +228,7 @@ async fn report_bundle(
 /// `enact-hub-report-{dataset}-{first 12 hex digits of its hash}`, with anything outside
 /// `[A-Za-z0-9._-]` in the name replaced, so it is a safe file name and header value.
 pub fn bundle_folder(report: &AgreementReport) -> String {
-    let name: String = report
-        .stamp
-        .dataset
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
+    let name = super::file_name_safe(&report.stamp.dataset);
     let hash = report.stamp.dataset_hash.get(..12).unwrap_or("");
     format!("enact-hub-report-{name}-{hash}")
 }

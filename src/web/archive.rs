@@ -35,17 +35,7 @@ pub fn routes() -> Vec<ApiRoute> {
 
 /// A name safe inside a quoted `Content-Disposition` filename.
 fn archive_file_name(dataset: &str) -> String {
-    let stem: String = dataset
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    format!("{stem}.tar")
+    format!("{}.tar", super::file_name_safe(dataset))
 }
 
 async fn download(

@@ -117,6 +117,20 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes
 }
 
+/// `text` with anything outside `[A-Za-z0-9._-]` replaced by `_`: safe as a file name and
+/// inside a quoted `Content-Disposition` header.
+fn file_name_safe(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
 /// The whole application with its middleware.
 pub fn router(state: AppState, config: &WebConfig) -> Router {
     let trace = TraceLayer::new_for_http().make_span_with(|request: &Request| {
