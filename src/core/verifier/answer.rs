@@ -6,9 +6,8 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use crate::core::verifier::pyint::PyInt;
-use crate::core::verifier::pyjson::{PY_INT_MAX_STR_DIGITS, PyValue};
+use crate::core::verifier::pyjson::{PY_INT_MAX_STR_DIGITS, PyValue, small_labels};
 use crate::core::verifier::unicode::{is_py_space, py_digit_value};
-use crate::core::verifier::verify::small_labels;
 
 pub use crate::core::dataset::{Direction, StepLength};
 

@@ -727,6 +727,21 @@ impl Parser<'_> {
     }
 }
 
+/// The labels as `i64` when every one is an int or bool well inside the `i64` range; the
+/// verifier then runs on machine integers, with the same results as on Python values.
+pub(crate) fn small_labels(labels: &[PyValue]) -> Option<Vec<i64>> {
+    labels
+        .iter()
+        .map(|label| match label {
+            PyValue::Bool(b) => Some(i64::from(*b)),
+            PyValue::Int(i) => i
+                .to_i64()
+                .filter(|v| *v > i64::MIN / 2 && *v < i64::MAX / 2),
+            _ => None,
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

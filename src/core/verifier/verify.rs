@@ -11,9 +11,10 @@ use std::cmp::Ordering;
 
 use serde::{Deserialize, Serialize};
 
-use crate::core::verifier::answer::{Direction, ParsedAnswer, Permutation};
+use crate::core::dataset::Direction;
+use crate::core::verifier::answer::{ParsedAnswer, Permutation};
 use crate::core::verifier::pyint::PyInt;
-use crate::core::verifier::pyjson::{Number, PyValue};
+use crate::core::verifier::pyjson::{Number, PyValue, small_labels};
 use crate::core::verifier::signatures::{ItemSignatures, PairLookup, SetId, View};
 
 /// ENACT's pairwise accuracy, keeping the Python type it has in ENACT's output.
@@ -160,21 +161,6 @@ impl<'a> GroundTruthView<'a> {
     pub fn is_empty(&self) -> bool {
         self.items.is_empty()
     }
-}
-
-/// The labels as `i64` when every one is an int or bool well inside the `i64` range; the
-/// verifier then runs on machine integers, with the same results as on Python values.
-pub(crate) fn small_labels(labels: &[PyValue]) -> Option<Vec<i64>> {
-    labels
-        .iter()
-        .map(|label| match label {
-            PyValue::Bool(b) => Some(i64::from(*b)),
-            PyValue::Int(i) => i
-                .to_i64()
-                .filter(|v| *v > i64::MIN / 2 && *v < i64::MAX / 2),
-            _ => None,
-        })
-        .collect()
 }
 
 /// Scores `answer` for a dataset item whose ground truth is a valid permutation, exactly as
