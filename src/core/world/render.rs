@@ -9,7 +9,7 @@ use image::{Rgb, RgbImage};
 
 use crate::core::scene_graph::record::Visibility;
 use crate::core::world::state::{Hand, Relation, WorldState};
-use crate::core::world::things::{self, CATALOGUE, Look, Room, ThingId};
+use crate::core::world::things::{self, CATALOGUE, Look, Room, Thing, ThingId};
 
 /// The camera sensor whose visibility ENACT reads.
 pub const SENSOR: &str = "external_sensor1";
@@ -639,212 +639,29 @@ fn project_rect(
 
 fn draw_thing(canvas: &mut Canvas, scene: &Scene, thing: ThingId, anchor: Anchor) {
     let spec = &CATALOGUE[thing];
-    let state = scene.state;
-    let cam = &scene.camera;
-    let owner = owner_of(thing);
-    let water = owner_of(things::WATER);
-    let water_colour = CATALOGUE[things::WATER].colour;
-    let col = spec.colour;
-    let dark = shade(col, 0.55);
+    let p = Paint {
+        scene,
+        thing,
+        spec,
+        owner: owner_of(thing),
+        col: spec.colour,
+        dark: shade(spec.colour, 0.55),
+        water: owner_of(things::WATER),
+        water_colour: CATALOGUE[things::WATER].colour,
+    };
     if let Some(at) = spec.at {
-        let [w, h, d] = spec.size;
         match spec.look {
-            Look::Counter => {
-                draw_box(canvas, cam, at, spec.size, col, owner);
-                for i in 0..4 {
-                    let x = at[0] + w * (i as f32 + 0.5) / 4.0;
-                    if let Some((u0, v0, u1, v1)) =
-                        project_rect(cam, x - 0.2, at[1] + 0.1, x + 0.2, at[1] + 0.75, at[2])
-                    {
-                        canvas.rect(u0, v0, u1, v1, shade(col, 0.92), owner);
-                        canvas.rect(
-                            u0,
-                            v0 + (v1 - v0) * 0.1,
-                            u1,
-                            v0 + (v1 - v0) * 0.14,
-                            dark,
-                            owner,
-                        );
-                    }
-                }
-            }
-            Look::Cabinet => {
-                if anchor.key > at[2] {
-                    // The body first; the contents and then the door are painted later.
-                    draw_box(canvas, cam, at, spec.size, col, owner);
-                    if let Some((u0, v0, u1, v1)) = project_rect(
-                        cam,
-                        at[0] + 0.03,
-                        at[1] + 0.03,
-                        at[0] + w - 0.03,
-                        at[1] + h - 0.03,
-                        at[2],
-                    ) {
-                        canvas.rect(u0, v0, u1, v1, [60, 42, 30], owner);
-                        let mid = (v0 + v1) / 2.0;
-                        canvas.rect(u0, mid - 2.0, u1, mid + 2.0, shade(col, 0.8), owner);
-                    }
-                } else if state.is_open(thing) {
-                    // Swung 100 degrees about the left hinge, towards the camera.
-                    let (dx, dz) = (w * -0.1736, -w * 0.9848);
-                    let pts: Vec<(f32, f32)> = [
-                        [at[0], at[1], at[2]],
-                        [at[0] + dx, at[1], at[2] + dz],
-                        [at[0] + dx, at[1] + h, at[2] + dz],
-                        [at[0], at[1] + h, at[2]],
-                    ]
-                    .iter()
-                    .filter_map(|p| cam.project(*p).map(|(u, v, _)| (u, v)))
-                    .collect();
-                    if pts.len() == 4 {
-                        canvas.polygon(&pts, shade(col, 0.85), owner);
-                    }
-                } else if let Some((u0, v0, u1, v1)) =
-                    project_rect(cam, at[0], at[1], at[0] + w, at[1] + h, at[2])
-                {
-                    canvas.rect(u0, v0, u1, v1, col, owner);
-                    canvas.rect(
-                        u0 + 3.0,
-                        v0 + 3.0,
-                        u1 - 3.0,
-                        v1 - 3.0,
-                        shade(col, 1.1),
-                        owner,
-                    );
-                    let knob = (u1 - (u1 - u0) * 0.1, (v0 + v1) / 2.0);
-                    canvas.ellipse(knob.0, knob.1, 4.0, 4.0, [230, 200, 120], owner);
-                }
-            }
-            Look::Stove => {
-                draw_box(canvas, cam, at, spec.size, col, owner);
-                let on = state.is_on(thing);
-                for (i, bx) in [0.25f32, 0.75].iter().enumerate() {
-                    if let Some((u, v, s)) =
-                        cam.project([at[0] + w * bx, at[1] + h, at[2] + d * 0.5])
-                    {
-                        let hot = on && i == 0;
-                        canvas.ellipse(u, v, 0.14 * s, 0.05 * s, [30, 30, 30], owner);
-                        if hot {
-                            canvas.ellipse(u, v, 0.12 * s, 0.04 * s, [255, 70, 20], owner);
-                            canvas.ellipse(u, v, 0.06 * s, 0.02 * s, [255, 200, 60], owner);
-                        } else {
-                            canvas.ellipse(u, v, 0.09 * s, 0.03 * s, [70, 70, 72], owner);
-                        }
-                    }
-                }
-                if let Some((u0, v0, u1, v1)) = project_rect(
-                    cam,
-                    at[0] + 0.08,
-                    at[1] + 0.1,
-                    at[0] + w - 0.08,
-                    at[1] + 0.6,
-                    at[2],
-                ) {
-                    canvas.rect(u0, v0, u1, v1, [40, 40, 46], owner);
-                }
-                for k in 0..3 {
-                    if let Some((u, v, s)) =
-                        cam.project([at[0] + w * (0.25 + 0.25 * k as f32), at[1] + 0.78, at[2]])
-                    {
-                        let knob = if on && k == 0 {
-                            [255, 90, 30]
-                        } else {
-                            [60, 60, 60]
-                        };
-                        canvas.ellipse(u, v, 0.035 * s, 0.035 * s, knob, owner);
-                    }
-                }
-            }
-            Look::Sofa => {
-                draw_box(
-                    canvas,
-                    cam,
-                    [at[0], at[1] + 0.45, at[2] + d - 0.2],
-                    [w, h - 0.45, 0.2],
-                    shade(col, 0.9),
-                    owner,
-                );
-                draw_box(canvas, cam, at, [w, 0.45, d], col, owner);
-                draw_box(
-                    canvas,
-                    cam,
-                    [at[0] - 0.12, at[1], at[2]],
-                    [0.12, 0.62, d],
-                    shade(col, 0.8),
-                    owner,
-                );
-                draw_box(
-                    canvas,
-                    cam,
-                    [at[0] + w, at[1], at[2]],
-                    [0.12, 0.62, d],
-                    shade(col, 0.8),
-                    owner,
-                );
-            }
-            Look::CoffeeTable => {
-                for (lx, lz) in [
-                    (0.05, 0.05),
-                    (w - 0.1, 0.05),
-                    (0.05, d - 0.1),
-                    (w - 0.1, d - 0.1),
-                ] {
-                    draw_box(
-                        canvas,
-                        cam,
-                        [at[0] + lx, 0.0, at[2] + lz],
-                        [0.05, h - 0.05, 0.05],
-                        dark,
-                        owner,
-                    );
-                }
-                draw_box(
-                    canvas,
-                    cam,
-                    [at[0], h - 0.06, at[2]],
-                    [w, 0.06, d],
-                    col,
-                    owner,
-                );
-            }
-            Look::Lamp => {
-                let cx = at[0] + w / 2.0;
-                let cz = at[2] + d / 2.0;
-                let on = state.is_on(thing);
-                if on && let Some((u, v, s)) = cam.project([cx, h - 0.12, cz]) {
-                    canvas.ellipse(u, v, 0.55 * s, 0.5 * s, [250, 240, 170], owner);
-                    canvas.ellipse(u, v, 0.38 * s, 0.34 * s, [255, 248, 200], owner);
-                }
-                if let Some((u, v, s)) = cam.project([cx, 0.0, cz]) {
-                    canvas.ellipse(u, v, 0.16 * s, 0.05 * s, dark, owner);
-                }
-                if let (Some(a), Some(b)) =
-                    (cam.project([cx, 0.0, cz]), cam.project([cx, h - 0.25, cz]))
-                {
-                    canvas.line((a.0, a.1), (b.0, b.1), 0.035 * a.2, dark, owner);
-                }
-                if let (Some((u0, v0, s)), Some((_, v1, _))) =
-                    (cam.project([cx, h - 0.3, cz]), cam.project([cx, h, cz]))
-                {
-                    let shade_colour = if on { [255, 226, 90] } else { [236, 228, 206] };
-                    canvas.polygon(
-                        &[
-                            (u0 - 0.2 * s, v0),
-                            (u0 + 0.2 * s, v0),
-                            (u0 + 0.12 * s, v1),
-                            (u0 - 0.12 * s, v1),
-                        ],
-                        shade_colour,
-                        owner,
-                    );
-                }
-            }
-            _ => draw_box(canvas, cam, at, spec.size, col, owner),
+            Look::Counter => draw_counter(canvas, &p, at),
+            Look::Cabinet => draw_cabinet(canvas, &p, at, anchor),
+            Look::Stove => draw_stove(canvas, &p, at),
+            Look::Sofa => draw_sofa(canvas, &p, at),
+            Look::CoffeeTable => draw_coffee_table(canvas, &p, at),
+            Look::Lamp => draw_lamp(canvas, &p, at),
+            _ => draw_box(canvas, &scene.camera, at, spec.size, p.col, p.owner),
         }
         return;
     }
-
-    let Some((u, v, mut s)) = cam.project(anchor.at) else {
+    let Some((u, v, mut s)) = scene.camera.project(anchor.at) else {
         return;
     };
     let [w0, h0, _] = spec.size;
@@ -852,367 +669,717 @@ fn draw_thing(canvas: &mut Canvas, scene: &Scene, thing: ThingId, anchor: Anchor
         // Carried things are drawn at a legible size rather than their true one up close.
         s = s.min(canvas.size as f32 * 0.3 / w0.max(0.05));
     }
-    let (w, h) = (w0 * s, h0 * s);
-    let outline = |c: &mut Canvas, pts: &[(f32, f32)], fill: [u8; 3]| {
-        let cx = pts.iter().map(|p| p.0).sum::<f32>() / pts.len() as f32;
-        let cy = pts.iter().map(|p| p.1).sum::<f32>() / pts.len() as f32;
-        let grown: Vec<(f32, f32)> = pts
-            .iter()
-            .map(|&(x, y)| {
-                let (dx, dy) = (x - cx, y - cy);
-                let n = (dx * dx + dy * dy).sqrt().max(1e-3);
-                (x + dx / n * 1.5, y + dy / n * 1.5)
-            })
-            .collect();
-        c.polygon(&grown, shade(fill, 0.45), owner);
-        c.polygon(pts, fill, owner);
+    let at = OnScreen {
+        u,
+        v,
+        w: w0 * s,
+        h: h0 * s,
+        held: anchor.held,
     };
     match spec.look {
-        Look::Plate => {
-            canvas.ellipse(
-                u,
-                v - h / 2.0,
-                w / 2.0 + 1.5,
-                (w * 0.16).max(h) + 1.5,
-                [120, 120, 120],
-                owner,
-            );
-            canvas.ellipse(u, v - h / 2.0, w / 2.0, (w * 0.16).max(h), col, owner);
-            canvas.ellipse(
-                u,
-                v - h / 2.0,
-                w * 0.32,
-                (w * 0.1).max(h * 0.6),
-                [232, 232, 226],
+        Look::Plate => draw_plate(canvas, &p, &at),
+        Look::Bowl => draw_bowl(canvas, &p, &at),
+        Look::Mug => draw_mug(canvas, &p, &at),
+        Look::Apple => draw_apple(canvas, &p, &at),
+        Look::HalfApple => draw_half_apple(canvas, &p, &at),
+        Look::Board => draw_board(canvas, &p, &at),
+        Look::Knife => draw_knife(canvas, &p, &at),
+        Look::Pan => draw_pan(canvas, &p, &at),
+        Look::Bacon => draw_bacon(canvas, &p, &at),
+        Look::Kettle => draw_kettle(canvas, &p, &at),
+        Look::Cloth => draw_cloth(canvas, &p, &at),
+        Look::Book => draw_book(canvas, &p, &at),
+        Look::Remote => draw_remote(canvas, &p, &at),
+        Look::Basket => draw_basket(canvas, &p, &at),
+        _ => {}
+    }
+}
+
+/// What every drawing of one thing shares: the scene, the thing, its catalogue entry, the
+/// owner id its pixels are marked with, and its colours (water's too, for things that hold it).
+struct Paint<'a> {
+    scene: &'a Scene<'a>,
+    thing: ThingId,
+    spec: &'static Thing,
+    owner: u16,
+    col: [u8; 3],
+    dark: [u8; 3],
+    water: u16,
+    water_colour: [u8; 3],
+}
+
+/// Where a movable thing lands on screen: its anchor at (`u`, `v`), its width and height in
+/// pixels, and whether a hand holds it.
+#[derive(Clone, Copy)]
+struct OnScreen {
+    u: f32,
+    v: f32,
+    w: f32,
+    h: f32,
+    held: bool,
+}
+
+/// Fills `pts` with a darker rim 1.5 px wide, so small things stand out from what is behind.
+fn outline(owner: u16, c: &mut Canvas, pts: &[(f32, f32)], fill: [u8; 3]) {
+    let cx = pts.iter().map(|p| p.0).sum::<f32>() / pts.len() as f32;
+    let cy = pts.iter().map(|p| p.1).sum::<f32>() / pts.len() as f32;
+    let grown: Vec<(f32, f32)> = pts
+        .iter()
+        .map(|&(x, y)| {
+            let (dx, dy) = (x - cx, y - cy);
+            let n = (dx * dx + dy * dy).sqrt().max(1e-3);
+            (x + dx / n * 1.5, y + dy / n * 1.5)
+        })
+        .collect();
+    c.polygon(&grown, shade(fill, 0.45), owner);
+    c.polygon(pts, fill, owner);
+}
+
+fn draw_counter(canvas: &mut Canvas, p: &Paint<'_>, at: [f32; 3]) {
+    let cam = &p.scene.camera;
+    let [w, _, _] = p.spec.size;
+    let spec = p.spec;
+    let owner = p.owner;
+    let col = p.col;
+    let dark = p.dark;
+    draw_box(canvas, cam, at, spec.size, col, owner);
+    for i in 0..4 {
+        let x = at[0] + w * (i as f32 + 0.5) / 4.0;
+        if let Some((u0, v0, u1, v1)) =
+            project_rect(cam, x - 0.2, at[1] + 0.1, x + 0.2, at[1] + 0.75, at[2])
+        {
+            canvas.rect(u0, v0, u1, v1, shade(col, 0.92), owner);
+            canvas.rect(
+                u0,
+                v0 + (v1 - v0) * 0.1,
+                u1,
+                v0 + (v1 - v0) * 0.14,
+                dark,
                 owner,
             );
         }
-        Look::Bowl => {
-            canvas.lower_half_ellipse(u, v - h, w / 2.0 + 1.5, h + 1.5, shade(col, 0.5), owner);
-            canvas.lower_half_ellipse(u, v - h, w / 2.0, h, col, owner);
-            canvas.ellipse(u, v - h, w / 2.0, w * 0.14, shade(col, 1.3), owner);
-            if state.has_water(thing) {
-                canvas.ellipse(u, v - h, w * 0.42, w * 0.1, water_colour, water);
+    }
+}
+
+fn draw_cabinet(canvas: &mut Canvas, p: &Paint<'_>, at: [f32; 3], anchor: Anchor) {
+    let cam = &p.scene.camera;
+    let state = p.scene.state;
+    let [w, h, _] = p.spec.size;
+    let spec = p.spec;
+    let owner = p.owner;
+    let col = p.col;
+    let thing = p.thing;
+    if anchor.key > at[2] {
+        // The body first; the contents and then the door are painted later.
+        draw_box(canvas, cam, at, spec.size, col, owner);
+        if let Some((u0, v0, u1, v1)) = project_rect(
+            cam,
+            at[0] + 0.03,
+            at[1] + 0.03,
+            at[0] + w - 0.03,
+            at[1] + h - 0.03,
+            at[2],
+        ) {
+            canvas.rect(u0, v0, u1, v1, [60, 42, 30], owner);
+            let mid = (v0 + v1) / 2.0;
+            canvas.rect(u0, mid - 2.0, u1, mid + 2.0, shade(col, 0.8), owner);
+        }
+    } else if state.is_open(thing) {
+        // Swung 100 degrees about the left hinge, towards the camera.
+        let (dx, dz) = (w * -0.1736, -w * 0.9848);
+        let pts: Vec<(f32, f32)> = [
+            [at[0], at[1], at[2]],
+            [at[0] + dx, at[1], at[2] + dz],
+            [at[0] + dx, at[1] + h, at[2] + dz],
+            [at[0], at[1] + h, at[2]],
+        ]
+        .iter()
+        .filter_map(|p| cam.project(*p).map(|(u, v, _)| (u, v)))
+        .collect();
+        if pts.len() == 4 {
+            canvas.polygon(&pts, shade(col, 0.85), owner);
+        }
+    } else if let Some((u0, v0, u1, v1)) =
+        project_rect(cam, at[0], at[1], at[0] + w, at[1] + h, at[2])
+    {
+        canvas.rect(u0, v0, u1, v1, col, owner);
+        canvas.rect(
+            u0 + 3.0,
+            v0 + 3.0,
+            u1 - 3.0,
+            v1 - 3.0,
+            shade(col, 1.1),
+            owner,
+        );
+        let knob = (u1 - (u1 - u0) * 0.1, (v0 + v1) / 2.0);
+        canvas.ellipse(knob.0, knob.1, 4.0, 4.0, [230, 200, 120], owner);
+    }
+}
+
+fn draw_stove(canvas: &mut Canvas, p: &Paint<'_>, at: [f32; 3]) {
+    let cam = &p.scene.camera;
+    let state = p.scene.state;
+    let [w, h, d] = p.spec.size;
+    let spec = p.spec;
+    let owner = p.owner;
+    let col = p.col;
+    let thing = p.thing;
+    draw_box(canvas, cam, at, spec.size, col, owner);
+    let on = state.is_on(thing);
+    for (i, bx) in [0.25f32, 0.75].iter().enumerate() {
+        if let Some((u, v, s)) = cam.project([at[0] + w * bx, at[1] + h, at[2] + d * 0.5]) {
+            let hot = on && i == 0;
+            canvas.ellipse(u, v, 0.14 * s, 0.05 * s, [30, 30, 30], owner);
+            if hot {
+                canvas.ellipse(u, v, 0.12 * s, 0.04 * s, [255, 70, 20], owner);
+                canvas.ellipse(u, v, 0.06 * s, 0.02 * s, [255, 200, 60], owner);
             } else {
-                canvas.ellipse(u, v - h, w * 0.42, w * 0.1, shade(col, 0.7), owner);
+                canvas.ellipse(u, v, 0.09 * s, 0.03 * s, [70, 70, 72], owner);
             }
         }
-        Look::Mug => {
-            canvas.ellipse(
-                u + w * 0.55,
-                v - h * 0.5,
-                w * 0.28,
-                h * 0.28,
-                shade(col, 0.6),
-                owner,
-            );
-            outline(
-                canvas,
-                &[
-                    (u - w / 2.0, v - h),
-                    (u + w / 2.0, v - h),
-                    (u + w / 2.0, v),
-                    (u - w / 2.0, v),
-                ],
-                col,
-            );
-            let rim = if state.has_water(thing) {
-                (water_colour, water)
+    }
+    if let Some((u0, v0, u1, v1)) = project_rect(
+        cam,
+        at[0] + 0.08,
+        at[1] + 0.1,
+        at[0] + w - 0.08,
+        at[1] + 0.6,
+        at[2],
+    ) {
+        canvas.rect(u0, v0, u1, v1, [40, 40, 46], owner);
+    }
+    for k in 0..3 {
+        if let Some((u, v, s)) =
+            cam.project([at[0] + w * (0.25 + 0.25 * k as f32), at[1] + 0.78, at[2]])
+        {
+            let knob = if on && k == 0 {
+                [255, 90, 30]
             } else {
-                ([80, 20, 20], owner)
+                [60, 60, 60]
             };
-            canvas.ellipse(u, v - h, w / 2.0, w * 0.16, rim.0, rim.1);
+            canvas.ellipse(u, v, 0.035 * s, 0.035 * s, knob, owner);
         }
-        Look::Apple => {
-            canvas.ellipse(
-                u,
-                v - w / 2.0,
-                w / 2.0 + 1.5,
-                w / 2.0 + 1.5,
-                [110, 10, 20],
-                owner,
-            );
-            canvas.ellipse(u, v - w / 2.0, w / 2.0, w / 2.0, col, owner);
-            canvas.line(
-                (u, v - w),
-                (u + w * 0.1, v - w * 1.25),
-                w * 0.08,
-                [90, 60, 30],
-                owner,
-            );
-            canvas.ellipse(
-                u + w * 0.22,
-                v - w * 1.12,
-                w * 0.16,
-                w * 0.08,
-                [60, 160, 60],
-                owner,
-            );
-        }
-        Look::HalfApple => {
-            canvas.lower_half_ellipse(u, v - h, w / 2.0 + 1.5, h + 1.5, [110, 10, 20], owner);
-            canvas.lower_half_ellipse(u, v - h, w / 2.0, h, col, owner);
-            canvas.ellipse(u, v - h, w / 2.0, w * 0.2, [250, 240, 200], owner);
-            canvas.ellipse(u, v - h, w * 0.08, w * 0.05, [120, 80, 40], owner);
-        }
-        Look::Board => {
-            let top = w * 0.18;
-            outline(
-                canvas,
-                &[
-                    (u - w / 2.0, v - h - top),
-                    (u + w / 2.0, v - h - top),
-                    (u + w / 2.0, v),
-                    (u - w / 2.0, v),
-                ],
-                col,
-            );
-            canvas.rect(u - w / 2.0, v - h, u + w / 2.0, v, shade(col, 0.8), owner);
-        }
-        Look::Knife => {
-            let blade = [
-                (u - w / 2.0, v - h),
-                (u + w * 0.1, v - h * 1.6),
-                (u + w * 0.1, v),
-                (u - w / 2.0, v),
+    }
+}
+
+fn draw_sofa(canvas: &mut Canvas, p: &Paint<'_>, at: [f32; 3]) {
+    let cam = &p.scene.camera;
+    let [w, h, d] = p.spec.size;
+    let owner = p.owner;
+    let col = p.col;
+    draw_box(
+        canvas,
+        cam,
+        [at[0], at[1] + 0.45, at[2] + d - 0.2],
+        [w, h - 0.45, 0.2],
+        shade(col, 0.9),
+        owner,
+    );
+    draw_box(canvas, cam, at, [w, 0.45, d], col, owner);
+    draw_box(
+        canvas,
+        cam,
+        [at[0] - 0.12, at[1], at[2]],
+        [0.12, 0.62, d],
+        shade(col, 0.8),
+        owner,
+    );
+    draw_box(
+        canvas,
+        cam,
+        [at[0] + w, at[1], at[2]],
+        [0.12, 0.62, d],
+        shade(col, 0.8),
+        owner,
+    );
+}
+
+fn draw_coffee_table(canvas: &mut Canvas, p: &Paint<'_>, at: [f32; 3]) {
+    let cam = &p.scene.camera;
+    let [w, h, d] = p.spec.size;
+    let owner = p.owner;
+    let col = p.col;
+    let dark = p.dark;
+    for (lx, lz) in [
+        (0.05, 0.05),
+        (w - 0.1, 0.05),
+        (0.05, d - 0.1),
+        (w - 0.1, d - 0.1),
+    ] {
+        draw_box(
+            canvas,
+            cam,
+            [at[0] + lx, 0.0, at[2] + lz],
+            [0.05, h - 0.05, 0.05],
+            dark,
+            owner,
+        );
+    }
+    draw_box(
+        canvas,
+        cam,
+        [at[0], h - 0.06, at[2]],
+        [w, 0.06, d],
+        col,
+        owner,
+    );
+}
+
+fn draw_lamp(canvas: &mut Canvas, p: &Paint<'_>, at: [f32; 3]) {
+    let cam = &p.scene.camera;
+    let state = p.scene.state;
+    let [w, h, d] = p.spec.size;
+    let owner = p.owner;
+    let dark = p.dark;
+    let thing = p.thing;
+    let cx = at[0] + w / 2.0;
+    let cz = at[2] + d / 2.0;
+    let on = state.is_on(thing);
+    if on && let Some((u, v, s)) = cam.project([cx, h - 0.12, cz]) {
+        canvas.ellipse(u, v, 0.55 * s, 0.5 * s, [250, 240, 170], owner);
+        canvas.ellipse(u, v, 0.38 * s, 0.34 * s, [255, 248, 200], owner);
+    }
+    if let Some((u, v, s)) = cam.project([cx, 0.0, cz]) {
+        canvas.ellipse(u, v, 0.16 * s, 0.05 * s, dark, owner);
+    }
+    if let (Some(a), Some(b)) = (cam.project([cx, 0.0, cz]), cam.project([cx, h - 0.25, cz])) {
+        canvas.line((a.0, a.1), (b.0, b.1), 0.035 * a.2, dark, owner);
+    }
+    if let (Some((u0, v0, s)), Some((_, v1, _))) =
+        (cam.project([cx, h - 0.3, cz]), cam.project([cx, h, cz]))
+    {
+        let shade_colour = if on { [255, 226, 90] } else { [236, 228, 206] };
+        canvas.polygon(
+            &[
+                (u0 - 0.2 * s, v0),
+                (u0 + 0.2 * s, v0),
+                (u0 + 0.12 * s, v1),
+                (u0 - 0.12 * s, v1),
+            ],
+            shade_colour,
+            owner,
+        );
+    }
+}
+
+fn draw_plate(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let OnScreen { u, v, w, h, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    canvas.ellipse(
+        u,
+        v - h / 2.0,
+        w / 2.0 + 1.5,
+        (w * 0.16).max(h) + 1.5,
+        [120, 120, 120],
+        owner,
+    );
+    canvas.ellipse(u, v - h / 2.0, w / 2.0, (w * 0.16).max(h), col, owner);
+    canvas.ellipse(
+        u,
+        v - h / 2.0,
+        w * 0.32,
+        (w * 0.1).max(h * 0.6),
+        [232, 232, 226],
+        owner,
+    );
+}
+
+fn draw_bowl(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let state = p.scene.state;
+    let OnScreen { u, v, w, h, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    let water = p.water;
+    let water_colour = p.water_colour;
+    let thing = p.thing;
+    canvas.lower_half_ellipse(u, v - h, w / 2.0 + 1.5, h + 1.5, shade(col, 0.5), owner);
+    canvas.lower_half_ellipse(u, v - h, w / 2.0, h, col, owner);
+    canvas.ellipse(u, v - h, w / 2.0, w * 0.14, shade(col, 1.3), owner);
+    if state.has_water(thing) {
+        canvas.ellipse(u, v - h, w * 0.42, w * 0.1, water_colour, water);
+    } else {
+        canvas.ellipse(u, v - h, w * 0.42, w * 0.1, shade(col, 0.7), owner);
+    }
+}
+
+fn draw_mug(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let state = p.scene.state;
+    let OnScreen { u, v, w, h, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    let water = p.water;
+    let water_colour = p.water_colour;
+    let thing = p.thing;
+    canvas.ellipse(
+        u + w * 0.55,
+        v - h * 0.5,
+        w * 0.28,
+        h * 0.28,
+        shade(col, 0.6),
+        owner,
+    );
+    outline(
+        owner,
+        canvas,
+        &[
+            (u - w / 2.0, v - h),
+            (u + w / 2.0, v - h),
+            (u + w / 2.0, v),
+            (u - w / 2.0, v),
+        ],
+        col,
+    );
+    let rim = if state.has_water(thing) {
+        (water_colour, water)
+    } else {
+        ([80, 20, 20], owner)
+    };
+    canvas.ellipse(u, v - h, w / 2.0, w * 0.16, rim.0, rim.1);
+}
+
+fn draw_apple(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let OnScreen { u, v, w, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    canvas.ellipse(
+        u,
+        v - w / 2.0,
+        w / 2.0 + 1.5,
+        w / 2.0 + 1.5,
+        [110, 10, 20],
+        owner,
+    );
+    canvas.ellipse(u, v - w / 2.0, w / 2.0, w / 2.0, col, owner);
+    canvas.line(
+        (u, v - w),
+        (u + w * 0.1, v - w * 1.25),
+        w * 0.08,
+        [90, 60, 30],
+        owner,
+    );
+    canvas.ellipse(
+        u + w * 0.22,
+        v - w * 1.12,
+        w * 0.16,
+        w * 0.08,
+        [60, 160, 60],
+        owner,
+    );
+}
+
+fn draw_half_apple(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let OnScreen { u, v, w, h, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    canvas.lower_half_ellipse(u, v - h, w / 2.0 + 1.5, h + 1.5, [110, 10, 20], owner);
+    canvas.lower_half_ellipse(u, v - h, w / 2.0, h, col, owner);
+    canvas.ellipse(u, v - h, w / 2.0, w * 0.2, [250, 240, 200], owner);
+    canvas.ellipse(u, v - h, w * 0.08, w * 0.05, [120, 80, 40], owner);
+}
+
+fn draw_board(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let OnScreen { u, v, w, h, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    let top = w * 0.18;
+    outline(
+        owner,
+        canvas,
+        &[
+            (u - w / 2.0, v - h - top),
+            (u + w / 2.0, v - h - top),
+            (u + w / 2.0, v),
+            (u - w / 2.0, v),
+        ],
+        col,
+    );
+    canvas.rect(u - w / 2.0, v - h, u + w / 2.0, v, shade(col, 0.8), owner);
+}
+
+fn draw_knife(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let OnScreen { u, v, w, h, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    let blade = [
+        (u - w / 2.0, v - h),
+        (u + w * 0.1, v - h * 1.6),
+        (u + w * 0.1, v),
+        (u - w / 2.0, v),
+    ];
+    outline(owner, canvas, &blade, col);
+    canvas.rect(
+        u + w * 0.1,
+        v - h * 1.2,
+        u + w / 2.0,
+        v,
+        [40, 30, 25],
+        owner,
+    );
+}
+
+fn draw_pan(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let OnScreen { u, v, w, h, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    canvas.line(
+        (u + w * 0.4, v - h),
+        (u + w * 0.95, v - h * 1.4),
+        h * 0.5 + 2.0,
+        [30, 30, 30],
+        owner,
+    );
+    canvas.ellipse(
+        u,
+        v - h / 2.0,
+        w / 2.0 + 1.5,
+        w * 0.17 + 1.5,
+        [20, 20, 20],
+        owner,
+    );
+    canvas.ellipse(u, v - h / 2.0, w / 2.0, w * 0.17, col, owner);
+    canvas.ellipse(u, v - h / 2.0, w * 0.4, w * 0.12, shade(col, 1.4), owner);
+}
+
+fn draw_bacon(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let state = p.scene.state;
+    let OnScreen { u, v, w, h, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    let thing = p.thing;
+    let c = if state.is_cooked(thing) {
+        [150, 75, 35]
+    } else {
+        col
+    };
+    let fat = if state.is_cooked(thing) {
+        [200, 150, 90]
+    } else {
+        [252, 225, 220]
+    };
+    for k in 0..2 {
+        let y = v - h * (1.0 + k as f32 * 1.3);
+        outline(
+            owner,
+            canvas,
+            &[
+                (u - w / 2.0, y - h),
+                (u + w / 2.0, y - h * 1.3),
+                (u + w / 2.0, y),
+                (u - w / 2.0, y + h * 0.3),
+            ],
+            c,
+        );
+        canvas.line(
+            (u - w / 2.0, y - h * 0.4),
+            (u + w / 2.0, y - h * 0.7),
+            (h * 0.25).max(1.0),
+            fat,
+            owner,
+        );
+    }
+}
+
+fn draw_kettle(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let state = p.scene.state;
+    let OnScreen { u, v, w, h, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    let water = p.water;
+    let water_colour = p.water_colour;
+    let thing = p.thing;
+    canvas.polygon(
+        &[
+            (u + w * 0.35, v - h * 0.5),
+            (u + w * 0.75, v - h * 0.95),
+            (u + w * 0.75, v - h * 0.85),
+            (u + w * 0.35, v - h * 0.3),
+        ],
+        shade(col, 0.7),
+        owner,
+    );
+    outline(
+        owner,
+        canvas,
+        &[
+            (u - w / 2.0, v),
+            (u + w / 2.0, v),
+            (u + w * 0.38, v - h * 0.85),
+            (u - w * 0.38, v - h * 0.85),
+        ],
+        col,
+    );
+    canvas.line(
+        (u - w * 0.3, v - h * 0.85),
+        (u, v - h * 1.1),
+        h * 0.07 + 1.0,
+        [40, 40, 40],
+        owner,
+    );
+    canvas.line(
+        (u, v - h * 1.1),
+        (u + w * 0.3, v - h * 0.85),
+        h * 0.07 + 1.0,
+        [40, 40, 40],
+        owner,
+    );
+    let window = (u - w * 0.2, v - h * 0.7, u + w * 0.1, v - h * 0.1);
+    canvas.rect(
+        window.0,
+        window.1,
+        window.2,
+        window.3,
+        [230, 240, 245],
+        owner,
+    );
+    if state.has_water(thing) {
+        canvas.rect(
+            window.0,
+            window.1 + (window.3 - window.1) * 0.35,
+            window.2,
+            window.3,
+            water_colour,
+            water,
+        );
+    }
+}
+
+fn draw_cloth(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let state = p.scene.state;
+    let OnScreen { u, v, w, h, held } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    let thing = p.thing;
+    let stripe = shade(col, 0.7);
+    if let Some(target) = state.covers(thing) {
+        if let Some((x0, y0, x1, y1)) = covered_box(p.scene, target) {
+            let (cw, ch) = (x1 - x0, y1 - y0);
+            let drape = [
+                (x0 - cw * 0.08, y0 - ch * 0.08),
+                (x1 + cw * 0.08, y0 - ch * 0.08),
+                (x1 + cw * 0.1, y0 + ch * 0.68),
+                (x0 - cw * 0.1, y0 + ch * 0.68),
             ];
-            outline(canvas, &blade, col);
-            canvas.rect(
-                u + w * 0.1,
-                v - h * 1.2,
-                u + w / 2.0,
-                v,
-                [40, 30, 25],
-                owner,
-            );
-        }
-        Look::Pan => {
-            canvas.line(
-                (u + w * 0.4, v - h),
-                (u + w * 0.95, v - h * 1.4),
-                h * 0.5 + 2.0,
-                [30, 30, 30],
-                owner,
-            );
-            canvas.ellipse(
-                u,
-                v - h / 2.0,
-                w / 2.0 + 1.5,
-                w * 0.17 + 1.5,
-                [20, 20, 20],
-                owner,
-            );
-            canvas.ellipse(u, v - h / 2.0, w / 2.0, w * 0.17, col, owner);
-            canvas.ellipse(u, v - h / 2.0, w * 0.4, w * 0.12, shade(col, 1.4), owner);
-        }
-        Look::Bacon => {
-            let c = if state.is_cooked(thing) {
-                [150, 75, 35]
-            } else {
-                col
-            };
-            let fat = if state.is_cooked(thing) {
-                [200, 150, 90]
-            } else {
-                [252, 225, 220]
-            };
-            for k in 0..2 {
-                let y = v - h * (1.0 + k as f32 * 1.3);
-                outline(
-                    canvas,
-                    &[
-                        (u - w / 2.0, y - h),
-                        (u + w / 2.0, y - h * 1.3),
-                        (u + w / 2.0, y),
-                        (u - w / 2.0, y + h * 0.3),
-                    ],
-                    c,
-                );
+            outline(owner, canvas, &drape, col);
+            for k in 1..4 {
+                let x = x0 + cw * k as f32 / 4.0;
                 canvas.line(
-                    (u - w / 2.0, y - h * 0.4),
-                    (u + w / 2.0, y - h * 0.7),
-                    (h * 0.25).max(1.0),
-                    fat,
-                    owner,
-                );
-            }
-        }
-        Look::Kettle => {
-            canvas.polygon(
-                &[
-                    (u + w * 0.35, v - h * 0.5),
-                    (u + w * 0.75, v - h * 0.95),
-                    (u + w * 0.75, v - h * 0.85),
-                    (u + w * 0.35, v - h * 0.3),
-                ],
-                shade(col, 0.7),
-                owner,
-            );
-            outline(
-                canvas,
-                &[
-                    (u - w / 2.0, v),
-                    (u + w / 2.0, v),
-                    (u + w * 0.38, v - h * 0.85),
-                    (u - w * 0.38, v - h * 0.85),
-                ],
-                col,
-            );
-            canvas.line(
-                (u - w * 0.3, v - h * 0.85),
-                (u, v - h * 1.1),
-                h * 0.07 + 1.0,
-                [40, 40, 40],
-                owner,
-            );
-            canvas.line(
-                (u, v - h * 1.1),
-                (u + w * 0.3, v - h * 0.85),
-                h * 0.07 + 1.0,
-                [40, 40, 40],
-                owner,
-            );
-            let window = (u - w * 0.2, v - h * 0.7, u + w * 0.1, v - h * 0.1);
-            canvas.rect(
-                window.0,
-                window.1,
-                window.2,
-                window.3,
-                [230, 240, 245],
-                owner,
-            );
-            if state.has_water(thing) {
-                canvas.rect(
-                    window.0,
-                    window.1 + (window.3 - window.1) * 0.35,
-                    window.2,
-                    window.3,
-                    water_colour,
-                    water,
-                );
-            }
-        }
-        Look::Cloth => {
-            let stripe = shade(col, 0.7);
-            if let Some(target) = state.covers(thing) {
-                if let Some((x0, y0, x1, y1)) = covered_box(scene, target) {
-                    let (cw, ch) = (x1 - x0, y1 - y0);
-                    let drape = [
-                        (x0 - cw * 0.08, y0 - ch * 0.08),
-                        (x1 + cw * 0.08, y0 - ch * 0.08),
-                        (x1 + cw * 0.1, y0 + ch * 0.68),
-                        (x0 - cw * 0.1, y0 + ch * 0.68),
-                    ];
-                    outline(canvas, &drape, col);
-                    for k in 1..4 {
-                        let x = x0 + cw * k as f32 / 4.0;
-                        canvas.line(
-                            (x, y0 - ch * 0.06),
-                            (x, y0 + ch * 0.66),
-                            (cw * 0.03).max(1.0),
-                            stripe,
-                            owner,
-                        );
-                    }
-                }
-            } else {
-                let fold = if anchor.held { w * 0.5 } else { w };
-                let hh = if anchor.held {
-                    fold * 0.6
-                } else {
-                    h + w * 0.12
-                };
-                outline(
-                    canvas,
-                    &[
-                        (u - fold / 2.0, v - hh),
-                        (u + fold / 2.0, v - hh),
-                        (u + fold / 2.0, v),
-                        (u - fold / 2.0, v),
-                    ],
-                    col,
-                );
-                canvas.line(
-                    (u - fold / 2.0, v - hh * 0.5),
-                    (u + fold / 2.0, v - hh * 0.5),
-                    (hh * 0.15).max(1.0),
+                    (x, y0 - ch * 0.06),
+                    (x, y0 + ch * 0.66),
+                    (cw * 0.03).max(1.0),
                     stripe,
                     owner,
                 );
             }
         }
-        Look::Book => {
-            outline(
-                canvas,
-                &[
-                    (u - w / 2.0, v - h - w * 0.15),
-                    (u + w / 2.0, v - h - w * 0.15),
-                    (u + w / 2.0, v),
-                    (u - w / 2.0, v),
-                ],
-                col,
-            );
-            canvas.rect(u - w / 2.0, v - h, u + w / 2.0, v, [240, 236, 220], owner);
-            canvas.rect(
-                u - w / 2.0,
-                v - h - w * 0.15,
-                u - w * 0.38,
-                v,
-                shade(col, 0.6),
-                owner,
-            );
-        }
-        Look::Remote => {
-            outline(
-                canvas,
-                &[
-                    (u - w / 2.0, v - h - w * 0.1),
-                    (u + w / 2.0, v - h - w * 0.1),
-                    (u + w / 2.0, v),
-                    (u - w / 2.0, v),
-                ],
-                col,
-            );
-            canvas.ellipse(u - w * 0.3, v - h, w * 0.05, w * 0.04, [220, 40, 40], owner);
-            canvas.ellipse(u, v - h, w * 0.05, w * 0.04, [60, 160, 220], owner);
-        }
-        Look::Basket => {
-            canvas.line(
-                (u - w * 0.35, v - h),
-                (u, v - h * 1.5),
-                w * 0.05 + 1.0,
-                dark,
-                owner,
-            );
-            canvas.line(
-                (u, v - h * 1.5),
-                (u + w * 0.35, v - h),
-                w * 0.05 + 1.0,
-                dark,
-                owner,
-            );
-            outline(
-                canvas,
-                &[
-                    (u - w / 2.0, v - h),
-                    (u + w / 2.0, v - h),
-                    (u + w * 0.4, v),
-                    (u - w * 0.4, v),
-                ],
-                col,
-            );
-            for k in 1..4 {
-                let y = v - h * k as f32 / 4.0;
-                canvas.line(
-                    (u - w * 0.45, y),
-                    (u + w * 0.45, y),
-                    (h * 0.04).max(1.0),
-                    dark,
-                    owner,
-                );
-            }
-        }
-        _ => {}
+    } else {
+        let fold = if held { w * 0.5 } else { w };
+        let hh = if held { fold * 0.6 } else { h + w * 0.12 };
+        outline(
+            owner,
+            canvas,
+            &[
+                (u - fold / 2.0, v - hh),
+                (u + fold / 2.0, v - hh),
+                (u + fold / 2.0, v),
+                (u - fold / 2.0, v),
+            ],
+            col,
+        );
+        canvas.line(
+            (u - fold / 2.0, v - hh * 0.5),
+            (u + fold / 2.0, v - hh * 0.5),
+            (hh * 0.15).max(1.0),
+            stripe,
+            owner,
+        );
+    }
+}
+
+fn draw_book(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let OnScreen { u, v, w, h, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    outline(
+        owner,
+        canvas,
+        &[
+            (u - w / 2.0, v - h - w * 0.15),
+            (u + w / 2.0, v - h - w * 0.15),
+            (u + w / 2.0, v),
+            (u - w / 2.0, v),
+        ],
+        col,
+    );
+    canvas.rect(u - w / 2.0, v - h, u + w / 2.0, v, [240, 236, 220], owner);
+    canvas.rect(
+        u - w / 2.0,
+        v - h - w * 0.15,
+        u - w * 0.38,
+        v,
+        shade(col, 0.6),
+        owner,
+    );
+}
+
+fn draw_remote(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let OnScreen { u, v, w, h, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    outline(
+        owner,
+        canvas,
+        &[
+            (u - w / 2.0, v - h - w * 0.1),
+            (u + w / 2.0, v - h - w * 0.1),
+            (u + w / 2.0, v),
+            (u - w / 2.0, v),
+        ],
+        col,
+    );
+    canvas.ellipse(u - w * 0.3, v - h, w * 0.05, w * 0.04, [220, 40, 40], owner);
+    canvas.ellipse(u, v - h, w * 0.05, w * 0.04, [60, 160, 220], owner);
+}
+
+fn draw_basket(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
+    let OnScreen { u, v, w, h, .. } = *at;
+    let owner = p.owner;
+    let col = p.col;
+    let dark = p.dark;
+    canvas.line(
+        (u - w * 0.35, v - h),
+        (u, v - h * 1.5),
+        w * 0.05 + 1.0,
+        dark,
+        owner,
+    );
+    canvas.line(
+        (u, v - h * 1.5),
+        (u + w * 0.35, v - h),
+        w * 0.05 + 1.0,
+        dark,
+        owner,
+    );
+    outline(
+        owner,
+        canvas,
+        &[
+            (u - w / 2.0, v - h),
+            (u + w / 2.0, v - h),
+            (u + w * 0.4, v),
+            (u - w * 0.4, v),
+        ],
+        col,
+    );
+    for k in 1..4 {
+        let y = v - h * k as f32 / 4.0;
+        canvas.line(
+            (u - w * 0.45, y),
+            (u + w * 0.45, y),
+            (h * 0.04).max(1.0),
+            dark,
+            owner,
+        );
     }
 }
 
