@@ -2,15 +2,11 @@
 
 use reqwest::StatusCode;
 
-use crate::annotate::{Browser, PASSWORD, annotator, hidden_csrf};
+use crate::annotate::{Browser, PASSWORD, annotator, hidden_csrf, logged_in_on};
 use crate::helpers::*;
 
 async fn logged_in(server: &TestServer, name: &str) -> (Browser, String) {
-    let mut browser = Browser::new(server);
-    let r = browser.login(name, PASSWORD).await;
-    assert_eq!(r.status(), StatusCode::SEE_OTHER, "login of {name}");
-    let csrf = browser.csrf("/admin/tokens").await;
-    (browser, csrf)
+    logged_in_on(server, name, "/admin/tokens").await
 }
 
 /// The secret between the `new-token` code tags of the result page.
@@ -20,23 +16,10 @@ fn shown_token(html: &str) -> String {
     html[start..end].to_owned()
 }
 
-fn compact_answers(records: &[serde_json::Value]) -> String {
-    records
-        .iter()
-        .map(|r| serde_json::json!({"id": r["id"], "answer": r["gt_answer"]}).to_string() + "\n")
-        .collect()
-}
-
 async fn submit(server: &TestServer, token: &str, body: String) -> StatusCode {
-    server
-        .client
-        .post(server.url("/api/v1/datasets/mini/submissions?model=m"))
-        .bearer_auth(token)
-        .body(body)
-        .send()
+    submit_to(server, "mini", "model=m", token, body)
         .await
-        .expect("POST submission")
-        .status()
+        .status
 }
 
 #[tokio::test]
@@ -76,7 +59,7 @@ async fn admins_create_tokens_that_work_and_revoke_them_at_once() {
     assert!(listing.contains("never"), "not used yet");
 
     assert_eq!(
-        submit(&server, &token, compact_answers(&records)).await,
+        submit(&server, &token, ground_truth_answers(&records)).await,
         StatusCode::CREATED
     );
     let (_, listing) = admin.text("/admin/tokens").await;
@@ -97,7 +80,7 @@ async fn admins_create_tokens_that_work_and_revoke_them_at_once() {
     assert_eq!(r.status(), StatusCode::OK);
     assert!(r.text().await.expect("body").contains("revoked"));
     assert_eq!(
-        submit(&server, &token, compact_answers(&records)).await,
+        submit(&server, &token, ground_truth_answers(&records)).await,
         StatusCode::UNAUTHORIZED
     );
     // Revoking twice says so.

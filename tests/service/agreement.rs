@@ -10,7 +10,7 @@ use enact_hub::core::verifier::Permutation;
 use enact_hub::store;
 use serde_json::Value;
 
-use crate::annotate::{Browser, PASSWORD, annotator};
+use crate::annotate::{Browser, annotator, logged_in_on};
 use crate::helpers::*;
 
 const TELEMETRY: Telemetry = Telemetry {
@@ -243,15 +243,7 @@ async fn agreement_without_overlapping_answers_says_so() {
 }
 
 async fn logged_in(server: &TestServer, name: &str) -> (Browser, String) {
-    let mut browser = Browser::new(server);
-    let r = browser.login(name, PASSWORD).await;
-    assert_eq!(
-        r.status(),
-        reqwest::StatusCode::SEE_OTHER,
-        "login of {name}"
-    );
-    let csrf = browser.csrf("/annotate").await;
-    (browser, csrf)
+    logged_in_on(server, name, "/annotate").await
 }
 
 async fn kinds(server: &TestServer) -> Vec<(i64, String, String)> {
@@ -523,18 +515,9 @@ async fn end_to_end_primary_split_protocol_answers_and_report() {
             format!("{}\n", serde_json::json!({"id": id, "answer": answer}))
         })
         .collect();
-    let r = server
-        .client
-        .post(server.url("/api/v1/datasets/mini/submissions?model=ascending"))
-        .bearer_auth(&token)
-        .body(body)
-        .send()
-        .await
-        .expect("submit");
-    assert_eq!(r.status(), 201);
-    let submission = r.json::<Value>().await.expect("json")["id"]
-        .as_i64()
-        .expect("id");
+    let reply = submit_to(&server, "mini", "model=ascending", &token, body).await;
+    assert_eq!(reply.status, 201, "{}", reply.text);
+    let submission = reply.id();
 
     // The pure core on exactly what was submitted.
     let mut items: Vec<AnnotatedOrdering> = item_ids
@@ -659,18 +642,9 @@ async fn end_to_end_primary_split_protocol_answers_and_report() {
             format!("{}\n", serde_json::json!({"id": id, "answer": answer}))
         })
         .collect();
-    let r = server
-        .client
-        .post(server.url("/api/v1/datasets/mini/submissions?model=oracle"))
-        .bearer_auth(&token)
-        .body(body)
-        .send()
-        .await
-        .expect("submit");
-    assert_eq!(r.status(), 201);
-    let oracle = r.json::<Value>().await.expect("json")["id"]
-        .as_i64()
-        .expect("id");
+    let reply = submit_to(&server, "mini", "model=oracle", &token, body).await;
+    assert_eq!(reply.status, 201, "{}", reply.text);
+    let oracle = reply.id();
     let (status, chosen) = admin_json(
         &mut admin,
         &format!("/admin/datasets/mini/report.json?bootstrap=0&a={submission}&b={oracle}"),

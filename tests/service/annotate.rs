@@ -162,11 +162,30 @@ pub async fn assign(server: &TestServer, annotator: i64, item_ids: &[&str]) {
 }
 
 async fn logged_in(server: &TestServer, name: &str) -> (Browser, String) {
+    logged_in_on(server, name, "/annotate").await
+}
+
+/// `name` logged in with the test password, and the CSRF token of `page`.
+pub async fn logged_in_on(server: &TestServer, name: &str, page: &str) -> (Browser, String) {
     let mut browser = Browser::new(server);
     let r = browser.login(name, PASSWORD).await;
     assert_eq!(r.status(), StatusCode::SEE_OTHER, "login of {name}");
-    let csrf = browser.csrf("/annotate").await;
+    let csrf = browser.csrf(page).await;
     (browser, csrf)
+}
+
+/// Annotator "alice", every item of `records` assigned to her, logged in: her browser, its
+/// CSRF token, and the item ids in order.
+async fn alice_with_every_item(
+    server: &TestServer,
+    records: &[Value],
+) -> (Browser, String, Vec<String>) {
+    let a = annotator(server, "alice", false).await;
+    let ids: Vec<String> = (0..records.len()).map(|i| id(records, i)).collect();
+    let refs: Vec<&str> = ids.iter().map(String::as_str).collect();
+    assign(server, a, &refs).await;
+    let (alice, csrf) = logged_in(server, "alice").await;
+    (alice, csrf, ids)
 }
 
 fn id(records: &[Value], i: usize) -> String {
@@ -366,11 +385,7 @@ async fn annotators_cannot_see_each_others_items_or_answers() {
 #[tokio::test]
 async fn no_annotator_response_contains_ground_truth_or_scores() {
     let (server, records) = spawn_app_with_release().await;
-    let a = annotator(&server, "alice", false).await;
-    let ids: Vec<String> = (0..records.len()).map(|i| id(&records, i)).collect();
-    let refs: Vec<&str> = ids.iter().map(String::as_str).collect();
-    assign(&server, a, &refs).await;
-    let (mut alice, csrf) = logged_in(&server, "alice").await;
+    let (mut alice, csrf, ids) = alice_with_every_item(&server, &records).await;
     let forbidden = [
         "gt_answer",
         "ground_truth",
@@ -496,11 +511,7 @@ async fn state_changing_requests_without_the_csrf_token_are_rejected() {
 #[tokio::test]
 async fn drafts_resume_submissions_are_checked_and_scored_for_the_human_row() {
     let (server, records) = spawn_app_with_release().await;
-    let a = annotator(&server, "alice", false).await;
-    let ids: Vec<String> = (0..records.len()).map(|i| id(&records, i)).collect();
-    let refs: Vec<&str> = ids.iter().map(String::as_str).collect();
-    assign(&server, a, &refs).await;
-    let (mut alice, csrf) = logged_in(&server, "alice").await;
+    let (mut alice, csrf, ids) = alice_with_every_item(&server, &records).await;
     let fwd3 = &ids[0]; // forward, L = 3, ground truth [2, 1]
     let counts = json!({"placements": 3, "swaps": 1, "clears": 1, "undos": 1});
 

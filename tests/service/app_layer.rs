@@ -4,28 +4,23 @@
 
 use enact_hub::app::{self, AppError, Hub};
 use enact_hub::core::credentials::Role;
+use reqwest::Method;
 use serde_json::{Value, json};
 
 use crate::helpers::*;
 
-/// Posts the compact answers of every record (the ground truth, so TA is 1) and returns the
-/// new submission's id.
+/// Posts the ground truth of every record (so TA is 1) and returns the new submission's id.
 async fn submit_ground_truth(server: &TestServer, token: &str, records: &[Value]) -> i64 {
-    let body: String = records
-        .iter()
-        .map(|r| format!("{}\n", json!({"id": r["id"], "answer": r["gt_answer"]})))
-        .collect();
-    let response = server
-        .client
-        .post(server.url("/api/v1/datasets/mini/submissions?model=oracle"))
-        .bearer_auth(token)
-        .body(body)
-        .send()
-        .await
-        .expect("request");
-    assert_eq!(response.status(), 201);
-    let created: Value = response.json().await.expect("json");
-    created["id"].as_i64().expect("id")
+    let reply = submit_to(
+        server,
+        "mini",
+        "model=oracle",
+        token,
+        ground_truth_answers(records),
+    )
+    .await;
+    assert_eq!(reply.status, 201, "{}", reply.text);
+    reply.id()
 }
 
 #[tokio::test]
@@ -65,15 +60,6 @@ async fn stored_scores_come_back_typed_and_an_unreadable_one_names_its_submissio
 async fn json_routes_refuse_bad_bodies_with_the_json_error_body() {
     let (server, _) = spawn_app_with_release().await;
     let (_, admin) = api_token(&server.pool, "root", Role::Admin, None, None).await;
-    let send = |body: &'static str, content_type: &'static str| {
-        server
-            .client
-            .post(server.url("/api/v1/admin/tokens"))
-            .bearer_auth(&admin)
-            .header("content-type", content_type)
-            .body(body)
-            .send()
-    };
     for (body, content_type, status, says) in [
         ("{not json", "application/json", 400, "not valid JSON"),
         ("{\"name\": 7}", "application/json", 422, "does not fit"),
@@ -90,34 +76,24 @@ async fn json_routes_refuse_bad_bodies_with_the_json_error_body() {
             "application/json",
         ),
     ] {
-        let response = send(body, content_type).await.expect("request");
-        assert_eq!(response.status(), status, "{body}");
-        assert_eq!(
-            response.headers()["content-type"],
-            "application/json",
-            "{body}"
-        );
-        let error: Value = response.json().await.expect("a JSON error body");
-        let message = error["error"].as_str().expect("an error message");
+        let reply = server
+            .call(Method::POST, "/api/v1/admin/tokens")
+            .bearer(&admin)
+            .header("content-type", content_type)
+            .body(body)
+            .expect(status)
+            .await;
+        assert_eq!(reply.headers["content-type"], "application/json", "{body}");
+        let message = reply.error();
         assert!(message.contains(says), "{body}: {message}");
     }
-    let response = server
-        .client
-        .post(server.url("/api/v1/datasets/mini/submissions?model=m"))
-        .bearer_auth(&admin)
+    let reply = server
+        .call(Method::POST, "/api/v1/datasets/mini/submissions?model=m")
+        .bearer(&admin)
         .header("idempotency-key", "")
-        .body("")
-        .send()
-        .await
-        .expect("request");
-    assert_eq!(response.status(), 400);
-    let error: Value = response.json().await.expect("json");
-    assert!(
-        error["error"]
-            .as_str()
-            .is_some_and(|m| m.contains("Idempotency-Key")),
-        "{error}"
-    );
+        .expect(400)
+        .await;
+    assert!(reply.error().contains("Idempotency-Key"), "{}", reply.text);
 }
 
 #[tokio::test]
@@ -125,17 +101,13 @@ async fn the_web_and_the_command_line_share_one_naming_rule() {
     let (server, _) = spawn_app_with_release().await;
     let (_, admin) = api_token(&server.pool, "root", Role::Admin, None, None).await;
     let long = "x".repeat(101);
-    let response = server
-        .client
-        .post(server.url("/api/v1/admin/tokens"))
-        .bearer_auth(&admin)
+    let web = server
+        .call(Method::POST, "/api/v1/admin/tokens")
+        .bearer(&admin)
         .json(&json!({"name": long}))
-        .send()
+        .expect(400)
         .await
-        .expect("request");
-    assert_eq!(response.status(), 400);
-    let error: Value = response.json().await.expect("json");
-    let web = error["error"].as_str().expect("message").to_owned();
+        .error();
 
     let db = server.db_path();
     let output = enact_hub()

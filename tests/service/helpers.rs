@@ -250,6 +250,127 @@ pub async fn spawn_app_with_release() -> (TestServer, Vec<Value>) {
     (server, records)
 }
 
+/// A request to the test server, built step by step and sent once.
+pub struct Call {
+    what: String,
+    request: reqwest::RequestBuilder,
+}
+
+/// A response read whole: status, headers and body.
+pub struct Reply {
+    pub status: reqwest::StatusCode,
+    pub headers: reqwest::header::HeaderMap,
+    pub text: String,
+}
+
+impl TestServer {
+    /// `method path`, relative to the server; add a token, headers and a body, then send.
+    pub fn call(&self, method: reqwest::Method, path: &str) -> Call {
+        Call {
+            what: format!("{method} {path}"),
+            request: self.client.request(method, self.url(path)),
+        }
+    }
+}
+
+impl Call {
+    pub fn bearer(self, token: &str) -> Call {
+        Call {
+            request: self.request.bearer_auth(token),
+            ..self
+        }
+    }
+
+    pub fn header(self, name: &str, value: &str) -> Call {
+        Call {
+            request: self.request.header(name, value),
+            ..self
+        }
+    }
+
+    pub fn json(self, body: &Value) -> Call {
+        Call {
+            request: self.request.json(body),
+            ..self
+        }
+    }
+
+    pub fn body(self, body: impl Into<reqwest::Body>) -> Call {
+        Call {
+            request: self.request.body(body),
+            ..self
+        }
+    }
+
+    pub async fn send(self) -> Reply {
+        let response = self
+            .request
+            .send()
+            .await
+            .unwrap_or_else(|e| panic!("{}: {e}", self.what));
+        Reply {
+            status: response.status(),
+            headers: response.headers().clone(),
+            text: response.text().await.unwrap_or_default(),
+        }
+    }
+
+    /// Sends and checks the status, naming the request and showing the body when it differs.
+    pub async fn expect(self, status: u16) -> Reply {
+        let what = self.what.clone();
+        let reply = self.send().await;
+        assert_eq!(reply.status, status, "{what}: {}", reply.text);
+        reply
+    }
+}
+
+impl Reply {
+    /// The body as JSON (`null` when it is not JSON).
+    pub fn json(&self) -> Value {
+        serde_json::from_str(&self.text).unwrap_or(Value::Null)
+    }
+
+    /// The `id` of the JSON body.
+    pub fn id(&self) -> i64 {
+        self.json()["id"].as_i64().expect("an id in the body")
+    }
+
+    /// The `error` message of a JSON error body.
+    pub fn error(&self) -> String {
+        self.json()["error"]
+            .as_str()
+            .unwrap_or_else(|| panic!("not an error body: {}", self.text))
+            .to_owned()
+    }
+}
+
+/// Posts a submission body to `dataset` as `token`; `query` carries the model and metadata.
+pub async fn submit_to(
+    server: &TestServer,
+    dataset: &str,
+    query: &str,
+    token: &str,
+    body: impl Into<reqwest::Body>,
+) -> Reply {
+    server
+        .call(
+            reqwest::Method::POST,
+            &format!("/api/v1/datasets/{dataset}/submissions?{query}"),
+        )
+        .bearer(token)
+        .body(body)
+        .send()
+        .await
+}
+
+/// Compact answers (`{"id", "answer"}` lines) equal to each record's ground truth.
+pub fn ground_truth_answers(records: &[Value]) -> String {
+    records
+        .iter()
+        .map(|r| json!({"id": r["id"], "answer": r["gt_answer"]}).to_string() + "\n")
+        .collect()
+}
+
 /// A new API token for the account `name` (created with `role` if new), as the admin
 /// endpoints issue them: its id and secret.
 pub async fn api_token(

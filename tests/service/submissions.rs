@@ -25,36 +25,34 @@ async fn post(
     body: impl Into<reqwest::Body>,
     idempotency_key: Option<&str>,
 ) -> (reqwest::StatusCode, reqwest::header::HeaderMap, Value) {
-    let mut request = server
-        .client
-        .post(server.url(&format!("/api/v1/datasets/{dataset}/submissions?{query}")))
-        .body(body);
+    let path = format!("/api/v1/datasets/{dataset}/submissions?{query}");
+    let mut call = server.call(reqwest::Method::POST, &path).body(body);
     if let Some(t) = token {
-        request = request.bearer_auth(t);
+        call = call.bearer(t);
     }
     if let Some(k) = idempotency_key {
-        request = request.header("Idempotency-Key", k);
+        call = call.header("Idempotency-Key", k);
     }
-    let response = request.send().await.expect("POST submission");
-    let status = response.status();
-    let headers = response.headers().clone();
-    let body = response.json::<Value>().await.unwrap_or(Value::Null);
-    (status, headers, body)
+    let reply = call.send().await;
+    (reply.status, reply.headers.clone(), reply.json())
+}
+
+/// `post` of `body` to dataset "mini" as model "m", with `token` and no idempotency key.
+async fn post_as(
+    server: &TestServer,
+    token: &str,
+    body: impl Into<reqwest::Body>,
+) -> (reqwest::StatusCode, reqwest::header::HeaderMap, Value) {
+    post(server, "mini", "model=m", Some(token), body, None).await
 }
 
 async fn get_authed(server: &TestServer, path: &str, token: &str) -> (reqwest::StatusCode, Value) {
-    let response = server
-        .client
-        .get(server.url(path))
-        .bearer_auth(token)
+    let reply = server
+        .call(reqwest::Method::GET, path)
+        .bearer(token)
         .send()
-        .await
-        .expect("GET");
-    let status = response.status();
-    (
-        status,
-        response.json::<Value>().await.unwrap_or(Value::Null),
-    )
+        .await;
+    (reply.status, reply.json())
 }
 
 async fn admin_json(
@@ -64,19 +62,26 @@ async fn admin_json(
     token: &str,
     body: Value,
 ) -> (reqwest::StatusCode, Value) {
-    let response = server
-        .client
-        .request(method, server.url(path))
-        .bearer_auth(token)
+    let reply = server
+        .call(method, path)
+        .bearer(token)
         .json(&body)
         .send()
-        .await
-        .expect("admin request");
-    let status = response.status();
-    (
-        status,
-        response.json::<Value>().await.unwrap_or(Value::Null),
-    )
+        .await;
+    (reply.status, reply.json())
+}
+
+/// An admin makes a dataset's ground truth and per-item verdicts public.
+async fn make_answers_public(server: &TestServer, dataset: &str, admin: &str) {
+    server
+        .call(
+            reqwest::Method::PUT,
+            &format!("/api/v1/admin/datasets/{dataset}/answers"),
+        )
+        .bearer(admin)
+        .json(&json!({"answers": "public"}))
+        .expect(200)
+        .await;
 }
 
 async fn stored_counts(pool: &SqlitePool) -> (i64, i64) {
@@ -154,15 +159,7 @@ async fn a_submission_is_scored_stored_and_readable_by_its_owner_only() {
 
     // An admin makes the answers public: the owner now sees verdicts and ground truth.
     let admin = make_token(&server.pool, "root", Role::Admin, None).await;
-    let (status, body) = admin_json(
-        &server,
-        reqwest::Method::PUT,
-        "/api/v1/admin/datasets/mini/answers",
-        &admin,
-        json!({"answers": "public"}),
-    )
-    .await;
-    assert_eq!(status, 200, "{body}");
+    make_answers_public(&server, "mini", &admin).await;
     let (_, own) = get_authed(&server, &path, &alice).await;
     let items = own["items"].as_array().expect("items");
     assert_eq!(items.len(), 4);
@@ -232,7 +229,7 @@ async fn tokens_missing_unknown_or_revoked_get_401() {
     )
     .await;
     assert_eq!(status, 401);
-    let (status, _, _) = post(&server, "mini", "model=m", Some(&token), body.clone(), None).await;
+    let (status, _, _) = post_as(&server, &token, body.clone()).await;
     assert_eq!(status, 201);
     let mut conn = server.pool.acquire().await.expect("conn");
     let prefix = enact_hub::core::credentials::lookup_prefix(&token);
@@ -242,7 +239,7 @@ async fn tokens_missing_unknown_or_revoked_get_401() {
             .expect("revoke")
     );
     drop(conn);
-    let (status, _, error) = post(&server, "mini", "model=m", Some(&token), body, None).await;
+    let (status, _, error) = post_as(&server, &token, body).await;
     assert_eq!(status, 401);
     assert!(error["error"].as_str().expect("msg").contains("revoked"));
     assert_eq!(stored_counts(&server.pool).await.0, 1);
@@ -276,7 +273,7 @@ async fn every_validation_problem_is_a_422_naming_its_line_and_nothing_is_stored
         ),
     ];
     for (body, kind, line) in cases {
-        let (status, _, error) = post(&server, "mini", "model=m", Some(&token), body, None).await;
+        let (status, _, error) = post_as(&server, &token, body).await;
         assert_eq!(status, 422, "{kind}: {error}");
         let problems = error["problems"].as_array().expect("problems");
         assert_eq!(problems.len(), 1, "{error}");
@@ -286,27 +283,11 @@ async fn every_validation_problem_is_a_422_naming_its_line_and_nothing_is_stored
         assert!(message.contains(&format!("line {line}")), "{message}");
     }
     // A JSON array body names the line of its syntax error.
-    let (status, _, error) = post(
-        &server,
-        "mini",
-        "model=m",
-        Some(&token),
-        "[\n{\"id\": 1,\n}]",
-        None,
-    )
-    .await;
+    let (status, _, error) = post_as(&server, &token, "[\n{\"id\": 1,\n}]").await;
     assert_eq!(status, 422, "{error}");
     assert_eq!(error["problems"][0]["line"], 3);
     // Not UTF-8.
-    let (status, _, error) = post(
-        &server,
-        "mini",
-        "model=m",
-        Some(&token),
-        vec![b'{', 0xff, b'}'],
-        None,
-    )
-    .await;
+    let (status, _, error) = post_as(&server, &token, vec![b'{', 0xff, b'}']).await;
     assert_eq!(status, 422);
     assert!(error["error"].as_str().expect("msg").contains("UTF-8"));
     // Missing metadata is a 400 that names the parameter.
@@ -342,27 +323,11 @@ async fn a_json_array_scores_like_jsonl_and_parse_failures_are_counted() {
 async fn quotas_count_rejected_attempts_and_answer_429_with_retry_after() {
     let (server, records) = spawn_app_with_release().await;
     let token = make_token(&server.pool, "alice", Role::Submitter, Some(2)).await;
-    let (status, _, _) = post(&server, "mini", "model=m", Some(&token), "{oops", None).await;
+    let (status, _, _) = post_as(&server, &token, "{oops").await;
     assert_eq!(status, 422);
-    let (status, _, _) = post(
-        &server,
-        "mini",
-        "model=m",
-        Some(&token),
-        answers(&records, &[]),
-        None,
-    )
-    .await;
+    let (status, _, _) = post_as(&server, &token, answers(&records, &[])).await;
     assert_eq!(status, 201);
-    let (status, headers, error) = post(
-        &server,
-        "mini",
-        "model=m",
-        Some(&token),
-        answers(&records, &[]),
-        None,
-    )
-    .await;
+    let (status, headers, error) = post_as(&server, &token, answers(&records, &[])).await;
     assert_eq!(status, 429, "{error}");
     let retry: u64 = headers["retry-after"]
         .to_str()
@@ -387,12 +352,12 @@ async fn a_used_up_total_quota_answers_429_without_retry_after() {
     let token = api_token(&server.pool, "carol", Role::Submitter, Some(50), Some(2))
         .await
         .1;
-    let (status, _, _) = post(&server, "mini", "model=m", Some(&token), "{oops", None).await;
+    let (status, _, _) = post_as(&server, &token, "{oops").await;
     assert_eq!(status, 422);
     let body = answers(&records, &[]);
-    let (status, _, _) = post(&server, "mini", "model=m", Some(&token), body.clone(), None).await;
+    let (status, _, _) = post_as(&server, &token, body.clone()).await;
     assert_eq!(status, 201);
-    let (status, headers, error) = post(&server, "mini", "model=m", Some(&token), body, None).await;
+    let (status, headers, error) = post_as(&server, &token, body).await;
     assert_eq!(status, 429, "{error}");
     assert!(
         headers.get("retry-after").is_none(),
@@ -454,7 +419,7 @@ async fn a_body_over_the_limit_is_refused_with_413() {
     let token = make_token(&server.pool, "alice", Role::Submitter, None).await;
     let body = answers(&records, &[]);
     assert!(body.len() > 300);
-    let (status, _, error) = post(&server, "mini", "model=m", Some(&token), body, None).await;
+    let (status, _, error) = post_as(&server, &token, body).await;
     assert_eq!(status, 413, "{error}");
     assert!(error["error"].as_str().expect("msg").contains("300 bytes"));
     // Chunked, without a length: refused once the limit is passed.
@@ -719,15 +684,7 @@ async fn token_create_prints_the_token_last_and_revoke_takes_effect_at_once() {
         token.starts_with("ehub_") && !token.contains(' '),
         "{stdout}"
     );
-    let (status, _, _) = post(
-        &server,
-        "mini",
-        "model=m",
-        Some(&token),
-        answers(&records, &[]),
-        None,
-    )
-    .await;
+    let (status, _, _) = post_as(&server, &token, answers(&records, &[])).await;
     assert_eq!(status, 201);
 
     let list = enact_hub()
@@ -749,15 +706,7 @@ async fn token_create_prints_the_token_last_and_revoke_takes_effect_at_once() {
         .output()
         .expect("revoke");
     assert!(revoke.status.success());
-    let (status, _, _) = post(
-        &server,
-        "mini",
-        "model=m",
-        Some(&token),
-        answers(&records, &[]),
-        None,
-    )
-    .await;
+    let (status, _, _) = post_as(&server, &token, answers(&records, &[])).await;
     assert_eq!(status, 401);
     server.stop().await;
 }
@@ -796,15 +745,7 @@ async fn every_enact_prediction_file_scores_as_the_strict_command_does() {
     })
     .await;
     let token = make_token(&server.pool, "alice", Role::Admin, None).await;
-    let (status, _) = admin_json(
-        &server,
-        reqwest::Method::PUT,
-        "/api/v1/admin/datasets/parity/answers",
-        &token,
-        json!({"answers": "public"}),
-    )
-    .await;
-    assert_eq!(status, 200);
+    make_answers_public(&server, "parity", &token).await;
     let out = tempfile::tempdir().expect("tempdir");
     let mut accepted = Vec::new();
     let mut refused = Vec::new();
