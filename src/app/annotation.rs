@@ -248,6 +248,7 @@ async fn finish(
     save: Option<&Draft>,
     outcome: Outcome,
 ) -> Result<(), AppError> {
+    let answered = matches!(outcome, Outcome::Answered(_));
     let now = now_ms();
     let mut tx = hub.begin().await?;
     if let Some(draft) = save {
@@ -268,6 +269,10 @@ async fn finish(
     }
     tx.commit().await?;
     hub.standings.forget(session.annotator, item.rowid);
+    if answered {
+        // The Human row counts every answer.
+        hub.boards.changed();
+    }
     Ok(())
 }
 

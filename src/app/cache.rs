@@ -12,6 +12,7 @@ use std::time::Duration;
 use bytes::Bytes;
 use sqlx::SqlitePool;
 
+use super::leaderboard::BoardCache;
 use super::standings::StandingCache;
 use crate::store;
 use crate::store::items::StoredItem;
@@ -90,11 +91,13 @@ impl<V: Clone> KeyedCache<V> {
     }
 }
 
-/// Clears `cache` and `standings` whenever the store's content generation changes. Runs until the pool closes.
+/// Clears `cache`, `standings` and `boards` whenever the store's content generation changes.
+/// Runs until the pool closes.
 pub async fn watch_generation(
     pool: SqlitePool,
     cache: Arc<ItemCache>,
     standings: Arc<StandingCache>,
+    boards: Arc<BoardCache>,
 ) {
     let mut seen = None;
     let mut ticker = tokio::time::interval(POLL_INTERVAL);
@@ -114,6 +117,7 @@ pub async fn watch_generation(
                     tracing::info!(generation, "stored items changed: item cache cleared");
                     cache.clear();
                     standings.clear();
+                    boards.changed();
                 }
                 seen = Some(generation);
             }
@@ -122,6 +126,7 @@ pub async fn watch_generation(
                 tracing::warn!(error = %e, "cannot read the content generation");
                 cache.clear();
                 standings.clear();
+                boards.changed();
             }
         }
     }

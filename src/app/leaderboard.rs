@@ -1,5 +1,13 @@
 //! A dataset's leaderboard: one row per published submission and, once annotators have
 //! answered, the Human row, scored by the same verifier; best overall task accuracy first.
+//!
+//! Boards are served from memory ([`board`]): built once, then shared until something that
+//! changes them happens in this process (a submission stored, a listing changed, an annotator's
+//! answer) or the stored items change (an import, seen by the content watcher).
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, RwLock};
 
 use super::{AppError, Hub, datasets};
 use crate::core::annotation::human_entries;
@@ -68,4 +76,63 @@ pub async fn of(hub: &Hub, name: &str) -> Result<(Dataset, Vec<LeaderboardRow>),
     let dataset = datasets::by_name(hub, name).await?;
     let rows = rows(hub, &dataset).await?;
     Ok((dataset, rows))
+}
+
+/// A dataset's board as built from the store: every published submission's row and the Human
+/// row. Pages, sorts and filters are cut from it per request.
+#[derive(Debug)]
+pub struct Board {
+    pub dataset: Dataset,
+    pub rows: Vec<LeaderboardRow>,
+    /// Unique per build in this process: a response's entity tag starts with it.
+    pub version: u64,
+}
+
+/// Built boards by dataset name, and a count of the changes that outdate them.
+#[derive(Default)]
+pub struct BoardCache {
+    boards: RwLock<HashMap<String, Arc<Board>>>,
+    /// Bumped by every change; a build stores its board only if no change came in between.
+    changes: AtomicU64,
+    builds: AtomicU64,
+}
+
+impl BoardCache {
+    /// Something that boards show has changed: drop them all (they rebuild in milliseconds).
+    pub fn changed(&self) {
+        self.changes.fetch_add(1, Ordering::SeqCst);
+        self.boards
+            .write()
+            .unwrap_or_else(|p| p.into_inner())
+            .clear();
+    }
+
+    fn get(&self, dataset: &str) -> Option<Arc<Board>> {
+        self.boards
+            .read()
+            .unwrap_or_else(|p| p.into_inner())
+            .get(dataset)
+            .cloned()
+    }
+}
+
+/// The board of the dataset named `name`, from memory when nothing changed since it was built.
+pub async fn board(hub: &Hub, name: &str) -> Result<Arc<Board>, AppError> {
+    let cache = &hub.boards;
+    if let Some(board) = cache.get(name) {
+        return Ok(board);
+    }
+    let ticket = cache.changes.load(Ordering::SeqCst);
+    let (dataset, rows) = of(hub, name).await?;
+    let board = Arc::new(Board {
+        dataset,
+        rows,
+        version: cache.builds.fetch_add(1, Ordering::SeqCst) + 1,
+    });
+    let mut boards = cache.boards.write().unwrap_or_else(|p| p.into_inner());
+    // A change during the build may predate what was read: serve this board, keep none.
+    if cache.changes.load(Ordering::SeqCst) == ticket {
+        boards.insert(name.to_owned(), board.clone());
+    }
+    Ok(board)
 }

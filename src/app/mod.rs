@@ -8,7 +8,7 @@
 //!   [`import`]: an ENACT release read from disk, all or nothing.
 //! - [`scoring`]: a prediction file scored against a stored dataset or a release folder.
 //! - [`submissions`]: submit, read and list a leaderboard submission; [`leaderboard`] builds
-//!   the rows, the Human row included.
+//!   the rows, the Human row included, and keeps each dataset's board in memory.
 //! - [`tokens`]: API tokens and the accounts behind them; [`annotators`]: annotator accounts,
 //!   invites and login sessions.
 //! - [`annotation`]: assignments, the queue, drafts, answers, skips and flags.
@@ -66,6 +66,7 @@ pub struct Hub {
     items: Arc<cache::ItemCache>,
     standings: Arc<standings::StandingCache>,
     targets: Arc<submissions::TargetCache>,
+    boards: Arc<leaderboard::BoardCache>,
     quotas: Quotas,
 }
 
@@ -82,6 +83,7 @@ impl Hub {
             items: Arc::default(),
             standings: Arc::default(),
             targets: Arc::default(),
+            boards: Arc::default(),
             quotas,
         }
     }
@@ -123,7 +125,7 @@ impl Hub {
     /// Clears the caches whenever stored items change, also through another process's
     /// import. Runs until the database is closed.
     pub async fn watch_content(self) {
-        cache::watch_generation(self.pool, self.items, self.standings).await;
+        cache::watch_generation(self.pool, self.items, self.standings, self.boards).await;
     }
 
     async fn conn(&self) -> Result<sqlx::pool::PoolConnection<sqlx::Sqlite>, AppError> {

@@ -234,6 +234,7 @@ where
     };
     store::submissions::insert_items(&mut tx, id, &targets.item_rows, &scored.items).await?;
     tx.commit().await?;
+    hub.boards.changed();
     tracing::info!(
         submission = id,
         dataset = %dataset.name,
@@ -316,6 +317,7 @@ pub async fn update_listing(
         return Err(not_found());
     }
     drop(conn);
+    hub.boards.changed();
     by_id(hub, numeric).await?.ok_or_else(not_found)
 }
 
@@ -364,5 +366,6 @@ pub async fn file_baseline(
     store::submissions::insert_items(&mut tx, id, &targets.item_rows, &scored.items).await?;
     store::submissions::update_listing(&mut tx, id, Some(true), None).await?;
     tx.commit().await?;
+    hub.boards.changed();
     Ok(true)
 }

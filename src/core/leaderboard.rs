@@ -1,6 +1,7 @@
-//! The leaderboard: one row per published submission in the paper's Table 1 layout (TA and PA
-//! overall, forward, inverse, and per step length 3..10), and the geometry of the
-//! accuracy-against-step-length chart (pure; templates draw it).
+//! The leaderboard: rows in the paper's Table 1 layout (TA and PA overall, forward, inverse,
+//! and per step length 3..10); one row per account and model, ranked with ties, sorted by any
+//! column and paged; and the geometry of the accuracy-against-step-length chart (pure;
+//! templates draw it).
 
 use serde::Serialize;
 
@@ -43,6 +44,11 @@ pub struct Interval {
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LeaderboardRow {
+    /// The rank among ranked rows (submissions that are not baselines) by the board's sort;
+    /// `None` for the Human row and baselines, which are shown for reference.
+    pub rank: Option<usize>,
+    /// Published submissions of this account and model (1 when every submission is shown).
+    pub attempts: usize,
     pub source: RowSource,
     /// The submission id.
     pub submission: Option<i64>,
@@ -102,6 +108,8 @@ impl LeaderboardRow {
     pub fn from_scores(who: &RowIdentity<'_>, scores: &SubmissionScores) -> LeaderboardRow {
         let report = &scores.report;
         LeaderboardRow {
+            rank: None,
+            attempts: 1,
             source: RowSource::Submission,
             submission: Some(who.submission),
             model: who.model.to_owned(),
@@ -123,6 +131,8 @@ impl LeaderboardRow {
     pub fn human(report: &PerformanceReport, dataset_items: usize) -> LeaderboardRow {
         let overall = cell(report.overall.as_ref().map(|g| &g.totals));
         LeaderboardRow {
+            rank: None,
+            attempts: 1,
             source: RowSource::Human,
             submission: None,
             model: "Human".to_owned(),
@@ -144,14 +154,320 @@ impl LeaderboardRow {
     }
 }
 
-/// Best overall task accuracy first; ties by earlier submission.
-pub fn rank(rows: &mut [LeaderboardRow]) {
+impl LeaderboardRow {
+    /// Whether the row competes for a rank: a submission that is not a baseline.
+    pub fn is_ranked(&self) -> bool {
+        self.source == RowSource::Submission && !self.baseline
+    }
+}
+
+/// A group of columns of the table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ColumnGroup {
+    Overall,
+    Forward,
+    Inverse,
+}
+
+/// A column to sort and rank by: `overall_ta`, `overall_pa`, `forward_ta`, `inverse_pa`, or one
+/// step length of a direction, `forward_ta_5`, `inverse_pa_10`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SortKey {
+    pub group: ColumnGroup,
+    /// A step length of the forward or inverse group.
+    pub step: Option<StepLength>,
+    /// Pairwise accuracy rather than task accuracy.
+    pub pairwise: bool,
+}
+
+impl Default for SortKey {
+    /// Overall task accuracy, the paper's headline figure.
+    fn default() -> Self {
+        SortKey {
+            group: ColumnGroup::Overall,
+            step: None,
+            pairwise: false,
+        }
+    }
+}
+
+impl SortKey {
+    /// Reads a column name; the message lists what is accepted.
+    pub fn parse(text: &str) -> Result<SortKey, String> {
+        let refuse = || {
+            format!(
+                "sort: {text:?} is not a column; use overall_ta, overall_pa, forward_ta, \
+                 forward_pa, inverse_ta, inverse_pa, or forward_ta_L (…) with L from 3 to 10"
+            )
+        };
+        let mut parts = text.trim().split('_');
+        let group = match parts.next() {
+            Some("overall") => ColumnGroup::Overall,
+            Some("forward") => ColumnGroup::Forward,
+            Some("inverse") => ColumnGroup::Inverse,
+            _ => return Err(refuse()),
+        };
+        let pairwise = match parts.next() {
+            Some("ta") => false,
+            Some("pa") => true,
+            _ => return Err(refuse()),
+        };
+        let step = match parts.next() {
+            None => None,
+            Some(_) if group == ColumnGroup::Overall => return Err(refuse()),
+            Some(l) => Some(
+                l.parse()
+                    .ok()
+                    .and_then(StepLength::new)
+                    .ok_or_else(refuse)?,
+            ),
+        };
+        if parts.next().is_some() {
+            return Err(refuse());
+        }
+        Ok(SortKey {
+            group,
+            step,
+            pairwise,
+        })
+    }
+
+    /// The name [`SortKey::parse`] reads back.
+    pub fn name(&self) -> String {
+        let group = match self.group {
+            ColumnGroup::Overall => "overall",
+            ColumnGroup::Forward => "forward",
+            ColumnGroup::Inverse => "inverse",
+        };
+        let metric = if self.pairwise { "pa" } else { "ta" };
+        match self.step {
+            None => format!("{group}_{metric}"),
+            Some(l) => format!("{group}_{metric}_{l}"),
+        }
+    }
+
+    /// The column as a person reads it: "overall TA", "forward PA at L=5".
+    pub fn label(&self) -> String {
+        let group = match self.group {
+            ColumnGroup::Overall => "overall",
+            ColumnGroup::Forward => "forward",
+            ColumnGroup::Inverse => "inverse",
+        };
+        let metric = if self.pairwise { "PA" } else { "TA" };
+        match self.step {
+            None => format!("{group} {metric}"),
+            Some(l) => format!("{group} {metric} at L={l}"),
+        }
+    }
+
+    /// The row's value in this column, if the row has one.
+    pub fn value(&self, row: &LeaderboardRow) -> Option<f64> {
+        let columns = match self.group {
+            ColumnGroup::Overall => None,
+            ColumnGroup::Forward => Some(&row.forward),
+            ColumnGroup::Inverse => Some(&row.inverse),
+        };
+        let cell = match (columns, self.step) {
+            (None, _) => &row.overall,
+            (Some(c), None) => &c.total,
+            (Some(c), Some(l)) => &c.per_step.iter().find(|(step, _)| *step == l.get())?.1,
+        };
+        if self.pairwise {
+            cell.pairwise_accuracy
+        } else {
+            cell.task_accuracy
+        }
+    }
+
+    /// The value as the table shows it (a percentage to one decimal), so rows that look equal
+    /// compare equal.
+    fn shown(&self, row: &LeaderboardRow) -> Option<i64> {
+        self.value(row).map(|v| (v * 1000.0).round() as i64)
+    }
+}
+
+/// One row per account and model: the latest published submission of each (highest id), with
+/// `attempts` counting them all. The latest is the entry because it is what the account last
+/// chose to publish; an account that prefers an earlier run asks an admin to hide the later
+/// ones, and every submission stays listed when asked for. The Human row passes through.
+pub fn one_per_model(rows: &[LeaderboardRow]) -> Vec<LeaderboardRow> {
+    let mut latest: std::collections::BTreeMap<(&str, &str), (usize, usize)> =
+        std::collections::BTreeMap::new();
+    let mut kept = Vec::new();
+    for (i, row) in rows.iter().enumerate() {
+        if row.source != RowSource::Submission {
+            kept.push(i);
+            continue;
+        }
+        let entry = latest
+            .entry((row.account.as_str(), row.model.as_str()))
+            .or_insert((i, 0));
+        entry.1 += 1;
+        if row.submission > rows[entry.0].submission {
+            entry.0 = i;
+        }
+    }
+    kept.extend(latest.values().map(|(i, _)| *i));
+    kept.sort_unstable();
+    kept.into_iter()
+        .map(|i| {
+            let mut row = rows[i].clone();
+            if row.source == RowSource::Submission {
+                row.attempts = latest[&(row.account.as_str(), row.model.as_str())].1;
+            }
+            row
+        })
+        .collect()
+}
+
+/// Sorts best first by `key` and ranks the ranked rows. Rows whose shown values are equal tie:
+/// they share a rank, and the next distinct value takes the rank after all of them (1, 2, 2,
+/// 4), as sports tables do; within a tie, the better overall task accuracy and then the earlier
+/// submission come first. Rows without a value in the column go last, unranked.
+pub fn rank_by(rows: &mut [LeaderboardRow], key: SortKey) {
+    let overall = SortKey::default();
     rows.sort_by(|a, b| {
-        let ta = |r: &LeaderboardRow| r.overall.task_accuracy.unwrap_or(-1.0);
-        ta(b)
-            .total_cmp(&ta(a))
+        let order = |r: &LeaderboardRow| (key.shown(r).is_some(), key.shown(r));
+        order(b)
+            .cmp(&order(a))
+            .then_with(|| overall.shown(b).cmp(&overall.shown(a)))
             .then_with(|| a.submission.cmp(&b.submission))
     });
+    let mut ranked = 0;
+    let mut previous: Option<(Option<i64>, usize)> = None;
+    for row in rows.iter_mut() {
+        row.rank = None;
+        if !row.is_ranked() {
+            continue;
+        }
+        let shown = key.shown(row);
+        ranked += 1;
+        if shown.is_none() {
+            continue;
+        }
+        let rank = match previous {
+            Some((value, rank)) if value == shown => rank,
+            _ => ranked,
+        };
+        row.rank = Some(rank);
+        previous = Some((shown, rank));
+    }
+}
+
+/// Best overall task accuracy first, with tie ranks (see [`rank_by`]).
+pub fn rank(rows: &mut [LeaderboardRow]) {
+    rank_by(rows, SortKey::default());
+}
+
+/// Which rows of a board to show.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BoardQuery {
+    pub sort: SortKey,
+    /// Every published submission rather than one row per account and model.
+    pub every_submission: bool,
+    /// Only this model (exact name), and only this account.
+    pub model: Option<String>,
+    pub account: Option<String>,
+    /// 1-based.
+    pub page: usize,
+    pub per_page: usize,
+}
+
+impl Default for BoardQuery {
+    fn default() -> Self {
+        BoardQuery {
+            sort: SortKey::default(),
+            every_submission: false,
+            model: None,
+            account: None,
+            page: 1,
+            per_page: DEFAULT_PER_PAGE,
+        }
+    }
+}
+
+/// Rows a board page shows unless asked for another number.
+pub const DEFAULT_PER_PAGE: usize = 50;
+
+/// One page of a board.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoardPage {
+    /// The page's ranked rows with the reference rows (Human, baselines), best first.
+    pub rows: Vec<LeaderboardRow>,
+    /// Ranked rows that match the filters, on every page together.
+    pub matching: usize,
+    pub pages: usize,
+}
+
+/// Every row `query` selects from a board's rows (each published submission once, and the
+/// Human row), sorted and ranked; the Human row and baselines are always kept.
+fn selected_rows(rows: &[LeaderboardRow], query: &BoardQuery) -> Vec<LeaderboardRow> {
+    let mut rows = if query.every_submission {
+        rows.to_vec()
+    } else {
+        one_per_model(rows)
+    };
+    let wanted = |r: &LeaderboardRow| {
+        query.model.as_deref().is_none_or(|m| r.model == m)
+            && query.account.as_deref().is_none_or(|a| r.account == a)
+    };
+    rows.retain(|r| !r.is_ranked() || wanted(r));
+    rank_by(&mut rows, query.sort);
+    rows
+}
+
+/// The page `query` asks for. Ranks are over every matching row, not only the page's; the
+/// Human row and baselines are shown on every page, in their place by the sort.
+pub fn board_page(rows: &[LeaderboardRow], query: &BoardQuery) -> BoardPage {
+    let rows = selected_rows(rows, query);
+    let matching = rows.iter().filter(|r| r.is_ranked()).count();
+    let per_page = query.per_page.max(1);
+    let first = (query.page.max(1) - 1).saturating_mul(per_page);
+    let mut seen = 0;
+    let rows = rows
+        .into_iter()
+        .filter(|r| {
+            if !r.is_ranked() {
+                return true;
+            }
+            seen += 1;
+            (first + 1..=first + per_page).contains(&seen)
+        })
+        .collect();
+    BoardPage {
+        rows,
+        matching,
+        pages: matching.div_ceil(per_page).max(1),
+    }
+}
+
+/// Lines the chart draws by default besides the Human row and baselines.
+pub const CHART_TOP: usize = 10;
+
+/// The rows the chart draws: the reference rows (Human, baselines) and either the submissions
+/// the reader picked (by id) or the best [`CHART_TOP`] by the board's sort.
+pub fn chart_rows(
+    rows: &[LeaderboardRow],
+    query: &BoardQuery,
+    picked: Option<&[i64]>,
+) -> Vec<LeaderboardRow> {
+    let mut top = 0;
+    selected_rows(rows, query)
+        .into_iter()
+        .filter(|r| {
+            if !r.is_ranked() {
+                return true;
+            }
+            match (picked, r.submission) {
+                (Some(ids), Some(id)) => ids.contains(&id),
+                (Some(_), None) => false,
+                (None, _) => {
+                    top += 1;
+                    top <= CHART_TOP
+                }
+            }
+        })
+        .collect()
 }
 
 /// Plot geometry in SVG user units.
@@ -395,5 +711,132 @@ mod tests {
         assert_ne!(forward.series[0].colour, forward.series[1].colour);
         assert_eq!(chart.panels[1].series[0].markers.len(), 1);
         assert_eq!(chart.panels[1].x_offset, CHART_PANEL_WIDTH);
+    }
+
+    /// A submission row for `account`/`model` with overall TA `ta` (PA 0.5) and id `id`.
+    fn entry(id: i64, account: &str, model: &str, ta: f64) -> LeaderboardRow {
+        let mut r = row(id, ta, ta);
+        r.account = account.to_owned();
+        r.model = model.to_owned();
+        r
+    }
+
+    fn ids(rows: &[LeaderboardRow]) -> Vec<Option<i64>> {
+        rows.iter().map(|r| r.submission).collect()
+    }
+
+    fn ranks(rows: &[LeaderboardRow]) -> Vec<Option<usize>> {
+        rows.iter().map(|r| r.rank).collect()
+    }
+
+    #[test]
+    fn one_row_per_account_and_model_is_the_latest_with_its_attempts() {
+        let rows = vec![
+            entry(1, "a", "m", 0.9),
+            entry(2, "a", "m", 0.1),
+            entry(3, "b", "m", 0.5),
+            entry(4, "a", "n", 0.2),
+            entry(5, "a", "m", 0.3),
+        ];
+        let kept = one_per_model(&rows);
+        assert_eq!(ids(&kept), vec![Some(3), Some(4), Some(5)]);
+        let attempts: Vec<usize> = kept.iter().map(|r| r.attempts).collect();
+        assert_eq!(attempts, vec![1, 1, 3]);
+    }
+
+    #[test]
+    fn equal_shown_values_share_a_rank_and_the_next_skips() {
+        let mut rows = vec![
+            entry(1, "a", "m1", 0.4),
+            entry(2, "b", "m2", 0.5004),
+            entry(3, "c", "m3", 0.4996),
+            entry(4, "d", "m4", 0.7),
+        ];
+        let mut baseline = entry(5, "e", "chance", 0.6);
+        baseline.baseline = true;
+        rows.push(baseline);
+        rank(&mut rows);
+        assert_eq!(
+            ids(&rows),
+            vec![Some(4), Some(5), Some(2), Some(3), Some(1)]
+        );
+        // 50.0 and 50.0 as shown: a tie; the baseline is placed but not ranked.
+        assert_eq!(ranks(&rows), vec![Some(1), None, Some(2), Some(2), Some(4)]);
+    }
+
+    #[test]
+    fn any_column_sorts_and_names_round_trip() {
+        for name in [
+            "overall_ta",
+            "overall_pa",
+            "forward_ta",
+            "inverse_pa",
+            "forward_ta_3",
+            "inverse_pa_10",
+        ] {
+            assert_eq!(SortKey::parse(name).expect(name).name(), name);
+        }
+        for bad in [
+            "",
+            "overall",
+            "overall_ta_3",
+            "forward_xx",
+            "forward_ta_11",
+            "inverse_pa_4_1",
+        ] {
+            let e = SortKey::parse(bad).expect_err(bad);
+            assert!(e.contains("sort:"), "{e}");
+        }
+        // Forward L=3 TA sorts the other way round from overall TA here.
+        let mut rows = vec![row(1, 1.0, 0.2), row(2, 0.0, 0.9)];
+        rank_by(&mut rows, SortKey::parse("forward_ta_3").expect("key"));
+        assert_eq!(ids(&rows), vec![Some(1), Some(2)]);
+        assert_eq!(ranks(&rows), vec![Some(1), Some(2)]);
+        rank_by(&mut rows, SortKey::default());
+        assert_eq!(ids(&rows), vec![Some(2), Some(1)]);
+        // A column a row has no value in puts it last, unranked.
+        let mut rows = vec![row(1, 1.0, 0.2), row(2, 0.0, 0.9)];
+        rank_by(&mut rows, SortKey::parse("forward_ta_4").expect("key"));
+        assert_eq!(ranks(&rows), vec![None, None]);
+    }
+
+    #[test]
+    fn pages_rank_over_every_row_and_always_show_the_reference_rows() {
+        let mut rows: Vec<LeaderboardRow> = (1..=5)
+            .map(|i| entry(i, &format!("t{i}"), "m", f64::from(i as i32) / 10.0))
+            .collect();
+        let mut human = LeaderboardRow::human(&PerformanceReport::default(), 4);
+        human.overall.task_accuracy = Some(0.35);
+        rows.push(human);
+        let query = BoardQuery {
+            per_page: 2,
+            page: 2,
+            ..BoardQuery::default()
+        };
+        let page = board_page(&rows, &query);
+        assert_eq!((page.matching, page.pages), (5, 3));
+        // Ranks 3 and 4 (ids 3 and 2), with the Human row (35.0) in its place above them.
+        assert_eq!(ids(&page.rows), vec![None, Some(3), Some(2)]);
+        assert_eq!(ranks(&page.rows), vec![None, Some(3), Some(4)]);
+        let only = BoardQuery {
+            account: Some("t1".to_owned()),
+            ..BoardQuery::default()
+        };
+        let page = board_page(&rows, &only);
+        assert_eq!(ids(&page.rows), vec![None, Some(1)]);
+        assert_eq!(page.matching, 1);
+    }
+
+    #[test]
+    fn the_chart_draws_the_top_ten_or_the_picked_rows_and_the_reference_rows() {
+        let rows: Vec<LeaderboardRow> = (1..=30)
+            .map(|i| entry(i, &format!("t{i}"), "m", f64::from(i as i32) / 100.0))
+            .collect();
+        let query = BoardQuery::default();
+        let drawn = chart_rows(&rows, &query, None);
+        assert_eq!(drawn.len(), CHART_TOP);
+        assert_eq!(drawn[0].submission, Some(30));
+        let drawn = chart_rows(&rows, &query, Some(&[2, 5]));
+        assert_eq!(ids(&drawn), vec![Some(5), Some(2)]);
     }
 }

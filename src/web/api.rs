@@ -375,7 +375,7 @@ fn is_sha256_hex(s: &str) -> bool {
 }
 
 /// True when an `If-None-Match` header names this entity tag (or is `*`).
-fn matches_etag(headers: &HeaderMap, etag: &str) -> bool {
+pub(super) fn matches_etag(headers: &HeaderMap, etag: &str) -> bool {
     headers
         .get_all(header::IF_NONE_MATCH)
         .iter()

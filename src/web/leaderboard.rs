@@ -1,20 +1,31 @@
 //! The leaderboard as JSON (`/api/v1/datasets/{dataset}/leaderboard`) and as a page with its
-//! chart (`/leaderboard/{dataset}`).
+//! chart (`/leaderboard/{dataset}`): one row per account and model (or every submission),
+//! ranked with ties, sorted by any column and paged, from the board kept in memory.
+
+use std::hash::{Hash, Hasher};
 
 use askama::Template;
 use axum::Router;
-use axum::extract::State;
-use axum::response::Html;
+use axum::extract::{RawQuery, State};
+use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use axum::response::{Html, IntoResponse, Response};
 use axum::routing::get;
 use serde::Serialize;
 
+use super::api::matches_etag;
 use super::error::PageError;
 use super::extract::{Json, Path};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
-use crate::app::leaderboard;
+use crate::app::leaderboard::{self, Board};
 use crate::core::dataset::StepLength;
-use crate::core::leaderboard::{AccuracyCell, AccuracyChart, Interval, LeaderboardRow};
+use crate::core::leaderboard::{
+    AccuracyCell, AccuracyChart, BoardPage, BoardQuery, ColumnGroup, Interval, LeaderboardRow,
+    RowSource, SortKey, board_page, chart_rows,
+};
+
+/// Rows a page may ask for at once.
+const MAX_PER_PAGE: usize = 1000;
 
 pub fn api_routes() -> Vec<ApiRoute> {
     vec![
@@ -25,12 +36,44 @@ pub fn api_routes() -> Vec<ApiRoute> {
             "The leaderboard",
         )
         .describe(
-            "One row per published submission, best overall TA first: TA and PA overall, \
-             forward, inverse and per step length 3..10, 95% bootstrap intervals, coverage and \
-             date; a Human row when annotations exist. The HTML page is /leaderboard/{dataset}.",
+            "One row per account and model (its latest published submission, with `attempts` \
+             and a `history` link), ranked by `sort` (overall TA by default): rows whose value \
+             is equal as shown (a percentage to one decimal) share a rank, and the next rank \
+             skips. TA and PA overall, forward, inverse and per step length 3..10, 95% \
+             bootstrap intervals, coverage and date. The Human row (when annotations exist) \
+             and baselines are on every page, unranked. Strong `ETag`; `If-None-Match` gives \
+             304. The HTML page is /leaderboard/{dataset}.",
         )
-        .responds(200, Some("application/json"), "The rows.")
-        .errors(&[404]),
+        .query(
+            "sort",
+            false,
+            "overall_ta (default), overall_pa, forward_ta, forward_pa, inverse_ta, inverse_pa, \
+             or a step length: forward_ta_5, inverse_pa_10, ….",
+        )
+        .query("page", false, "1-based page of ranked rows (default 1).")
+        .query(
+            "per_page",
+            false,
+            "Ranked rows per page, 1 to 1000 (default 50).",
+        )
+        .query(
+            "all",
+            false,
+            "`1` lists every published submission instead of one row per account and model.",
+        )
+        .query("model", false, "Only this model (exact name).")
+        .query("account", false, "Only this account (exact name).")
+        .responds(
+            200,
+            Some("application/json"),
+            "The page of rows, with `next` and `prev` links.",
+        )
+        .responds(
+            304,
+            None,
+            "Unchanged since the `ETag` sent in `If-None-Match`.",
+        )
+        .errors(&[400, 404]),
     ]
 }
 
@@ -38,25 +81,203 @@ pub fn page_router() -> Router<AppState> {
     Router::new().route("/leaderboard/{dataset}", get(leaderboard_page))
 }
 
+/// A board request as typed in a URL.
+struct BoardRequest {
+    query: BoardQuery,
+    /// Submission ids the reader picked for the chart.
+    chart: Option<Vec<i64>>,
+}
+
+impl BoardRequest {
+    fn parse(raw: Option<&str>) -> Result<BoardRequest, AppError> {
+        let pairs: Vec<(String, String)> = serde_urlencoded::from_str(raw.unwrap_or(""))
+            .map_err(|e| AppError::BadRequest(format!("query string: {e}")))?;
+        let mut query = BoardQuery::default();
+        let mut chart: Option<Vec<i64>> = None;
+        let number = |name: &str, text: &str, max: usize| {
+            text.trim()
+                .parse::<usize>()
+                .ok()
+                .filter(|n| (1..=max).contains(n))
+                .ok_or_else(|| {
+                    AppError::BadRequest(format!(
+                        "{name} must be a whole number from 1 to {max}, not {text:?}"
+                    ))
+                })
+        };
+        for (key, value) in &pairs {
+            let value = value.trim();
+            match key.as_str() {
+                _ if value.is_empty() => {}
+                "sort" => query.sort = SortKey::parse(value).map_err(AppError::BadRequest)?,
+                "page" => query.page = number("page", value, 1_000_000)?,
+                "per_page" => query.per_page = number("per_page", value, MAX_PER_PAGE)?,
+                "all" => {
+                    query.every_submission = match value {
+                        "1" | "true" => true,
+                        "0" | "false" => false,
+                        other => {
+                            return Err(AppError::BadRequest(format!(
+                                "all must be 1 or 0, not {other:?}"
+                            )));
+                        }
+                    }
+                }
+                "model" => query.model = Some(value.to_owned()),
+                "account" => query.account = Some(value.to_owned()),
+                "chart" => {
+                    for part in value.split(',').filter(|p| !p.trim().is_empty()) {
+                        let id = part.trim().parse().map_err(|_| {
+                            AppError::BadRequest(format!("chart: {part:?} is not a submission id"))
+                        })?;
+                        chart.get_or_insert_with(Vec::new).push(id);
+                    }
+                }
+                // Unknown parameters are ignored, as links from elsewhere may carry some.
+                _ => {}
+            }
+        }
+        Ok(BoardRequest { query, chart })
+    }
+
+    /// The query string of this request with `page` and other changes applied by `edit`.
+    fn link(&self, dataset_path: &str, edit: impl FnOnce(&mut BoardQuery)) -> String {
+        let mut q = self.query.clone();
+        edit(&mut q);
+        format!("{dataset_path}?{}", query_string(&q))
+    }
+
+    /// An entity tag for this request's answer from `board`: it changes when the board is
+    /// rebuilt or the request asks for something else.
+    fn etag(&self, board: &Board, kind: &str) -> String {
+        let mut hasher = std::collections::hash_map::DefaultHasher::new();
+        kind.hash(&mut hasher);
+        query_string(&self.query).hash(&mut hasher);
+        self.chart.hash(&mut hasher);
+        format!("\"lb{}-{:016x}\"", board.version, hasher.finish())
+    }
+}
+
+/// A query string that reads back as `q`.
+fn query_string(q: &BoardQuery) -> String {
+    let mut pairs: Vec<(&str, String)> = vec![("sort", q.sort.name())];
+    if q.every_submission {
+        pairs.push(("all", "1".to_owned()));
+    }
+    if let Some(m) = &q.model {
+        pairs.push(("model", m.clone()));
+    }
+    if let Some(a) = &q.account {
+        pairs.push(("account", a.clone()));
+    }
+    pairs.push(("page", q.page.to_string()));
+    pairs.push(("per_page", q.per_page.to_string()));
+    serde_urlencoded::to_string(pairs).unwrap_or_default()
+}
+
+/// The link to every published submission of a row's account and model.
+fn history(base: &str, row: &LeaderboardRow) -> Option<String> {
+    (row.source == RowSource::Submission).then(|| {
+        let q = BoardQuery {
+            every_submission: true,
+            model: Some(row.model.clone()),
+            account: Some(row.account.clone()),
+            ..BoardQuery::default()
+        };
+        format!("{base}?{}", query_string(&q))
+    })
+}
+
+/// 304 when the client holds `etag`, else `response` with it; boards are revalidated, never
+/// served stale from a cache.
+fn with_etag(headers: &HeaderMap, etag: &str, response: impl IntoResponse) -> Response {
+    let mut response = if matches_etag(headers, etag) {
+        StatusCode::NOT_MODIFIED.into_response()
+    } else {
+        response.into_response()
+    };
+    let h = response.headers_mut();
+    if let Ok(v) = HeaderValue::from_str(etag) {
+        h.insert(header::ETAG, v);
+    }
+    h.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-cache"));
+    response
+}
+
 #[derive(Serialize)]
-struct LeaderboardView {
-    dataset: String,
+struct RowView<'a> {
+    #[serde(flatten)]
+    row: &'a LeaderboardRow,
+    /// Every published submission of this account and model.
+    history: Option<String>,
+}
+
+#[derive(Serialize)]
+struct LeaderboardView<'a> {
+    dataset: &'a str,
     policy: &'static str,
+    sort: String,
+    every_submission: bool,
+    page: usize,
+    per_page: usize,
+    pages: usize,
+    /// Ranked rows matching the filters, on all pages.
+    entries: usize,
     step_lengths: Vec<u8>,
-    rows: Vec<LeaderboardRow>,
+    rows: Vec<RowView<'a>>,
+    next: Option<String>,
+    prev: Option<String>,
+}
+
+/// The links to the pages before and after this one.
+fn neighbours(
+    request: &BoardRequest,
+    path: &str,
+    page: &BoardPage,
+) -> (Option<String>, Option<String>) {
+    let current = request.query.page;
+    let prev = (current > 1).then(|| request.link(path, |q| q.page = current - 1));
+    let next = (current < page.pages).then(|| request.link(path, |q| q.page = current + 1));
+    (prev, next)
 }
 
 async fn leaderboard_json(
     State(state): State<AppState>,
     Path(name): Path<String>,
-) -> Result<Json<LeaderboardView>, AppError> {
-    let (dataset, rows) = leaderboard::of(&state.hub, &name).await?;
-    Ok(Json(LeaderboardView {
-        dataset: dataset.name,
+    RawQuery(raw): RawQuery,
+    headers: HeaderMap,
+) -> Result<Response, AppError> {
+    let request = BoardRequest::parse(raw.as_deref())?;
+    let board = leaderboard::board(&state.hub, &name).await?;
+    let etag = request.etag(&board, "json");
+    if matches_etag(&headers, &etag) {
+        return Ok(with_etag(&headers, &etag, ()));
+    }
+    let path = format!("/api/v1/datasets/{name}/leaderboard");
+    let page = board_page(&board.rows, &request.query);
+    let (prev, next) = neighbours(&request, &path, &page);
+    let view = LeaderboardView {
+        dataset: &board.dataset.name,
         policy: "strict",
+        sort: request.query.sort.name(),
+        every_submission: request.query.every_submission,
+        page: request.query.page,
+        per_page: request.query.per_page,
+        pages: page.pages,
+        entries: page.matching,
         step_lengths: StepLength::all().map(StepLength::get).collect(),
-        rows,
-    }))
+        rows: page
+            .rows
+            .iter()
+            .map(|row| RowView {
+                row,
+                history: history(&path, row),
+            })
+            .collect(),
+        next,
+        prev,
+    };
+    Ok(with_etag(&headers, &etag, Json(view)))
 }
 
 /// One TA/PA pair as the table prints it.
@@ -83,10 +304,17 @@ fn interval_text(i: Option<Interval>) -> String {
 }
 
 struct RowText {
-    rank: usize,
+    /// The rank, or a dash for reference rows.
+    rank: String,
     model: String,
     account: String,
     baseline: bool,
+    human: bool,
+    attempts: usize,
+    history: Option<String>,
+    /// The submission id, for the chart's checkbox.
+    submission: Option<i64>,
+    drawn: bool,
     submitted_on: String,
     overall: CellText,
     ta_ci: String,
@@ -99,6 +327,18 @@ struct RowText {
     parse_failures: String,
 }
 
+/// A column header that sorts the board by its column.
+struct SortLink {
+    href: String,
+    active: bool,
+}
+
+/// The TA and PA sort links of one group of columns.
+struct SortPair {
+    ta: SortLink,
+    pa: SortLink,
+}
+
 #[derive(Template)]
 #[template(path = "leaderboard.html")]
 struct LeaderboardPage {
@@ -106,53 +346,151 @@ struct LeaderboardPage {
     step_lengths: Vec<u8>,
     rows: Vec<RowText>,
     chart: AccuracyChart,
+    picked: bool,
+    sort_label: String,
+    overall: SortPair,
+    forward: SortPair,
+    inverse: SortPair,
+    forward_steps: Vec<SortPair>,
+    inverse_steps: Vec<SortPair>,
+    every_submission: bool,
+    toggle: String,
+    filter: Option<String>,
+    unfiltered: String,
+    page: usize,
+    pages: usize,
+    entries: usize,
+    prev: Option<String>,
+    next: Option<String>,
+    /// The request's parameters but the chart's, for the chart form.
+    hidden: Vec<(String, String)>,
+}
+
+impl LeaderboardPage {
+    fn new(board: &Board, request: &BoardRequest) -> LeaderboardPage {
+        let name = &board.dataset.name;
+        let path = format!("/leaderboard/{name}");
+        let query = &request.query;
+        let page = board_page(&board.rows, query);
+        let drawn = chart_rows(&board.rows, query, request.chart.as_deref());
+        let drawn_ids: Vec<i64> = drawn.iter().filter_map(|r| r.submission).collect();
+        let sort = |key: SortKey| SortLink {
+            href: request.link(&path, |q| {
+                q.sort = key;
+                q.page = 1;
+            }),
+            active: key == query.sort,
+        };
+        let pair = |group: ColumnGroup, step: Option<StepLength>| SortPair {
+            ta: sort(SortKey {
+                group,
+                step,
+                pairwise: false,
+            }),
+            pa: sort(SortKey {
+                group,
+                step,
+                pairwise: true,
+            }),
+        };
+        let steps = |group| StepLength::all().map(|l| pair(group, Some(l))).collect();
+        let (prev, next) = neighbours(request, &path, &page);
+        let filter = match (&query.model, &query.account) {
+            (None, None) => None,
+            (m, a) => Some(format!(
+                "Only{}{}",
+                m.as_ref().map_or(String::new(), |m| format!(" model {m}")),
+                a.as_ref()
+                    .map_or(String::new(), |a| format!(" of account {a}"))
+            )),
+        };
+        LeaderboardPage {
+            dataset: name.clone(),
+            step_lengths: StepLength::all().map(StepLength::get).collect(),
+            rows: page
+                .rows
+                .iter()
+                .map(|r| row_text(r, history(&path, r), &drawn_ids))
+                .collect(),
+            chart: AccuracyChart::task_accuracy_by_step_length(&drawn),
+            picked: request.chart.is_some(),
+            sort_label: query.sort.label(),
+            overall: pair(ColumnGroup::Overall, None),
+            forward: pair(ColumnGroup::Forward, None),
+            inverse: pair(ColumnGroup::Inverse, None),
+            forward_steps: steps(ColumnGroup::Forward),
+            inverse_steps: steps(ColumnGroup::Inverse),
+            every_submission: query.every_submission,
+            toggle: request.link(&path, |q| {
+                q.every_submission = !q.every_submission;
+                q.page = 1;
+            }),
+            filter,
+            unfiltered: request.link(&path, |q| {
+                q.model = None;
+                q.account = None;
+                q.page = 1;
+            }),
+            page: query.page,
+            pages: page.pages,
+            entries: page.matching,
+            prev,
+            next,
+            hidden: serde_urlencoded::from_str(&query_string(query)).unwrap_or_default(),
+        }
+    }
+}
+
+fn row_text(r: &LeaderboardRow, history: Option<String>, drawn: &[i64]) -> RowText {
+    RowText {
+        rank: r.rank.map_or_else(|| "–".to_owned(), |k| k.to_string()),
+        model: r.model.clone(),
+        account: r.account.clone(),
+        baseline: r.baseline,
+        human: r.source == RowSource::Human,
+        attempts: r.attempts,
+        history,
+        submission: r.submission,
+        drawn: r.submission.is_some_and(|id| drawn.contains(&id)),
+        submitted_on: r
+            .submitted_at
+            .get(..10)
+            .unwrap_or(&r.submitted_at)
+            .to_owned(),
+        overall: cell_text(&r.overall),
+        ta_ci: interval_text(r.overall_task_accuracy_ci),
+        pa_ci: interval_text(r.overall_pairwise_accuracy_ci),
+        forward: cell_text(&r.forward.total),
+        inverse: cell_text(&r.inverse.total),
+        forward_steps: r
+            .forward
+            .per_step
+            .iter()
+            .map(|(_, c)| cell_text(c))
+            .collect(),
+        inverse_steps: r
+            .inverse
+            .per_step
+            .iter()
+            .map(|(_, c)| cell_text(c))
+            .collect(),
+        coverage: format!("{:.1}%", r.coverage * 100.0),
+        parse_failures: format!("{:.1}%", r.parse_failure_rate * 100.0),
+    }
 }
 
 async fn leaderboard_page(
     State(state): State<AppState>,
     Path(name): Path<String>,
-) -> Result<Html<String>, PageError> {
-    let (dataset, rows) = leaderboard::of(&state.hub, &name).await?;
-    let chart = AccuracyChart::task_accuracy_by_step_length(&rows);
-    let texts = rows
-        .iter()
-        .enumerate()
-        .map(|(i, r)| RowText {
-            rank: i + 1,
-            model: r.model.clone(),
-            account: r.account.clone(),
-            baseline: r.baseline,
-            submitted_on: r
-                .submitted_at
-                .get(..10)
-                .unwrap_or(&r.submitted_at)
-                .to_owned(),
-            overall: cell_text(&r.overall),
-            ta_ci: interval_text(r.overall_task_accuracy_ci),
-            pa_ci: interval_text(r.overall_pairwise_accuracy_ci),
-            forward: cell_text(&r.forward.total),
-            inverse: cell_text(&r.inverse.total),
-            forward_steps: r
-                .forward
-                .per_step
-                .iter()
-                .map(|(_, c)| cell_text(c))
-                .collect(),
-            inverse_steps: r
-                .inverse
-                .per_step
-                .iter()
-                .map(|(_, c)| cell_text(c))
-                .collect(),
-            coverage: format!("{:.1}%", r.coverage * 100.0),
-            parse_failures: format!("{:.1}%", r.parse_failure_rate * 100.0),
-        })
-        .collect();
-    let page = LeaderboardPage {
-        dataset: dataset.name,
-        step_lengths: StepLength::all().map(StepLength::get).collect(),
-        rows: texts,
-        chart,
-    };
-    Ok(Html(page.render()?))
+    RawQuery(raw): RawQuery,
+    headers: HeaderMap,
+) -> Result<Response, PageError> {
+    let request = BoardRequest::parse(raw.as_deref())?;
+    let board = leaderboard::board(&state.hub, &name).await?;
+    let etag = request.etag(&board, "page");
+    if matches_etag(&headers, &etag) {
+        return Ok(with_etag(&headers, &etag, ()));
+    }
+    let html = LeaderboardPage::new(&board, &request).render()?;
+    Ok(with_etag(&headers, &etag, Html(html)))
 }

@@ -14,6 +14,7 @@ mod client;
 mod fixtures;
 mod helpers;
 mod import;
+mod leaderboard;
 mod openapi;
 mod pages;
 mod score;

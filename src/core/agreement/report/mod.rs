@@ -621,6 +621,8 @@ mod tests {
         };
         SubmissionInput {
             row: LeaderboardRow {
+                rank: None,
+                attempts: 1,
                 source: RowSource::Submission,
                 submission: Some(id),
                 model: format!("m{id}"),
