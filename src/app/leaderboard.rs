@@ -9,6 +9,8 @@ use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, RwLock};
 
+use bytes::Bytes;
+
 use super::{AppError, Hub, datasets};
 use crate::core::annotation::human_entries;
 use crate::core::leaderboard::{LeaderboardRow, RowIdentity, rank};
@@ -79,13 +81,38 @@ pub async fn of(hub: &Hub, name: &str) -> Result<(Dataset, Vec<LeaderboardRow>),
 }
 
 /// A dataset's board as built from the store: every published submission's row and the Human
-/// row. Pages, sorts and filters are cut from it per request.
+/// row. Pages, sorts and filters are cut from it per request, and what was cut and rendered is
+/// kept with it (it goes when the board goes).
 #[derive(Debug)]
 pub struct Board {
     pub dataset: Dataset,
     pub rows: Vec<LeaderboardRow>,
     /// Unique per build in this process: a response's entity tag starts with it.
     pub version: u64,
+    views: RwLock<HashMap<String, Bytes>>,
+}
+
+/// Rendered views kept per board; past this the board starts over (each renders in a few ms).
+const MAX_VIEWS: usize = 256;
+
+impl Board {
+    /// A view rendered before under `key` (a format and the normalized request).
+    pub fn view(&self, key: &str) -> Option<Bytes> {
+        self.views
+            .read()
+            .unwrap_or_else(|p| p.into_inner())
+            .get(key)
+            .cloned()
+    }
+
+    /// Keeps a rendered view for the next request with the same `key`.
+    pub fn keep_view(&self, key: String, view: Bytes) {
+        let mut views = self.views.write().unwrap_or_else(|p| p.into_inner());
+        if views.len() >= MAX_VIEWS {
+            views.clear();
+        }
+        views.insert(key, view);
+    }
 }
 
 /// Built boards by dataset name, and a count of the changes that outdate them.
@@ -128,6 +155,7 @@ pub async fn board(hub: &Hub, name: &str) -> Result<Arc<Board>, AppError> {
         dataset,
         rows,
         version: cache.builds.fetch_add(1, Ordering::SeqCst) + 1,
+        views: RwLock::default(),
     });
     let mut boards = cache.boards.write().unwrap_or_else(|p| p.into_inner());
     // A change during the build may predate what was read: serve this board, keep none.

@@ -417,11 +417,13 @@ fn selected_rows(rows: &[LeaderboardRow], query: &BoardQuery) -> Vec<Leaderboard
 }
 
 /// The page `query` asks for. Ranks are over every matching row, not only the page's; the
-/// Human row and baselines are shown on every page, in their place by the sort.
+/// Human row and baselines are shown on every page, in their place by the sort, and count
+/// towards the page's `per_page` rows (one ranked row at least).
 pub fn board_page(rows: &[LeaderboardRow], query: &BoardQuery) -> BoardPage {
     let rows = selected_rows(rows, query);
     let matching = rows.iter().filter(|r| r.is_ranked()).count();
-    let per_page = query.per_page.max(1);
+    let references = rows.len() - matching;
+    let per_page = query.per_page.saturating_sub(references).max(1);
     let first = (query.page.max(1) - 1).saturating_mul(per_page);
     let mut seen = 0;
     let rows = rows
@@ -808,8 +810,9 @@ mod tests {
         let mut human = LeaderboardRow::human(&PerformanceReport::default(), 4);
         human.overall.task_accuracy = Some(0.35);
         rows.push(human);
+        // Three rows a page: the Human row and two ranked ones.
         let query = BoardQuery {
-            per_page: 2,
+            per_page: 3,
             page: 2,
             ..BoardQuery::default()
         };

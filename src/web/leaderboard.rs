@@ -6,15 +6,16 @@ use std::hash::{Hash, Hasher};
 
 use askama::Template;
 use axum::Router;
+use axum::body::Bytes;
 use axum::extract::{RawQuery, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
-use axum::response::{Html, IntoResponse, Response};
+use axum::response::{IntoResponse, Response};
 use axum::routing::get;
 use serde::Serialize;
 
 use super::api::matches_etag;
 use super::error::PageError;
-use super::extract::{Json, Path};
+use super::extract::Path;
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
 use crate::app::leaderboard::{self, Board};
@@ -147,14 +148,39 @@ impl BoardRequest {
         format!("{dataset_path}?{}", query_string(&q))
     }
 
+    /// What this request asks for in `kind` (json or page), normalized: the key of its
+    /// rendered view.
+    fn key(&self, kind: &str) -> String {
+        format!(
+            "{kind}?{}&chart={:?}",
+            query_string(&self.query),
+            self.chart
+        )
+    }
+
     /// An entity tag for this request's answer from `board`: it changes when the board is
     /// rebuilt or the request asks for something else.
     fn etag(&self, board: &Board, kind: &str) -> String {
         let mut hasher = std::collections::hash_map::DefaultHasher::new();
-        kind.hash(&mut hasher);
-        query_string(&self.query).hash(&mut hasher);
-        self.chart.hash(&mut hasher);
+        self.key(kind).hash(&mut hasher);
         format!("\"lb{}-{:016x}\"", board.version, hasher.finish())
+    }
+
+    /// The view of `board` this request asks for in `kind`, rendered by `render` the first
+    /// time and kept with the board after that.
+    fn view(
+        &self,
+        board: &Board,
+        kind: &str,
+        render: impl FnOnce() -> Result<Vec<u8>, AppError>,
+    ) -> Result<Bytes, AppError> {
+        let key = self.key(kind);
+        if let Some(view) = board.view(&key) {
+            return Ok(view);
+        }
+        let view = Bytes::from(render()?);
+        board.keep_view(key, view.clone());
+        Ok(view)
     }
 }
 
@@ -205,9 +231,9 @@ fn with_etag(headers: &HeaderMap, etag: &str, response: impl IntoResponse) -> Re
 }
 
 #[derive(Serialize)]
-struct RowView<'a> {
+struct RowView {
     #[serde(flatten)]
-    row: &'a LeaderboardRow,
+    row: LeaderboardRow,
     /// Every published submission of this account and model.
     history: Option<String>,
 }
@@ -224,7 +250,7 @@ struct LeaderboardView<'a> {
     /// Ranked rows matching the filters, on all pages.
     entries: usize,
     step_lengths: Vec<u8>,
-    rows: Vec<RowView<'a>>,
+    rows: Vec<RowView>,
     next: Option<String>,
     prev: Option<String>,
 }
@@ -253,10 +279,19 @@ async fn leaderboard_json(
     if matches_etag(&headers, &etag) {
         return Ok(with_etag(&headers, &etag, ()));
     }
-    let path = format!("/api/v1/datasets/{name}/leaderboard");
+    let json = request.view(&board, "json", || {
+        Ok(serde_json::to_vec(&leaderboard_view(&board, &request))?)
+    })?;
+    let body = ([(header::CONTENT_TYPE, "application/json")], json);
+    Ok(with_etag(&headers, &etag, body))
+}
+
+/// The JSON of the page `request` asks for.
+fn leaderboard_view<'a>(board: &'a Board, request: &BoardRequest) -> LeaderboardView<'a> {
+    let path = format!("/api/v1/datasets/{}/leaderboard", board.dataset.name);
     let page = board_page(&board.rows, &request.query);
-    let (prev, next) = neighbours(&request, &path, &page);
-    let view = LeaderboardView {
+    let (prev, next) = neighbours(request, &path, &page);
+    LeaderboardView {
         dataset: &board.dataset.name,
         policy: "strict",
         sort: request.query.sort.name(),
@@ -268,16 +303,15 @@ async fn leaderboard_json(
         step_lengths: StepLength::all().map(StepLength::get).collect(),
         rows: page
             .rows
-            .iter()
+            .into_iter()
             .map(|row| RowView {
+                history: history(&path, &row),
                 row,
-                history: history(&path, row),
             })
             .collect(),
         next,
         prev,
-    };
-    Ok(with_etag(&headers, &etag, Json(view)))
+    }
 }
 
 /// One TA/PA pair as the table prints it.
@@ -491,6 +525,11 @@ async fn leaderboard_page(
     if matches_etag(&headers, &etag) {
         return Ok(with_etag(&headers, &etag, ()));
     }
-    let html = LeaderboardPage::new(&board, &request).render()?;
-    Ok(with_etag(&headers, &etag, Html(html)))
+    let html = request.view(&board, "page", || {
+        Ok(LeaderboardPage::new(&board, &request)
+            .render()?
+            .into_bytes())
+    })?;
+    let body = ([(header::CONTENT_TYPE, "text/html; charset=utf-8")], html);
+    Ok(with_etag(&headers, &etag, body))
 }

@@ -17,8 +17,8 @@ fn browser_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/browser")
 }
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
+/// Whether Chromium and playwright-core are here (they must be in CI; elsewhere the test skips).
+fn browser_available() -> bool {
     let in_ci = std::env::var("CI").is_ok_and(|v| v == "true");
     if !Path::new(CHROMIUM).exists() {
         assert!(
@@ -26,12 +26,68 @@ async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
             "{CHROMIUM} is missing in CI: scripts/test.sh installs it"
         );
         eprintln!("skipping: {CHROMIUM} is absent (install chromium, or run scripts/test.sh)");
-        return;
+        return false;
     }
     assert!(
         browser_dir().join("node_modules/playwright-core").is_dir(),
         "tests/browser/node_modules is missing: run `npm ci` in tests/browser (scripts/test.sh does)"
     );
+    true
+}
+
+/// Runs `script` in tests/browser with `params`; its last line of output as JSON.
+async fn run_node(script: &'static str, params: Value) -> Value {
+    let output = tokio::task::spawn_blocking(move || {
+        std::process::Command::new("node")
+            .arg(browser_dir().join(script))
+            .arg(params.to_string())
+            .output()
+            .expect("run node")
+    })
+    .await
+    .expect("join");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        output.status.success(),
+        "{script} failed:\n{stderr}\n{stdout}"
+    );
+    serde_json::from_str(stdout.lines().last().expect("a result line")).expect("JSON result")
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_board_of_a_thousand_submissions_reads_at_1280_px() {
+    if !browser_available() {
+        return;
+    }
+    let (server, records) = spawn_app_with_release().await;
+    crate::leaderboard::crowded_board(&server, &records, 1000, 50).await;
+    // A baseline too: shown on every page, within the page's rows.
+    sqlx::query("UPDATE submissions SET baseline = 1 WHERE id = (SELECT min(id) FROM submissions)")
+        .execute(&server.pool)
+        .await
+        .expect("mark a baseline");
+    let found = run_node(
+        "leaderboard.mjs",
+        json!({"url": server.url("/leaderboard/mini"), "chromium": CHROMIUM}),
+    )
+    .await;
+    assert_eq!(found["table_rows"], 50, "{found}");
+    for lines in found["lines_per_panel"].as_array().expect("panels") {
+        assert!(lines.as_u64().expect("lines") <= 12, "{found}");
+    }
+    assert!(
+        found["scroll_width"].as_u64() <= found["client_width"].as_u64(),
+        "the page scrolls sideways: {found}"
+    );
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
+    if !browser_available() {
+        return;
+    }
     let records = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
     let shared = records.clone();
     let server = spawn_app_with(|pool, dir| async move {
@@ -70,23 +126,7 @@ async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
         "chromium": CHROMIUM,
         "failure_dir": env!("CARGO_TARGET_TMPDIR"),
     });
-    let output = tokio::task::spawn_blocking(move || {
-        std::process::Command::new("node")
-            .arg(browser_dir().join("annotate.mjs"))
-            .arg(params.to_string())
-            .output()
-            .expect("run node")
-    })
-    .await
-    .expect("join");
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(
-        output.status.success(),
-        "browser run failed:\n{stderr}\n{stdout}"
-    );
-    let found: Value =
-        serde_json::from_str(stdout.lines().last().expect("a result line")).expect("JSON result");
+    let found = run_node("annotate.mjs", params).await;
     assert_eq!(
         found["after_reload"],
         json!(["Slot 1: Next State 2", "Slot 2: empty"])

@@ -9,7 +9,7 @@ use crate::annotate::{annotator, assign, logged_in_on};
 use crate::helpers::*;
 
 /// Compact answers to the mini release: the ground truth, reversed for the records in `wrong`.
-fn answers(records: &[Value], wrong: &[usize]) -> String {
+pub fn answers(records: &[Value], wrong: &[usize]) -> String {
     records
         .iter()
         .enumerate()
@@ -29,7 +29,7 @@ fn answers(records: &[Value], wrong: &[usize]) -> String {
 }
 
 /// Submits `body` as `model` with `token`; the new submission's id.
-async fn submit(server: &TestServer, token: &str, model: &str, body: String) -> i64 {
+pub async fn submit(server: &TestServer, token: &str, model: &str, body: String) -> i64 {
     let reply = submit_to(server, "mini", &format!("model={model}"), token, body).await;
     assert_eq!(reply.status, 201, "{}", reply.text);
     reply.id()
@@ -326,6 +326,77 @@ async fn the_board_stays_in_memory_until_something_it_shows_changes() {
             .iter()
             .any(|r| r["source"] == "human"),
         "{board}"
+    );
+    server.stop().await;
+}
+
+/// Publishes `total` submissions to "mini" from `accounts` accounts, each (account, model) pair
+/// its own entry: four are scored for real (right, and wrong on one, two and every record), the
+/// rest copy their scores row by row in SQL, which is all a board reads.
+pub async fn crowded_board(server: &TestServer, records: &[Value], total: usize, accounts: usize) {
+    let mut tokens = Vec::new();
+    for a in 0..accounts {
+        let name = format!("team-{a:02}");
+        let (id, token) = api_token(&server.pool, &name, Role::Submitter, None, None).await;
+        tokens.push((id, token));
+    }
+    let mut templates = Vec::new();
+    for (k, wrong) in [vec![], vec![0], vec![0, 1], vec![0, 1, 2, 3]]
+        .iter()
+        .enumerate()
+    {
+        let model = format!("model-{k:03}");
+        templates.push(
+            submit(
+                server,
+                &tokens[k % accounts].1,
+                &model,
+                answers(records, wrong),
+            )
+            .await,
+        );
+    }
+    let mut tx = server.pool.begin().await.expect("begin");
+    for i in templates.len()..total {
+        let (token, _) = &tokens[i % accounts];
+        sqlx::query(
+            "INSERT INTO submissions (dataset, account, token, body_sha256, model, scores) \
+             SELECT s.dataset, t.account, t.id, s.body_sha256, ?, s.scores \
+             FROM submissions s, api_tokens t WHERE s.id = ? AND t.id = ?",
+        )
+        .bind(format!("model-{i:03}"))
+        .bind(templates[i % templates.len()])
+        .bind(token)
+        .execute(&mut *tx)
+        .await
+        .expect("copy a submission");
+    }
+    tx.commit().await.expect("commit");
+}
+
+#[tokio::test]
+async fn a_thousand_submissions_make_a_board_of_pages() {
+    let (server, records) = spawn_app_with_release().await;
+    crowded_board(&server, &records, 1000, 50).await;
+    let first = board(&server, "").await;
+    assert_eq!(first["entries"], 1000);
+    assert_eq!(first["pages"], 20);
+    assert_eq!(first["rows"].as_array().expect("rows").len(), 50);
+    let last = board(&server, "page=20").await;
+    let ranks: Vec<Option<u64>> = rows(&last).iter().map(|r| r.1).collect();
+    // A quarter of the copies are wrong everywhere: they tie for the last rank, 751.
+    assert!(ranks.iter().all(|r| *r == Some(751)), "{ranks:?}");
+    let html = server
+        .call(Method::GET, "/leaderboard/mini")
+        .expect(200)
+        .await
+        .text;
+    assert!(html.contains("page 1 of 20"));
+    assert_eq!(html.matches("<tr>").count() - 3, 50, "fifty table rows");
+    assert_eq!(
+        html.matches("<polyline").count(),
+        2 * 10,
+        "the top ten in each panel"
     );
     server.stop().await;
 }

@@ -1,0 +1,40 @@
+// Loads a crowded leaderboard page in headless Chromium at 1280x800 and reports what a reader
+// gets: table rows, lines per chart panel, page width, load time. Started by
+// tests/service/browser.rs; parameters come as JSON in the first argument. Prints one JSON line.
+import { chromium } from "playwright-core";
+import { mkdtempSync } from "node:fs";
+import { tmpdir } from "node:os";
+import { join } from "node:path";
+
+const params = JSON.parse(process.argv[2]);
+const userDataDir = mkdtempSync(join(tmpdir(), "enact-hub-chromium-"));
+const context = await chromium.launchPersistentContext(userDataDir, {
+  executablePath: params.chromium || "/usr/bin/chromium",
+  headless: true,
+  args: ["--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run"],
+  viewport: { width: 1280, height: 800 },
+});
+const page = context.pages()[0] || (await context.newPage());
+page.setDefaultTimeout(15000);
+try {
+  const started = Date.now();
+  await page.goto(params.url, { waitUntil: "load" });
+  const load_ms = Date.now() - started;
+  const found = await page.evaluate(() => ({
+    table_rows: document.querySelectorAll("table.leaderboard tbody tr").length,
+    lines_per_panel: [...document.querySelectorAll("figure.chart svg > g")].map(
+      (g) => g.querySelectorAll("polyline").length,
+    ),
+    legend: document.querySelectorAll("figure.chart figcaption .legend-entry").length,
+    scroll_width: document.documentElement.scrollWidth,
+    client_width: document.documentElement.clientWidth,
+    html_bytes: document.documentElement.outerHTML.length,
+  }));
+  if (params.shot) await page.screenshot({ path: params.shot });
+  console.log(JSON.stringify({ ok: true, load_ms, ...found }));
+  await context.close();
+} catch (error) {
+  console.error(`leaderboard page failed at ${page.url()}: ${error.stack}`);
+  await context.close().catch(() => {});
+  process.exit(1);
+}
