@@ -236,16 +236,21 @@ async fn tagged(server: &TestServer) -> (String, Value) {
     (etag, reply.json())
 }
 
-#[tokio::test]
-async fn the_board_stays_in_memory_until_something_it_shows_changes() {
+/// A board with one submission ("m" of account "team"), read once: the server, the records,
+/// team's and an admin's tokens, the submission's id, and the board's entity tag.
+async fn read_board() -> (TestServer, Vec<Value>, String, String, i64, String) {
     let (server, records) = spawn_app_with_release().await;
     let (_, team) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
     let (_, admin) = api_token(&server.pool, "root", Role::Admin, None, None).await;
     let first = submit(&server, &team, "m", answers(&records, &[0])).await;
     let (etag, before) = tagged(&server).await;
-    assert_eq!(rows(&before).len(), 1);
+    assert_eq!(rows(&before), vec![(Some(first), Some(1), 1)]);
+    (server, records, team, admin, first, etag)
+}
 
-    // Unchanged: the same tag, and 304 to a client that has it.
+#[tokio::test]
+async fn an_unchanged_board_keeps_its_tag_and_answers_304() {
+    let (server, _, _, _, _, etag) = read_board().await;
     let (again, _) = tagged(&server).await;
     assert_eq!(again, etag);
     let reply = server
@@ -260,47 +265,74 @@ async fn the_board_stays_in_memory_until_something_it_shows_changes() {
         .expect(200)
         .await;
     let page_tag = page.headers["etag"].to_str().expect("tag").to_owned();
+    assert_ne!(
+        page_tag, etag,
+        "the page and the JSON are different entities"
+    );
     let reply = server
         .call(Method::GET, "/leaderboard/mini")
         .header("if-none-match", &page_tag)
         .send()
         .await;
     assert_eq!(reply.status, 304);
+    // Another page of the same board is another entity.
+    let other = server
+        .call(
+            Method::GET,
+            "/api/v1/datasets/mini/leaderboard?sort=overall_pa",
+        )
+        .expect(200)
+        .await;
+    assert_ne!(other.headers["etag"], etag.as_str());
+    server.stop().await;
+}
 
-    // A submission is stored.
+#[tokio::test]
+async fn a_stored_submission_drops_the_board() {
+    let (server, records, team, _, _, etag) = read_board().await;
     let second = submit(&server, &team, "n", answers(&records, &[])).await;
-    let (etag2, board) = tagged(&server).await;
-    assert_ne!(etag2, etag);
+    let (after, board) = tagged(&server).await;
+    assert_ne!(after, etag);
     assert_eq!(rows(&board).len(), 2);
     assert_eq!(board["rows"][0]["submission"], second);
+    server.stop().await;
+}
 
-    // An admin hides a row.
+#[tokio::test]
+async fn a_visibility_change_drops_the_board() {
+    let (server, _, _, admin, first, etag) = read_board().await;
     server
-        .call(
-            Method::PATCH,
-            &format!("/api/v1/admin/submissions/{second}"),
-        )
+        .call(Method::PATCH, &format!("/api/v1/admin/submissions/{first}"))
         .bearer(&admin)
         .json(&json!({"visibility": "hidden"}))
         .expect(200)
         .await;
-    let (etag3, board) = tagged(&server).await;
-    assert_ne!(etag3, etag2);
-    assert_eq!(rows(&board), vec![(Some(first), Some(1), 1)]);
+    let (after, board) = tagged(&server).await;
+    assert_ne!(after, etag);
+    assert_eq!(rows(&board), vec![]);
+    server.stop().await;
+}
 
-    // An admin marks a baseline: shown, no longer ranked.
+#[tokio::test]
+async fn a_baseline_flag_drops_the_board() {
+    let (server, _, _, admin, first, etag) = read_board().await;
     server
         .call(Method::PATCH, &format!("/api/v1/admin/submissions/{first}"))
         .bearer(&admin)
         .json(&json!({"baseline": true}))
         .expect(200)
         .await;
-    let (etag4, board) = tagged(&server).await;
-    assert_ne!(etag4, etag3);
+    let (after, board) = tagged(&server).await;
+    assert_ne!(after, etag);
+    // Shown, no longer ranked.
     assert_eq!(rows(&board), vec![(Some(first), None, 1)]);
     assert_eq!(board["rows"][0]["baseline"], true);
+    server.stop().await;
+}
 
-    // An annotator's answer brings the Human row.
+#[tokio::test]
+async fn an_annotators_answer_drops_the_board_for_the_human_row() {
+    let (server, records, _, _, _, etag) = read_board().await;
     let annotator_id = annotator(&server, "ann", false).await;
     let item = records[0]["id"].as_str().expect("id").to_owned();
     assign(&server, annotator_id, &[&item]).await;
@@ -317,8 +349,8 @@ async fn the_board_stays_in_memory_until_something_it_shows_changes() {
         )
         .await;
     assert_eq!(r.status(), 200);
-    let (etag5, board) = tagged(&server).await;
-    assert_ne!(etag5, etag4);
+    let (after, board) = tagged(&server).await;
+    assert_ne!(after, etag);
     assert!(
         board["rows"]
             .as_array()
