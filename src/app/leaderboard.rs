@@ -1,5 +1,6 @@
-//! A dataset's leaderboard: one row per published submission and, once annotators have
-//! answered, the Human row, scored by the same verifier; best overall task accuracy first.
+//! A dataset's leaderboard: a row per published submission and, once annotators have
+//! answered, the Human row, scored by the same verifier. `core::leaderboard` cuts pages from
+//! them (one row per account and model, ranks, sorts, filters).
 //!
 //! Boards are served from memory ([`board`]): built once, then shared until something that
 //! changes them happens in this process (a submission stored, a listing changed, an annotator's
