@@ -363,6 +363,27 @@ pub async fn submit_to(
         .await
 }
 
+/// Compact lines answering every record of a release with its ground truth written as text
+/// (`"[2, 1]"`, as models answer), reversed for the records at the indices in `wrong`.
+pub fn answers(records: &[Value], wrong: &[usize]) -> String {
+    records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let mut gt: Vec<u64> = r["gt_answer"]
+                .as_array()
+                .expect("gt")
+                .iter()
+                .map(|v| v.as_u64().expect("label"))
+                .collect();
+            if wrong.contains(&i) {
+                gt.reverse();
+            }
+            json!({"id": r["id"], "answer": format!("{gt:?}")}).to_string() + "\n"
+        })
+        .collect()
+}
+
 /// Compact answers (`{"id", "answer"}` lines) equal to each record's ground truth.
 pub fn ground_truth_answers(records: &[Value]) -> String {
     records

@@ -8,26 +8,6 @@ use serde_json::{Value, json};
 use crate::annotate::{annotator, assign, logged_in_on};
 use crate::helpers::*;
 
-/// Compact answers to the mini release: the ground truth, reversed for the records in `wrong`.
-pub fn answers(records: &[Value], wrong: &[usize]) -> String {
-    records
-        .iter()
-        .enumerate()
-        .map(|(i, r)| {
-            let mut gt: Vec<u64> = r["gt_answer"]
-                .as_array()
-                .expect("gt")
-                .iter()
-                .map(|v| v.as_u64().expect("label"))
-                .collect();
-            if wrong.contains(&i) {
-                gt.reverse();
-            }
-            json!({"id": r["id"], "answer": gt}).to_string() + "\n"
-        })
-        .collect()
-}
-
 /// Submits `body` as `model` with `token`; the new submission's id.
 pub async fn submit(server: &TestServer, token: &str, model: &str, body: String) -> i64 {
     let reply = submit_to(server, "mini", &format!("model={model}"), token, body).await;

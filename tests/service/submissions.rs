@@ -89,26 +89,6 @@ async fn stored_counts(pool: &SqlitePool) -> (i64, i64) {
     store::submissions::counts(&mut conn).await.expect("counts")
 }
 
-/// Compact lines answering every record of the mini release; `wrong` ids get the reverse.
-fn answers(records: &[Value], wrong: &[usize]) -> String {
-    records
-        .iter()
-        .enumerate()
-        .map(|(i, r)| {
-            let mut gt: Vec<u64> = r["gt_answer"]
-                .as_array()
-                .expect("gt")
-                .iter()
-                .map(|v| v.as_u64().expect("label"))
-                .collect();
-            if wrong.contains(&i) {
-                gt.reverse();
-            }
-            json!({"id": r["id"], "answer": format!("{gt:?}")}).to_string() + "\n"
-        })
-        .collect()
-}
-
 #[tokio::test]
 async fn a_submission_is_scored_stored_and_readable_by_its_owner_only() {
     let (server, records) = spawn_app_with_release().await;
