@@ -164,12 +164,13 @@ pub async fn open(
             )
             .await?;
             hub.standings.forget(session.annotator, item.rowid);
-            Some(opened.draft)
+            // None: finished meanwhile (the standing read was older than the answer).
+            opened.map(|o| o.draft)
         }
     };
     Ok(AssignedItem {
         item,
-        finished: standing.finished,
+        finished: draft.is_none(),
         draft,
     })
 }
@@ -183,11 +184,15 @@ async fn unfinished(
 ) -> Result<Arc<StoredItem>, AppError> {
     let (item, standing) = assigned(hub, session, dataset, item_id).await?;
     if standing.finished {
-        return Err(AppError::Conflict(format!(
-            "item '{item_id}' is already finished; its answer can no longer change"
-        )));
+        return Err(finished_already(item_id));
     }
     Ok(item)
+}
+
+fn finished_already(item_id: &str) -> AppError {
+    AppError::Conflict(format!(
+        "item '{item_id}' is already finished; its answer can no longer change"
+    ))
 }
 
 fn checked(item: &StoredItem, draft: &Draft) -> Result<(), AppError> {
@@ -207,9 +212,13 @@ pub async fn save_draft(
     let item = unfinished(hub, session, dataset, item_id).await?;
     checked(&item, draft)?;
     let mut conn = hub.conn().await?;
-    store::annotations::save_draft(&mut conn, session.annotator, item.rowid, draft, now_ms())
-        .await?;
+    let saved =
+        store::annotations::save_draft(&mut conn, session.annotator, item.rowid, draft, now_ms())
+            .await?;
     hub.standings.forget(session.annotator, item.rowid);
+    if !saved {
+        return Err(finished_already(item_id));
+    }
     Ok(())
 }
 
@@ -251,8 +260,11 @@ async fn finish(
     let answered = matches!(outcome, Outcome::Answered(_));
     let now = now_ms();
     let mut tx = hub.begin().await?;
-    if let Some(draft) = save {
-        store::annotations::save_draft(&mut tx, session.annotator, item.rowid, draft, now).await?;
+    if let Some(draft) = save
+        && !store::annotations::save_draft(&mut tx, session.annotator, item.rowid, draft, now)
+            .await?
+    {
+        return Err(finished_already(&item.summary.item_id));
     }
     let stored = store::annotations::draft(&mut tx, session.annotator, item.rowid).await?;
     let telemetry = stored
@@ -262,10 +274,7 @@ async fn finish(
         store::annotations::finish(&mut tx, session.annotator, item.rowid, &outcome, &telemetry)
             .await?;
     if !finished {
-        return Err(AppError::Conflict(format!(
-            "item '{}' is already finished",
-            item.summary.item_id
-        )));
+        return Err(finished_already(&item.summary.item_id));
     }
     tx.commit().await?;
     hub.standings.forget(session.annotator, item.rowid);

@@ -23,8 +23,8 @@ use crate::core::verifier::{
 pub struct LineProblem {
     /// 1-based line of a JSONL body, or 1-based element of a JSON array body.
     pub line: usize,
-    /// `invalid_json`, `not_an_object`, `missing_id`, `unknown_id`, `duplicate_id`,
-    /// `missing_answer`.
+    /// `empty_body`, `invalid_json`, `not_an_object`, `missing_id`, `unknown_id`,
+    /// `duplicate_id`, `missing_answer`, `malformed_answer`.
     pub kind: &'static str,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub item: Option<String>,
@@ -209,6 +209,18 @@ pub fn score_submission(
     body: &str,
 ) -> Result<ScoredSubmission, SubmissionError> {
     let records = submission_records(body).map_err(SubmissionError::Rejected)?;
+    if records.iter().all(|(_, record)| record.trim().is_empty()) {
+        // Scoring nothing would store a row of zeros: almost surely a client that sent the
+        // wrong file, or none.
+        return Err(SubmissionError::Rejected(vec![LineProblem {
+            line: 1,
+            kind: "empty_body",
+            item: None,
+            message: "line 1: the body holds no record; send one JSON object per line (or a \
+                      JSON array of them), each with `id` and `answer`"
+                .to_owned(),
+        }]));
+    }
     let items: Vec<StrictItem<'_>> = targets.iter().map(ScoringTarget::strict_item).collect();
     let scoring = score_strict_predictions(&items, records.iter().map(|(l, s)| (*l, s.as_str())))?;
     let mut problems: Vec<LineProblem> = scoring
@@ -217,19 +229,26 @@ pub fn score_submission(
         .map(LineProblem::from_strict)
         .collect();
     for result in &scoring.items {
-        if let (Some(line), StrictOutcome::Unparseable { reason }) = (result.line, &result.outcome)
-            && *reason == StrictParseFailure::Missing
-        {
-            problems.push(LineProblem {
-                line,
-                kind: "missing_answer",
-                item: Some(result.id.clone()),
-                message: format!(
-                    "line {line}: item {}: `answer` is missing or null",
-                    result.id
-                ),
-            });
-        }
+        let (Some(line), StrictOutcome::Unparseable { reason }) = (result.line, &result.outcome)
+        else {
+            continue;
+        };
+        // A model's reply is text or a list; a missing answer or an object is the client's
+        // mistake, refused rather than scored as the model's failure.
+        let (kind, what) = match reason {
+            StrictParseFailure::Missing => ("missing_answer", "is missing or null"),
+            StrictParseFailure::NotText { found: "dict" } => (
+                "malformed_answer",
+                "is a JSON object; send the model's reply as text or a list of labels",
+            ),
+            _ => continue,
+        };
+        problems.push(LineProblem {
+            line,
+            kind,
+            item: Some(result.id.clone()),
+            message: format!("line {line}: item {}: `answer` {what}", result.id),
+        });
     }
     if !problems.is_empty() {
         problems.sort_by_key(|p| p.line);

@@ -326,22 +326,25 @@ pub async fn assignment_state(
     .transpose()
 }
 
-/// The annotator's draft of an item, creating an empty one (which starts the item's clock).
+/// The annotator's draft of an item, creating an empty one (which starts the item's clock);
+/// `None` when the item is finished, which leaves no draft behind.
 pub async fn open_draft(
     conn: &mut SqliteConnection,
     annotator: i64,
     item: i64,
     empty: &Draft,
     now_ms: i64,
-) -> Result<StoredDraft, sqlx::Error> {
+) -> Result<Option<StoredDraft>, sqlx::Error> {
     // Read first: page views are many, and a write would take SQLite's one write lock.
     if let Some(found) = draft(&mut *conn, annotator, item).await? {
-        return Ok(found);
+        return Ok(Some(found));
     }
     let json = serde_json::to_string(empty).map_err(|e| corrupt("state", e))?;
     sqlx::query(
         "INSERT INTO drafts (annotator, item, slots, state, started_at_ms, updated_at_ms) \
-         VALUES (?1, ?2, '[]', ?3, ?4, ?4) ON CONFLICT (annotator, item) DO NOTHING",
+         SELECT ?1, ?2, '[]', ?3, ?4, ?4 WHERE NOT EXISTS \
+         (SELECT 1 FROM annotations WHERE annotator = ?1 AND item = ?2) \
+         ON CONFLICT (annotator, item) DO NOTHING",
     )
     .bind(annotator)
     .bind(item)
@@ -349,9 +352,7 @@ pub async fn open_draft(
     .bind(now_ms)
     .execute(&mut *conn)
     .await?;
-    draft(conn, annotator, item)
-        .await?
-        .ok_or_else(|| corrupt("drafts", "a draft just written is missing"))
+    draft(conn, annotator, item).await
 }
 
 pub async fn draft(
@@ -381,18 +382,21 @@ fn stored_draft(r: &sqlx::sqlite::SqliteRow) -> Result<StoredDraft, sqlx::Error>
 }
 
 /// Saves a draft; the first save with a card placed records the time of the first placement.
+/// `Ok(false)` when the item is finished: the check and the write are one statement, so a
+/// draft can never outlive the answer that finished its item.
 pub async fn save_draft(
     conn: &mut SqliteConnection,
     annotator: i64,
     item: i64,
     draft: &Draft,
     now_ms: i64,
-) -> Result<(), sqlx::Error> {
+) -> Result<bool, sqlx::Error> {
     let state = serde_json::to_string(draft).map_err(|e| corrupt("state", e))?;
     let slots = serde_json::to_string(&draft.slots).map_err(|e| corrupt("slots", e))?;
-    sqlx::query(
+    let done = sqlx::query(
         "INSERT INTO drafts (annotator, item, slots, state, started_at_ms, first_placement_at_ms, \
-         updated_at_ms) VALUES (?1, ?2, ?3, ?4, ?5, CASE WHEN ?6 THEN ?5 END, ?5) \
+         updated_at_ms) SELECT ?1, ?2, ?3, ?4, ?5, CASE WHEN ?6 THEN ?5 END, ?5 \
+         WHERE NOT EXISTS (SELECT 1 FROM annotations WHERE annotator = ?1 AND item = ?2) \
          ON CONFLICT (annotator, item) DO UPDATE SET slots = excluded.slots, \
          state = excluded.state, updated_at_ms = excluded.updated_at_ms, \
          first_placement_at_ms = coalesce(drafts.first_placement_at_ms, \
@@ -406,7 +410,7 @@ pub async fn save_draft(
     .bind(draft.has_placement())
     .execute(conn)
     .await?;
-    Ok(())
+    Ok(done.rows_affected() > 0)
 }
 
 /// Records a finished item and drops its draft. `Ok(false)` if it was already finished.

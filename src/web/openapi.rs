@@ -134,8 +134,9 @@ fn error_meaning(status: u16) -> &'static str {
         413 => "The body is larger than the server's limit for this route.",
         422 => {
             "The body was read but refused; nothing was stored. `problems` lists each bad \
-             line: its 1-based number, a `kind` (invalid_json, not_an_object, missing_id, \
-             unknown_id, duplicate_id, missing_answer), the item id when known, and a message."
+             line: its 1-based number, a `kind` (empty_body, invalid_json, not_an_object, \
+             missing_id, unknown_id, duplicate_id, missing_answer, malformed_answer), the item \
+             id when known, and a message."
         }
         429 => {
             "A quota is used up. Past the daily quota, `Retry-After` gives the seconds to the \
@@ -399,7 +400,7 @@ pub fn document(routes: &[ApiRoute]) -> Value {
                                 "required": ["line", "kind", "message"],
                                 "properties": {
                                     "line": {"type": "integer", "description": "1-based line (JSONL) or element (JSON array)."},
-                                    "kind": {"type": "string", "enum": ["invalid_json", "not_an_object", "missing_id", "unknown_id", "duplicate_id", "missing_answer"]},
+                                    "kind": {"type": "string", "enum": ["empty_body", "invalid_json", "not_an_object", "missing_id", "unknown_id", "duplicate_id", "missing_answer", "malformed_answer"]},
                                     "item": {"type": "string", "description": "The item id, when the line named one."},
                                     "message": {"type": "string"},
                                 },

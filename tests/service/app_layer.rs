@@ -137,3 +137,55 @@ async fn the_web_and_the_command_line_share_one_naming_rule() {
         "the CLI says {cli:?}, the use case {rule:?}"
     );
 }
+
+#[tokio::test]
+async fn a_draft_never_outlives_the_answer_that_finished_its_item() {
+    use enact_hub::core::annotation::{Draft, Outcome, Session, Telemetry};
+    let (server, records) = spawn_app_with_release().await;
+    let annotator = crate::annotate::annotator(&server, "ann", false).await;
+    let item = records[0]["id"].as_str().expect("id").to_owned();
+    crate::annotate::assign(&server, annotator, &[&item]).await;
+    let hub = Hub::from(server.pool.clone());
+    let session = Session {
+        annotator,
+        name: "ann".to_owned(),
+        is_admin: false,
+        csrf_token: String::new(),
+    };
+    // The item is opened: this hub now holds "unfinished, with a draft" in memory.
+    let opened = app::annotation::open(&hub, &session, "mini", &item)
+        .await
+        .expect("open");
+    assert!(!opened.finished);
+    let rowid = opened.item.rowid;
+    // Another server (or a request this hub's memory has not seen) finishes it meanwhile.
+    let mut conn = server.pool.acquire().await.expect("conn");
+    let answer = enact_hub::core::verifier::Permutation::new(vec![2, 1]).expect("answer");
+    assert!(
+        enact_hub::store::annotations::finish(
+            &mut conn,
+            annotator,
+            rowid,
+            &Outcome::Answered(answer),
+            &Telemetry::none(),
+        )
+        .await
+        .expect("finish")
+    );
+    // The late save is refused by the store itself, and leaves no draft.
+    let mut draft = Draft::empty(opened.item.summary.step_length);
+    draft.slots = vec![Some(1), None];
+    let Err(AppError::Conflict(message)) =
+        app::annotation::save_draft(&hub, &session, "mini", &item, &draft).await
+    else {
+        panic!("a save after the answer must be refused");
+    };
+    assert!(message.contains("already finished"), "{message}");
+    let drafts: i64 = sqlx::query_scalar("SELECT count(*) FROM drafts WHERE item = ?")
+        .bind(rowid)
+        .fetch_one(&mut *conn)
+        .await
+        .expect("count");
+    assert_eq!(drafts, 0);
+    server.stop().await;
+}

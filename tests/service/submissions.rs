@@ -251,6 +251,17 @@ async fn every_validation_problem_is_a_422_naming_its_line_and_nothing_is_stored
             "missing_id",
             2,
         ),
+        (
+            format!(
+                "{first}\n{}\n",
+                json!({"id": records[1]["id"], "answer": {"order": [1, 2]}})
+            ),
+            "malformed_answer",
+            2,
+        ),
+        ("".to_owned(), "empty_body", 1),
+        (" \n\n".to_owned(), "empty_body", 1),
+        ("[]".to_owned(), "empty_body", 1),
     ];
     for (body, kind, line) in cases {
         let (status, _, error) = post_as(&server, &token, body).await;
@@ -691,9 +702,9 @@ async fn token_create_prints_the_token_last_and_revoke_takes_effect_at_once() {
     server.stop().await;
 }
 
-/// Lines of `file` whose record has no `answer` (or a null one): the strict scorer reads those
-/// as missing answers, which the API refuses.
-fn lines_without_answer(text: &str) -> Vec<u64> {
+/// Lines of `file` whose record has no reply in `answer` (missing, null, or a JSON object): the
+/// strict scorer counts them as unparseable, the API refuses them as the client's mistake.
+fn lines_without_a_reply(text: &str) -> Vec<u64> {
     text.lines()
         .enumerate()
         .filter_map(|(i, line)| {
@@ -702,7 +713,7 @@ fn lines_without_answer(text: &str) -> Vec<u64> {
             object.get("id")?.as_str().filter(|s| !s.is_empty())?;
             object
                 .get("answer")
-                .is_none_or(Value::is_null)
+                .is_none_or(|a| a.is_null() || a.is_object())
                 .then_some(i as u64 + 1)
         })
         .collect()
@@ -773,7 +784,7 @@ async fn every_enact_prediction_file_scores_as_the_strict_command_does() {
             .filter_map(|l| l.split(": line ").nth(1))
             .filter_map(|rest| rest.split(':').next()?.parse().ok())
             .collect();
-        expected.extend(lines_without_answer(&text));
+        expected.extend(lines_without_a_reply(&text));
         expected.sort_unstable();
         expected.dedup();
 
