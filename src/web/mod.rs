@@ -1,10 +1,12 @@
-//! The HTTP service: application state, the router, and the server's life cycle.
+//! The HTTP service: application state, the router, and the server's life cycle. Handlers
+//! parse a request, call one use case of [`crate::app`] and render its result.
 //!
-//! `api` serves JSON under `/api/v1`, `pages` serves the HTML site, `assets` the embedded CSS
-//! and scripts; `auth` logs annotators in, `annotate` is their side of human annotation and
-//! `admin` the admins'. Each exposes one `router()`; they are merged once in [`router`].
-//! The JSON routes are one table instead ([`openapi`]): the `/api/v1` router and the OpenAPI
-//! document are both built from it.
+//! `api` serves JSON under `/api/v1`, `pages` the HTML site, `assets` the embedded CSS and
+//! scripts; `auth` reads API tokens, `session` logs annotators in, `annotate` is their side of
+//! human annotation and `admin` the admins'. Each page module exposes one `router()`; they are
+//! merged once in [`router`]. The JSON routes are one table instead ([`api_routes`]): the
+//! `/api/v1` router and the OpenAPI document (`openapi`) are both built from it. `extract`
+//! holds the extractors whose rejections are the JSON error body.
 
 mod admin;
 mod admin_tokens;

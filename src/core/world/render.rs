@@ -719,6 +719,20 @@ struct OnScreen {
     held: bool,
 }
 
+impl OnScreen {
+    /// The front of an upright thing: from the ground line up to its height plus `top` (the
+    /// part of its top face the camera sees).
+    fn front(&self, top: f32) -> [(f32, f32); 4] {
+        let Self { u, v, w, h, .. } = *self;
+        [
+            (u - w / 2.0, v - h - top),
+            (u + w / 2.0, v - h - top),
+            (u + w / 2.0, v),
+            (u - w / 2.0, v),
+        ]
+    }
+}
+
 /// Fills `pts` with a darker rim 1.5 px wide, so small things stand out from what is behind.
 fn outline(owner: u16, c: &mut Canvas, pts: &[(f32, f32)], fill: [u8; 3]) {
     let cx = pts.iter().map(|p| p.0).sum::<f32>() / pts.len() as f32;
@@ -1019,17 +1033,7 @@ fn draw_mug(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
         shade(col, 0.6),
         owner,
     );
-    outline(
-        owner,
-        canvas,
-        &[
-            (u - w / 2.0, v - h),
-            (u + w / 2.0, v - h),
-            (u + w / 2.0, v),
-            (u - w / 2.0, v),
-        ],
-        col,
-    );
+    outline(owner, canvas, &at.front(0.0), col);
     let rim = if state.has_water(thing) {
         (water_colour, water)
     } else {
@@ -1083,17 +1087,7 @@ fn draw_board(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
     let owner = p.owner;
     let col = p.col;
     let top = w * 0.18;
-    outline(
-        owner,
-        canvas,
-        &[
-            (u - w / 2.0, v - h - top),
-            (u + w / 2.0, v - h - top),
-            (u + w / 2.0, v),
-            (u - w / 2.0, v),
-        ],
-        col,
-    );
+    outline(owner, canvas, &at.front(top), col);
     canvas.rect(u - w / 2.0, v - h, u + w / 2.0, v, shade(col, 0.8), owner);
 }
 
@@ -1300,17 +1294,7 @@ fn draw_book(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
     let OnScreen { u, v, w, h, .. } = *at;
     let owner = p.owner;
     let col = p.col;
-    outline(
-        owner,
-        canvas,
-        &[
-            (u - w / 2.0, v - h - w * 0.15),
-            (u + w / 2.0, v - h - w * 0.15),
-            (u + w / 2.0, v),
-            (u - w / 2.0, v),
-        ],
-        col,
-    );
+    outline(owner, canvas, &at.front(w * 0.15), col);
     canvas.rect(u - w / 2.0, v - h, u + w / 2.0, v, [240, 236, 220], owner);
     canvas.rect(
         u - w / 2.0,
@@ -1326,17 +1310,7 @@ fn draw_remote(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
     let OnScreen { u, v, w, h, .. } = *at;
     let owner = p.owner;
     let col = p.col;
-    outline(
-        owner,
-        canvas,
-        &[
-            (u - w / 2.0, v - h - w * 0.1),
-            (u + w / 2.0, v - h - w * 0.1),
-            (u + w / 2.0, v),
-            (u - w / 2.0, v),
-        ],
-        col,
-    );
+    outline(owner, canvas, &at.front(w * 0.1), col);
     canvas.ellipse(u - w * 0.3, v - h, w * 0.05, w * 0.04, [220, 40, 40], owner);
     canvas.ellipse(u, v - h, w * 0.05, w * 0.04, [60, 160, 220], owner);
 }
