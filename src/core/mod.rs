@@ -8,6 +8,8 @@
 //!   policies, with TA/PA tables.
 //! - [`semantics`]: where an item's transition signatures come from (scene graphs or action
 //!   text); [`scoring`]: scoring whole prediction files and ENACT's output files.
+//! - [`error_analysis`]: the paper's structural and semantic error taxonomy, handedness and
+//!   accepted-but-incomplete answers, per step of every analysed answer.
 //! - [`submission`]: reading, refusing and scoring a leaderboard submission.
 //! - [`leaderboard`]: leaderboard rows (Table 1 layout) and the TA-vs-L chart geometry.
 //! - [`pipeline`]: ENACT's data pipeline: key-frame segmentation, the transition graph, path
@@ -27,6 +29,7 @@ pub mod annotation;
 pub mod credentials;
 pub mod dataset;
 pub mod demo;
+pub mod error_analysis;
 pub mod leaderboard;
 pub mod pipeline;
 pub mod release;

@@ -11,7 +11,7 @@
 //!
 //! Forward items without scene graphs are scored by exact match only.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
@@ -19,7 +19,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::core::dataset::{Direction, FieldProblem, QaItem};
 use crate::core::scene_graph::{
-    FrameSelection, SceneGraphTimeline, TimelineError, View, pair_signatures, parse_action,
+    FrameSelection, SceneGraphTimeline, TimelineError, View, pair_signature_views, pair_signatures,
+    parse_action,
 };
 use crate::core::verifier::{ItemSignatures, VisibleCoverage};
 
@@ -65,12 +66,36 @@ pub fn scene_graph_path(replayed_dir: &Path, task_name: &str) -> PathBuf {
 
 /// Builds one item's table from a loaded timeline. Pairs on which ENACT raises are kept as
 /// errors inside the table (the verifier reproduces what ENACT does with them).
-pub fn item_signatures(timeline: &SceneGraphTimeline, key_frame_ids: &[String]) -> ItemSignatures {
-    ItemSignatures::build(
-        key_frame_ids,
-        VisibleCoverage::Chronological,
-        |from, to, view| pair_signatures(timeline, from, to, view).map_err(|e| e.to_string()),
-    )
+///
+/// A forward item's table holds the visible sets of every ordered pair, not only the
+/// chronological ones the verifier reads: the error analysis compares each step of a forward
+/// answer with the visible change between the frames the answer put side by side. Each pair's
+/// diff is computed once for both views.
+pub fn item_signatures(
+    timeline: &SceneGraphTimeline,
+    key_frame_ids: &[String],
+    direction: Direction,
+) -> ItemSignatures {
+    let coverage = match direction {
+        Direction::Forward => VisibleCoverage::AllPairs,
+        Direction::Inverse => VisibleCoverage::Chronological,
+    };
+    // Per pair, the visible and full sets until the table takes them.
+    type Views = [Option<Result<BTreeSet<String>, String>>; 2];
+    let mut computed: HashMap<(String, String), Views> = HashMap::new();
+    ItemSignatures::build(key_frame_ids, coverage, |from, to, view| {
+        let views = computed
+            .entry((from.to_owned(), to.to_owned()))
+            .or_insert_with(|| pair_signature_views(timeline, from, to).map(Some));
+        let slot = match view {
+            View::Visible => 0,
+            View::Full => 1,
+        };
+        // Each (pair, view) is asked for once, so the set can be moved out.
+        views[slot]
+            .take()
+            .unwrap_or_else(|| pair_signatures(timeline, from, to, view).map_err(|e| e.to_string()))
+    })
 }
 
 /// Signatures from scene graphs for every item, in input order.
@@ -121,7 +146,11 @@ pub fn from_scene_graphs(replayed_dir: &Path, items: &[&QaItem]) -> Vec<Signatur
                                 })
                                 .collect();
                             if missing.is_empty() {
-                                Ok(item_signatures(tl, &items[i].key_frame_ids))
+                                Ok(item_signatures(
+                                    tl,
+                                    &items[i].key_frame_ids,
+                                    items[i].direction,
+                                ))
                             } else {
                                 Err(missing)
                             }

@@ -111,6 +111,39 @@ pub fn pair_signatures(
     diff_signatures(&diff).map_err(|e| pair_fault(timeline, from, to)(DiffFault::Name(e)))
 }
 
+/// Both views' signature sets of the change from `from` to `to`, from one state-centric diff:
+/// each view fails (or not) exactly as [`pair_signatures`] would for it alone.
+pub fn pair_signature_views(
+    timeline: &SceneGraphTimeline,
+    from: &str,
+    to: &str,
+) -> [Result<BTreeSet<String>, String>; 2] {
+    let fault = pair_fault(timeline, from, to);
+    let graphs = timeline
+        .scene_graph(from)
+        .and_then(|a| Ok((a, timeline.scene_graph(to)?)));
+    let (a, b) = match graphs {
+        Ok(graphs) => graphs,
+        Err(e) => {
+            let message = DiffError::from(e).to_string();
+            return [Err(message.clone()), Err(message)];
+        }
+    };
+    let full = match state_centric_diff(&a, &b) {
+        Ok(full) => full,
+        Err(e) => {
+            let message = fault(e).to_string();
+            return [Err(message.clone()), Err(message)];
+        }
+    };
+    [View::Visible, View::Full].map(|view| {
+        restrict_to_view(&a, &b, &full, view, &EVALUATION_SENSORS)
+            .map_err(&fault)
+            .and_then(|diff| diff_signatures(&diff).map_err(|e| fault(DiffFault::Name(e))))
+            .map_err(|e| e.to_string())
+    })
+}
+
 /// The C (visible) and F (full) signature sets of one transition.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct TransitionSignatureSets {
