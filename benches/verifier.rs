@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use enact_hub::core::error_analysis::analyse_strict;
 use enact_hub::core::verifier::{
     Direction, ItemSignatures, ParsedAnswer, PerformanceReport, Permutation, PyValue, ScoredEntry,
     StepLength, StrictItem, View, VisibleCoverage, parse_answer_enact, score_strict_predictions,
@@ -109,21 +110,26 @@ fn fixture_items(dir: &Path) -> Vec<BenchItem> {
         } else {
             Direction::Forward
         };
-        let signatures =
-            ItemSignatures::build(&frames, VisibleCoverage::Chronological, |from, to, view| {
-                if from == to {
-                    return Ok(BTreeSet::new());
-                }
-                match pairs.get(&(task.clone(), from.to_owned(), to.to_owned())) {
-                    Some(Ok((v, f))) => Ok(if view == View::Visible {
-                        v.clone()
-                    } else {
-                        f.clone()
-                    }),
-                    Some(Err(e)) => Err(e.clone()),
-                    None => Err("unknown pair".to_owned()),
-                }
-            });
+        // As stored at import: forward tables hold the visible sets of every pair (the error
+        // analysis reads them), inverse tables the chronological ones.
+        let coverage = match direction {
+            Direction::Forward => VisibleCoverage::AllPairs,
+            Direction::Inverse => VisibleCoverage::Chronological,
+        };
+        let signatures = ItemSignatures::build(&frames, coverage, |from, to, view| {
+            if from == to {
+                return Ok(BTreeSet::new());
+            }
+            match pairs.get(&(task.clone(), from.to_owned(), to.to_owned())) {
+                Some(Ok((v, f))) => Ok(if view == View::Visible {
+                    v.clone()
+                } else {
+                    f.clone()
+                }),
+                Some(Err(e)) => Err(e.clone()),
+                None => Err("unknown pair".to_owned()),
+            }
+        });
         let answers = answers.remove(&id).unwrap_or_default();
         base.push((
             id,
@@ -176,19 +182,22 @@ fn synthetic_items() -> Vec<BenchItem> {
             answer.swap(a, b);
             let frames: Vec<String> = (0..states).map(|i| format!("{}", 100 * i + k)).collect();
             let pool: Vec<String> = (0..40).map(|s| format!("edge_add_obj{s}_Inside")).collect();
-            let signatures =
-                ItemSignatures::build(&frames, VisibleCoverage::Chronological, |from, to, view| {
-                    if from == to {
-                        return Ok(BTreeSet::new());
-                    }
-                    let seed = from.len() * 31
-                        + to.len() * 7
-                        + from.bytes().map(usize::from).sum::<usize>();
-                    let size = 1 + seed % 4 + if view == View::Full { 2 } else { 0 };
-                    Ok((0..size)
-                        .map(|i| pool[(seed + i * 13) % pool.len()].clone())
-                        .collect())
-                });
+            let coverage = if k % 2 == 0 {
+                VisibleCoverage::AllPairs
+            } else {
+                VisibleCoverage::Chronological
+            };
+            let signatures = ItemSignatures::build(&frames, coverage, |from, to, view| {
+                if from == to {
+                    return Ok(BTreeSet::new());
+                }
+                let seed =
+                    from.len() * 31 + to.len() * 7 + from.bytes().map(usize::from).sum::<usize>();
+                let size = 1 + seed % 4 + if view == View::Full { 2 } else { 0 };
+                Ok((0..size)
+                    .map(|i| pool[(seed + i * 13) % pool.len()].clone())
+                    .collect())
+            });
             let text: Vec<String> = answer.iter().map(u8::to_string).collect();
             BenchItem {
                 id: format!("synthetic_{k}"),
@@ -310,6 +319,19 @@ fn bench_scoring(c: &mut Criterion) {
                 .expect("scores"),
             )
         })
+    });
+    let scoring = score_strict_predictions(
+        &dataset,
+        lines.iter().enumerate().map(|(i, l)| (i + 1, l.as_str())),
+    )
+    .expect("scores");
+    let analysis = analyse_strict(&dataset, &scoring);
+    println!(
+        "error analysis: {} answers analysed, {} errors",
+        analysis.overall.analysed_answers, analysis.overall.errors
+    );
+    c.bench_function("error_analysis_8972_answers", |b| {
+        b.iter(|| black_box(analyse_strict(black_box(&dataset), black_box(&scoring))))
     });
     c.bench_function("item_signatures_deserialise_8972", |b| {
         let stored: Vec<String> = items

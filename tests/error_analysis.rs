@@ -167,8 +167,8 @@ fn identities_hold_on_every_prediction_file() {
         let scoring = score_strict_predictions(&items, python_text_lines(&text)).unwrap();
         let analysis = analyse_strict(&items, &scoring);
         check_identities(&name, &analysis.overall);
-        let forward = &analysis.by_direction["forward"];
-        let inverse = &analysis.by_direction["inverse"];
+        let forward = &analysis.by_direction.forward;
+        let inverse = &analysis.by_direction.inverse;
         check_identities(&name, forward);
         check_identities(&name, inverse);
         assert_eq!(

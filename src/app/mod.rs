@@ -24,6 +24,7 @@ pub mod cache;
 pub mod datasets;
 pub mod demo;
 mod error;
+pub mod error_analysis;
 pub mod import;
 pub mod items;
 pub mod leaderboard;

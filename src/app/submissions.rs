@@ -268,18 +268,8 @@ pub struct SubmissionDetail {
 /// Reads a submission. Another account's submission is answered like a missing one, so ids
 /// reveal nothing.
 pub async fn read(hub: &Hub, caller: &Caller, id: &str) -> Result<SubmissionDetail, AppError> {
-    if !caller.has(Scope::ReadOwn) && !caller.has(Scope::Admin) {
-        return Err(AppError::Forbidden(
-            "this token lacks the `read_own` scope".to_owned(),
-        ));
-    }
-    let not_found = || AppError::NotFound(format!("no submission {id}"));
-    let numeric: i64 = id.parse().map_err(|_| not_found())?;
-    let admin = caller.has(Scope::Admin);
-    let row = by_id(hub, numeric)
-        .await?
-        .filter(|r| r.account_id == caller.account_id || admin)
-        .ok_or_else(not_found)?;
+    let row = readable(hub, caller, id).await?;
+    let numeric = row.id;
     let mut conn = hub.conn().await?;
     let visibility = store::submissions::answer_visibility(&mut conn, row.dataset_id).await?;
     let verdicts = if visibility == AnswerVisibility::Public {
@@ -292,6 +282,23 @@ pub async fn read(hub: &Hub, caller: &Caller, id: &str) -> Result<SubmissionDeta
         ))
     };
     Ok(SubmissionDetail { row, verdicts })
+}
+
+/// A submission its caller may read: their own (with the `read_own` scope) or any (admin).
+/// Another account's submission is answered like a missing one.
+pub async fn readable(hub: &Hub, caller: &Caller, id: &str) -> Result<SubmissionRow, AppError> {
+    if !caller.has(Scope::ReadOwn) && !caller.has(Scope::Admin) {
+        return Err(AppError::Forbidden(
+            "this token lacks the `read_own` scope".to_owned(),
+        ));
+    }
+    let not_found = || AppError::NotFound(format!("no submission {id}"));
+    let numeric: i64 = id.parse().map_err(|_| not_found())?;
+    let admin = caller.has(Scope::Admin);
+    by_id(hub, numeric)
+        .await?
+        .filter(|r| r.account_id == caller.account_id || admin)
+        .ok_or_else(not_found)
 }
 
 /// An admin's change to a leaderboard row: mark a baseline, or hide, publish or withdraw it.

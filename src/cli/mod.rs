@@ -37,6 +37,9 @@ enum Command {
     Import(ImportArgs),
     /// Score a prediction file (ENACT model-output JSONL, or compact {"id", "answer"} lines).
     Score(ScoreArgs),
+    /// The paper's error analysis of a prediction file: structural and semantic error classes,
+    /// left/right hand precision, recall and mixing, and accepted-but-incomplete answers.
+    Errors(ErrorsArgs),
     /// Krippendorff's alpha of reliability data, with an optional bootstrap interval.
     Agreement(AgreementArgs),
     /// The paper's cross-annotation protocol on a stored dataset: draw k completed primary items
@@ -236,6 +239,27 @@ struct ScoreArgs {
 }
 
 #[derive(Args)]
+struct ErrorsArgs {
+    /// The prediction file (JSONL), read as the leaderboard reads submissions.
+    predictions: PathBuf,
+    /// Analyse against a dataset stored in this database (with --dataset).
+    #[arg(long, requires = "dataset", conflicts_with = "data")]
+    db: Option<PathBuf>,
+    /// The stored dataset.
+    #[arg(long, requires = "db")]
+    dataset: Option<String>,
+    /// Analyse against an ENACT release folder (QA/enact_ordering.jsonl) instead.
+    #[arg(long, value_name = "DATA_DIR", required_unless_present = "db")]
+    data: Option<PathBuf>,
+    /// ENACT's replayed_activities folder: signatures for forward items come only from there.
+    #[arg(long, value_name = "REPLAYED_DIR")]
+    scene_graphs: Option<PathBuf>,
+    /// Print one JSON object (the API's `/submissions/{id}/errors` shape) instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
 struct DbArg {
     /// SQLite database file (created if missing).
     #[arg(long, env = "ENACT_HUB_DB", default_value = "enact-hub.db")]
@@ -332,6 +356,7 @@ pub fn main() -> ExitCode {
             Command::Serve(args) => serve(args).await,
             Command::Import(args) => import(args).await,
             Command::Score(args) => score(args).await,
+            Command::Errors(args) => errors(args).await,
             Command::Agreement(args) => match (&args.db, &args.dataset) {
                 (Some(db), Some(dataset)) => stored::agreement(db, dataset, args.stored()).await,
                 _ => agreement(&args),
@@ -624,8 +649,25 @@ fn write_enact_outputs(out: &Path, model: &str, meta: &str, detailed: &str) -> a
 async fn scoring_targets(
     args: &ScoreArgs,
 ) -> anyhow::Result<Result<Vec<ScoringTarget>, Vec<String>>> {
-    if let (Some(db), Some(dataset)) = (&args.db, &args.dataset) {
-        if args.scene_graphs.is_some() {
+    targets_of(
+        args.db.as_deref(),
+        args.dataset.as_deref(),
+        args.data.as_deref(),
+        args.scene_graphs.as_deref(),
+    )
+    .await
+}
+
+/// The items a prediction file is scored or analysed against: a stored dataset, or a release
+/// folder with its signatures computed now (from scene graphs when given).
+async fn targets_of(
+    db: Option<&Path>,
+    dataset: Option<&str>,
+    data: Option<&Path>,
+    scene_graphs: Option<&Path>,
+) -> anyhow::Result<Result<Vec<ScoringTarget>, Vec<String>>> {
+    if let (Some(db), Some(dataset)) = (db, dataset) {
+        if scene_graphs.is_some() {
             anyhow::bail!(
                 "--scene-graphs goes with --data; a stored dataset keeps the signatures computed \
                  at import (enact-hub import DATA_DIR --scene-graphs REPLAYED_DIR)"
@@ -636,16 +678,84 @@ async fn scoring_targets(
         hub.close().await;
         return Ok(Ok(in_database(targets, db)?));
     }
-    let data = args
-        .data
-        .clone()
-        .context("give --data DATA_DIR, or --db PATH --dataset NAME")?;
-    let scene_graphs = args.scene_graphs.clone();
-    tokio::task::spawn_blocking(move || {
+    let data = data
+        .context("give --data DATA_DIR, or --db PATH --dataset NAME")?
+        .to_path_buf();
+    let scene_graphs = scene_graphs.map(Path::to_path_buf);
+    let spinner = spinner(if scene_graphs.is_some() {
+        "reading the release and its scene graphs"
+    } else {
+        "reading the release"
+    });
+    let targets = tokio::task::spawn_blocking(move || {
         app::scoring::release_targets(&data, scene_graphs.as_deref())
     })
     .await
-    .context("reading the release failed")?
+    .context("reading the release failed")?;
+    spinner.finish_and_clear();
+    targets
+}
+
+/// A spinner on standard error for a step that may take a while (hidden when not a terminal).
+fn spinner(message: &'static str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new_spinner().with_message(message);
+    bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    bar
+}
+
+async fn errors(args: ErrorsArgs) -> anyhow::Result<ExitCode> {
+    let file = args.predictions.display().to_string();
+    let text = std::fs::read_to_string(&args.predictions)
+        .with_context(|| format!("cannot read {file} (it must be UTF-8 text)"))?;
+    let targets = match targets_of(
+        args.db.as_deref(),
+        args.dataset.as_deref(),
+        args.data.as_deref(),
+        args.scene_graphs.as_deref(),
+    )
+    .await?
+    {
+        Ok(t) => t,
+        Err(problems) => {
+            for p in &problems {
+                eprintln!("{p}");
+            }
+            eprintln!(
+                "error: the dataset has {} problems; nothing was analysed",
+                problems.len()
+            );
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    let spinner = spinner("analysing answers");
+    let analysis =
+        tokio::task::spawn_blocking(move || app::error_analysis::analyse_file(&targets, &text))
+            .await
+            .context("the analysis failed")?
+            .map_err(anyhow::Error::msg)?;
+    spinner.finish_and_clear();
+    let analysis = match analysis {
+        Ok(a) => a,
+        Err(problems) => {
+            for p in &problems {
+                eprintln!("{file}: {p}");
+            }
+            eprintln!(
+                "error: {file}: {} problems; nothing was analysed",
+                problems.len()
+            );
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&analysis)?);
+    } else {
+        print!(
+            "{}",
+            crate::core::error_analysis::present::text_table(&analysis)
+        );
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 /// A use case's result on a database the user named: what was not found says where it looked.

@@ -8,7 +8,10 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use crate::core::dataset::{Direction, StepLength};
-use crate::core::verifier::{ItemSignatures, ParsedAnswer, Permutation, ScoredEntry, verify};
+use crate::core::error_analysis::{self, AnsweredItem, ErrorAnalysis, Reading};
+use crate::core::verifier::{
+    ItemSignatures, ParsedAnswer, Permutation, ScoredEntry, StrictItem, verify,
+};
 
 /// An item to deal out: its store id and its kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -128,6 +131,7 @@ fn check_slots(field: &str, slots: &[Option<u8>], n: usize) -> Result<(), String
 /// One submitted human answer with what scoring needs of its item.
 #[derive(Debug, Clone)]
 pub struct HumanAnswer {
+    pub item_id: String,
     pub direction: Direction,
     pub step_length: StepLength,
     pub ground_truth: Permutation,
@@ -158,6 +162,37 @@ pub fn human_entries(answers: &[HumanAnswer]) -> Result<Vec<ScoredEntry>, String
             })
         })
         .collect()
+}
+
+/// The error analysis of human answers, each read like a model's (an item answered by two
+/// people counts twice), with the verifier's task accuracy for it.
+pub fn human_error_analysis(answers: &[HumanAnswer]) -> Result<ErrorAnalysis, String> {
+    let mut verdicts = Vec::with_capacity(answers.len());
+    for (i, a) in answers.iter().enumerate() {
+        let verdict = verify(
+            a.direction,
+            &a.ground_truth,
+            &ParsedAnswer::from(&a.answer),
+            a.signatures.as_ref(),
+        )
+        .map_err(|e| format!("answer {i} (item {}): {e}", a.item_id))?;
+        verdicts.push(verdict.task_accuracy);
+    }
+    Ok(error_analysis::analyse(answers.iter().zip(verdicts).map(
+        |(a, task_accuracy)| AnsweredItem {
+            item: StrictItem {
+                id: &a.item_id,
+                direction: a.direction,
+                step_length: a.step_length,
+                ground_truth: &a.ground_truth,
+                signatures: a.signatures.as_ref(),
+            },
+            reading: Reading::Answer {
+                answer: &a.answer,
+                task_accuracy,
+            },
+        },
+    )))
 }
 
 /// An annotator logged in: who, and the CSRF token their forms must carry.
@@ -367,6 +402,7 @@ mod tests {
         let gt = Permutation::new(vec![2, 1]).expect("gt");
         let answers = [
             HumanAnswer {
+                item_id: "a".to_owned(),
                 direction: Direction::Forward,
                 step_length: l(3),
                 ground_truth: gt.clone(),
@@ -374,6 +410,7 @@ mod tests {
                 signatures: None,
             },
             HumanAnswer {
+                item_id: "b".to_owned(),
                 direction: Direction::Inverse,
                 step_length: l(3),
                 ground_truth: gt.clone(),

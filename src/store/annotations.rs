@@ -531,7 +531,7 @@ pub async fn human_answers(
     dataset_id: i64,
 ) -> Result<Vec<HumanAnswer>, sqlx::Error> {
     let rows = sqlx::query(
-        "SELECT i.direction, i.step_length, i.gt_answer, n.answer, s.signatures \
+        "SELECT i.item_id, i.direction, i.step_length, i.gt_answer, n.answer, s.signatures \
          FROM annotations n JOIN items i ON i.id = n.item \
          LEFT JOIN item_signatures s ON s.item = i.id \
          WHERE i.dataset_id = ? AND n.outcome = 'answered' \
@@ -555,6 +555,7 @@ pub(crate) fn human_answer_from_row(
     };
     let signatures: Option<String> = r.try_get("signatures")?;
     Ok(HumanAnswer {
+        item_id: r.try_get("item_id")?,
         direction,
         step_length,
         ground_truth: permutation("gt_answer")?,

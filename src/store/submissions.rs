@@ -332,3 +332,29 @@ pub async fn counts(conn: &mut SqliteConnection) -> Result<(i64, i64), sqlx::Err
         .await?;
     Ok((submissions, items))
 }
+
+/// The stored error analysis of a submission (JSON), if one was computed.
+pub async fn error_analysis(
+    conn: &mut SqliteConnection,
+    submission: i64,
+) -> Result<Option<String>, sqlx::Error> {
+    sqlx::query_scalar("SELECT error_analysis FROM submissions WHERE id = ?")
+        .bind(submission)
+        .fetch_optional(conn)
+        .await
+        .map(Option::flatten)
+}
+
+/// Keeps a submission's error analysis (JSON).
+pub async fn set_error_analysis(
+    conn: &mut SqliteConnection,
+    submission: i64,
+    json: &str,
+) -> Result<(), sqlx::Error> {
+    sqlx::query("UPDATE submissions SET error_analysis = ? WHERE id = ?")
+        .bind(json)
+        .bind(submission)
+        .execute(conn)
+        .await
+        .map(|_| ())
+}

@@ -14,12 +14,13 @@
 pub mod classify;
 pub mod component;
 pub mod handedness;
+pub mod present;
 pub mod semantic;
 pub mod steps;
 
 use std::collections::BTreeMap;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 pub use classify::{StepComparison, StructuralClass, StructuralError, compare_step};
 pub use component::{Component, ComponentKind, ComponentParseError, Hand, Operation};
@@ -30,6 +31,10 @@ pub use steps::{StepSets, StepsUnavailable, answer_steps};
 use crate::core::verifier::{
     Direction, Permutation, StrictItem, StrictOutcome, StrictParseFailure, StrictScoring,
 };
+
+/// The analysis's version, stored with every result: a stored result of another version is
+/// recomputed. Raise it whenever a rule here changes what is counted.
+pub const ANALYSIS_VERSION: u32 = 1;
 
 /// Examples kept per semantic category × structural class.
 pub const EXAMPLES_PER_CELL: usize = 3;
@@ -114,20 +119,20 @@ impl Tally {
     }
 
     fn figures(&self) -> ErrorFigures {
-        let mut structural = BTreeMap::new();
-        for class in StructuralClass::ALL {
-            structural.insert(class.as_str(), self.structural[class.index()]);
-        }
-        let mut semantic = BTreeMap::new();
-        for category in SemanticCategory::ALL {
-            let row = &self.semantic[category.index()];
-            let mut cell: BTreeMap<&'static str, usize> = StructuralClass::ALL
-                .iter()
-                .map(|c| (c.as_str(), row[c.index()]))
-                .collect();
-            cell.insert("total", row.iter().sum());
-            semantic.insert(category.as_str(), cell);
-        }
+        let classes = |row: &[usize; 5]| ClassCounts {
+            polarity_inversion: row[StructuralClass::PolarityInversion.index()],
+            predicate_substitution: row[StructuralClass::PredicateSubstitution.index()],
+            entity_substitution: row[StructuralClass::EntitySubstitution.index()],
+            omission: row[StructuralClass::Omission.index()],
+            hallucination: row[StructuralClass::Hallucination.index()],
+        };
+        let category = |c: SemanticCategory| {
+            let row = &self.semantic[c.index()];
+            CategoryCounts {
+                classes: classes(row),
+                total: row.iter().sum(),
+            }
+        };
         ErrorFigures {
             analysed_answers: self.answers,
             analysed_steps: self.steps,
@@ -141,8 +146,13 @@ impl Tally {
                 matched: self.matched,
             },
             errors: self.structural.iter().sum(),
-            structural,
-            semantic,
+            structural: classes(&self.structural),
+            semantic: SemanticCounts {
+                spatial_relations: category(SemanticCategory::SpatialRelations),
+                functional_states: category(SemanticCategory::FunctionalStates),
+                material_states: category(SemanticCategory::MaterialStates),
+                agent_interaction: category(SemanticCategory::AgentInteraction),
+            },
             handedness: Handedness {
                 left: self.hands[Hand::Left as usize].figures(),
                 right: self.hands[Hand::Right as usize].figures(),
@@ -165,7 +175,7 @@ fn ratio(part: usize, whole: usize) -> Option<f64> {
 
 /// Component totals: the identities `matched + paired + omissions = truth` and
 /// `matched + paired + hallucinations = predicted` hold.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ComponentCounts {
     pub truth: usize,
     pub predicted: usize,
@@ -173,14 +183,14 @@ pub struct ComponentCounts {
 }
 
 /// Left- and right-hand figures.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Handedness {
     pub left: HandFigures,
     pub right: HandFigures,
 }
 
 /// The paper's table of semantically accepted answers that omit parts of transitions.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AcceptedIncomplete {
     /// Analysed answers the verifier accepts (task accuracy).
     pub accepted_answers: usize,
@@ -196,8 +206,58 @@ pub struct AcceptedIncomplete {
     pub pair_level: Option<f64>,
 }
 
+/// A count per structural class.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ClassCounts {
+    pub polarity_inversion: usize,
+    pub predicate_substitution: usize,
+    pub entity_substitution: usize,
+    pub omission: usize,
+    pub hallucination: usize,
+}
+
+impl ClassCounts {
+    pub fn get(&self, class: StructuralClass) -> usize {
+        match class {
+            StructuralClass::PolarityInversion => self.polarity_inversion,
+            StructuralClass::PredicateSubstitution => self.predicate_substitution,
+            StructuralClass::EntitySubstitution => self.entity_substitution,
+            StructuralClass::Omission => self.omission,
+            StructuralClass::Hallucination => self.hallucination,
+        }
+    }
+}
+
+/// One semantic category's errors by structural class, and their total.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CategoryCounts {
+    #[serde(flatten)]
+    pub classes: ClassCounts,
+    pub total: usize,
+}
+
+/// Errors per semantic category.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SemanticCounts {
+    pub spatial_relations: CategoryCounts,
+    pub functional_states: CategoryCounts,
+    pub material_states: CategoryCounts,
+    pub agent_interaction: CategoryCounts,
+}
+
+impl SemanticCounts {
+    pub fn get(&self, category: SemanticCategory) -> &CategoryCounts {
+        match category {
+            SemanticCategory::SpatialRelations => &self.spatial_relations,
+            SemanticCategory::FunctionalStates => &self.functional_states,
+            SemanticCategory::MaterialStates => &self.material_states,
+            SemanticCategory::AgentInteraction => &self.agent_interaction,
+        }
+    }
+}
+
 /// The figures of one group of answers (all, or one direction).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ErrorFigures {
     pub analysed_answers: usize,
     pub analysed_steps: usize,
@@ -210,38 +270,20 @@ pub struct ErrorFigures {
     pub components: ComponentCounts,
     /// Structural errors in all: the sum of `structural`.
     pub errors: usize,
-    /// Count per structural class.
-    pub structural: BTreeMap<&'static str, usize>,
-    /// Per semantic category: count per structural class, and `total`.
-    pub semantic: BTreeMap<&'static str, BTreeMap<&'static str, usize>>,
+    pub structural: ClassCounts,
+    pub semantic: SemanticCounts,
     pub handedness: Handedness,
     pub accepted_incomplete: AcceptedIncomplete,
 }
 
 impl ErrorFigures {
     pub fn structural_count(&self, class: StructuralClass) -> usize {
-        self.structural.get(class.as_str()).copied().unwrap_or(0)
-    }
-
-    pub fn semantic_count(&self, category: SemanticCategory, class: StructuralClass) -> usize {
-        self.semantic
-            .get(category.as_str())
-            .and_then(|row| row.get(class.as_str()))
-            .copied()
-            .unwrap_or(0)
-    }
-
-    pub fn semantic_total(&self, category: SemanticCategory) -> usize {
-        self.semantic
-            .get(category.as_str())
-            .and_then(|row| row.get("total"))
-            .copied()
-            .unwrap_or(0)
+        self.structural.get(class)
     }
 }
 
 /// One wrong component, as shown to people.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ErrorExample {
     pub item: String,
     pub direction: Direction,
@@ -254,7 +296,7 @@ pub struct ErrorExample {
 }
 
 /// A component as signature and sentence.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ExampleChange {
     pub signature: String,
     pub sentence: String,
@@ -270,20 +312,30 @@ impl ExampleChange {
 }
 
 /// The whole analysis of a set of answers.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ErrorAnalysis {
+    pub version: u32,
     #[serde(flatten)]
     pub overall: ErrorFigures,
-    /// `forward` and `inverse`.
-    pub by_direction: BTreeMap<&'static str, ErrorFigures>,
+    pub by_direction: ByDirection,
     /// Up to [`EXAMPLES_PER_CELL`] per semantic category × structural class, in answer order.
     /// Callers remove them where the truth must stay hidden.
     pub examples: Vec<ErrorExample>,
 }
 
+/// The figures of each direction.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ByDirection {
+    pub forward: ErrorFigures,
+    pub inverse: ErrorFigures,
+}
+
 impl ErrorAnalysis {
-    pub fn direction(&self, direction: Direction) -> Option<&ErrorFigures> {
-        self.by_direction.get(direction.as_str())
+    pub fn direction(&self, direction: Direction) -> &ErrorFigures {
+        match direction {
+            Direction::Forward => &self.by_direction.forward,
+            Direction::Inverse => &self.by_direction.inverse,
+        }
     }
 }
 
@@ -380,12 +432,12 @@ pub fn analyse<'a>(answers: impl IntoIterator<Item = AnsweredItem<'a>>) -> Error
         }
     }
     ErrorAnalysis {
+        version: ANALYSIS_VERSION,
         overall: overall.figures(),
-        by_direction: [Direction::Forward, Direction::Inverse]
-            .into_iter()
-            .zip(&by_direction)
-            .map(|(d, t)| (d.as_str(), t.figures()))
-            .collect(),
+        by_direction: ByDirection {
+            forward: by_direction[0].figures(),
+            inverse: by_direction[1].figures(),
+        },
         examples,
     }
 }

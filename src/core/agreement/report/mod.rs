@@ -604,6 +604,7 @@ mod tests {
             item_id: item.to_owned(),
             kind: AssignmentKind::Primary,
             human: HumanAnswer {
+                item_id: item.to_owned(),
                 // Inverse items are scored by exact match here (no signatures): PA 1 or 0.
                 direction: Direction::Inverse,
                 step_length: l(4),
