@@ -17,6 +17,7 @@ mod archive;
 mod assets;
 mod auth;
 pub mod error;
+mod error_analysis;
 mod extract;
 mod frame_cache;
 mod leaderboard;
@@ -103,6 +104,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(archive::routes());
     routes.extend(submissions::routes());
     routes.extend(leaderboard::api_routes());
+    routes.extend(error_analysis::routes());
     routes.push(
         openapi::ApiRoute::new(
             openapi::Verb::Get,
@@ -147,6 +149,7 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
         .route("/healthz", axum::routing::get(healthz))
         .merge(pages::router())
         .merge(leaderboard::page_router())
+        .merge(error_analysis::page_router())
         .merge(session::router())
         .merge(annotate::router())
         .merge(admin::router())

@@ -11,6 +11,7 @@
 //!
 //! Pure: answers and signature tables come in, one [`ErrorAnalysis`] goes out.
 
+pub mod chart;
 pub mod classify;
 pub mod component;
 pub mod handedness;

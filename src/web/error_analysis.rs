@@ -1,0 +1,493 @@
+//! Error analysis over HTTP: a submission's analysis as JSON (owner or admin), the published
+//! rows of a dataset side by side as JSON, and the two pages (all rows compared; one row with
+//! its examples).
+
+use askama::Template;
+use axum::Router;
+use axum::extract::FromRequestParts;
+use axum::extract::State;
+use axum::http::request::Parts;
+use axum::response::Html;
+use axum::routing::get;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use super::error::PageError;
+use super::extract::{Json, Path, Query};
+use super::openapi::{ApiRoute, Verb};
+use super::session::LoggedIn;
+use super::{AppError, AppState};
+use crate::app::error_analysis::{self, Analysed, ComparedRow};
+use crate::app::tokens::Caller;
+use crate::core::error_analysis::chart::{self, BarChart};
+use crate::core::error_analysis::{
+    ErrorExample, ErrorFigures, Hand, HandFigures, SemanticCategory, StructuralClass,
+};
+use crate::core::verifier::Direction;
+
+/// Rows compared by default: the top of the board, as on its chart.
+const DEFAULT_ROWS: usize = 8;
+
+pub fn routes() -> Vec<ApiRoute> {
+    vec![
+        ApiRoute::new(
+            Verb::Get,
+            "/submissions/{id}/errors",
+            submission_errors,
+            "A submission's error analysis",
+        )
+        .describe(
+            "The paper's error analysis of the submission's answers: per step, the predicted \
+             state changes against the true ones, components matched or classed as polarity \
+             inversion, predicate substitution, entity substitution, omission or \
+             hallucination (`structural`), by semantic category (`semantic`), left- and \
+             right-hand precision, recall and mixing with standard errors (`handedness`), \
+             accepted-but-incomplete rates, and the same `by_direction`. Only answers of the \
+             right length are analysed; `excluded_*` count the others. `examples` (true and \
+             predicted changes as sentences) only when the dataset's answers are public; \
+             otherwise `examples_withheld` says why. Same JSON as `enact-hub errors --json`.",
+        )
+        .bearer("read_own")
+        .responds(200, Some("application/json"), "The analysis.")
+        .errors(&[401, 403, 404]),
+        ApiRoute::new(
+            Verb::Get,
+            "/datasets/{dataset}/errors",
+            dataset_errors,
+            "Error analyses of a leaderboard",
+        )
+        .describe(
+            "The error analysis of each published leaderboard row in board order (the top 8 \
+             by default), then the Human row once annotators have answered. Examples only for \
+             datasets whose answers are public. The page is /leaderboard/{dataset}/errors.",
+        )
+        .query("top", false, "How many ranked rows, 1 to 50 (default 8).")
+        .query(
+            "pick",
+            false,
+            "Comma-separated submission ids to compare instead.",
+        )
+        .responds(200, Some("application/json"), "`dataset` and `rows`.")
+        .errors(&[400, 404]),
+    ]
+}
+
+pub fn page_router() -> Router<AppState> {
+    Router::new()
+        .route("/leaderboard/{dataset}/errors", get(comparison_page))
+        .route("/leaderboard/{dataset}/errors/{entry}", get(row_page))
+}
+
+/// The analysis as JSON, with `examples_withheld` when examples were removed.
+fn analysis_json(analysed: &Analysed) -> Result<Value, AppError> {
+    let mut value = serde_json::to_value(&analysed.analysis).map_err(AppError::internal)?;
+    if let (Some(why), Value::Object(map)) = (&analysed.withheld, &mut value) {
+        map.insert("examples_withheld".to_owned(), Value::String(why.clone()));
+    }
+    Ok(value)
+}
+
+async fn submission_errors(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    caller: Caller,
+) -> Result<Json<Value>, AppError> {
+    let (_, analysed) = error_analysis::of_submission(&state.hub, &caller, &id).await?;
+    Ok(Json(analysis_json(&analysed)?))
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct CompareQuery {
+    top: Option<usize>,
+    pick: Option<String>,
+    direction: Option<String>,
+}
+
+impl CompareQuery {
+    fn top(&self) -> Result<usize, AppError> {
+        match self.top {
+            None => Ok(DEFAULT_ROWS),
+            Some(n @ 1..=50) => Ok(n),
+            Some(n) => Err(AppError::BadRequest(format!(
+                "query parameter `top`: {n} is outside 1..=50"
+            ))),
+        }
+    }
+
+    fn picked(&self) -> Result<Vec<i64>, AppError> {
+        let Some(text) = self.pick.as_deref().filter(|t| !t.is_empty()) else {
+            return Ok(Vec::new());
+        };
+        text.split(',')
+            .map(|id| {
+                id.trim().parse().map_err(|_| {
+                    AppError::BadRequest(format!(
+                        "query parameter `pick`: `{id}` is not a submission id"
+                    ))
+                })
+            })
+            .collect()
+    }
+
+    fn direction(&self) -> Result<Option<Direction>, AppError> {
+        match self.direction.as_deref() {
+            None | Some("" | "overall") => Ok(None),
+            Some("forward") => Ok(Some(Direction::Forward)),
+            Some("inverse") => Ok(Some(Direction::Inverse)),
+            Some(other) => Err(AppError::BadRequest(format!(
+                "query parameter `direction`: `{other}` is not overall, forward or inverse"
+            ))),
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct ComparedJson {
+    submission: Option<i64>,
+    label: String,
+    account: String,
+    baseline: bool,
+    analysis: Value,
+}
+
+async fn dataset_errors(
+    State(state): State<AppState>,
+    Path(name): Path<String>,
+    Query(query): Query<CompareQuery>,
+) -> Result<Json<Value>, AppError> {
+    let (dataset, rows) =
+        error_analysis::comparison(&state.hub, &name, query.top()?, &query.picked()?, false)
+            .await?;
+    let rows: Vec<ComparedJson> = rows
+        .iter()
+        .map(|r| {
+            Ok(ComparedJson {
+                submission: r.submission,
+                label: r.label.clone(),
+                account: r.account.clone(),
+                baseline: r.baseline,
+                analysis: analysis_json(&r.analysis)?,
+            })
+        })
+        .collect::<Result<_, AppError>>()?;
+    Ok(Json(
+        serde_json::json!({ "dataset": dataset.name, "rows": rows }),
+    ))
+}
+
+/// Whether the reader is a logged-in admin (pages show them examples of hidden datasets).
+struct ReaderIsAdmin(bool);
+
+impl FromRequestParts<AppState> for ReaderIsAdmin {
+    type Rejection = std::convert::Infallible;
+    async fn from_request_parts(
+        parts: &mut Parts,
+        state: &AppState,
+    ) -> Result<Self, Self::Rejection> {
+        let has_cookie = parts.headers.contains_key(axum::http::header::COOKIE);
+        if !has_cookie {
+            return Ok(ReaderIsAdmin(false));
+        }
+        Ok(ReaderIsAdmin(
+            LoggedIn::from_request_parts(parts, state)
+                .await
+                .is_ok_and(|LoggedIn(s)| s.is_admin),
+        ))
+    }
+}
+
+/// One table line of figures.
+struct FigureRow {
+    label: String,
+    href: Option<String>,
+    analysed: usize,
+    excluded: usize,
+    errors: usize,
+    /// Per structural class: "12.4% (37)".
+    structural: Vec<String>,
+    /// Per semantic category.
+    semantic: Vec<String>,
+    /// Left precision, recall, mixing, then right: "0.812 ± 0.021".
+    hands: Vec<String>,
+    data_level: String,
+    pair_level: String,
+}
+
+fn share(n: usize, of: usize) -> String {
+    if of == 0 {
+        "–".to_owned()
+    } else {
+        format!("{:.1}% ({n})", 100.0 * n as f64 / of as f64)
+    }
+}
+
+fn rate(value: Option<f64>) -> String {
+    value.map_or("–".to_owned(), |v| format!("{:.2}%", v * 100.0))
+}
+
+fn figure_row(label: String, href: Option<String>, f: &ErrorFigures) -> FigureRow {
+    let hand = |h: &HandFigures| {
+        [
+            (h.precision, h.precision_se),
+            (h.recall, h.recall_se),
+            (h.mixing, h.mixing_se),
+        ]
+        .map(|(v, se)| match (v, se) {
+            (Some(v), Some(se)) => format!("{v:.3} ± {se:.3}"),
+            _ => "–".to_owned(),
+        })
+    };
+    let mut hands = hand(&f.handedness.left).to_vec();
+    hands.extend(hand(&f.handedness.right));
+    FigureRow {
+        label,
+        href,
+        analysed: f.analysed_answers,
+        excluded: f.excluded_unequal_length
+            + f.excluded_unreadable
+            + f.excluded_missing
+            + f.excluded_without_signatures,
+        errors: f.errors,
+        structural: StructuralClass::ALL
+            .iter()
+            .map(|c| share(f.structural.get(*c), f.errors))
+            .collect(),
+        semantic: SemanticCategory::ALL
+            .iter()
+            .map(|c| share(f.semantic.get(*c).total, f.errors))
+            .collect(),
+        hands,
+        data_level: rate(f.accepted_incomplete.data_level),
+        pair_level: rate(f.accepted_incomplete.pair_level),
+    }
+}
+
+fn figures(analysed: &Analysed, direction: Option<Direction>) -> &ErrorFigures {
+    match direction {
+        None => &analysed.analysis.overall,
+        Some(d) => analysed.analysis.direction(d),
+    }
+}
+
+/// Column headings shared by both pages.
+struct Headings {
+    structural: Vec<&'static str>,
+    semantic: Vec<&'static str>,
+    hands: Vec<String>,
+}
+
+fn headings() -> Headings {
+    let mut hands = Vec::new();
+    for h in Hand::BOTH {
+        for m in ["precision", "recall", "mixing"] {
+            hands.push(format!("{} {m}", h.as_str()));
+        }
+    }
+    Headings {
+        structural: StructuralClass::ALL.iter().map(|c| c.label()).collect(),
+        semantic: SemanticCategory::ALL.iter().map(|c| c.label()).collect(),
+        hands,
+    }
+}
+
+#[derive(Template)]
+#[template(path = "errors.html")]
+struct ComparisonPage {
+    dataset: String,
+    direction: &'static str,
+    links: Vec<(&'static str, String, bool)>,
+    headings: Headings,
+    rows: Vec<FigureRow>,
+    structural: BarChart,
+    semantic: BarChart,
+    hands: BarChart,
+    withheld: Option<String>,
+}
+
+fn direction_name(direction: Option<Direction>) -> &'static str {
+    direction.map_or("overall", Direction::as_str)
+}
+
+async fn comparison_page(
+    State(state): State<AppState>,
+    Path(name): Path<String>,
+    Query(query): Query<CompareQuery>,
+    ReaderIsAdmin(admin): ReaderIsAdmin,
+) -> Result<Html<String>, PageError> {
+    let direction = query.direction()?;
+    let (dataset, rows) =
+        error_analysis::comparison(&state.hub, &name, query.top()?, &query.picked()?, admin)
+            .await?;
+    let base = format!("/leaderboard/{}/errors", dataset.name);
+    let label = |r: &ComparedRow| match r.submission {
+        Some(id) => format!("{} (#{id})", r.label),
+        None => r.label.clone(),
+    };
+    let entry = |r: &ComparedRow| {
+        r.submission
+            .map_or_else(|| "human".to_owned(), |id| id.to_string())
+    };
+    let labels: Vec<String> = rows.iter().map(label).collect();
+    let drawn: Vec<(&str, &ErrorFigures)> = rows
+        .iter()
+        .zip(&labels)
+        .map(|(r, l)| (l.as_str(), figures(&r.analysis, direction)))
+        .collect();
+    let keep = |d: &str| {
+        let mut q = vec![format!("direction={d}")];
+        if let Some(top) = query.top {
+            q.push(format!("top={top}"));
+        }
+        if let Some(pick) = &query.pick {
+            q.push(format!("pick={pick}"));
+        }
+        format!("{base}?{}", q.join("&"))
+    };
+    let page = ComparisonPage {
+        dataset: dataset.name.clone(),
+        direction: direction_name(direction),
+        links: ["overall", "forward", "inverse"]
+            .into_iter()
+            .map(|d| (d, keep(d), d == direction_name(direction)))
+            .collect(),
+        headings: headings(),
+        rows: rows
+            .iter()
+            .zip(&labels)
+            .map(|(r, l)| {
+                figure_row(
+                    l.clone(),
+                    Some(format!("{base}/{}", entry(r))),
+                    figures(&r.analysis, direction),
+                )
+            })
+            .collect(),
+        structural: chart::structural_chart(&drawn),
+        semantic: chart::semantic_chart(&drawn),
+        hands: chart::hand_chart(&drawn),
+        withheld: rows.iter().find_map(|r| r.analysis.withheld.clone()),
+    };
+    Ok(Html(page.render()?))
+}
+
+/// Examples of one semantic category, per structural class.
+struct ExampleGroup {
+    category: &'static str,
+    examples: Vec<ExampleLine>,
+}
+
+struct ExampleLine {
+    class: &'static str,
+    item: String,
+    href: String,
+    direction: &'static str,
+    step: usize,
+    truth: String,
+    predicted: String,
+}
+
+#[derive(Template)]
+#[template(path = "errors_row.html")]
+struct RowPage {
+    dataset: String,
+    label: String,
+    headings: Headings,
+    rows: Vec<FigureRow>,
+    structural: BarChart,
+    semantic: BarChart,
+    hands: BarChart,
+    examples: Vec<ExampleGroup>,
+    withheld: Option<String>,
+}
+
+fn example_groups(dataset: &str, examples: &[ErrorExample]) -> Vec<ExampleGroup> {
+    let mut groups: Vec<ExampleGroup> = SemanticCategory::ALL
+        .iter()
+        .map(|c| ExampleGroup {
+            category: c.label(),
+            examples: Vec::new(),
+        })
+        .collect();
+    for e in examples {
+        let Some(category) = e.category else { continue };
+        groups[category.index()].examples.push(ExampleLine {
+            class: e.class.label(),
+            item: e.item.clone(),
+            href: format!("/datasets/{dataset}/items/{}", e.item),
+            direction: e.direction.as_str(),
+            step: e.step,
+            truth: e
+                .truth
+                .as_ref()
+                .map_or("–".to_owned(), |c| c.sentence.clone()),
+            predicted: e
+                .predicted
+                .as_ref()
+                .map_or("–".to_owned(), |c| c.sentence.clone()),
+        });
+    }
+    groups.retain(|g| !g.examples.is_empty());
+    groups
+}
+
+async fn row_page(
+    State(state): State<AppState>,
+    Path((name, entry)): Path<(String, String)>,
+    ReaderIsAdmin(admin): ReaderIsAdmin,
+) -> Result<Html<String>, PageError> {
+    let picked: Vec<i64> = match entry.as_str() {
+        "human" => Vec::new(),
+        id => vec![id.parse().map_err(|_| {
+            AppError::NotFound(format!(
+                "no published row {id} on the leaderboard of '{name}': use a submission id \
+                 or `human`"
+            ))
+        })?],
+    };
+    let (dataset, rows) = error_analysis::comparison(&state.hub, &name, 0, &picked, admin).await?;
+    let row = rows
+        .into_iter()
+        .find(|r| match (entry.as_str(), r.submission) {
+            ("human", None) => true,
+            (_, Some(id)) => picked.contains(&id),
+            _ => false,
+        })
+        .ok_or_else(|| {
+            AppError::NotFound(format!(
+                "no published row {entry} on the leaderboard of '{}'{}",
+                dataset.name,
+                if entry == "human" {
+                    " (nobody has answered yet)"
+                } else {
+                    ""
+                }
+            ))
+        })?;
+    let label = match row.submission {
+        Some(id) => format!("{} (#{id})", row.label),
+        None => row.label.clone(),
+    };
+    let a = &row.analysis.analysis;
+    let groups = [
+        ("overall", &a.overall),
+        ("forward", &a.by_direction.forward),
+        ("inverse", &a.by_direction.inverse),
+    ];
+    let drawn: Vec<(&str, &ErrorFigures)> = groups[1..].to_vec();
+    let page = RowPage {
+        dataset: dataset.name.clone(),
+        label,
+        headings: headings(),
+        rows: groups
+            .iter()
+            .map(|(g, f)| figure_row((*g).to_owned(), None, f))
+            .collect(),
+        structural: chart::structural_chart(&drawn),
+        semantic: chart::semantic_chart(&drawn),
+        hands: chart::hand_chart(&drawn),
+        examples: example_groups(&dataset.name, &a.examples),
+        withheld: row.analysis.withheld.clone(),
+    };
+    Ok(Html(page.render()?))
+}

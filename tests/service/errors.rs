@@ -1,0 +1,219 @@
+//! Error analysis through the service and the command line: on ENACT's parity items (scene
+//! graphs imported), a submission's `/errors` JSON is the one `enact-hub errors --json` prints
+//! for the same file; examples follow the dataset's answer visibility; only the owner or an
+//! admin reads a submission's analysis; the pages draw every row, the Human row included.
+
+use enact_hub::core::credentials::Role;
+use reqwest::Method;
+use serde_json::{Value, json};
+
+use crate::helpers::*;
+
+fn check_identities(v: &Value) {
+    let c = &v["components"];
+    let s = &v["structural"];
+    let n = |x: &Value| x.as_u64().unwrap();
+    let paired = n(&s["polarity_inversion"])
+        + n(&s["predicate_substitution"])
+        + n(&s["entity_substitution"]);
+    assert_eq!(
+        n(&c["matched"]) + paired + n(&s["omission"]),
+        n(&c["truth"])
+    );
+    assert_eq!(
+        n(&c["matched"]) + paired + n(&s["hallucination"]),
+        n(&c["predicted"])
+    );
+}
+
+#[tokio::test]
+async fn the_api_and_the_cli_agree_on_parity_predictions() {
+    let Some(fixtures) = shared_fixtures() else {
+        eprintln!("skipped: ../shared/fixtures not present");
+        return;
+    };
+    let parity = fixtures.join("enact-parity");
+    let replayed = parity.join("replayed_activities");
+    let server = spawn_app_with(|pool, _| {
+        let parity = parity.clone();
+        let replayed = replayed.clone();
+        async move {
+            let mut options = options("parity");
+            options.scene_graphs = Some(replayed);
+            import(&pool, &parity, &options).await;
+        }
+    })
+    .await;
+    let (_, admin) = api_token(&server.pool, "admin", Role::Admin, None, None).await;
+    let (_, team) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let (_, other) = api_token(&server.pool, "other", Role::Submitter, None, None).await;
+
+    for model in ["random", "adjswap", "length"] {
+        let file = parity.join(format!("predictions/enact_ordering_{model}.jsonl"));
+        let body = std::fs::read(&file).unwrap();
+        let reply = submit_to(&server, "parity", &format!("model={model}"), &team, body).await;
+        assert_eq!(reply.status, 201, "{model}: {}", reply.text);
+        let id = reply.id();
+
+        // Hidden answers (the default): aggregate figures only, and why.
+        let hidden = server
+            .call(Method::GET, &format!("/api/v1/submissions/{id}/errors"))
+            .bearer(&team)
+            .expect(200)
+            .await
+            .json();
+        assert_eq!(hidden["examples"], json!([]), "{model}");
+        assert!(
+            hidden["examples_withheld"]
+                .as_str()
+                .unwrap()
+                .contains("hidden")
+        );
+        check_identities(&hidden);
+        check_identities(&hidden["by_direction"]["forward"]);
+        check_identities(&hidden["by_direction"]["inverse"]);
+        server
+            .call(Method::GET, &format!("/api/v1/submissions/{id}/errors"))
+            .bearer(&other)
+            .expect(404)
+            .await;
+
+        server
+            .call(Method::PUT, "/api/v1/admin/datasets/parity/answers")
+            .bearer(&admin)
+            .json(&json!({"answers": "public"}))
+            .expect(200)
+            .await;
+        let public = server
+            .call(Method::GET, &format!("/api/v1/submissions/{id}/errors"))
+            .bearer(&team)
+            .expect(200)
+            .await
+            .json();
+        server
+            .call(Method::PUT, "/api/v1/admin/datasets/parity/answers")
+            .bearer(&admin)
+            .json(&json!({"answers": "hidden"}))
+            .expect(200)
+            .await;
+
+        let out = enact_hub()
+            .args(["errors", file.to_str().unwrap(), "--db"])
+            .arg(server.db_path())
+            .args(["--dataset", "parity", "--json"])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let cli: Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(cli, public, "{model}: CLI and API differ");
+        if model == "length" {
+            // Every answer of this file has another length than its item's.
+            assert_eq!(public["excluded_unequal_length"], 96, "{public:#}");
+        } else {
+            assert!(
+                public["analysed_answers"].as_u64().unwrap() > 80,
+                "{model}: {public:#}"
+            );
+            assert!(
+                !public["examples"].as_array().unwrap().is_empty(),
+                "{model}"
+            );
+        }
+        let mut without = public.clone();
+        without["examples"] = json!([]);
+        let mut hidden = hidden.clone();
+        hidden.as_object_mut().unwrap().remove("examples_withheld");
+        assert_eq!(hidden, without, "{model}: hiding changes only the examples");
+    }
+
+    // The comparison: every published row, in board order, as JSON and as pages.
+    let compared = server.get_json("/api/v1/datasets/parity/errors").await.1;
+    let rows = compared["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    assert!(rows.iter().all(|r| r["analysis"]["examples"] == json!([])));
+    let page = server.get("/leaderboard/parity/errors").await;
+    assert_eq!(page.status(), 200);
+    let html = page.text().await.unwrap();
+    for model in ["random", "adjswap", "length"] {
+        assert!(
+            html.contains(model),
+            "{model} missing from the comparison page"
+        );
+    }
+    assert!(html.contains("<svg") && html.contains("Polarity inversion"));
+    let first = rows[0]["submission"].as_i64().unwrap();
+    let row_page = server
+        .get(&format!("/leaderboard/parity/errors/{first}"))
+        .await;
+    assert_eq!(row_page.status(), 200);
+    let html = row_page.text().await.unwrap();
+    assert!(
+        html.contains("are hidden"),
+        "examples of a hidden dataset are withheld"
+    );
+    assert_eq!(
+        server
+            .get("/leaderboard/parity/errors/human")
+            .await
+            .status(),
+        404,
+        "no human has answered"
+    );
+    assert_eq!(
+        server
+            .get_json("/api/v1/datasets/parity/errors?top=0")
+            .await
+            .0,
+        400
+    );
+    assert_eq!(server.get_json("/api/v1/datasets/nope/errors").await.0, 404);
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn the_cli_names_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("release");
+    let records = write_release(&root, &[3, 4]);
+    let predictions = dir.path().join("p.jsonl");
+    std::fs::write(&predictions, answers(&records, &[0, 1])).unwrap();
+
+    let out = enact_hub()
+        .args(["errors", predictions.to_str().unwrap(), "--data"])
+        .arg(&root)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = String::from_utf8(out.stdout).unwrap();
+    assert!(table.contains("answers analysed"), "{table}");
+    assert!(table.contains("polarity inversion"), "{table}");
+
+    let db = dir.path().join("x.db");
+    let out = enact_hub()
+        .args(["errors", predictions.to_str().unwrap(), "--db"])
+        .arg(&db)
+        .args(["--dataset", "missing"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("missing"), "{err}");
+
+    std::fs::write(&predictions, "{\"id\": \"nope\", \"answer\": \"[1, 2]\"}\n").unwrap();
+    let out = enact_hub()
+        .args(["errors", predictions.to_str().unwrap(), "--data"])
+        .arg(&root)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("line 1") && err.contains("nope"), "{err}");
+}
