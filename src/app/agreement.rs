@@ -1,8 +1,9 @@
 //! Agreement among annotators: the paper's cross-annotation protocol (run once per dataset),
 //! Krippendorff's alpha over the overlapping answers, and the dataset's agreement report.
 
-use super::{AppError, Hub, datasets, leaderboard};
+use super::{AppError, Hub, datasets, error_analysis, leaderboard};
 use crate::core::agreement::protocol::{ProtocolError, ProtocolPlan, plan_cross_assignments};
+use crate::core::agreement::report::export::{BundleFile, ErrorRow, bundle_files, error_files};
 use crate::core::agreement::report::{
     AgreementReport, AgreementSection, ItemScore, ProtocolStamp, ReportError, ReportInputs,
     SubmissionInput, agreement_section, build_report, dataset_content_hash, overlapping_answers,
@@ -200,4 +201,30 @@ pub async fn report(
                 AppError::internal(format!("dataset '{}': {e}", dataset.name))
             }
         })
+}
+
+/// The report's files (`core::agreement::report::export`) with the error analysis of every
+/// published row and the Human row (`errors.json`, `errors.csv`, examples included: bundles
+/// are for admins and the command line).
+pub async fn report_bundle(
+    hub: &Hub,
+    dataset: &str,
+    settings: &ReportSettings,
+) -> Result<(AgreementReport, Vec<BundleFile>), AppError> {
+    let report = report(hub, dataset, settings).await?;
+    let (_, rows) = error_analysis::comparison(hub, dataset, usize::MAX, &[], true).await?;
+    let labelled: Vec<ErrorRow<'_>> = rows
+        .iter()
+        .map(|r| ErrorRow {
+            label: match r.submission {
+                Some(id) => format!("{} (#{id})", r.label),
+                None => r.label.clone(),
+            },
+            submission: r.submission,
+            analysis: &r.analysis.analysis,
+        })
+        .collect();
+    let mut files = bundle_files(&report).map_err(AppError::internal)?;
+    files.extend(error_files(&report.stamp, &labelled).map_err(AppError::internal)?);
+    Ok((report, files))
 }

@@ -146,7 +146,6 @@ pub struct ReportArgs {
 
 /// `report`: builds the dataset's report and writes the bundle's files into `--out`.
 pub async fn report(args: &ReportArgs) -> anyhow::Result<ExitCode> {
-    use crate::core::agreement::report::export;
     let settings = ReportSettings {
         encoding: args.encoding,
         level: args.level,
@@ -161,10 +160,9 @@ pub async fn report(args: &ReportArgs) -> anyhow::Result<ExitCode> {
         }),
     };
     let hub = open(&args.db).await?;
-    let report = app::agreement::report(&hub, &args.dataset, &settings).await;
+    let bundle = app::agreement::report_bundle(&hub, &args.dataset, &settings).await;
     hub.close().await;
-    let report = in_database(report, &args.db)?;
-    let files = export::bundle_files(&report)?;
+    let (report, files) = in_database(bundle, &args.db)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     for file in &files {

@@ -16,7 +16,7 @@ use super::session::{Admin, Protected};
 use super::{AppError, AppState};
 use crate::app::agreement::{self, ReportSettings};
 use crate::core::agreement::protocol::DEFAULT_ITEMS_PER_CELL;
-use crate::core::agreement::report::export::{bundle_files, tar_archive};
+use crate::core::agreement::report::export::{BundleFile, tar_archive};
 use crate::core::agreement::report::heatmap::Heatmap;
 use crate::core::agreement::report::{AgreementReport, AgreementSection};
 use crate::core::agreement::{
@@ -191,6 +191,16 @@ async fn dataset_report(
     Ok((report, settings))
 }
 
+/// The report's bundle: its files and the error analyses of the leaderboard's rows.
+async fn dataset_bundle(
+    state: &AppState,
+    name: &str,
+    raw: Option<&str>,
+) -> Result<(AgreementReport, Vec<BundleFile>), AppError> {
+    let settings = ReportQuery::parse(raw)?.settings()?;
+    agreement::report_bundle(&state.hub, name, &settings).await
+}
+
 async fn report_json(
     State(state): State<AppState>,
     Admin(_): Admin,
@@ -206,9 +216,8 @@ async fn report_bundle(
     Path(name): Path<String>,
     RawQuery(raw): RawQuery,
 ) -> Result<Response, PageError> {
-    let (report, _) = dataset_report(&state, &name, raw.as_deref()).await?;
+    let (report, files) = dataset_bundle(&state, &name, raw.as_deref()).await?;
     let folder = bundle_folder(&report);
-    let files = bundle_files(&report).map_err(AppError::from)?;
     let archive = tar_archive(&folder, &files).map_err(AppError::from)?;
     let disposition = HeaderValue::from_str(&format!("attachment; filename=\"{folder}.tar\""))
         .map_err(anyhow::Error::from)?;

@@ -625,9 +625,18 @@ async fn end_to_end_primary_split_protocol_answers_and_report() {
         let path = entry.path().expect("path").display().to_string();
         assert!(text.contains(&hash), "{path} lacks the dataset hash");
         assert!(text.contains("enact-hub-agreement-report/1"), "{path}");
+        if path.ends_with("/errors.json") {
+            // One error analysis per published row, then the Human row.
+            let errors: serde_json::Value = serde_json::from_str(&text).expect("errors.json");
+            let rows = errors["rows"].as_array().expect("rows");
+            assert_eq!(rows.last().expect("human")["label"], "Human");
+            assert!(rows.iter().any(|r| r["submission"] == submission));
+            assert!(rows.iter().all(|r| r["analysis"]["structural"].is_object()));
+        }
         names_in_tar.push(path);
     }
-    assert_eq!(names_in_tar.len(), 9);
+    assert_eq!(names_in_tar.len(), 11);
+    assert!(names_in_tar.iter().any(|n| n.ends_with("/errors.csv")));
     assert!(names_in_tar.iter().any(|n| n.ends_with("/tables.tex")));
 
     // Two submissions chosen by the admin: the ground truth itself against "ascending".

@@ -1,4 +1,4 @@
-//! Error analyses as text: the CLI's table and the report bundle's CSV.
+//! Error analyses as text: the CLI's table and the report bundle's CSV lines.
 
 use std::fmt::Write as _;
 
@@ -133,9 +133,10 @@ fn number(value: Option<f64>) -> String {
     value.map(|v| format!("{v}")).unwrap_or_default()
 }
 
-/// One CSV line per row × group (overall, forward, inverse): counts per structural class and
-/// semantic category, hand figures with standard errors, and the accepted-but-incomplete rates.
-pub fn csv(rows: &[(&str, &ErrorAnalysis)]) -> String {
+/// One table line per row × group (overall, forward, inverse): counts per structural class
+/// and semantic category, hand figures with standard errors, and the accepted-but-incomplete
+/// rates. Returns the header and the lines, unquoted.
+pub fn table(rows: &[(&str, &ErrorAnalysis)]) -> (Vec<String>, Vec<Vec<String>>) {
     let mut header = vec!["row".to_owned(), "group".to_owned()];
     header.extend(
         [
@@ -167,15 +168,14 @@ pub fn csv(rows: &[(&str, &ErrorAnalysis)]) -> String {
         }
     }
     header.extend(["data_level_incomplete", "pair_level_incomplete"].map(str::to_owned));
-    let mut out = header.join(",");
-    out.push('\n');
+    let mut lines = Vec::new();
     for (label, analysis) in rows {
         for (group, g) in [
             ("overall", &analysis.overall),
             ("forward", &analysis.by_direction.forward),
             ("inverse", &analysis.by_direction.inverse),
         ] {
-            let mut cells = vec![quote(label), group.to_owned()];
+            let mut cells = vec![(*label).to_owned(), group.to_owned()];
             cells.extend(
                 [
                     g.analysed_answers,
@@ -208,19 +208,10 @@ pub fn csv(rows: &[(&str, &ErrorAnalysis)]) -> String {
             }
             cells.push(number(g.accepted_incomplete.data_level));
             cells.push(number(g.accepted_incomplete.pair_level));
-            out.push_str(&cells.join(","));
-            out.push('\n');
+            lines.push(cells);
         }
     }
-    out
-}
-
-fn quote(text: &str) -> String {
-    if text.contains([',', '"', '\n']) {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.to_owned()
-    }
+    (header, lines)
 }
 
 #[cfg(test)]
@@ -234,16 +225,9 @@ mod tests {
         let table = text_table(&a);
         assert!(table.contains("0 answers analysed"));
         assert!(!table.contains("NaN"));
-        let csv = csv(&[("model, with comma", &a)]);
-        assert_eq!(csv.lines().count(), 4);
-        assert!(
-            csv.lines()
-                .nth(1)
-                .unwrap()
-                .starts_with("\"model, with comma\",overall,0,")
-        );
-        let plain = super::csv(&[("m", &a)]);
-        let columns = plain.lines().next().unwrap().split(',').count();
-        assert!(plain.lines().all(|l| l.split(',').count() == columns));
+        let (header, lines) = super::table(&[("m", &a)]);
+        assert_eq!(lines.len(), 3);
+        assert_eq!(lines[0][..3], ["m", "overall", "0"]);
+        assert!(lines.iter().all(|l| l.len() == header.len()));
     }
 }

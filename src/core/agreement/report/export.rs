@@ -9,6 +9,7 @@ use crate::core::agreement::WelchComparison;
 use crate::core::agreement::report::heatmap::Heatmap;
 use crate::core::agreement::report::{AgreementReport, ReportStamp};
 use crate::core::dataset::Direction;
+use crate::core::error_analysis::{ErrorAnalysis, present};
 use crate::core::leaderboard::{AccuracyCell, AccuracyChart, LeaderboardRow, RowSource};
 
 /// One file of the bundle.
@@ -618,6 +619,48 @@ pub fn bundle_files(report: &AgreementReport) -> Result<Vec<BundleFile>, askama:
         bytes: accuracy_chart_svg(report)?.into_bytes(),
     });
     Ok(files)
+}
+
+/// A row of the error-analysis files: its label and analysis.
+pub struct ErrorRow<'a> {
+    pub label: String,
+    pub submission: Option<i64>,
+    pub analysis: &'a ErrorAnalysis,
+}
+
+/// `errors.json` and `errors.csv`: the error analysis of each row, stamped like every file.
+pub fn error_files(
+    stamp: &ReportStamp,
+    rows: &[ErrorRow<'_>],
+) -> Result<Vec<BundleFile>, askama::Error> {
+    let json = serde_json::json!({
+        "stamp": stamp_lines(stamp),
+        "rows": rows
+            .iter()
+            .map(|r| serde_json::json!({
+                "label": r.label,
+                "submission": r.submission,
+                "analysis": r.analysis,
+            }))
+            .collect::<Vec<_>>(),
+    });
+    let json = serde_json::to_string_pretty(&json).map_err(|e| askama::Error::Custom(e.into()))?;
+    let labelled: Vec<(&str, &ErrorAnalysis)> = rows
+        .iter()
+        .map(|r| (r.label.as_str(), r.analysis))
+        .collect();
+    let (header, lines) = present::table(&labelled);
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    Ok(vec![
+        BundleFile {
+            name: "errors.json",
+            bytes: (json + "\n").into_bytes(),
+        },
+        BundleFile {
+            name: "errors.csv",
+            bytes: csv(stamp, &header, &lines).into_bytes(),
+        },
+    ])
 }
 
 /// The files as one tar archive under `folder/`, with a fixed mtime so the same report gives
