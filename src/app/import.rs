@@ -575,6 +575,10 @@ pub async fn import_release(
         if report.signatures_updated > 0 {
             store::bump_content_generation(&mut tx).await?;
         }
+        // Stored error analyses were computed from the old items or signatures.
+        if report.signatures_updated + report.replaced_items > 0 {
+            store::submissions::clear_error_analyses(&mut tx, dataset.id).await?;
+        }
     }
     // Frames of unchanged items are reused as well.
     report.reused_frames = report.frames - report.new_frames;

@@ -13,6 +13,8 @@
 //!   invites and login sessions.
 //! - [`annotation`]: assignments, the queue, drafts, answers, skips and flags.
 //! - [`agreement`]: the cross-annotation protocol, agreement statistics and the report.
+//! - [`error_analysis`]: the paper's error taxonomy of a submission, the Human row, a file, or
+//!   a whole leaderboard.
 //! - [`demo`]: the built-in demo dataset and its chance baseline.
 //!
 //! Errors are [`AppError`]: each kind says what was wrong, in words a person can act on.

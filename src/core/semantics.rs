@@ -127,8 +127,9 @@ pub fn from_scene_graphs(replayed_dir: &Path, items: &[&QaItem]) -> Vec<Signatur
                     ),
                 })
             };
+            // Items of one task in parallel too: a forward item of L = 10 needs 90 pairs.
             indexes
-                .into_iter()
+                .into_par_iter()
                 .map(|i| {
                     let result = match &timeline {
                         Err(e) => Err(vec![FieldProblem::new("task_name", e.to_string())]),

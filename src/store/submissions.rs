@@ -358,3 +358,16 @@ pub async fn set_error_analysis(
         .await
         .map(|_| ())
 }
+
+/// Forgets the stored error analyses of a dataset's submissions (its items or signatures
+/// changed); they are computed again on the next request.
+pub async fn clear_error_analyses(
+    conn: &mut SqliteConnection,
+    dataset: i64,
+) -> Result<(), sqlx::Error> {
+    sqlx::query("UPDATE submissions SET error_analysis = NULL WHERE dataset = ?")
+        .bind(dataset)
+        .execute(conn)
+        .await
+        .map(|_| ())
+}

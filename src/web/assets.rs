@@ -9,41 +9,35 @@ use super::AppState;
 
 const APP_CSS: &str = include_str!("../../static/app.css");
 const ANNOTATE_JS: &str = include_str!("../../static/annotate.js");
+const FAVICON_SVG: &str = include_str!("../../static/favicon.svg");
 
 pub fn router() -> Router<AppState> {
     Router::new()
-        .route("/static/app.css", get(app_css))
-        .route("/static/annotate.js", get(annotate_js))
+        .route(
+            "/static/app.css",
+            get(|| asset("text/css; charset=utf-8", APP_CSS)),
+        )
+        .route(
+            "/static/annotate.js",
+            get(|| asset("text/javascript; charset=utf-8", ANNOTATE_JS)),
+        )
+        .route(
+            "/static/favicon.svg",
+            get(|| asset("image/svg+xml", FAVICON_SVG)),
+        )
+        // Browsers ask for /favicon.ico whatever the page says; the SVG answers it too.
+        .route("/favicon.ico", get(|| asset("image/svg+xml", FAVICON_SVG)))
 }
 
-async fn annotate_js() -> impl IntoResponse {
+async fn asset(content_type: &'static str, body: &'static str) -> impl IntoResponse {
     (
         [
-            (
-                header::CONTENT_TYPE,
-                HeaderValue::from_static("text/javascript; charset=utf-8"),
-            ),
+            (header::CONTENT_TYPE, HeaderValue::from_static(content_type)),
             (
                 header::CACHE_CONTROL,
                 HeaderValue::from_static("public, max-age=3600"),
             ),
         ],
-        ANNOTATE_JS,
-    )
-}
-
-async fn app_css() -> impl IntoResponse {
-    (
-        [
-            (
-                header::CONTENT_TYPE,
-                HeaderValue::from_static("text/css; charset=utf-8"),
-            ),
-            (
-                header::CACHE_CONTROL,
-                HeaderValue::from_static("public, max-age=3600"),
-            ),
-        ],
-        APP_CSS,
+        body,
     )
 }

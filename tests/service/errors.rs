@@ -217,3 +217,59 @@ async fn the_cli_names_what_is_wrong() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("line 1") && err.contains("nope"), "{err}");
 }
+
+#[tokio::test]
+async fn a_stored_analysis_is_redone_when_scene_graphs_arrive() {
+    let Some(fixtures) = shared_fixtures() else {
+        eprintln!("skipped: ../shared/fixtures not present");
+        return;
+    };
+    let parity = fixtures.join("enact-parity");
+    let server = spawn_app_with(|pool, _| {
+        let parity = parity.clone();
+        async move {
+            import(&pool, &parity, &options("parity")).await;
+        }
+    })
+    .await;
+    let (_, team) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let body = std::fs::read(parity.join("predictions/enact_ordering_random.jsonl")).unwrap();
+    let reply = submit_to(&server, "parity", "model=random", &team, body).await;
+    assert_eq!(reply.status, 201, "{}", reply.text);
+    let path = format!("/api/v1/submissions/{}/errors", reply.id());
+    let before = server
+        .call(Method::GET, &path)
+        .bearer(&team)
+        .expect(200)
+        .await
+        .json();
+    // Without scene graphs forward answers cannot be compared; inverse ones use the sets
+    // parsed from the action sentences.
+    let forward = &before["by_direction"]["forward"];
+    assert_eq!(forward["analysed_answers"], 0, "{forward:#}");
+    assert!(forward["excluded_without_signatures"].as_u64().unwrap() > 0);
+    assert!(
+        before["by_direction"]["inverse"]["analysed_answers"]
+            .as_u64()
+            .unwrap()
+            > 0
+    );
+
+    let mut with_graphs = options("parity");
+    with_graphs.scene_graphs = Some(parity.join("replayed_activities"));
+    import(&server.pool, &parity, &with_graphs).await;
+    let after = server
+        .call(Method::GET, &path)
+        .bearer(&team)
+        .expect(200)
+        .await
+        .json();
+    assert!(
+        after["by_direction"]["forward"]["analysed_answers"]
+            .as_u64()
+            .unwrap()
+            > 0,
+        "the stored analysis was not redone"
+    );
+    server.stop().await;
+}
