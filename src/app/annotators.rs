@@ -93,6 +93,28 @@ pub async fn accept_invite(
         .ok_or_else(unknown_invite)
 }
 
+/// A new single-use login link secret for `annotator` (the path is `/login/link/{secret}`).
+pub async fn login_link(hub: &Hub, annotator: i64) -> Result<String, AppError> {
+    let token = random_token();
+    let mut conn = hub.conn().await?;
+    store::annotations::insert_login_link(&mut conn, &token_hash(&token), annotator).await?;
+    Ok(token)
+}
+
+/// Uses a login link up and returns its annotator; a link is good once.
+pub async fn follow_login_link(hub: &Hub, token: &str) -> Result<i64, AppError> {
+    let mut conn = hub.conn().await?;
+    store::annotations::take_login_link(&mut conn, &token_hash(token))
+        .await?
+        .ok_or_else(|| {
+            AppError::NotFound(
+                "this login link is unknown or has already been used: restart `serve --demo` \
+                 for a new one, or log in with a password"
+                    .to_owned(),
+            )
+        })
+}
+
 /// The annotator whose password this is, if the name and password match.
 pub async fn check_password(
     hub: &Hub,

@@ -4,12 +4,21 @@
 use anyhow::Context;
 
 use super::import::{ImportOptions, ImportReport, import_release};
-use super::{Hub, submissions};
+use super::{AppError, Hub, annotators, datasets, submissions};
+use crate::core::annotation::balanced_sample;
+use crate::core::credentials::{random_token, token_hash};
 use crate::core::demo;
 use crate::core::submission::SubmissionMetadata;
+use crate::store;
 
 /// The dataset the demo is imported as.
 pub const DEMO_DATASET: &str = "demo";
+
+/// The demo's admin annotator, whose queue holds a sample of the demo.
+pub const DEMO_ANNOTATOR: &str = "demo-admin";
+
+/// Demo items of each direction × step length in the demo admin's queue.
+const SAMPLE_PER_KIND: usize = 2;
 
 /// The account the demo's baseline row is filed under.
 pub const DEMO_ACCOUNT: &str = "enact-hub demo";
@@ -54,4 +63,35 @@ pub async fn load(hub: &Hub) -> anyhow::Result<ImportReport> {
     .await
     .context("cannot add the demo's chance baseline")?;
     Ok(report)
+}
+
+/// A single-use login link secret for the demo admin (created on first use, with a balanced
+/// sample of the demo in their queue: both directions, every step length), so a newcomer
+/// annotates with one click. Their answers make the Human row.
+pub async fn annotator_link(hub: &Hub) -> Result<String, AppError> {
+    let dataset = datasets::by_name(hub, DEMO_DATASET).await?;
+    let mut conn = hub.conn().await?;
+    let existing = store::annotations::annotators(&mut conn)
+        .await?
+        .into_iter()
+        .find(|a| a.name == DEMO_ANNOTATOR)
+        .map(|a| a.id);
+    let annotator = match existing {
+        Some(id) => id,
+        None => {
+            // An invite nobody holds: the account is reached through login links only.
+            let hash = token_hash(&random_token());
+            store::annotations::create_annotator(&mut conn, DEMO_ANNOTATOR, true, &hash)
+                .await?
+                .ok_or_else(|| AppError::internal("the demo annotator appeared meanwhile"))?
+        }
+    };
+    let items = store::annotations::dataset_items(&mut conn, dataset.id).await?;
+    drop(conn);
+    let sample = balanced_sample(&items, SAMPLE_PER_KIND);
+    let mut tx = hub.begin().await?;
+    let pairs: Vec<(i64, i64)> = sample.iter().map(|&item| (annotator, item)).collect();
+    store::annotations::assign(&mut tx, &pairs).await?;
+    tx.commit().await?;
+    annotators::login_link(hub, annotator).await
 }

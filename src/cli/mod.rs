@@ -426,6 +426,17 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         .with_context(|| format!("cannot listen on {}", args.addr))?;
     let addr = server.local_addr()?;
     tracing::info!(%addr, db = %db.display(), "enact-hub is listening on http://{addr}/");
+    if args.demo {
+        let link = app::demo::annotator_link(&hub)
+            .await
+            .map_err(anyhow::Error::from)?;
+        eprintln!("enact-hub is serving the demo on http://{addr}/");
+        eprintln!("annotate at once (a single-use login link for the demo admin):");
+        println!("http://{addr}/login/link/{link}");
+        if args.db.is_none() {
+            eprintln!("(the demo database is temporary; give --db FILE to keep it)");
+        }
+    }
     server.run(shutdown_signal()).await?;
     hub.close().await;
     Ok(ExitCode::SUCCESS)

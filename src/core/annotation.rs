@@ -21,6 +21,27 @@ pub struct SplitItem {
     pub step_length: StepLength,
 }
 
+/// Up to `per_kind` items of each direction × step length, in rounds: the first item of every
+/// kind (step lengths ascending, forward before inverse), then the second, and so on, so that
+/// a short session already sees both directions and every length.
+pub fn balanced_sample(items: &[SplitItem], per_kind: usize) -> Vec<i64> {
+    let mut by_kind: BTreeMap<(StepLength, Direction), Vec<i64>> = BTreeMap::new();
+    for it in items {
+        by_kind
+            .entry((it.step_length, it.direction))
+            .or_default()
+            .push(it.item);
+    }
+    (0..per_kind)
+        .flat_map(|round| {
+            by_kind
+                .values()
+                .filter_map(move |ids| ids.get(round).copied())
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
 /// Deals `items` over `annotators` disjointly so that every annotator gets the same number of
 /// items of each direction × step length, ±1, and the same total, ±1. Items keep their order
 /// within a kind; returns `(annotator, item)` pairs.
@@ -424,5 +445,27 @@ mod tests {
         assert!(!entries[1].task_accuracy);
         let report = crate::core::verifier::PerformanceReport::from_entries(&entries);
         assert_eq!(report.overall.expect("overall").totals.task_accuracy, 0.5);
+    }
+
+    #[test]
+    fn a_balanced_sample_has_every_kind_in_rounds() {
+        let items: Vec<SplitItem> = (0..40)
+            .map(|i| SplitItem {
+                item: i,
+                direction: if i % 2 == 0 {
+                    Direction::Forward
+                } else {
+                    Direction::Inverse
+                },
+                step_length: l(3 + (i as usize / 2) % 4),
+            })
+            .collect();
+        let sample = balanced_sample(&items, 2);
+        assert_eq!(sample.len(), 16);
+        // The first round holds one item of each of the 8 kinds, lengths ascending.
+        assert_eq!(&sample[..8], &[0, 1, 2, 3, 4, 5, 6, 7]);
+        assert_eq!(&sample[8..], &[8, 9, 10, 11, 12, 13, 14, 15]);
+        assert!(balanced_sample(&items, 0).is_empty());
+        assert_eq!(balanced_sample(&items[..3], 5), vec![0, 1, 2]);
     }
 }

@@ -185,6 +185,29 @@ pub async fn delete_session(
 }
 
 /// Store ids and kinds of a dataset's items that no annotator has yet, in import order.
+/// Every item of a dataset with its kind, in id order.
+pub async fn dataset_items(
+    conn: &mut SqliteConnection,
+    dataset_id: i64,
+) -> Result<Vec<SplitItem>, sqlx::Error> {
+    let rows = sqlx::query(
+        "SELECT i.id, i.direction, i.step_length FROM items i WHERE i.dataset_id = ? ORDER BY i.id",
+    )
+    .bind(dataset_id)
+    .fetch_all(conn)
+    .await?;
+    rows.iter().map(split_item_from_row).collect()
+}
+
+fn split_item_from_row(r: &sqlx::sqlite::SqliteRow) -> Result<SplitItem, sqlx::Error> {
+    let (direction, step_length) = kind_from_row(r)?;
+    Ok(SplitItem {
+        item: r.try_get("id")?,
+        direction,
+        step_length,
+    })
+}
+
 pub async fn unassigned_items(
     conn: &mut SqliteConnection,
     dataset_id: i64,
@@ -196,16 +219,7 @@ pub async fn unassigned_items(
     .bind(dataset_id)
     .fetch_all(conn)
     .await?;
-    rows.iter()
-        .map(|r| {
-            let (direction, step_length) = kind_from_row(r)?;
-            Ok(SplitItem {
-                item: r.try_get("id")?,
-                direction,
-                step_length,
-            })
-        })
-        .collect()
+    rows.iter().map(split_item_from_row).collect()
 }
 
 /// Store ids of the given item ids of a dataset; ids not in the dataset come back in `Err`.
@@ -588,4 +602,29 @@ pub async fn progress_by_annotator(
             ))
         })
         .collect()
+}
+
+/// Stores a single-use login link for `annotator`.
+pub async fn insert_login_link(
+    conn: &mut SqliteConnection,
+    hash: &str,
+    annotator: i64,
+) -> Result<(), sqlx::Error> {
+    sqlx::query("INSERT INTO login_links (hash, annotator) VALUES (?, ?)")
+        .bind(hash)
+        .bind(annotator)
+        .execute(conn)
+        .await
+        .map(|_| ())
+}
+
+/// Uses a login link up: the annotator it was for, if it existed.
+pub async fn take_login_link(
+    conn: &mut SqliteConnection,
+    hash: &str,
+) -> Result<Option<i64>, sqlx::Error> {
+    sqlx::query_scalar("DELETE FROM login_links WHERE hash = ? RETURNING annotator")
+        .bind(hash)
+        .fetch_optional(conn)
+        .await
 }

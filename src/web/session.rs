@@ -42,6 +42,7 @@ pub fn router() -> Router<AppState> {
         .route("/login", get(login_page).post(login))
         .route("/logout", post(logout))
         .route("/invite/{token}", get(invite_page).post(accept_invite))
+        .route("/login/link/{token}", get(follow_login_link))
 }
 
 /// Failed login attempts in a sliding window, per account and per client address.
@@ -441,6 +442,16 @@ async fn login(
 
 #[derive(Deserialize)]
 struct EmptyForm {}
+
+/// A single-use login link: starts a session and goes to the queue.
+async fn follow_login_link(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    Path(token): Path<String>,
+) -> Result<Response, PageError> {
+    let annotator = annotators::follow_login_link(&state.hub, &token).await?;
+    Ok(start_session(&state, &headers, annotator, "/annotate").await?)
+}
 
 async fn logout(
     State(state): State<AppState>,

@@ -10,6 +10,7 @@ mod archive;
 mod browser;
 mod cli;
 mod client;
+mod demo_link;
 mod errors;
 #[path = "../support/fixtures.rs"]
 mod fixtures;
