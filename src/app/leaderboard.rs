@@ -14,7 +14,7 @@ use bytes::Bytes;
 
 use super::{AppError, Hub, datasets};
 use crate::core::annotation::human_entries;
-use crate::core::leaderboard::{LeaderboardRow, RowIdentity, rank};
+use crate::core::leaderboard::{HumanCoverage, LeaderboardRow, RowIdentity, rank};
 use crate::core::verifier::PerformanceReport;
 use crate::store;
 use crate::store::datasets::Dataset;
@@ -62,12 +62,20 @@ pub async fn rows(hub: &Hub, dataset: &Dataset) -> Result<Vec<LeaderboardRow>, A
     let mut conn = hub.conn().await?;
     let submissions = store::submissions::published(&mut conn, dataset.id).await?;
     let items = store::datasets::counts(&mut conn, dataset.id).await?.total;
+    let (answers, answered_items, annotators) =
+        store::annotations::human_coverage(&mut conn, dataset.id).await?;
     drop(conn);
     let mut rows: Vec<LeaderboardRow> = submissions.iter().map(submission_row).collect();
     if let Some(report) = human_performance(hub, dataset).await? {
+        let count = |n: i64| usize::try_from(n).unwrap_or(0);
         rows.push(LeaderboardRow::human(
             &report,
-            usize::try_from(items).unwrap_or(0),
+            HumanCoverage {
+                answers: count(answers),
+                items: count(answered_items),
+                annotators: count(annotators),
+                dataset_items: count(items),
+            },
         ));
     }
     rank(&mut rows);

@@ -21,6 +21,41 @@ pub enum RowSource {
     Human,
 }
 
+/// How much the Human row rests on: answers, distinct items and distinct annotators.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct HumanCoverage {
+    pub answers: usize,
+    pub items: usize,
+    pub annotators: usize,
+    pub dataset_items: usize,
+}
+
+impl HumanCoverage {
+    /// From `(annotator, item)` pairs of submitted answers.
+    pub fn of_answers<'a, A: Ord + 'a, I: Ord + 'a>(
+        answers: impl IntoIterator<Item = (A, I)>,
+        dataset_items: usize,
+    ) -> HumanCoverage {
+        let mut annotators = std::collections::BTreeSet::new();
+        let mut items = std::collections::BTreeSet::new();
+        let mut count = 0;
+        for (a, i) in answers {
+            annotators.insert(a);
+            items.insert(i);
+            count += 1;
+        }
+        HumanCoverage {
+            answers: count,
+            items: items.len(),
+            annotators: annotators.len(),
+            dataset_items,
+        }
+    }
+}
+
+/// A Human cell resting on fewer answers than this is marked, not shown as a bare figure.
+pub const MIN_HUMAN_ANSWERS: usize = 5;
+
 /// TA and PA as fractions in [0, 1]; `None` where the group had no item.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct AccuracyCell {
@@ -63,6 +98,9 @@ pub struct LeaderboardRow {
     pub inverse: DirectionColumns,
     pub coverage: f64,
     pub parse_failure_rate: f64,
+    /// The Human row's answers, items and annotators; `None` for submissions.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub human: Option<HumanCoverage>,
 }
 
 fn cell(group: Option<&StepPerformance>) -> AccuracyCell {
@@ -123,12 +161,14 @@ impl LeaderboardRow {
             inverse: columns(report.inverse_world_modeling.as_ref()),
             coverage: scores.coverage.coverage,
             parse_failure_rate: scores.coverage.parse_failure_rate,
+            human: None,
         }
     }
 
-    /// The Human row: `report` over the annotators' submitted answers; `dataset_items` gives
-    /// its coverage.
-    pub fn human(report: &PerformanceReport, dataset_items: usize) -> LeaderboardRow {
+    /// The Human row: `report` over the annotators' submitted answers. It is never ranked
+    /// among models (it is a reference row, like baselines); `human` says what it rests on.
+    pub fn human(report: &PerformanceReport, coverage: HumanCoverage) -> LeaderboardRow {
+        let dataset_items = coverage.dataset_items;
         let overall = cell(report.overall.as_ref().map(|g| &g.totals));
         LeaderboardRow {
             rank: None,
@@ -150,6 +190,7 @@ impl LeaderboardRow {
             forward: columns(report.forward_world_modeling.as_ref()),
             inverse: columns(report.inverse_world_modeling.as_ref()),
             parse_failure_rate: 0.0,
+            human: Some(coverage),
         }
     }
 }
@@ -807,7 +848,13 @@ mod tests {
         let mut rows: Vec<LeaderboardRow> = (1..=5)
             .map(|i| entry(i, &format!("t{i}"), "m", f64::from(i as i32) / 10.0))
             .collect();
-        let mut human = LeaderboardRow::human(&PerformanceReport::default(), 4);
+        let mut human = LeaderboardRow::human(
+            &PerformanceReport::default(),
+            HumanCoverage {
+                dataset_items: 4,
+                ..HumanCoverage::default()
+            },
+        );
         human.overall.task_accuracy = Some(0.35);
         rows.push(human);
         // Three rows a page: the Human row and two ranked ones.

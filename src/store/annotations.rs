@@ -628,3 +628,18 @@ pub async fn take_login_link(
         .fetch_optional(conn)
         .await
 }
+
+/// `(answers, distinct items, distinct annotators)` of the submitted answers on a dataset.
+pub async fn human_coverage(
+    conn: &mut SqliteConnection,
+    dataset_id: i64,
+) -> Result<(i64, i64, i64), sqlx::Error> {
+    sqlx::query_as(
+        "SELECT count(*), count(DISTINCT n.item), count(DISTINCT n.annotator) \
+         FROM annotations n JOIN items i ON i.id = n.item \
+         WHERE i.dataset_id = ? AND n.outcome = 'answered'",
+    )
+    .bind(dataset_id)
+    .fetch_one(conn)
+    .await
+}

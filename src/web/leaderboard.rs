@@ -22,7 +22,7 @@ use crate::app::leaderboard::{self, Board};
 use crate::core::dataset::StepLength;
 use crate::core::leaderboard::{
     AccuracyCell, AccuracyChart, BoardPage, BoardQuery, ColumnGroup, Interval, LeaderboardRow,
-    RowSource, SortKey, board_page, chart_rows,
+    MIN_HUMAN_ANSWERS, RowSource, SortKey, board_page, chart_rows,
 };
 
 /// Rows a page may ask for at once.
@@ -318,14 +318,25 @@ fn leaderboard_view<'a>(board: &'a Board, request: &BoardRequest) -> Leaderboard
 struct CellText {
     ta: String,
     pa: String,
+    /// Set on a Human cell resting on too few answers: what it rests on.
+    few: Option<String>,
 }
 
 fn percent(v: Option<f64>) -> String {
     v.map_or_else(|| "–".to_owned(), |v| format!("{:.1}", v * 100.0))
 }
 
-fn cell_text(c: &AccuracyCell) -> CellText {
+/// A cell's text; Human cells with fewer than [`MIN_HUMAN_ANSWERS`] answers are marked.
+fn cell_text(c: &AccuracyCell, human: bool) -> CellText {
+    let few = (human && c.count > 0 && c.count < MIN_HUMAN_ANSWERS).then(|| {
+        format!(
+            "only {} answer{}: fewer than {MIN_HUMAN_ANSWERS}",
+            c.count,
+            if c.count == 1 { "" } else { "s" }
+        )
+    });
     CellText {
+        few,
         ta: percent(c.task_accuracy),
         pa: percent(c.pairwise_accuracy),
     }
@@ -359,6 +370,8 @@ struct RowText {
     inverse_steps: Vec<CellText>,
     coverage: String,
     parse_failures: String,
+    /// The Human row: answers, items and annotators it rests on.
+    human_note: Option<String>,
 }
 
 /// A column header that sorts the board by its column.
@@ -476,12 +489,24 @@ impl LeaderboardPage {
 }
 
 fn row_text(r: &LeaderboardRow, history: Option<String>, drawn: &[i64]) -> RowText {
+    let human = r.source == RowSource::Human;
     RowText {
+        human_note: r.human.map(|h| {
+            format!(
+                "{} of {} items, {} annotator{}, {} answer{}; not ranked",
+                h.items,
+                h.dataset_items,
+                h.annotators,
+                if h.annotators == 1 { "" } else { "s" },
+                h.answers,
+                if h.answers == 1 { "" } else { "s" }
+            )
+        }),
         rank: r.rank.map_or_else(|| "–".to_owned(), |k| k.to_string()),
         model: r.model.clone(),
         account: r.account.clone(),
         baseline: r.baseline,
-        human: r.source == RowSource::Human,
+        human,
         attempts: r.attempts,
         history,
         submission: r.submission,
@@ -491,22 +516,22 @@ fn row_text(r: &LeaderboardRow, history: Option<String>, drawn: &[i64]) -> RowTe
             .get(..10)
             .unwrap_or(&r.submitted_at)
             .to_owned(),
-        overall: cell_text(&r.overall),
+        overall: cell_text(&r.overall, human),
         ta_ci: interval_text(r.overall_task_accuracy_ci),
         pa_ci: interval_text(r.overall_pairwise_accuracy_ci),
-        forward: cell_text(&r.forward.total),
-        inverse: cell_text(&r.inverse.total),
+        forward: cell_text(&r.forward.total, human),
+        inverse: cell_text(&r.inverse.total, human),
         forward_steps: r
             .forward
             .per_step
             .iter()
-            .map(|(_, c)| cell_text(c))
+            .map(|(_, c)| cell_text(c, human))
             .collect(),
         inverse_steps: r
             .inverse
             .per_step
             .iter()
-            .map(|(_, c)| cell_text(c))
+            .map(|(_, c)| cell_text(c, human))
             .collect(),
         coverage: format!("{:.1}%", r.coverage * 100.0),
         parse_failures: format!("{:.1}%", r.parse_failure_rate * 100.0),

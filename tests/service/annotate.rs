@@ -692,6 +692,17 @@ async fn drafts_resume_submissions_are_checked_and_scored_for_the_human_row() {
         .await
         .expect("page");
     assert!(page.contains("Human"), "{page}");
+    // What the row rests on, and its thin cells marked rather than bare.
+    let items = rows[0]["human"]["dataset_items"].as_u64().expect("items");
+    assert_eq!(rows[0]["human"]["answers"], 2);
+    assert_eq!(rows[0]["human"]["items"], 2);
+    assert_eq!(rows[0]["human"]["annotators"], 1);
+    assert!(
+        page.contains(&format!("2 of {items} items, 1 annotator, 2 answers; not ranked")),
+        "{page}"
+    );
+    assert!(page.contains("only 2 answers: fewer than 5"), "{page}");
+    assert!(page.contains("only 1 answer: fewer than 5"), "{page}");
     server.stop().await;
 }
 

@@ -10,7 +10,9 @@ use crate::core::agreement::report::heatmap::Heatmap;
 use crate::core::agreement::report::{AgreementReport, ReportStamp};
 use crate::core::dataset::Direction;
 use crate::core::error_analysis::{ErrorAnalysis, present};
-use crate::core::leaderboard::{AccuracyCell, AccuracyChart, LeaderboardRow, RowSource};
+use crate::core::leaderboard::{
+    AccuracyCell, AccuracyChart, LeaderboardRow, MIN_HUMAN_ANSWERS, RowSource,
+};
 
 /// One file of the bundle.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -430,10 +432,21 @@ pub fn markdown(report: &AgreementReport) -> String {
                     } else {
                         cell.pairwise_accuracy
                     };
-                    out.push_str(&format!(" {} |", percent(v)));
+                    // A Human cell on too few answers says so instead of a bare figure.
+                    let few =
+                        row.human.is_some() && cell.count > 0 && cell.count < MIN_HUMAN_ANSWERS;
+                    let mark = if few { "†" } else { "" };
+                    out.push_str(&format!(" {}{mark} |", percent(v)));
                 }
             }
             out.push('\n');
+        }
+        if let Some(h) = report.rows.iter().find_map(|r| r.human) {
+            out.push_str(&format!(
+                "\nHuman: {} of {} items answered by {} annotators ({} answers); not ranked. \
+                 † fewer than {MIN_HUMAN_ANSWERS} answers.\n",
+                h.items, h.dataset_items, h.annotators, h.answers
+            ));
         }
     }
     out.push_str(

@@ -22,7 +22,7 @@ use crate::core::agreement::{
 };
 use crate::core::annotation::{HumanAnswer, human_entries};
 use crate::core::dataset::{Direction, StepLength};
-use crate::core::leaderboard::LeaderboardRow;
+use crate::core::leaderboard::{HumanCoverage, LeaderboardRow};
 use crate::core::verifier::PerformanceReport;
 
 /// Names what the numbers of a report mean. Bump it when a definition changes (which answers
@@ -453,7 +453,13 @@ pub fn build_report(inputs: &ReportInputs) -> Result<AgreementReport, ReportErro
     if !entries.is_empty() {
         rows.push(LeaderboardRow::human(
             &PerformanceReport::from_entries(&entries),
-            inputs.dataset_items,
+            HumanCoverage::of_answers(
+                inputs
+                    .answers
+                    .iter()
+                    .map(|a| (a.annotator_id, a.item_id.as_str())),
+                inputs.dataset_items,
+            ),
         ));
     }
 
@@ -637,6 +643,7 @@ mod tests {
                 inverse: columns,
                 coverage: 1.0,
                 parse_failure_rate: 0.0,
+                human: None,
             },
             item_scores: values
                 .iter()
