@@ -698,7 +698,9 @@ async fn drafts_resume_submissions_are_checked_and_scored_for_the_human_row() {
     assert_eq!(rows[0]["human"]["items"], 2);
     assert_eq!(rows[0]["human"]["annotators"], 1);
     assert!(
-        page.contains(&format!("2 of {items} items, 1 annotator, 2 answers; not ranked")),
+        page.contains(&format!(
+            "2 of {items} items, 1 annotator, 2 answers; not ranked"
+        )),
         "{page}"
     );
     assert!(page.contains("only 2 answers: fewer than 5"), "{page}");

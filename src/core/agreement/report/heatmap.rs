@@ -7,7 +7,10 @@ use serde::Serialize;
 use crate::core::agreement::report::Comparison;
 use crate::core::dataset::{Direction, StepLength};
 
+/// The narrowest label column; it widens to fit the longest row label.
 const LABEL_WIDTH: f64 = 230.0;
+/// A generous average advance of an 11 px sans-serif character, so labels are never cut.
+const CHAR_WIDTH: f64 = 7.0;
 const CELL_WIDTH: f64 = 50.0;
 const CELL_HEIGHT: f64 = 28.0;
 const TOP: f64 = 52.0;
@@ -87,14 +90,22 @@ impl Heatmap {
     /// Rows are `comparisons` in order, labelled "a − b".
     pub fn of_comparisons(comparisons: &[Comparison]) -> Heatmap {
         let columns_per_group = StepLength::all().count();
-        let x_of = |column: usize| LABEL_WIDTH + column as f64 * CELL_WIDTH;
+        let labels: Vec<String> = comparisons
+            .iter()
+            .map(|c| format!("{} − {}", c.a.label, c.b.label))
+            .collect();
+        let label_width = labels
+            .iter()
+            .map(|l| l.chars().count() as f64 * CHAR_WIDTH + 16.0)
+            .fold(LABEL_WIDTH, f64::max);
+        let x_of = |column: usize| label_width + column as f64 * CELL_WIDTH;
         let rows: Vec<HeatmapRow> = comparisons
             .iter()
             .enumerate()
             .map(|(r, comparison)| {
                 let y = TOP + r as f64 * CELL_HEIGHT;
                 HeatmapRow {
-                    label: format!("{} − {}", comparison.a.label, comparison.b.label),
+                    label: labels[r].clone(),
                     label_y: y + CELL_HEIGHT / 2.0 + 4.0,
                     cells: comparison
                         .cells
@@ -159,17 +170,17 @@ impl Heatmap {
             ])
             .enumerate()
             .map(|(i, (fill, label))| LegendEntry {
-                x: LABEL_WIDTH + i as f64 * 110.0,
+                x: label_width + i as f64 * 110.0,
                 fill,
                 label,
             })
             .collect();
         Heatmap {
-            width: LABEL_WIDTH + 2.0 * columns_per_group as f64 * CELL_WIDTH + RIGHT,
+            width: label_width + 2.0 * columns_per_group as f64 * CELL_WIDTH + RIGHT,
             height: legend_y + LEGEND_HEIGHT,
             cell_width: CELL_WIDTH,
             cell_height: CELL_HEIGHT,
-            label_right: LABEL_WIDTH - 8.0,
+            label_right: label_width - 8.0,
             groups,
             columns,
             rows,
@@ -245,5 +256,26 @@ mod tests {
         assert_eq!(map.groups[1].label, "Inverse world modeling");
         assert_eq!(map.legend.len(), 5);
         assert!(map.height > map.legend_y);
+        assert_eq!(
+            map.label_right,
+            LABEL_WIDTH - 8.0,
+            "short labels keep the narrowest column"
+        );
+
+        // A long label widens the label column instead of running off the left edge.
+        let mut long = Heatmap::of_comparisons(&[]);
+        assert!(long.rows.is_empty());
+        let name = "a-very-long-model-name-with-a-version-2025-11-26-instruct (#12345)";
+        let comparison = Comparison {
+            a: side(name),
+            b: side("Human"),
+            items: 8,
+            overall: none.clone(),
+            cells: Vec::new(),
+        };
+        long = Heatmap::of_comparisons(&[comparison]);
+        let label = &long.rows[0].label;
+        assert!(long.label_right >= label.chars().count() as f64 * CHAR_WIDTH);
+        assert!(long.width > map.width);
     }
 }
