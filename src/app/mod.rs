@@ -15,13 +15,15 @@
 //! - [`agreement`]: the cross-annotation protocol, agreement statistics and the report.
 //! - [`error_analysis`]: the paper's error taxonomy of a submission, the Human row, a file, or
 //!   a whole leaderboard.
-//! - [`demo`]: the built-in demo dataset and its chance baseline.
+//! - [`demo`]: the built-in demo dataset, its chance baseline and its login link.
+//! - [`backup`]: online snapshots of the database, and restoring one.
 //!
 //! Errors are [`AppError`]: each kind says what was wrong, in words a person can act on.
 
 pub mod agreement;
 pub mod annotation;
 pub mod annotators;
+pub mod backup;
 pub mod cache;
 pub mod datasets;
 pub mod demo;

@@ -53,6 +53,10 @@ enum Command {
     /// Simulate household activities in the built-in synthetic world and write them as
     /// BEHAVIOR-format replays that `generate` reads.
     Simulate(simulate::SimulateArgs),
+    /// Write a consistent snapshot of the database while the server runs.
+    Backup(BackupArgs),
+    /// Put a snapshot in place as the database (the server must be stopped).
+    Restore(RestoreArgs),
     /// Manage API tokens: create, list, revoke.
     #[command(subcommand)]
     Token(TokenCommand),
@@ -260,6 +264,27 @@ struct ErrorsArgs {
 }
 
 #[derive(Args)]
+struct BackupArgs {
+    #[command(flatten)]
+    db: DbArg,
+    /// The snapshot file to write; it must not exist.
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+}
+
+#[derive(Args)]
+struct RestoreArgs {
+    /// The snapshot to restore (written by `enact-hub backup`).
+    #[arg(long, value_name = "FILE")]
+    from: PathBuf,
+    #[command(flatten)]
+    db: DbArg,
+    /// Move an existing database aside (to `{db}.before-restore`) instead of refusing.
+    #[arg(long)]
+    replace: bool,
+}
+
+#[derive(Args)]
 struct DbArg {
     /// SQLite database file (created if missing).
     #[arg(long, env = "ENACT_HUB_DB", default_value = "enact-hub.db")]
@@ -365,6 +390,8 @@ pub fn main() -> ExitCode {
             Command::Report(args) => stored::report(&args).await,
             Command::Generate(args) => generate(args).await,
             Command::Simulate(args) => simulate::run(args),
+            Command::Backup(args) => backup(args).await,
+            Command::Restore(args) => restore(args).await,
             Command::Token(command) => token(command).await,
             Command::Annotator(AnnotatorCommand::Create(args)) => create_annotator(args).await,
         }
@@ -462,6 +489,46 @@ async fn ensure_admin_token(hub: &Hub) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+fn print_snapshot(what: &str, s: &app::backup::Snapshot) {
+    println!(
+        "{what} {} ({} bytes: {} items, {} submissions, {} annotations; integrity ok)",
+        s.path.display(),
+        s.bytes,
+        s.items,
+        s.submissions,
+        s.annotations
+    );
+}
+
+async fn backup(args: BackupArgs) -> anyhow::Result<ExitCode> {
+    if !args.db.db.exists() {
+        anyhow::bail!(
+            "{} does not exist: nothing to back up",
+            args.db.db.display()
+        );
+    }
+    let hub = open(&args.db.db).await?;
+    let done = app::backup::backup(&hub, &args.out).await;
+    hub.close().await;
+    match done {
+        Ok(snapshot) => {
+            print_snapshot("wrote", &snapshot);
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(e) => refused(e),
+    }
+}
+
+async fn restore(args: RestoreArgs) -> anyhow::Result<ExitCode> {
+    match app::backup::restore(&args.from, &args.db.db, args.replace).await {
+        Ok(snapshot) => {
+            print_snapshot("restored", &snapshot);
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(e) => refused(e),
+    }
 }
 
 async fn token(command: TokenCommand) -> anyhow::Result<ExitCode> {

@@ -140,3 +140,25 @@ text_column!(
     crate::core::submission::Visibility,
     crate::core::verifier::ScoringPolicy,
 );
+
+/// Writes a consistent copy of the whole database to `out` (`VACUUM INTO`): one read
+/// transaction, so writers carry on and the copy holds exactly what was committed when it
+/// began. `out` must not exist.
+pub async fn backup_into(conn: &mut sqlx::SqliteConnection, out: &Path) -> Result<(), sqlx::Error> {
+    let target = out
+        .to_str()
+        .ok_or_else(|| sqlx::Error::Protocol(format!("{} is not a UTF-8 path", out.display())))?;
+    sqlx::query("VACUUM INTO ?")
+        .bind(target)
+        .execute(conn)
+        .await
+        .map(|_| ())
+}
+
+/// SQLite's own consistency check of the database `conn` is on: `ok`, or what is wrong.
+pub async fn integrity_check(conn: &mut sqlx::SqliteConnection) -> Result<String, sqlx::Error> {
+    let lines: Vec<String> = sqlx::query_scalar("PRAGMA integrity_check")
+        .fetch_all(conn)
+        .await?;
+    Ok(lines.join("; "))
+}

@@ -1,0 +1,153 @@
+//! `enact-hub backup` while submissions keep arriving, then `enact-hub restore`: the snapshot
+//! passes SQLite's integrity check and holds every submission acknowledged before the backup
+//! began; neither command overwrites a file.
+
+use std::time::Instant;
+
+use enact_hub::core::credentials::Role;
+
+use crate::helpers::*;
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_backup_under_write_load_restores_every_acknowledged_write() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, token) = api_token(&server.pool, "team", Role::Admin, None, None).await;
+    let server = std::sync::Arc::new(server);
+
+    // Submissions, one after another, each with the moment its 201 arrived.
+    let writer = {
+        let server = server.clone();
+        let body = answers(&records, &[0]);
+        tokio::spawn(async move {
+            let mut acknowledged = Vec::new();
+            for k in 0..60 {
+                let reply = submit_to(
+                    &server,
+                    "mini",
+                    &format!("model=m{k}"),
+                    &token,
+                    body.clone(),
+                )
+                .await;
+                assert_eq!(reply.status, 201, "{}", reply.text);
+                acknowledged.push((reply.id(), Instant::now()));
+            }
+            acknowledged
+        })
+    };
+    // Let some writes land, then snapshot while the rest arrive.
+    while sqlx::query_scalar::<_, i64>("SELECT count(*) FROM submissions")
+        .fetch_one(&server.pool)
+        .await
+        .unwrap()
+        < 10
+    {
+        tokio::time::sleep(std::time::Duration::from_millis(5)).await;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let snapshot = dir.path().join("snapshot.db");
+    let began = Instant::now();
+    let out = enact_hub()
+        .args(["backup", "--db"])
+        .arg(server.db_path())
+        .arg("--out")
+        .arg(&snapshot)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("integrity ok"));
+    let acknowledged = writer.await.unwrap();
+    let before: Vec<i64> = acknowledged
+        .iter()
+        .filter(|(_, at)| *at < began)
+        .map(|(id, _)| *id)
+        .collect();
+    assert!(
+        before.len() >= 10,
+        "{} writes before the backup",
+        before.len()
+    );
+
+    // A backup never overwrites.
+    let again = enact_hub()
+        .args(["backup", "--db"])
+        .arg(server.db_path())
+        .arg("--out")
+        .arg(&snapshot)
+        .output()
+        .unwrap();
+    assert!(!again.status.success());
+    assert!(String::from_utf8_lossy(&again.stderr).contains("already exists"));
+
+    // Restore into a new place, and check what it holds.
+    let restored = dir.path().join("restored.db");
+    let out = enact_hub()
+        .args(["restore", "--from"])
+        .arg(&snapshot)
+        .arg("--db")
+        .arg(&restored)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let pool = enact_hub::store::open(&restored).await.unwrap();
+    let mut conn = pool.acquire().await.unwrap();
+    assert_eq!(
+        enact_hub::store::integrity_check(&mut conn).await.unwrap(),
+        "ok"
+    );
+    let ids: Vec<i64> = sqlx::query_scalar("SELECT id FROM submissions")
+        .fetch_all(&mut *conn)
+        .await
+        .unwrap();
+    for id in &before {
+        assert!(
+            ids.contains(id),
+            "submission {id}, acknowledged before the backup, is lost"
+        );
+    }
+    // Each restored submission is whole: all its item verdicts came along.
+    let items = records.len() as i64;
+    let partial: i64 = sqlx::query_scalar(
+        "SELECT count(*) FROM (SELECT submission, count(*) AS n FROM submission_items \
+         GROUP BY submission) WHERE n != ?",
+    )
+    .bind(items)
+    .fetch_one(&mut *conn)
+    .await
+    .unwrap();
+    assert_eq!(partial, 0);
+    drop(conn);
+    pool.close().await;
+
+    // An existing database is refused, or moved aside when asked.
+    let refused = enact_hub()
+        .args(["restore", "--from"])
+        .arg(&snapshot)
+        .arg("--db")
+        .arg(&restored)
+        .output()
+        .unwrap();
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--replace"));
+    let replaced = enact_hub()
+        .args(["restore", "--replace", "--from"])
+        .arg(&snapshot)
+        .arg("--db")
+        .arg(&restored)
+        .output()
+        .unwrap();
+    assert!(
+        replaced.status.success(),
+        "{}",
+        String::from_utf8_lossy(&replaced.stderr)
+    );
+    assert!(dir.path().join("restored.db.before-restore").exists());
+}
