@@ -145,9 +145,15 @@ const context = await chromium.launchPersistentContext(userDataDir, {
   viewport: { width: 1280, height: 800 },
 });
 const page = context.pages()[0] || (await context.newPage());
+// Any console error (a refused script or style, a missing favicon, a script error) fails e2e.
+const consoleErrors = [];
+page.on("console", (m) => m.type() === "error" && consoleErrors.push(`${page.url()}: ${m.text()}`));
+page.on("pageerror", (e) => consoleErrors.push(`${page.url()}: ${e.message}`));
 page.setDefaultTimeout(15000);
 try {
   const found = mode === "screenshots" ? await screenshots(page) : await e2e(page);
+  check(consoleErrors.length === 0, `console errors:\n${consoleErrors.join("\n")}`);
+  found.console_errors = consoleErrors.length;
   console.log(JSON.stringify({ ok: true, ...found }));
   await context.close();
 } catch (error) {

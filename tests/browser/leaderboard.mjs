@@ -16,6 +16,10 @@ const context = await chromium.launchPersistentContext(userDataDir, {
 });
 const page = context.pages()[0] || (await context.newPage());
 page.setDefaultTimeout(15000);
+// Any console error (a refused script or style, a missing file, a script error) fails the run.
+const consoleErrors = [];
+page.on("console", (m) => m.type() === "error" && consoleErrors.push(`${page.url()}: ${m.text()}`));
+page.on("pageerror", (e) => consoleErrors.push(`${page.url()}: ${e.message}`));
 try {
   const started = Date.now();
   await page.goto(params.url, { waitUntil: "load" });
@@ -31,6 +35,12 @@ try {
     html_bytes: document.documentElement.outerHTML.length,
   }));
   if (params.shot) await page.screenshot({ path: params.shot });
+  // The other public pages of the board: error analyses, the home page, the API docs.
+  for (const path of params.also || []) {
+    await page.goto(new URL(path, params.url).href, { waitUntil: "load" });
+  }
+  if (consoleErrors.length) throw new Error(`console errors:\n${consoleErrors.join("\n")}`);
+  found.pages_without_console_errors = 1 + (params.also || []).length;
   console.log(JSON.stringify({ ok: true, load_ms, ...found }));
   await context.close();
 } catch (error) {

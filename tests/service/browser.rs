@@ -69,9 +69,15 @@ async fn a_board_of_a_thousand_submissions_reads_at_1280_px() {
         .expect("mark a baseline");
     let found = run_node(
         "leaderboard.mjs",
-        json!({"url": server.url("/leaderboard/mini"), "chromium": CHROMIUM}),
+        json!({
+            "url": server.url("/leaderboard/mini"),
+            "chromium": CHROMIUM,
+            "also": ["/leaderboard/mini/errors", "/", "/datasets/mini", "/api/docs", "/login"],
+        }),
     )
     .await;
+    // Six pages, and not one console error (CSP refusals and missing files included).
+    assert_eq!(found["pages_without_console_errors"], 6, "{found}");
     assert_eq!(found["table_rows"], 50, "{found}");
     for lines in found["lines_per_panel"].as_array().expect("panels") {
         assert!(lines.as_u64().expect("lines") <= 12, "{found}");

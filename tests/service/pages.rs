@@ -151,3 +151,35 @@ async fn every_demo_item_page_shows_its_images() {
     assert_eq!(kinds.len(), 16, "{kinds:?}");
     server.stop().await;
 }
+
+#[tokio::test]
+async fn every_response_carries_the_security_headers() {
+    let (server, _) = spawn_app_with_release().await;
+    for path in [
+        "/",
+        "/datasets/mini",
+        "/leaderboard/mini",
+        "/leaderboard/mini/errors",
+        "/login",
+        "/api/docs",
+        "/api/v1/datasets",
+        "/favicon.ico",
+        "/no/such/page",
+    ] {
+        let r = server.get(path).await;
+        let h = r.headers();
+        let csp = h["content-security-policy"].to_str().unwrap();
+        assert!(
+            csp.contains("script-src 'self'") && !csp.contains("unsafe-inline"),
+            "{path}"
+        );
+        assert!(csp.contains("frame-ancestors 'none'"), "{path}");
+        assert_eq!(h["x-content-type-options"], "nosniff", "{path}");
+        assert_eq!(h["x-frame-options"], "DENY", "{path}");
+        assert_eq!(h["referrer-policy"], "no-referrer", "{path}");
+    }
+    let icon = server.get("/favicon.ico").await;
+    assert_eq!(icon.status(), StatusCode::OK);
+    assert_eq!(icon.headers()["content-type"], "image/svg+xml");
+    server.stop().await;
+}
