@@ -28,7 +28,7 @@
     announcer.textContent = text;
   };
 
-  function render() {
+  let render = function () {
     slotButtons.forEach((button, i) => {
       const content = button.querySelector(".slot-content");
       content.replaceChildren();
@@ -251,5 +251,114 @@
     if (event.target === lightbox) lightbox.close();
   });
 
+  // Inspector: the image (or pair) under the pointer or focus, large, beside the board.
+  // Forward: the chosen image and the state before it (the current state, or the image of the
+  // slot before). Inverse: the transition's two states.
+  const inspector = document.getElementById("inspector");
+  const forward = root.classList.contains("forward");
+  const current = root.querySelector("figure.current .frame");
+  const transitions = Array.from(root.querySelectorAll("li.transition"));
+  let inspected = null;
+
+  // `name` is the image's own name (its alt text); `caption` says what it is here.
+  function show(figure, src, caption, name) {
+    const img = inspector.querySelector(`figure.${figure} img`);
+    const text = inspector.querySelector(`figure.${figure} figcaption`);
+    if (src) {
+      if (img.getAttribute("src") !== src) img.src = src;
+      img.alt = name || caption;
+      img.hidden = false;
+    } else {
+      img.hidden = true;
+      img.removeAttribute("src");
+    }
+    text.textContent = caption;
+  }
+
+  const srcOf = (label) => (label === null ? null : cardByLabel.get(label).dataset.src);
+
+  // The state before slot `index` (0-based) along the answer as it stands.
+  function beforeSlot(index) {
+    if (index === 0) {
+      const name = current ? current.dataset.name : "";
+      return [current && current.dataset.src, `before: ${name}`, name];
+    }
+    const label = slots[index - 1];
+    return label === null
+      ? [null, `before: slot ${index} is empty`, ""]
+      : [srcOf(label), `before: slot ${index}, ${nameOf(label)}`, nameOf(label)];
+  }
+
+  function inspectSlot(index) {
+    root.querySelectorAll(".inspected").forEach((e) => e.classList.remove("inspected"));
+    if (forward) {
+      const [beforeSrc, beforeCaption, beforeName] = beforeSlot(index);
+      show("before", beforeSrc, beforeCaption, beforeName);
+      const label = slots[index];
+      const name = label === null ? "" : nameOf(label);
+      show("focus", srcOf(label), label === null ? `slot ${index + 1}: empty` : `slot ${index + 1}: ${name}`, name);
+      slotButtons[index].closest("li").classList.add("inspected");
+    } else {
+      const t = transitions[index];
+      const [from, to] = t.querySelectorAll(".frame");
+      show("before", from.dataset.src, `transition ${index + 1}, before: ${from.dataset.name}`, from.dataset.name);
+      show("focus", to.dataset.src, `transition ${index + 1}, after: ${to.dataset.name}`, to.dataset.name);
+      t.classList.add("inspected");
+    }
+    inspected = { slot: index };
+  }
+
+  function inspectCard(label) {
+    const at = slots.indexOf(label);
+    if (at >= 0) {
+      inspectSlot(at);
+      return;
+    }
+    if (forward) {
+      root.querySelectorAll(".inspected").forEach((e) => e.classList.remove("inspected"));
+      const name = current ? current.dataset.name : "";
+      show("before", current && current.dataset.src, `before: ${name}`, name);
+      show("focus", srcOf(label), `${nameOf(label)} (not placed)`, nameOf(label));
+      inspected = { card: label };
+    }
+  }
+
+  for (const card of cards) {
+    const label = Number(card.dataset.label);
+    card.addEventListener("mouseenter", () => inspectCard(label));
+    card.addEventListener("focus", () => inspectCard(label));
+  }
+  slotButtons.forEach((button, index) => {
+    button.addEventListener("mouseenter", () => inspectSlot(index));
+    button.addEventListener("focus", () => inspectSlot(index));
+  });
+  transitions.forEach((t, index) => {
+    for (const frame of t.querySelectorAll(".frame")) {
+      frame.addEventListener("mouseenter", () => inspectSlot(index));
+      frame.addEventListener("focus", () => inspectSlot(index));
+    }
+  });
+  // Placing or clearing changes what a slot shows: refresh the inspector.
+  const renderBoard = render;
+  render = function () {
+    renderBoard();
+    if (inspected && inspected.slot !== undefined) inspectSlot(inspected.slot);
+    else if (inspected && inspected.card !== undefined) inspectCard(inspected.card);
+  };
+
+  // Arrow keys walk the slots, then the cards; the inspector follows focus.
+  const walk = slotButtons.concat(cards);
+  root.addEventListener("keydown", (event) => {
+    if (event.ctrlKey || event.metaKey || event.altKey) return;
+    const step = { ArrowDown: 1, ArrowRight: 1, ArrowUp: -1, ArrowLeft: -1 }[event.key];
+    if (!step) return;
+    const at = walk.indexOf(document.activeElement);
+    if (at < 0) return;
+    event.preventDefault();
+    walk[(at + step + walk.length) % walk.length].focus();
+  });
+
+  if (forward) inspectSlot(0);
+  else if (transitions.length) inspectSlot(0);
   render();
 })();

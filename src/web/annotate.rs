@@ -163,11 +163,12 @@ struct ItemPage {
     item_id: String,
     forward: bool,
     step_length: u8,
-    slots: Vec<usize>,
     /// Forward: the pinned current state.
     current: Option<Frame>,
-    /// Forward: the actions in order.
-    actions: Vec<String>,
+    /// Forward: each slot with the action that leads to it, in order.
+    steps: Vec<(usize, String)>,
+    /// Thumbnails shrink from 140 to 110 px for long items (L ≥ 7), so L = 10 fits.
+    long: bool,
     /// Inverse: the ordered transitions, one slot each.
     transitions: Vec<Transition>,
     library: Vec<Card>,
@@ -250,13 +251,17 @@ impl ItemPage {
             item_id: item.summary.item_id.clone(),
             forward,
             step_length: step_length.get(),
-            slots: (1..=step_length.actions()).collect(),
             current: if forward { frame(item, 0) } else { None },
-            actions: if forward {
-                item.actions.clone()
+            steps: if forward {
+                item.actions
+                    .iter()
+                    .enumerate()
+                    .map(|(i, a)| (i + 1, a.clone()))
+                    .collect()
             } else {
                 Vec::new()
             },
+            long: step_length.get() >= 7,
             transitions,
             library: library(item),
             question: item.question.clone(),

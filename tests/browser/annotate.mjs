@@ -45,6 +45,31 @@ async function noHorizontalScroll(page) {
   return page.evaluate(() => document.documentElement.scrollWidth <= window.innerWidth);
 }
 
+// What the inspector shows and how large, by getBoundingClientRect.
+async function inspectorSizes(page) {
+  return page.evaluate(() => {
+    const box = (sel) => document.querySelector(sel).getBoundingClientRect();
+    const img = (sel) => document.querySelector(sel);
+    return {
+      focus_alt: img("#inspector figure.focus img").alt,
+      before_alt: img("#inspector figure.before img").alt,
+      focus_width: box("#inspector figure.focus img").width,
+      focus_height: box("#inspector figure.focus img").height,
+      before_width: box("#inspector figure.before img").width,
+      focused_slot: document.activeElement?.dataset?.slot ?? null,
+    };
+  });
+}
+
+// The smallest rendered width of the page's thumbnails (candidate, slot and transition images).
+async function thumbSizes(page) {
+  return page.evaluate(() => {
+    const widths = [...document.querySelectorAll(".card img, .slot-content img, li.transition .pair img, figure.current img")]
+      .map((i) => i.getBoundingClientRect().width);
+    return { min: Math.min(...widths), count: widths.length };
+  });
+}
+
 async function acceptInvite(page, invite, password) {
   await page.goto(base + invite);
   await page.fill('input[name="password"]', password);
@@ -60,9 +85,18 @@ async function e2e(page) {
   // Forward L = 3 by drag-and-drop.
   await Promise.all([page.waitForURL(`${base}/annotate/mini/${params.forward}`), page.click("#continue")]);
   check((await page.$$(".slot")).length === 2, "forward L=3 has two slots");
-  check(await page.isVisible(".context img[alt='Current State']"), "current state is pinned");
+  check(await page.isVisible("figure.current img[alt='Current State']"), "current state is shown");
   await page.dragAndDrop('.card[data-label="2"]', '.slot[data-slot="1"]');
   await waitSaved(page);
+  // The inspector shows the slot's image large, beside the state before it.
+  await page.hover('.slot[data-slot="1"]');
+  found.forward_inspector = await inspectorSizes(page);
+  check(found.forward_inspector.focus_alt === "Next State 2", `inspector shows ${found.forward_inspector.focus_alt}`);
+  check(found.forward_inspector.before_alt === "Current State", `before is ${found.forward_inspector.before_alt}`);
+  check(found.forward_inspector.focus_width >= 384 && found.forward_inspector.focus_height >= 384,
+    `inspector image ${found.forward_inspector.focus_width}x${found.forward_inspector.focus_height} < 384`);
+  found.forward_thumbs = await thumbSizes(page);
+  check(found.forward_thumbs.min >= 140, `forward L=3 thumbnails ${found.forward_thumbs.min} px < 140`);
   check(await page.isDisabled("#submit"), "submit enabled with an empty slot");
   found.announced = await page.textContent("#announce");
 
@@ -105,14 +139,25 @@ async function e2e(page) {
     `inverse partial answer lost on reload: ${await slotLabels(page)}`);
   await press(2, "2");
   await waitSaved(page);
+  // Arrow keys walk the slots and the inspector follows focus: transition 2's two states.
+  await tabTo(page, '.slot[data-slot="1"]');
+  await page.keyboard.press("ArrowDown");
+  found.inverse_inspector = await inspectorSizes(page);
+  check(found.inverse_inspector.focused_slot === "2", `arrow moved focus to ${found.inverse_inspector.focused_slot}`);
+  check(found.inverse_inspector.before_alt === "Next State 1" && found.inverse_inspector.focus_alt === "Next State 2",
+    `inverse inspector shows ${found.inverse_inspector.before_alt} → ${found.inverse_inspector.focus_alt}`);
+  check(found.inverse_inspector.before_width >= 384 && found.inverse_inspector.focus_width >= 384,
+    "inverse inspector images below 384 px");
   found.announced_last = await page.textContent("#announce");
   await tabTo(page, "#submit");
   await Promise.all([page.waitForURL((url) => !url.pathname.endsWith(params.inverse)), page.keyboard.press("Enter")]);
 
-  // L = 10 pages fit 1280 pixels.
+  // L = 10 pages fit 1280 pixels, with thumbnails of at least 110 px.
   for (const item of params.wide || []) {
     await page.goto(`${base}/annotate/mini/${item}`);
     check(await noHorizontalScroll(page), `${item}: horizontal scrolling at 1280x800`);
+    const thumbs = await thumbSizes(page);
+    check(thumbs.min >= 110, `${item}: thumbnails ${thumbs.min} px < 110`);
   }
   found.wide_checked = (params.wide || []).length;
   return found;
