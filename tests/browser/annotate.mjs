@@ -160,6 +160,24 @@ async function e2e(page) {
     check(thumbs.min >= 110, `${item}: thumbnails ${thumbs.min} px < 110`);
   }
   found.wide_checked = (params.wide || []).length;
+
+  // ENACT's real frames: thumbnails of at least 140 px up to L = 6 and 110 px at L = 10, the
+  // inspector at 384 px or more, no sideways scrolling.
+  found.sample = [];
+  for (const { item, steps } of params.sample || []) {
+    await page.goto(`${base}/annotate/sample/${item}`);
+    await page.waitForLoadState("networkidle");
+    check(await noHorizontalScroll(page), `sample ${item}: horizontal scrolling at 1280x800`);
+    const thumbs = await thumbSizes(page);
+    const least = steps <= 6 ? 140 : 110;
+    check(thumbs.min >= least, `sample L=${steps}: thumbnails ${thumbs.min} px < ${least}`);
+    await page.hover(".card >> nth=0");
+    const inspector = await inspectorSizes(page);
+    check(inspector.focus_width >= 384 && inspector.focus_height >= 384,
+      `sample L=${steps}: inspector ${inspector.focus_width}x${inspector.focus_height}`);
+    found.sample.push({ steps, thumb: thumbs.min, inspector: inspector.focus_width });
+  }
+  found.sample_checked = found.sample.length;
   return found;
 }
 

@@ -145,11 +145,16 @@ pub async fn annotator(server: &TestServer, name: &str, admin: bool) -> i64 {
 
 /// Assigns the listed items of dataset "mini" to `annotator`.
 pub async fn assign(server: &TestServer, annotator: i64, item_ids: &[&str]) {
+    assign_in(server, "mini", annotator, item_ids).await;
+}
+
+/// Appends items of `dataset` to an annotator's queue.
+pub async fn assign_in(server: &TestServer, dataset: &str, annotator: i64, item_ids: &[&str]) {
     let mut conn = server.pool.acquire().await.expect("conn");
-    let dataset = store::datasets::by_name(&mut conn, "mini")
+    let dataset = store::datasets::by_name(&mut conn, dataset)
         .await
         .expect("query")
-        .expect("mini");
+        .expect("dataset");
     let ids: Vec<String> = item_ids.iter().map(|s| (*s).to_owned()).collect();
     let rows = store::annotations::item_rowids(&mut conn, dataset.id, &ids)
         .await

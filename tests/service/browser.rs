@@ -96,10 +96,16 @@ async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
     }
     let records = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
     let shared = records.clone();
+    // ENACT's own sample items (real 512x512 frames), when the shared fixtures are here.
+    let sample = shared_fixtures().map(|f| f.join("enact-sample"));
+    let sample_dir = sample.clone();
     let server = spawn_app_with(|pool, dir| async move {
         let root = dir.join("release");
         let written = write_release(&root, &[3, 4, 10]);
         import(&pool, &root, &options("mini")).await;
+        if let Some(sample) = sample_dir {
+            import(&pool, &sample, &options("sample")).await;
+        }
         *shared.lock().expect("lock") = written;
     })
     .await;
@@ -121,6 +127,32 @@ async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
         &[&forward, &inverse, &wide[0], &wide[1]],
     )
     .await;
+    // Forward L = 3, inverse L = 5 and forward L = 10 of the sample.
+    let mut sample_items = Vec::new();
+    if let Some(sample) = &sample {
+        let qa = std::fs::read_to_string(sample.join("QA/enact_ordering.jsonl")).expect("qa");
+        for (direction, steps) in [("forward", 3), ("inverse", 5), ("forward", 10)] {
+            let kind = format!("{direction}_world_modeling_ordering_{steps}_steps");
+            let id = qa
+                .lines()
+                .map(|l| serde_json::from_str::<Value>(l).expect("record"))
+                .find(|r| r["type"] == kind.as_str())
+                .map(|r| r["id"].as_str().expect("id").to_owned())
+                .expect("a sample item of each kind");
+            sample_items.push(json!({"item": id, "steps": steps}));
+        }
+        let ids: Vec<String> = sample_items
+            .iter()
+            .map(|i| i["item"].as_str().expect("id").to_owned())
+            .collect();
+        crate::annotate::assign_in(
+            &server,
+            "sample",
+            annotator,
+            &ids.iter().map(String::as_str).collect::<Vec<_>>(),
+        )
+        .await;
+    }
 
     let params = json!({
         "mode": "e2e",
@@ -129,6 +161,7 @@ async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
         "forward": forward,
         "inverse": inverse,
         "wide": wide,
+        "sample": sample_items,
         "chromium": CHROMIUM,
         "failure_dir": env!("CARGO_TARGET_TMPDIR"),
     });
@@ -140,6 +173,8 @@ async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
     assert_eq!(found["announced"], "Next State 2 placed in slot 1.");
     assert_eq!(found["announced_last"], "Action 2 placed in slot 2.");
     assert_eq!(found["wide_checked"], 2);
+    assert_eq!(found["sample_checked"], sample_items.len(), "{found}");
+    assert_eq!(found["console_errors"], 0);
 
     let mut conn = server.pool.acquire().await.expect("conn");
     let rowid = |item: String| {
@@ -181,4 +216,45 @@ async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
     );
     drop(conn);
     server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_newcomer_follows_the_demo_link_and_annotates_at_once() {
+    if !browser_available() {
+        return;
+    }
+    use std::io::BufRead;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_enact-hub"))
+        .args(["serve", "--demo", "--addr", "127.0.0.1:0"])
+        .env("RUST_LOG", "warn")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("start serve --demo");
+    let stdout = child.stdout.take().expect("stdout");
+    let link = tokio::task::spawn_blocking(move || {
+        std::io::BufReader::new(stdout)
+            .lines()
+            .map_while(Result::ok)
+            .find(|l| l.starts_with("http://") && l.contains("/login/link/"))
+    })
+    .await
+    .expect("join");
+    let Some(link) = link else {
+        let _ = child.kill();
+        panic!("serve --demo printed no login link");
+    };
+    let found = run_node(
+        "demo.mjs",
+        json!({"link": link, "chromium": CHROMIUM, "failure_dir": env!("CARGO_TARGET_TMPDIR")}),
+    )
+    .await;
+    // A graceful stop, so the server removes its temporary demo database.
+    let _ = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    let _ = child.wait();
+    assert_eq!(found["done"], json!(["forward", "inverse"]), "{found}");
+    let human = found["human_row"].as_str().expect("a Human row");
+    assert!(human.contains("1 annotator, 2 answers"), "{human}");
 }
