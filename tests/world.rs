@@ -247,3 +247,157 @@ fn the_written_records_rebuild_every_frame_as_simulated() {
         );
     }
 }
+
+/// `(xmin, ymin, xmax, ymax)` of a node as the head camera sees it, if it is seen.
+fn bbox(graph: &enact_hub::core::scene_graph::SceneGraph, name: &str) -> Option<[f64; 4]> {
+    let node = graph.nodes.iter().find(|n| n.name == name)?;
+    let reading = node.visibility.get("external_sensor1")?;
+    let v: Vec<f64> = reading.iter().filter_map(|n| n.as_f64()).collect();
+    (v.len() == 7 && v[0] > 0.0).then(|| [v[1], v[2], v[3], v[4]])
+}
+
+/// Objects whose recorded state changed between two graphs: a node's states, a node appearing
+/// or disappearing, or a relation (both of its objects), counting only states ENACT describes.
+fn changed_objects(
+    a: &enact_hub::core::scene_graph::SceneGraph,
+    b: &enact_hub::core::scene_graph::SceneGraph,
+) -> BTreeSet<String> {
+    use enact_hub::core::scene_graph::signature::state_phrase;
+    let described = |states: &[String]| -> BTreeSet<String> {
+        states
+            .iter()
+            .filter(|s| state_phrase(s).is_some())
+            .cloned()
+            .collect()
+    };
+    let mut changed = BTreeSet::new();
+    let names: BTreeSet<&str> = a
+        .nodes
+        .iter()
+        .chain(&b.nodes)
+        .map(|n| n.name.as_str())
+        .collect();
+    for name in names {
+        let states = |g: &enact_hub::core::scene_graph::SceneGraph| {
+            g.nodes
+                .iter()
+                .find(|n| n.name == name)
+                .map(|n| described(&n.states))
+        };
+        if states(a) != states(b) {
+            changed.insert(name.to_owned());
+        }
+    }
+    let edges = |g: &enact_hub::core::scene_graph::SceneGraph| {
+        g.edges
+            .iter()
+            .map(|e| ((e.from.clone(), e.to.clone()), described(&e.states)))
+            .filter(|(_, s)| !s.is_empty())
+            .collect::<std::collections::BTreeMap<_, _>>()
+    };
+    let (ea, eb) = (edges(a), edges(b));
+    for key in ea.keys().chain(eb.keys()) {
+        if ea.get(key) != eb.get(key) {
+            changed.insert(key.0.clone());
+            changed.insert(key.1.clone());
+        }
+    }
+    changed
+}
+
+/// Every state change a key frame records is visible at thumbnail size, and every object an
+/// activity touches is drawn at least 24 px across in a 512 px frame.
+#[test]
+fn key_frame_changes_are_visible_at_thumbnail_size() {
+    use image::imageops::{FilterType, resize};
+    let mut report = Vec::new();
+    for activity in Activity::ALL {
+        for seed in [3, 11] {
+            let simulation = simulate(&SimulateOptions {
+                seed,
+                activity,
+                length: None,
+                camera: CameraRig::default(),
+            })
+            .unwrap();
+            let frames = &simulation.key_frames;
+            let mut touched: BTreeSet<String> = BTreeSet::new();
+            let mut largest: std::collections::BTreeMap<String, f64> = Default::default();
+            for pair in frames.windows(2) {
+                let (a, b) = (
+                    simulation.scene_graph(pair[0]),
+                    simulation.scene_graph(pair[1]),
+                );
+                let small = |f: u64| resize(simulation.image(f), 256, 256, FilterType::Triangle);
+                let (ia, ib) = (small(pair[0]), small(pair[1]));
+                let differs = |x: u32, y: u32| {
+                    let (p, q) = (ia.get_pixel(x, y).0, ib.get_pixel(x, y).0);
+                    (0..3).any(|c| p[c].abs_diff(q[c]) > 24)
+                };
+                let changed_pixels = (0..256)
+                    .flat_map(|y| (0..256).map(move |x| (x, y)))
+                    .filter(|&(x, y)| differs(x, y))
+                    .count();
+                let share = changed_pixels as f64 / (256.0 * 256.0);
+                let what = format!(
+                    "{} seed {seed}, key frames {} → {}",
+                    activity.name(),
+                    pair[0],
+                    pair[1]
+                );
+                if share < 0.005 {
+                    report.push(format!(
+                        "{what}: only {:.2}% of pixels change ({:?})",
+                        share * 100.0,
+                        changed_objects(&a, &b)
+                    ));
+                }
+                for name in changed_objects(&a, &b) {
+                    if name.starts_with("robot") {
+                        continue;
+                    }
+                    // Where the object is in either frame, at 256 px.
+                    let boxes: Vec<[f64; 4]> = [bbox(&a, &name), bbox(&b, &name)]
+                        .into_iter()
+                        .flatten()
+                        .collect();
+                    if boxes.is_empty() {
+                        continue; // not seen in either frame: ENACT does not describe it
+                    }
+                    touched.insert(name.clone());
+                    let seen = boxes.iter().any(|[x0, y0, x1, y1]| {
+                        let r = |v: f64| ((v / 2.0).floor().max(0.0) as u32).min(255);
+                        (r(*y0)..=r(*y1)).any(|y| (r(*x0)..=r(*x1)).any(|x| differs(x, y)))
+                    });
+                    if !seen {
+                        report.push(format!("{what}: {name} changes but no pixel of it does"));
+                    }
+                }
+                for g in [&a, &b] {
+                    for n in &g.nodes {
+                        if let Some([x0, y0, x1, y1]) = bbox(g, &n.name) {
+                            let across = (x1 - x0).max(y1 - y0);
+                            let e = largest.entry(n.name.clone()).or_default();
+                            *e = e.max(across);
+                        }
+                    }
+                }
+            }
+            for name in &touched {
+                let across = largest.get(name).copied().unwrap_or(0.0);
+                if across < 24.0 {
+                    report.push(format!(
+                        "{} seed {seed}: {name} is at most {across} px across",
+                        activity.name()
+                    ));
+                }
+            }
+        }
+    }
+    assert!(
+        report.is_empty(),
+        "{} problems:\n{}",
+        report.len(),
+        report.join("\n")
+    );
+}

@@ -840,9 +840,9 @@ fn draw_stove(canvas: &mut Canvas, p: &Paint<'_>, at: [f32; 3]) {
     let thing = p.thing;
     draw_box(canvas, cam, at, spec.size, col, owner);
     let on = state.is_on(thing);
-    for (i, bx) in [0.25f32, 0.75].iter().enumerate() {
+    for bx in [0.25f32, 0.75] {
         if let Some((u, v, s)) = cam.project([at[0] + w * bx, at[1] + h, at[2] + d * 0.5]) {
-            let hot = on && i == 0;
+            let hot = on;
             canvas.ellipse(u, v, 0.14 * s, 0.05 * s, [30, 30, 30], owner);
             if hot {
                 canvas.ellipse(u, v, 0.12 * s, 0.04 * s, [255, 70, 20], owner);
@@ -860,7 +860,9 @@ fn draw_stove(canvas: &mut Canvas, p: &Paint<'_>, at: [f32; 3]) {
         at[1] + 0.6,
         at[2],
     ) {
-        canvas.rect(u0, v0, u1, v1, [40, 40, 46], owner);
+        // A switched-on stove shows it across its whole front: the oven window glows.
+        let window = if on { [255, 130, 40] } else { [40, 40, 46] };
+        canvas.rect(u0, v0, u1, v1, window, owner);
     }
     for k in 0..3 {
         if let Some((u, v, s)) =
@@ -1011,7 +1013,36 @@ fn draw_bowl(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
     canvas.lower_half_ellipse(u, v - h, w / 2.0, h, col, owner);
     canvas.ellipse(u, v - h, w / 2.0, w * 0.14, shade(col, 1.3), owner);
     if state.has_water(thing) {
-        canvas.ellipse(u, v - h, w * 0.42, w * 0.1, water_colour, water);
+        // Filled: water splashes up over the rim, then fills the bowl to the brim.
+        for k in 0..6 {
+            let k = k as f32;
+            canvas.ellipse(
+                u + (k - 2.5) * w * 0.17,
+                v - h - w * (0.25 + 0.12 * (2.5 - (k - 2.5).abs())),
+                w * 0.12,
+                w * 0.12,
+                water_colour,
+                water,
+            );
+        }
+        canvas.ellipse(u, v - h, w * 0.6, w * 0.2, [200, 228, 250], water);
+        canvas.ellipse(u, v - h, w * 0.48, w * 0.13, water_colour, water);
+        canvas.lower_half_ellipse(
+            u,
+            v - h,
+            w * 0.44,
+            h * 0.8,
+            shade(water_colour, 0.85),
+            water,
+        );
+        canvas.ellipse(
+            u - w * 0.15,
+            v - h,
+            w * 0.12,
+            w * 0.04,
+            [235, 245, 255],
+            water,
+        );
     } else {
         canvas.ellipse(u, v - h, w * 0.42, w * 0.1, shade(col, 0.7), owner);
     }
@@ -1034,12 +1065,27 @@ fn draw_mug(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
         owner,
     );
     outline(owner, canvas, &at.front(0.0), col);
-    let rim = if state.has_water(thing) {
+    let full = state.has_water(thing);
+    let rim = if full {
         (water_colour, water)
     } else {
         ([80, 20, 20], owner)
     };
     canvas.ellipse(u, v - h, w / 2.0, w * 0.16, rim.0, rim.1);
+    if full {
+        // Steam over a filled mug: tea is visible at thumbnail size.
+        for k in 0..5 {
+            let k = k as f32;
+            canvas.ellipse(
+                u + (k % 2.0 - 0.5) * w * 0.5,
+                v - h - w * (0.45 + 0.5 * k),
+                w * 0.6,
+                w * 0.36,
+                [245, 245, 250],
+                water,
+            );
+        }
+    }
 }
 
 fn draw_apple(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
@@ -1076,10 +1122,13 @@ fn draw_half_apple(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
     let OnScreen { u, v, w, h, .. } = *at;
     let owner = p.owner;
     let col = p.col;
+    // Juice on the surface under a freshly cut half.
+    canvas.ellipse(u, v, w * 0.95, w * 0.3, [240, 170, 170], owner);
     canvas.lower_half_ellipse(u, v - h, w / 2.0 + 1.5, h + 1.5, [110, 10, 20], owner);
     canvas.lower_half_ellipse(u, v - h, w / 2.0, h, col, owner);
-    canvas.ellipse(u, v - h, w / 2.0, w * 0.2, [250, 240, 200], owner);
-    canvas.ellipse(u, v - h, w * 0.08, w * 0.05, [120, 80, 40], owner);
+    // The cut face, turned to the camera: pale flesh and the core.
+    canvas.ellipse(u, v - h, w / 2.0, w * 0.34, [250, 240, 200], owner);
+    canvas.ellipse(u, v - h, w * 0.1, w * 0.07, [120, 80, 40], owner);
 }
 
 fn draw_board(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
@@ -1151,6 +1200,26 @@ fn draw_bacon(canvas: &mut Canvas, p: &Paint<'_>, at: &OnScreen) {
     } else {
         [252, 225, 220]
     };
+    if state.is_cooked(thing) {
+        // Cooked bacon has curled and rendered its fat: a crisp dark halo around the strips
+        // makes the change read at thumbnail size.
+        canvas.ellipse(
+            u,
+            v - h * 1.6,
+            w * 0.72,
+            h * 3.2 + w * 0.12,
+            [95, 50, 20],
+            owner,
+        );
+        canvas.ellipse(
+            u,
+            v - h * 1.6,
+            w * 0.62,
+            h * 2.6 + w * 0.08,
+            [185, 120, 55],
+            owner,
+        );
+    }
     for k in 0..2 {
         let y = v - h * (1.0 + k as f32 * 1.3);
         outline(

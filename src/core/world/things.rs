@@ -79,6 +79,10 @@ const fn furniture(
     }
 }
 
+/// How much larger than life small items are made: at real size a 9 cm apple is 16 px across
+/// in a 512 px frame that shows the whole kitchen, too small to judge a change by.
+const SMALL_ITEM_SCALE: f32 = 1.6;
+
 const fn item(
     name: &'static str,
     category: &'static str,
@@ -87,12 +91,17 @@ const fn item(
     size: [f32; 3],
     colour: [u8; 3],
 ) -> Thing {
+    let scale = if size[0] < 0.2 && size[2] < 0.2 {
+        SMALL_ITEM_SCALE
+    } else {
+        1.0
+    };
     Thing {
         name,
         category,
         room,
         look,
-        size,
+        size: [size[0] * scale, size[1] * scale, size[2] * scale],
         colour,
         at: None,
     }
@@ -170,7 +179,7 @@ pub const CATALOGUE: [Thing; 23] = [
         Kitchen,
         L::Bowl,
         [0.17, 0.08, 0.17],
-        [70, 120, 200],
+        [236, 226, 205],
     ),
     item(
         "mug_0",
@@ -193,7 +202,7 @@ pub const CATALOGUE: [Thing; 23] = [
         "half_apple",
         Kitchen,
         L::HalfApple,
-        [0.08, 0.05, 0.08],
+        [0.095, 0.05, 0.095],
         [210, 30, 40],
     ),
     item(
@@ -201,7 +210,7 @@ pub const CATALOGUE: [Thing; 23] = [
         "half_apple",
         Kitchen,
         L::HalfApple,
-        [0.08, 0.05, 0.08],
+        [0.095, 0.05, 0.095],
         [210, 30, 40],
     ),
     item(
