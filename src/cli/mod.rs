@@ -215,22 +215,30 @@ enum PolicyArg {
     Strict,
 }
 
+/// The items a prediction file is read against: a stored dataset or a release folder.
+#[derive(Args)]
+struct AgainstArgs {
+    /// Use a dataset stored in this database (with --dataset).
+    #[arg(long, requires = "dataset", conflicts_with = "data")]
+    db: Option<PathBuf>,
+    /// The stored dataset.
+    #[arg(long, requires = "db")]
+    dataset: Option<String>,
+    /// Use an ENACT release folder (QA/enact_ordering.jsonl) instead of a database.
+    #[arg(long, value_name = "DATA_DIR", required_unless_present = "db")]
+    data: Option<PathBuf>,
+    /// ENACT's replayed_activities folder, for semantic matching from scene graphs (forward
+    /// items get signatures only from there).
+    #[arg(long, value_name = "REPLAYED_DIR")]
+    scene_graphs: Option<PathBuf>,
+}
+
 #[derive(Args)]
 struct ScoreArgs {
     /// The prediction file (JSONL).
     predictions: PathBuf,
-    /// Score against a dataset stored in this database (with --dataset).
-    #[arg(long, requires = "dataset", conflicts_with = "data")]
-    db: Option<PathBuf>,
-    /// The stored dataset to score against.
-    #[arg(long, requires = "db")]
-    dataset: Option<String>,
-    /// Score against an ENACT release folder (QA/enact_ordering.jsonl) instead of a database.
-    #[arg(long, value_name = "DATA_DIR", required_unless_present = "db")]
-    data: Option<PathBuf>,
-    /// ENACT's replayed_activities folder, for semantic matching from scene graphs.
-    #[arg(long, value_name = "REPLAYED_DIR")]
-    scene_graphs: Option<PathBuf>,
+    #[command(flatten)]
+    against: AgainstArgs,
     /// Scoring policy.
     #[arg(long, value_enum, default_value = "strict")]
     policy: PolicyArg,
@@ -246,18 +254,8 @@ struct ScoreArgs {
 struct ErrorsArgs {
     /// The prediction file (JSONL), read as the leaderboard reads submissions.
     predictions: PathBuf,
-    /// Analyse against a dataset stored in this database (with --dataset).
-    #[arg(long, requires = "dataset", conflicts_with = "data")]
-    db: Option<PathBuf>,
-    /// The stored dataset.
-    #[arg(long, requires = "db")]
-    dataset: Option<String>,
-    /// Analyse against an ENACT release folder (QA/enact_ordering.jsonl) instead.
-    #[arg(long, value_name = "DATA_DIR", required_unless_present = "db")]
-    data: Option<PathBuf>,
-    /// ENACT's replayed_activities folder: signatures for forward items come only from there.
-    #[arg(long, value_name = "REPLAYED_DIR")]
-    scene_graphs: Option<PathBuf>,
+    #[command(flatten)]
+    against: AgainstArgs,
     /// Print one JSON object (the API's `/submissions/{id}/errors` shape) instead of a table.
     #[arg(long)]
     json: bool,
@@ -727,25 +725,16 @@ fn write_enact_outputs(out: &Path, model: &str, meta: &str, detailed: &str) -> a
 async fn scoring_targets(
     args: &ScoreArgs,
 ) -> anyhow::Result<Result<Vec<ScoringTarget>, Vec<String>>> {
-    targets_of(
-        args.db.as_deref(),
-        args.dataset.as_deref(),
-        args.data.as_deref(),
-        args.scene_graphs.as_deref(),
-    )
-    .await
+    targets_of(&args.against).await
 }
 
 /// The items a prediction file is scored or analysed against: a stored dataset, or a release
 /// folder with its signatures computed now (from scene graphs when given).
 async fn targets_of(
-    db: Option<&Path>,
-    dataset: Option<&str>,
-    data: Option<&Path>,
-    scene_graphs: Option<&Path>,
+    against: &AgainstArgs,
 ) -> anyhow::Result<Result<Vec<ScoringTarget>, Vec<String>>> {
-    if let (Some(db), Some(dataset)) = (db, dataset) {
-        if scene_graphs.is_some() {
+    if let (Some(db), Some(dataset)) = (&against.db, &against.dataset) {
+        if against.scene_graphs.is_some() {
             anyhow::bail!(
                 "--scene-graphs goes with --data; a stored dataset keeps the signatures computed \
                  at import (enact-hub import DATA_DIR --scene-graphs REPLAYED_DIR)"
@@ -756,10 +745,11 @@ async fn targets_of(
         hub.close().await;
         return Ok(Ok(in_database(targets, db)?));
     }
-    let data = data
-        .context("give --data DATA_DIR, or --db PATH --dataset NAME")?
-        .to_path_buf();
-    let scene_graphs = scene_graphs.map(Path::to_path_buf);
+    let data = against
+        .data
+        .clone()
+        .context("give --data DATA_DIR, or --db PATH --dataset NAME")?;
+    let scene_graphs = against.scene_graphs.clone();
     let spinner = spinner(if scene_graphs.is_some() {
         "reading the release and its scene graphs"
     } else {
@@ -785,14 +775,7 @@ async fn errors(args: ErrorsArgs) -> anyhow::Result<ExitCode> {
     let file = args.predictions.display().to_string();
     let text = std::fs::read_to_string(&args.predictions)
         .with_context(|| format!("cannot read {file} (it must be UTF-8 text)"))?;
-    let targets = match targets_of(
-        args.db.as_deref(),
-        args.dataset.as_deref(),
-        args.data.as_deref(),
-        args.scene_graphs.as_deref(),
-    )
-    .await?
-    {
+    let targets = match targets_of(&args.against).await? {
         Ok(t) => t,
         Err(problems) => {
             for p in &problems {
@@ -877,33 +860,36 @@ async fn score_enact(
     text: String,
     model: String,
 ) -> anyhow::Result<ExitCode> {
-    let source: Box<dyn crate::core::verifier::EnactSignatureSource + Send> =
-        match (&args.scene_graphs, &args.db, &args.dataset) {
-            (Some(replayed), _, _) => {
-                let replayed = replayed.clone();
-                let text = text.clone();
-                Box::new(
-                    tokio::task::spawn_blocking(move || {
-                        scoring::SceneGraphSignatures::for_predictions(
-                            &replayed,
-                            crate::core::verifier::python_text_lines(&text).map(|(_, l)| l),
-                        )
-                    })
-                    .await
-                    .context("loading scene graphs failed")??,
-                )
-            }
-            (None, Some(db), Some(dataset)) => {
-                let hub = open(db).await?;
-                let signatures = app::scoring::stored_signatures(&hub, dataset).await;
-                hub.close().await;
-                Box::new(in_database(signatures, db)?)
-            }
-            _ => anyhow::bail!(
-                "the enact policy scores as ENACT's evaluator does, which needs scene \
+    let source: Box<dyn crate::core::verifier::EnactSignatureSource + Send> = match (
+        &args.against.scene_graphs,
+        &args.against.db,
+        &args.against.dataset,
+    ) {
+        (Some(replayed), _, _) => {
+            let replayed = replayed.clone();
+            let text = text.clone();
+            Box::new(
+                tokio::task::spawn_blocking(move || {
+                    scoring::SceneGraphSignatures::for_predictions(
+                        &replayed,
+                        crate::core::verifier::python_text_lines(&text).map(|(_, l)| l),
+                    )
+                })
+                .await
+                .context("loading scene graphs failed")??,
+            )
+        }
+        (None, Some(db), Some(dataset)) => {
+            let hub = open(db).await?;
+            let signatures = app::scoring::stored_signatures(&hub, dataset).await;
+            hub.close().await;
+            Box::new(in_database(signatures, db)?)
+        }
+        _ => anyhow::bail!(
+            "the enact policy scores as ENACT's evaluator does, which needs scene \
                  graphs: give --scene-graphs REPLAYED_DIR, or a --db dataset imported with them"
-            ),
-        };
+        ),
+    };
     let evaluation = tokio::task::spawn_blocking(move || {
         let lines: Vec<(usize, &str)> = crate::core::verifier::python_text_lines(&text).collect();
         crate::core::verifier::score_enact_predictions(lines, &model, source.as_ref())

@@ -2,11 +2,40 @@
 //! passes SQLite's integrity check and holds every submission acknowledged before the backup
 //! began; neither command overwrites a file.
 
+use std::path::Path;
+use std::process::Output;
 use std::time::Instant;
 
 use enact_hub::core::credentials::Role;
 
 use crate::helpers::*;
+
+/// `enact-hub backup --db DB --out OUT`.
+fn backup(db: &Path, out: &Path) -> Output {
+    enact_hub()
+        .args(["backup", "--db"])
+        .arg(db)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
+/// `enact-hub restore [--replace] --from SNAPSHOT --db DB`.
+fn restore(snapshot: &Path, db: &Path, replace: bool) -> Output {
+    let mut command = enact_hub();
+    command.arg("restore");
+    if replace {
+        command.arg("--replace");
+    }
+    command
+        .arg("--from")
+        .arg(snapshot)
+        .arg("--db")
+        .arg(db)
+        .output()
+        .unwrap()
+}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_backup_under_write_load_restores_every_acknowledged_write() {
@@ -47,13 +76,7 @@ async fn a_backup_under_write_load_restores_every_acknowledged_write() {
     let dir = tempfile::tempdir().unwrap();
     let snapshot = dir.path().join("snapshot.db");
     let began = Instant::now();
-    let out = enact_hub()
-        .args(["backup", "--db"])
-        .arg(server.db_path())
-        .arg("--out")
-        .arg(&snapshot)
-        .output()
-        .unwrap();
+    let out = backup(&server.db_path(), &snapshot);
     assert!(
         out.status.success(),
         "{}",
@@ -73,25 +96,13 @@ async fn a_backup_under_write_load_restores_every_acknowledged_write() {
     );
 
     // A backup never overwrites.
-    let again = enact_hub()
-        .args(["backup", "--db"])
-        .arg(server.db_path())
-        .arg("--out")
-        .arg(&snapshot)
-        .output()
-        .unwrap();
+    let again = backup(&server.db_path(), &snapshot);
     assert!(!again.status.success());
     assert!(String::from_utf8_lossy(&again.stderr).contains("already exists"));
 
     // Restore into a new place, and check what it holds.
     let restored = dir.path().join("restored.db");
-    let out = enact_hub()
-        .args(["restore", "--from"])
-        .arg(&snapshot)
-        .arg("--db")
-        .arg(&restored)
-        .output()
-        .unwrap();
+    let out = restore(&snapshot, &restored, false);
     assert!(
         out.status.success(),
         "{}",
@@ -128,22 +139,10 @@ async fn a_backup_under_write_load_restores_every_acknowledged_write() {
     pool.close().await;
 
     // An existing database is refused, or moved aside when asked.
-    let refused = enact_hub()
-        .args(["restore", "--from"])
-        .arg(&snapshot)
-        .arg("--db")
-        .arg(&restored)
-        .output()
-        .unwrap();
+    let refused = restore(&snapshot, &restored, false);
     assert!(!refused.status.success());
     assert!(String::from_utf8_lossy(&refused.stderr).contains("--replace"));
-    let replaced = enact_hub()
-        .args(["restore", "--replace", "--from"])
-        .arg(&snapshot)
-        .arg("--db")
-        .arg(&restored)
-        .output()
-        .unwrap();
+    let replaced = restore(&snapshot, &restored, true);
     assert!(
         replaced.status.success(),
         "{}",

@@ -26,6 +26,16 @@ fn check_identities(v: &Value) {
     );
 }
 
+/// `GET /api/v1/submissions/{id}/errors` as `token`, expecting `status`; the body.
+async fn errors_of(server: &TestServer, id: i64, token: &str, status: u16) -> Value {
+    server
+        .call(Method::GET, &format!("/api/v1/submissions/{id}/errors"))
+        .bearer(token)
+        .expect(status)
+        .await
+        .json()
+}
+
 #[tokio::test]
 async fn the_api_and_the_cli_agree_on_parity_predictions() {
     let Some(fixtures) = shared_fixtures() else {
@@ -56,12 +66,7 @@ async fn the_api_and_the_cli_agree_on_parity_predictions() {
         let id = reply.id();
 
         // Hidden answers (the default): aggregate figures only, and why.
-        let hidden = server
-            .call(Method::GET, &format!("/api/v1/submissions/{id}/errors"))
-            .bearer(&team)
-            .expect(200)
-            .await
-            .json();
+        let hidden = errors_of(&server, id, &team, 200).await;
         assert_eq!(hidden["examples"], json!([]), "{model}");
         assert!(
             hidden["examples_withheld"]
@@ -72,11 +77,7 @@ async fn the_api_and_the_cli_agree_on_parity_predictions() {
         check_identities(&hidden);
         check_identities(&hidden["by_direction"]["forward"]);
         check_identities(&hidden["by_direction"]["inverse"]);
-        server
-            .call(Method::GET, &format!("/api/v1/submissions/{id}/errors"))
-            .bearer(&other)
-            .expect(404)
-            .await;
+        errors_of(&server, id, &other, 404).await;
 
         server
             .call(Method::PUT, "/api/v1/admin/datasets/parity/answers")
@@ -84,12 +85,7 @@ async fn the_api_and_the_cli_agree_on_parity_predictions() {
             .json(&json!({"answers": "public"}))
             .expect(200)
             .await;
-        let public = server
-            .call(Method::GET, &format!("/api/v1/submissions/{id}/errors"))
-            .bearer(&team)
-            .expect(200)
-            .await
-            .json();
+        let public = errors_of(&server, id, &team, 200).await;
         server
             .call(Method::PUT, "/api/v1/admin/datasets/parity/answers")
             .bearer(&admin)
@@ -236,13 +232,8 @@ async fn a_stored_analysis_is_redone_when_scene_graphs_arrive() {
     let body = std::fs::read(parity.join("predictions/enact_ordering_random.jsonl")).unwrap();
     let reply = submit_to(&server, "parity", "model=random", &team, body).await;
     assert_eq!(reply.status, 201, "{}", reply.text);
-    let path = format!("/api/v1/submissions/{}/errors", reply.id());
-    let before = server
-        .call(Method::GET, &path)
-        .bearer(&team)
-        .expect(200)
-        .await
-        .json();
+    let id = reply.id();
+    let before = errors_of(&server, id, &team, 200).await;
     // Without scene graphs forward answers cannot be compared; inverse ones use the sets
     // parsed from the action sentences.
     let forward = &before["by_direction"]["forward"];
@@ -258,12 +249,7 @@ async fn a_stored_analysis_is_redone_when_scene_graphs_arrive() {
     let mut with_graphs = options("parity");
     with_graphs.scene_graphs = Some(parity.join("replayed_activities"));
     import(&server.pool, &parity, &with_graphs).await;
-    let after = server
-        .call(Method::GET, &path)
-        .bearer(&team)
-        .expect(200)
-        .await
-        .json();
+    let after = errors_of(&server, id, &team, 200).await;
     assert!(
         after["by_direction"]["forward"]["analysed_answers"]
             .as_u64()
