@@ -32,7 +32,7 @@ pub struct HumanCoverage {
 
 impl HumanCoverage {
     /// From `(annotator, item)` pairs of submitted answers.
-    pub fn of_answers<'a, A: Ord + 'a, I: Ord + 'a>(
+    pub fn of_answers<A: Ord, I: Ord>(
         answers: impl IntoIterator<Item = (A, I)>,
         dataset_items: usize,
     ) -> HumanCoverage {
