@@ -13,6 +13,7 @@ mod cli;
 mod client;
 mod demo_link;
 mod errors;
+mod escaping;
 #[path = "../support/fixtures.rs"]
 mod fixtures;
 mod helpers;

@@ -346,8 +346,23 @@ fn welch_cells(c: &super::Comparison, escape: fn(&str) -> String, no_p: &str) ->
     ]
 }
 
+/// Text for a Markdown cell or line: HTML characters as entities (Markdown renders raw HTML,
+/// and model names come from submitters) and Markdown's own punctuation backslash-escaped.
 fn md_escape(text: &str) -> String {
-    text.replace('|', "\\|")
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '&' => out.push_str("&amp;"),
+            '|' | '\\' | '`' | '*' | '_' | '[' | ']' => {
+                out.push('\\');
+                out.push(c);
+            }
+            _ => out.push(c),
+        }
+    }
+    out
 }
 
 /// The report as Markdown.
@@ -471,6 +486,9 @@ fn tex_escape(text: &str) -> String {
                 out.push(c);
             }
             '~' => out.push_str("\\textasciitilde{}"),
+            // In LaTeX's default font encoding `<` and `>` print as ¡ and ¿.
+            '<' => out.push_str("\\textless{}"),
+            '>' => out.push_str("\\textgreater{}"),
             '^' => out.push_str("\\textasciicircum{}"),
             _ => out.push(c),
         }
