@@ -178,3 +178,171 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
     assert!(routes >= 15, "{routes} routes");
     server.stop().await;
 }
+
+/// Who a page route is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Page {
+    /// Anyone.
+    Public,
+    /// Anyone, with a secret in the path (a bogus one is 404 for everyone).
+    Link,
+    /// A public form guarded by its own CSRF cookie (login, invite): refused without it (or,
+    /// for a bogus invite, as unknown).
+    Form,
+    /// A logged-in annotator.
+    Session,
+    /// A logged-in admin.
+    Admin,
+}
+
+/// Every page route: (method, path, who it is for). The source is scanned for `.route("…")`
+/// below, so a page route missing here fails the test.
+const PAGES: &[(&str, &str, Page)] = &[
+    ("GET", "/", Page::Public),
+    ("GET", "/healthz", Page::Public),
+    ("GET", "/datasets/{dataset}", Page::Public),
+    ("GET", "/datasets/{dataset}/items/{item_id}", Page::Public),
+    ("GET", "/leaderboard/{dataset}", Page::Public),
+    ("GET", "/leaderboard/{dataset}/errors", Page::Public),
+    ("GET", "/leaderboard/{dataset}/errors/{entry}", Page::Public),
+    ("GET", "/api/docs", Page::Public),
+    ("GET", "/static/app.css", Page::Public),
+    ("GET", "/static/annotate.js", Page::Public),
+    ("GET", "/static/favicon.svg", Page::Public),
+    ("GET", "/favicon.ico", Page::Public),
+    ("GET", "/login", Page::Public),
+    ("POST", "/login", Page::Form),
+    ("GET", "/invite/{token}", Page::Link),
+    ("POST", "/invite/{token}", Page::Form),
+    ("GET", "/login/link/{token}", Page::Link),
+    ("POST", "/logout", Page::Session),
+    ("GET", "/annotate", Page::Session),
+    ("GET", "/annotate/next", Page::Session),
+    ("GET", "/annotate/{dataset}/{item_id}", Page::Session),
+    ("POST", "/annotate/{dataset}/{item_id}/draft", Page::Session),
+    (
+        "POST",
+        "/annotate/{dataset}/{item_id}/submit",
+        Page::Session,
+    ),
+    ("POST", "/annotate/{dataset}/{item_id}/skip", Page::Session),
+    ("GET", "/annotate/{dataset}/{item_id}/answer", Page::Session),
+    ("GET", "/admin", Page::Admin),
+    ("POST", "/admin/annotators", Page::Admin),
+    ("POST", "/admin/assign", Page::Admin),
+    ("GET", "/admin/tokens", Page::Admin),
+    ("POST", "/admin/tokens", Page::Admin),
+    ("POST", "/admin/tokens/revoke", Page::Admin),
+    (
+        "POST",
+        "/admin/datasets/{dataset}/agreement-protocol",
+        Page::Admin,
+    ),
+    ("GET", "/admin/datasets/{dataset}/report", Page::Admin),
+    ("GET", "/admin/datasets/{dataset}/report.json", Page::Admin),
+    ("GET", "/admin/datasets/{dataset}/report.tar", Page::Admin),
+];
+
+/// The literal paths of every `.route(` in the web adapter's source.
+fn routes_in_source() -> std::collections::BTreeSet<String> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/web");
+    let mut found = std::collections::BTreeSet::new();
+    for entry in std::fs::read_dir(dir).expect("src/web") {
+        let text = std::fs::read_to_string(entry.expect("entry").path()).expect("source");
+        for (i, _) in text.match_indices(".route(") {
+            let rest = text[i + 7..].trim_start();
+            if let Some(literal) = rest.strip_prefix('"') {
+                found.insert(literal[..literal.find('"').expect("closing quote")].to_owned());
+            }
+        }
+    }
+    found
+}
+
+#[tokio::test]
+async fn every_page_route_answers_every_caller_as_the_matrix_says() {
+    use crate::annotate::{annotator, assign, logged_in_on};
+
+    let listed: std::collections::BTreeSet<String> =
+        PAGES.iter().map(|(_, p, _)| (*p).to_owned()).collect();
+    for path in routes_in_source() {
+        assert!(
+            listed.contains(&path),
+            "page route {path} is not in the authorization matrix (PAGES)"
+        );
+    }
+
+    let (server, records) = spawn_app_with_release().await;
+    let ann = annotator(&server, "ann", false).await;
+    let root = annotator(&server, "root", true).await;
+    let item = records[0]["id"].as_str().expect("id").to_owned();
+    assign(&server, ann, &[&item]).await;
+    assign(&server, root, &[&item]).await;
+    let submission = {
+        let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+        submit_to(&server, "mini", "model=m", &token, answers(&records, &[]))
+            .await
+            .id()
+    };
+
+    let mut cells = 0;
+    for &(verb, pattern, page) in PAGES {
+        let path = pattern
+            .replace("{dataset}", "mini")
+            .replace("{item_id}", &item)
+            .replace("{entry}", &submission.to_string())
+            .replace("{token}", "not-a-real-secret");
+        let post = verb == "POST";
+        // Anonymous, annotator, admin (both with the page's CSRF token), and for forms an admin
+        // without it. Sessions are fresh per cell: logging out must not spoil the next one.
+        let callers: &[&str] = if post {
+            &["anonymous", "annotator", "admin", "admin without CSRF"]
+        } else {
+            &["anonymous", "annotator", "admin"]
+        };
+        for &caller in callers {
+            let (mut browser, csrf) = match caller {
+                "anonymous" => (crate::annotate::Browser::new(&server), String::new()),
+                "annotator" => logged_in_on(&server, "ann", "/annotate").await,
+                _ => logged_in_on(&server, "root", "/admin").await,
+            };
+            let response = if post {
+                let fields: Vec<(&str, &str)> = if caller == "admin without CSRF" {
+                    Vec::new()
+                } else {
+                    vec![("csrf", csrf.as_str())]
+                };
+                browser.post_form(&path, &fields).await
+            } else {
+                browser.get(&path).await
+            };
+            let status = response.status().as_u16();
+            let to_login = response
+                .headers()
+                .get("location")
+                .is_some_and(|l| l.to_str().unwrap_or("").starts_with("/login"));
+            let what = format!("{verb} {pattern} as {caller}: {status}");
+            assert!(status < 500, "{what}");
+            match (page, caller) {
+                (Page::Public, _) => assert!(status < 400, "{what}"),
+                (Page::Link, _) => assert_eq!(status, 404, "{what}"),
+                // Refused: the form's own CSRF is missing (403), or the invite is unknown (404).
+                (Page::Form, _) => assert!(status == 403 || status == 404, "{what}"),
+                (Page::Session | Page::Admin, "anonymous") => {
+                    assert!(status == 401 || (status == 303 && to_login), "{what}")
+                }
+                (_, "admin without CSRF") => assert_eq!(status, 403, "{what}"),
+                (Page::Admin, "annotator") => assert_eq!(status, 403, "{what}"),
+                // Allowed: anything but a refusal of who they are (a bad form is 400).
+                // (Logging out succeeds by going to the login page.)
+                (Page::Session | Page::Admin, _) => assert!(
+                    status != 401 && status != 403 && (!to_login || pattern == "/logout"),
+                    "{what}"
+                ),
+            }
+            cells += 1;
+        }
+    }
+    assert!(cells > 100, "{cells} cells");
+    server.stop().await;
+}
