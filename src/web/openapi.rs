@@ -17,8 +17,8 @@ use axum::response::Html;
 use axum::routing::{MethodFilter, MethodRouter, get, on};
 use serde_json::{Map, Value, json};
 
-use super::AppState;
 use super::error::PageError;
+use super::{AppError, AppState};
 
 /// Where the table is mounted.
 pub const API_PREFIX: &str = "/api/v1";
@@ -260,6 +260,15 @@ pub fn api_router(routes: Vec<ApiRoute>) -> Router<AppState> {
     routes
         .into_iter()
         .fold(Router::new(), |router, r| router.route(r.path, r.handler))
+        .fallback(unknown_route)
+}
+
+/// A path under `/api/v1` that no route serves: the JSON error body, like every refusal.
+async fn unknown_route(uri: axum::http::Uri) -> AppError {
+    AppError::NotFound(format!(
+        "no API route {}: the routes are listed at /api/docs",
+        uri.path()
+    ))
 }
 
 /// The HTML docs page, outside `/api/v1`.

@@ -18,6 +18,7 @@ mod escaping;
 #[path = "../support/fixtures.rs"]
 mod fixtures;
 mod helpers;
+mod hostile;
 mod import;
 mod leaderboard;
 mod openapi;
