@@ -154,8 +154,35 @@ pub async fn of_submission(
 
 /// The analysis of every answer annotators gave on a dataset, `None` before the first one.
 pub async fn of_humans(hub: &Hub, dataset: &Dataset) -> Result<Option<ErrorAnalysis>, AppError> {
+    humans(hub, dataset, None).await
+}
+
+/// The analysis of one annotator's answers on the dataset named `dataset` (the command line;
+/// pages show annotators pooled), `None` before their first answer.
+pub async fn of_annotator(
+    hub: &Hub,
+    dataset: &str,
+    annotator: &str,
+) -> Result<Option<ErrorAnalysis>, AppError> {
+    let dataset = datasets::by_name(hub, dataset).await?;
     let mut conn = hub.conn().await?;
-    let answers = store::annotations::human_answers(&mut conn, dataset.id).await?;
+    let id = store::annotations::annotators(&mut conn)
+        .await?
+        .into_iter()
+        .find(|a| a.name == annotator)
+        .map(|a| a.id)
+        .ok_or_else(|| AppError::NotFound(format!("no annotator named '{annotator}'")))?;
+    drop(conn);
+    humans(hub, &dataset, Some(id)).await
+}
+
+async fn humans(
+    hub: &Hub,
+    dataset: &Dataset,
+    annotator: Option<i64>,
+) -> Result<Option<ErrorAnalysis>, AppError> {
+    let mut conn = hub.conn().await?;
+    let answers = store::annotations::human_answers_of(&mut conn, dataset.id, annotator).await?;
     drop(conn);
     if answers.is_empty() {
         return Ok(None);

@@ -253,9 +253,13 @@ struct ScoreArgs {
 #[derive(Args)]
 struct ErrorsArgs {
     /// The prediction file (JSONL), read as the leaderboard reads submissions.
-    predictions: PathBuf,
+    #[arg(required_unless_present = "annotator")]
+    predictions: Option<PathBuf>,
     #[command(flatten)]
     against: AgainstArgs,
+    /// Analyse this annotator's answers on the --db dataset instead of a prediction file.
+    #[arg(long, requires = "dataset", conflicts_with = "predictions")]
+    annotator: Option<String>,
     /// Print one JSON object (the API's `/submissions/{id}/errors` shape) instead of a table.
     #[arg(long)]
     json: bool,
@@ -771,9 +775,46 @@ fn spinner(message: &'static str) -> indicatif::ProgressBar {
     bar
 }
 
+/// Prints an analysis as the table, or as JSON.
+fn print_analysis(
+    analysis: &crate::core::error_analysis::ErrorAnalysis,
+    json: bool,
+) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string_pretty(analysis)?);
+    } else {
+        print!(
+            "{}",
+            crate::core::error_analysis::present::text_table(analysis)
+        );
+    }
+    Ok(())
+}
+
 async fn errors(args: ErrorsArgs) -> anyhow::Result<ExitCode> {
-    let file = args.predictions.display().to_string();
-    let text = std::fs::read_to_string(&args.predictions)
+    if let (Some(annotator), Some(db), Some(dataset)) =
+        (&args.annotator, &args.against.db, &args.against.dataset)
+    {
+        let hub = open(db).await?;
+        let analysis = app::error_analysis::of_annotator(&hub, dataset, annotator).await;
+        hub.close().await;
+        return match in_database(analysis, db)? {
+            Some(analysis) => {
+                print_analysis(&analysis, args.json)?;
+                Ok(ExitCode::SUCCESS)
+            }
+            None => {
+                eprintln!("error: {annotator} has not answered any item of '{dataset}' yet");
+                Ok(ExitCode::FAILURE)
+            }
+        };
+    }
+    let predictions = args
+        .predictions
+        .clone()
+        .context("give a prediction file, or --annotator NAME with --db and --dataset")?;
+    let file = predictions.display().to_string();
+    let text = std::fs::read_to_string(&predictions)
         .with_context(|| format!("cannot read {file} (it must be UTF-8 text)"))?;
     let targets = match targets_of(&args.against).await? {
         Ok(t) => t,

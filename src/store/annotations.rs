@@ -544,14 +544,26 @@ pub async fn human_answers(
     conn: &mut SqliteConnection,
     dataset_id: i64,
 ) -> Result<Vec<HumanAnswer>, sqlx::Error> {
+    human_answers_of(conn, dataset_id, None).await
+}
+
+/// The submitted answers on a dataset, of one annotator when `annotator` names one.
+pub async fn human_answers_of(
+    conn: &mut SqliteConnection,
+    dataset_id: i64,
+    annotator: Option<i64>,
+) -> Result<Vec<HumanAnswer>, sqlx::Error> {
     let rows = sqlx::query(
         "SELECT i.item_id, i.direction, i.step_length, i.gt_answer, n.answer, s.signatures \
          FROM annotations n JOIN items i ON i.id = n.item \
          LEFT JOIN item_signatures s ON s.item = i.id \
          WHERE i.dataset_id = ? AND n.outcome = 'answered' \
+         AND (? IS NULL OR n.annotator = ?) \
          ORDER BY n.finished_at, i.id, n.annotator",
     )
     .bind(dataset_id)
+    .bind(annotator)
+    .bind(annotator)
     .fetch_all(conn)
     .await?;
     rows.iter().map(human_answer_from_row).collect()

@@ -259,3 +259,79 @@ async fn a_stored_analysis_is_redone_when_scene_graphs_arrive() {
     );
     server.stop().await;
 }
+
+#[tokio::test]
+async fn the_cli_analyses_one_annotator_at_a_time() {
+    use enact_hub::app::Hub;
+    use enact_hub::core::annotation::{Draft, InteractionCounts, Session};
+
+    let (server, records) = spawn_app_with_release().await;
+    let hub = Hub::from(server.pool.clone());
+    let ann = crate::annotate::annotator(&server, "ann", false).await;
+    let bob = crate::annotate::annotator(&server, "bob", false).await;
+    let ids: Vec<&str> = records[..3]
+        .iter()
+        .map(|r| r["id"].as_str().expect("id"))
+        .collect();
+    crate::annotate::assign(&server, ann, &ids).await;
+    crate::annotate::assign(&server, bob, &ids[..1]).await;
+    for (annotator, name, count) in [(ann, "ann", 3), (bob, "bob", 1)] {
+        let session = Session {
+            annotator,
+            name: name.to_owned(),
+            is_admin: false,
+            csrf_token: String::new(),
+        };
+        for record in &records[..count] {
+            let slots = record["gt_answer"]
+                .as_array()
+                .expect("gt")
+                .iter()
+                .map(|l| Some(l.as_u64().expect("label") as u8))
+                .collect();
+            let draft = Draft {
+                slots,
+                counts: InteractionCounts::default(),
+                history: Vec::new(),
+            };
+            let id = record["id"].as_str().expect("id");
+            enact_hub::app::annotation::answer(&hub, &session, "mini", id, &draft)
+                .await
+                .expect("answered");
+        }
+    }
+    let analyse = |name: &str| {
+        enact_hub()
+            .args([
+                "errors",
+                "--annotator",
+                name,
+                "--dataset",
+                "mini",
+                "--json",
+                "--db",
+            ])
+            .arg(server.db_path())
+            .output()
+            .expect("run")
+    };
+    for (name, answers) in [("ann", 3), ("bob", 1)] {
+        let out = analyse(name);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: Value = serde_json::from_slice(&out.stdout).expect("json");
+        let counted = ["analysed_answers", "excluded_without_signatures"]
+            .iter()
+            .map(|k| v[*k].as_u64().expect("count"))
+            .sum::<u64>();
+        assert_eq!(counted, answers, "{name}: {v:#}");
+        assert_eq!(v["errors"], 0, "ground-truth answers have no errors");
+    }
+    let out = analyse("nobody");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no annotator named 'nobody'"));
+    server.stop().await;
+}
