@@ -101,8 +101,26 @@ struct Tally {
     incomplete_steps: usize,
 }
 
+/// Why an answer is not analysed.
+#[derive(Debug, Clone, Copy)]
+enum Exclusion {
+    UnequalLength,
+    Unreadable,
+    Missing,
+    WithoutSignatures,
+}
+
 impl Tally {
-    fn add_step(&mut self, comparison: &StepComparison) -> usize {
+    fn exclude(&mut self, why: Exclusion) {
+        *match why {
+            Exclusion::UnequalLength => &mut self.excluded_unequal_length,
+            Exclusion::Unreadable => &mut self.excluded_unreadable,
+            Exclusion::Missing => &mut self.excluded_missing,
+            Exclusion::WithoutSignatures => &mut self.excluded_without_signatures,
+        } += 1;
+    }
+
+    fn add_step(&mut self, comparison: &StepComparison) {
         self.steps += 1;
         self.truth += comparison.matched.len() + comparison.missing.len();
         self.predicted += comparison.matched.len() + comparison.hallucinated.len();
@@ -116,7 +134,6 @@ impl Tally {
         for hand in Hand::BOTH {
             self.hands[hand as usize].add(hand, comparison);
         }
-        comparison.errors.len()
     }
 
     fn figures(&self) -> ErrorFigures {
@@ -365,32 +382,33 @@ pub fn analyse<'a>(answers: impl IntoIterator<Item = AnsweredItem<'a>>) -> Error
             Direction::Forward => 0,
             Direction::Inverse => 1,
         };
-        let exclude = |t: &mut Tally, field: fn(&mut Tally) -> &mut usize| *field(t) += 1;
-        let (answer, task_accuracy) = match reading {
-            Reading::Answer {
-                answer,
-                task_accuracy,
-            } => (answer, task_accuracy),
-            Reading::WrongLength | Reading::Unreadable | Reading::Missing => {
-                let field: fn(&mut Tally) -> &mut usize = match reading {
-                    Reading::WrongLength => |t| &mut t.excluded_unequal_length,
-                    Reading::Unreadable => |t| &mut t.excluded_unreadable,
-                    _ => |t| &mut t.excluded_missing,
-                };
-                exclude(&mut overall, field);
-                exclude(&mut by_direction[d], field);
-                continue;
-            }
+        let excluded = match reading {
+            Reading::Answer { .. } => None,
+            Reading::WrongLength => Some(Exclusion::UnequalLength),
+            Reading::Unreadable => Some(Exclusion::Unreadable),
+            Reading::Missing => Some(Exclusion::Missing),
         };
-        let steps = item.signatures.ok_or(()).and_then(|table| {
-            answer_steps(item.direction, item.ground_truth, answer, table).map_err(|_| ())
-        });
-        let Ok(steps) = steps else {
-            let field: fn(&mut Tally) -> &mut usize = |t| &mut t.excluded_without_signatures;
-            exclude(&mut overall, field);
-            exclude(&mut by_direction[d], field);
+        // A table that cannot give the sets (no scene graphs, a pair ENACT raises on) excludes
+        // the answer too.
+        let steps = match (reading, item.signatures) {
+            (Reading::Answer { answer, .. }, Some(table)) => {
+                answer_steps(item.direction, item.ground_truth, answer, table).ok()
+            }
+            _ => None,
+        };
+        let (Some(steps), None) = (steps, excluded) else {
+            let why = excluded.unwrap_or(Exclusion::WithoutSignatures);
+            overall.exclude(why);
+            by_direction[d].exclude(why);
             continue;
         };
+        let task_accuracy = matches!(
+            reading,
+            Reading::Answer {
+                task_accuracy: true,
+                ..
+            }
+        );
         let mut incomplete_steps = 0;
         let mut accepted_steps = 0;
         for t in [&mut overall, &mut by_direction[d]] {
