@@ -44,6 +44,9 @@ async fn a_backup_under_write_load_restores_every_acknowledged_write() {
     let server = std::sync::Arc::new(server);
 
     // Submissions, one after another, each with the moment its 201 arrived.
+    // The writer says when ten are acknowledged, so the backup starts after
+    // them however slow the machine is (counting rows would race the 201s).
+    let (ten_acknowledged, mut ten) = tokio::sync::watch::channel(false);
     let writer = {
         let server = server.clone();
         let body = answers(&records, &[0]);
@@ -60,19 +63,15 @@ async fn a_backup_under_write_load_restores_every_acknowledged_write() {
                 .await;
                 assert_eq!(reply.status, 201, "{}", reply.text);
                 acknowledged.push((reply.id(), Instant::now()));
+                if acknowledged.len() == 10 {
+                    ten_acknowledged.send_replace(true);
+                }
             }
             acknowledged
         })
     };
     // Let some writes land, then snapshot while the rest arrive.
-    while sqlx::query_scalar::<_, i64>("SELECT count(*) FROM submissions")
-        .fetch_one(&server.pool)
-        .await
-        .unwrap()
-        < 10
-    {
-        tokio::time::sleep(std::time::Duration::from_millis(5)).await;
-    }
+    ten.wait_for(|ready| *ready).await.unwrap();
     let dir = tempfile::tempdir().unwrap();
     let snapshot = dir.path().join("snapshot.db");
     let began = Instant::now();
