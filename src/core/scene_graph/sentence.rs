@@ -274,11 +274,17 @@ pub fn parse_action(text: &str) -> Result<BTreeSet<String>, SentenceParseError> 
     }
     let body = text.strip_suffix('.').unwrap_or(text);
     for (index, sentence) in body.split(". ").enumerate() {
-        let lowered = decapitalize(sentence);
-        let sig = parse_sentence(&lowered).ok_or_else(|| SentenceParseError::Unrecognised {
+        let unrecognised = || SentenceParseError::Unrecognised {
             index,
             sentence: sentence.to_string(),
-        })?;
+        };
+        // ENACT's object names never hold `_` (it splits names on it), and signatures use it
+        // as their separator: a name with one would give a signature that reads two ways.
+        if sentence.contains('_') {
+            return Err(unrecognised());
+        }
+        let lowered = decapitalize(sentence);
+        let sig = parse_sentence(&lowered).ok_or_else(unrecognised)?;
         out.insert(sig);
     }
     Ok(out)
@@ -475,5 +481,17 @@ mod tests {
         );
         assert!(parse_action("The oven becomes purple.").is_err());
         assert!(parse_action("Oven becomes open.").is_err());
+    }
+
+    /// Found by `cargo fuzz run sentence`: a name holding `_` gave a signature that the error
+    /// analysis could not split back into its fields.
+    #[test]
+    fn names_with_underscores_are_refused() {
+        let err = parse_action(
+            "The bowl becomes inside the node_transition_from_the apple_to_the basket.",
+        )
+        .unwrap_err();
+        assert!(matches!(err, SentenceParseError::Unrecognised { index: 0, .. }));
+        assert!(parse_action("The oven_1 becomes open.").is_err());
     }
 }
