@@ -1,14 +1,17 @@
 //! Agreement among annotators: the paper's cross-annotation protocol (run once per dataset),
 //! Krippendorff's alpha over the overlapping answers, and the dataset's agreement report.
 
-use super::{AppError, Hub, datasets, error_analysis, leaderboard};
+use super::{AppError, Hub, audit, datasets, error_analysis, leaderboard};
 use crate::core::agreement::protocol::{ProtocolError, ProtocolPlan, plan_cross_assignments};
-use crate::core::agreement::report::export::{BundleFile, ErrorRow, bundle_files, error_files};
+use crate::core::agreement::report::export::{
+    BundleFile, ErrorRow, audit_file, bundle_files, error_files,
+};
 use crate::core::agreement::report::{
     AgreementReport, AgreementSection, ItemScore, ProtocolStamp, ReportError, ReportInputs,
     SubmissionInput, agreement_section, build_report, dataset_content_hash, overlapping_answers,
 };
 use crate::core::agreement::{BootstrapConfig, MeasurementLevel, OrderingEncoding};
+use crate::core::audit::{Actor, AuditAction};
 use crate::store;
 use crate::store::agreement::AgreementRound;
 use crate::store::datasets::Dataset;
@@ -50,6 +53,7 @@ pub struct ProtocolRun {
 /// ran it, if any. A second run on the same dataset is refused (409).
 pub async fn run_protocol(
     hub: &Hub,
+    actor: &Actor,
     dataset: &str,
     items_per_cell: usize,
     seed: u64,
@@ -71,6 +75,19 @@ pub async fn run_protocol(
             return Err(ProtocolRefusal::AlreadyRan(existing).into_error(&dataset.name));
         }
     };
+    audit::record(
+        &mut tx,
+        actor,
+        AuditAction::ProtocolRun,
+        format!("dataset {}", dataset.name),
+        Some(&dataset.name),
+        format!(
+            "{items_per_cell} items per cell, seed {seed}; {added} cross-assignments to {} \
+             annotators",
+            annotators.len()
+        ),
+    )
+    .await?;
     tx.commit().await?;
     Ok(ProtocolRun {
         dataset: dataset.name,
@@ -205,7 +222,7 @@ pub async fn report(
 
 /// The report's files (`core::agreement::report::export`) with the error analysis of every
 /// published row and the Human row (`errors.json`, `errors.csv`, examples included: bundles
-/// are for admins and the command line).
+/// are for admins and the command line), and `audit.csv`: the dataset's audit entries.
 pub async fn report_bundle(
     hub: &Hub,
     dataset: &str,
@@ -226,5 +243,7 @@ pub async fn report_bundle(
         .collect();
     let mut files = bundle_files(&report).map_err(AppError::internal)?;
     files.extend(error_files(&report.stamp, &labelled).map_err(AppError::internal)?);
+    let entries = audit::of_dataset(hub, &report.stamp.dataset).await?;
+    files.push(audit_file(&report.stamp, &entries));
     Ok((report, files))
 }

@@ -4,13 +4,15 @@
 //! Blind by construction: nothing here hands an annotator an item's ground truth or score, and
 //! an item not assigned to the annotator is 403 on every use case.
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use super::annotators::now_ms;
-use super::{AppError, Hub, datasets};
+use super::{AppError, Hub, audit, datasets};
 use crate::core::annotation::{
     AssignmentState, Draft, Outcome, QueueEntry, Session, Telemetry, balanced_split, next_in_queue,
 };
+use crate::core::audit::{Actor, AuditAction};
 use crate::store;
 use crate::store::annotations::StoredAnnotation;
 use crate::store::items::StoredItem;
@@ -37,19 +39,24 @@ pub struct Assigned {
 }
 
 /// Appends items of `dataset` to annotators' queues.
-pub async fn assign(hub: &Hub, dataset: &str, how: &Assignment) -> Result<Assigned, AppError> {
+pub async fn assign(
+    hub: &Hub,
+    actor: &Actor,
+    dataset: &str,
+    how: &Assignment,
+) -> Result<Assigned, AppError> {
     let dataset = datasets::by_name(hub, dataset).await?;
     let mut conn = hub.conn().await?;
-    let known: Vec<i64> = store::annotations::annotators(&mut conn)
+    let names: HashMap<i64, String> = store::annotations::annotators(&mut conn)
         .await?
-        .iter()
-        .map(|a| a.id)
+        .into_iter()
+        .map(|a| (a.id, a.name))
         .collect();
     let chosen: &[i64] = match how {
         Assignment::Split(annotators) => annotators,
         Assignment::List { annotator, .. } => std::slice::from_ref(annotator),
     };
-    if let Some(unknown) = chosen.iter().find(|a| !known.contains(a)) {
+    if let Some(unknown) = chosen.iter().find(|a| !names.contains_key(a)) {
         return Err(AppError::BadRequest(format!(
             "annotator: no annotator has id {unknown}"
         )));
@@ -88,6 +95,20 @@ pub async fn assign(hub: &Hub, dataset: &str, how: &Assignment) -> Result<Assign
     drop(conn);
     let mut tx = hub.begin().await?;
     let added = store::annotations::assign(&mut tx, &pairs).await?;
+    let named: Vec<&str> = chosen.iter().map(|a| names[a].as_str()).collect();
+    let how = match how {
+        Assignment::Split(_) => "balanced split of the unassigned items",
+        Assignment::List { .. } => "listed items",
+    };
+    audit::record(
+        &mut tx,
+        actor,
+        AuditAction::AssignmentChange,
+        format!("annotators {}", named.join(", ")),
+        Some(&dataset.name),
+        format!("{how}: {} asked, {added} new to the queues", pairs.len()),
+    )
+    .await?;
     tx.commit().await?;
     Ok(Assigned {
         requested: pairs.len() as u64,
@@ -245,7 +266,15 @@ pub async fn answer(
             empty.join(", ")
         )));
     };
-    finish(hub, session, &item, Some(draft), Outcome::Answered(answer)).await
+    finish(
+        hub,
+        session,
+        dataset,
+        &item,
+        Some(draft),
+        Outcome::Answered(answer),
+    )
+    .await
 }
 
 /// Records a finished item with its telemetry and drops its draft, in one transaction; `save`
@@ -253,6 +282,7 @@ pub async fn answer(
 async fn finish(
     hub: &Hub,
     session: &Session,
+    dataset: &str,
     item: &StoredItem,
     save: Option<&Draft>,
     outcome: Outcome,
@@ -276,6 +306,23 @@ async fn finish(
     if !finished {
         return Err(finished_already(&item.summary.item_id));
     }
+    let (action, detail) = match &outcome {
+        Outcome::Answered(answer) => (
+            AuditAction::AnnotationAnswer,
+            format!("{:?}", answer.labels()),
+        ),
+        Outcome::Skipped(reason) => (AuditAction::AnnotationSkip, format!("skipped: {reason}")),
+        Outcome::Flagged(reason) => (AuditAction::AnnotationSkip, format!("flagged: {reason}")),
+    };
+    audit::record(
+        &mut tx,
+        &session.actor(),
+        action,
+        format!("item {}", item.summary.item_id),
+        Some(dataset),
+        detail,
+    )
+    .await?;
     tx.commit().await?;
     hub.standings.forget(session.annotator, item.rowid);
     if answered {
@@ -316,7 +363,7 @@ pub async fn skip(
             )));
         }
     };
-    finish(hub, session, &item, None, outcome).await
+    finish(hub, session, dataset, &item, None, outcome).await
 }
 
 /// The annotator's own finished item: their answer and telemetry, never a score.

@@ -3,8 +3,9 @@
 
 use std::time::Duration;
 
-use super::{AppError, Hub};
+use super::{AppError, Hub, audit};
 use crate::core::annotation::Session;
+use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{
     self, hash_password, password_problem, random_token, token_hash, verify_password,
 };
@@ -36,18 +37,36 @@ pub struct Invited {
 
 /// Creates an annotator (an admin with `is_admin`) with a pending invite. The name follows
 /// [`credentials::annotator_name`]; a name in use is a conflict.
-pub async fn create(hub: &Hub, name: &str, is_admin: bool) -> Result<Invited, AppError> {
+pub async fn create(
+    hub: &Hub,
+    actor: &Actor,
+    name: &str,
+    is_admin: bool,
+) -> Result<Invited, AppError> {
     let name = credentials::annotator_name(name).map_err(AppError::BadRequest)?;
     let token = random_token();
-    let mut conn = hub.conn().await?;
+    let mut tx = hub.begin().await?;
     let created =
-        store::annotations::create_annotator(&mut conn, name, is_admin, &token_hash(&token))
-            .await?;
+        store::annotations::create_annotator(&mut tx, name, is_admin, &token_hash(&token)).await?;
     if created.is_none() {
         return Err(AppError::Conflict(format!(
             "an annotator named '{name}' already exists"
         )));
     }
+    audit::record(
+        &mut tx,
+        actor,
+        AuditAction::AnnotatorCreate,
+        format!("annotator {name}"),
+        None,
+        if is_admin {
+            "admin; invited"
+        } else {
+            "invited"
+        },
+    )
+    .await?;
+    tx.commit().await?;
     Ok(Invited {
         name: name.to_owned(),
         is_admin,
@@ -87,10 +106,25 @@ pub async fn accept_invite(
     let hash = tokio::task::spawn_blocking(move || hash_password(&password))
         .await?
         .map_err(|e| AppError::internal(format!("argon2: {e}")))?;
-    let mut conn = hub.conn().await?;
-    store::annotations::accept_invite(&mut conn, &token_hash(invite_token), &hash)
+    let invite = token_hash(invite_token);
+    let mut tx = hub.begin().await?;
+    let invited = store::annotations::annotator_by_invite(&mut tx, &invite)
         .await?
-        .ok_or_else(unknown_invite)
+        .ok_or_else(unknown_invite)?;
+    let id = store::annotations::accept_invite(&mut tx, &invite, &hash)
+        .await?
+        .ok_or_else(unknown_invite)?;
+    audit::record(
+        &mut tx,
+        &Actor::Annotator(invited.name.clone()),
+        AuditAction::AnnotatorActivate,
+        format!("annotator {}", invited.name),
+        None,
+        "invite used, password set",
+    )
+    .await?;
+    tx.commit().await?;
+    Ok(id)
 }
 
 /// A new single-use login link secret for `annotator` (the path is `/login/link/{secret}`).

@@ -12,7 +12,8 @@ use anyhow::Context;
 use sqlx::Connection;
 use sqlx::sqlite::SqliteConnectOptions;
 
-use super::{AppError, Hub};
+use super::{AppError, Hub, audit};
+use crate::core::audit::{Actor, AuditAction};
 use crate::store;
 
 /// What a backup or restore did.
@@ -52,7 +53,7 @@ async fn inspect(path: &Path) -> anyhow::Result<Snapshot> {
 }
 
 /// Snapshots the hub's database into `out`, which must not exist.
-pub async fn backup(hub: &Hub, out: &Path) -> Result<Snapshot, AppError> {
+pub async fn backup(hub: &Hub, actor: &Actor, out: &Path) -> Result<Snapshot, AppError> {
     if out.exists() {
         return Err(AppError::Conflict(format!(
             "{} already exists: a backup never overwrites a file",
@@ -61,8 +62,21 @@ pub async fn backup(hub: &Hub, out: &Path) -> Result<Snapshot, AppError> {
     }
     let mut conn = hub.conn().await?;
     store::backup_into(&mut conn, out).await?;
-    drop(conn);
-    Ok(inspect(out).await?)
+    let snapshot = inspect(out).await?;
+    // Written after the snapshot, so the log says what was taken, not what was attempted.
+    audit::record(
+        &mut conn,
+        actor,
+        AuditAction::BackupCreate,
+        format!("file {}", out.display()),
+        None,
+        format!(
+            "{} bytes: {} items, {} submissions, {} annotations",
+            snapshot.bytes, snapshot.items, snapshot.submissions, snapshot.annotations
+        ),
+    )
+    .await?;
+    Ok(snapshot)
 }
 
 /// Puts the snapshot `from` in place as the database `db`. An existing `db` is refused unless

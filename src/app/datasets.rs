@@ -6,7 +6,8 @@ use std::collections::HashSet;
 use bytes::Bytes;
 use tokio::sync::mpsc;
 
-use super::{AppError, Hub};
+use super::{AppError, Hub, audit};
+use crate::core::audit::{Actor, AuditAction};
 use crate::core::dataset::AnswerVisibility;
 use crate::core::release::{ArchiveWriter, QA_FILE, release_line};
 use crate::store;
@@ -52,12 +53,23 @@ pub async fn answer_visibility(hub: &Hub, dataset: &Dataset) -> Result<AnswerVis
 /// Makes a dataset's ground truth and per-item verdicts public, or hides them again.
 pub async fn set_answer_visibility(
     hub: &Hub,
+    actor: &Actor,
     name: &str,
     answers: AnswerVisibility,
 ) -> Result<Dataset, AppError> {
     let dataset = by_name(hub, name).await?;
-    let mut conn = hub.conn().await?;
-    store::submissions::set_answer_visibility(&mut conn, dataset.id, answers).await?;
+    let mut tx = hub.begin().await?;
+    store::submissions::set_answer_visibility(&mut tx, dataset.id, answers).await?;
+    audit::record(
+        &mut tx,
+        actor,
+        AuditAction::DatasetAnswerVisibility,
+        format!("dataset {}", dataset.name),
+        Some(&dataset.name),
+        format!("answers {}", answers.as_str()),
+    )
+    .await?;
+    tx.commit().await?;
     Ok(dataset)
 }
 

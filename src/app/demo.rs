@@ -6,6 +6,7 @@ use anyhow::Context;
 use super::import::{ImportOptions, ImportReport, import_release};
 use super::{AppError, Hub, annotators, datasets, submissions};
 use crate::core::annotation::balanced_sample;
+use crate::core::audit::Actor;
 use crate::core::credentials::{random_token, token_hash};
 use crate::core::demo;
 use crate::core::submission::SubmissionMetadata;
@@ -40,7 +41,7 @@ pub async fn load(hub: &Hub) -> anyhow::Result<ImportReport> {
         progress: false,
         scene_graphs: Some(written.replayed_dir),
     };
-    let report = import_release(hub, dir.path(), &options)
+    let report = import_release(hub, &Actor::Server, dir.path(), &options)
         .await
         .context("cannot import the demo dataset")?;
     tracing::info!("{}", report.summary_line());
@@ -51,15 +52,22 @@ pub async fn load(hub: &Hub) -> anyhow::Result<ImportReport> {
             .to_owned(),
         ..SubmissionMetadata::default()
     };
-    submissions::file_baseline(hub, DEMO_DATASET, DEMO_ACCOUNT, metadata, |dataset| {
-        demo::chance_baseline(
-            dataset
-                .targets
-                .iter()
-                .map(|t| (t.id.as_str(), t.ground_truth.len())),
-            demo::DEFAULT_SEED,
-        )
-    })
+    submissions::file_baseline(
+        hub,
+        &Actor::Server,
+        DEMO_DATASET,
+        DEMO_ACCOUNT,
+        metadata,
+        |dataset| {
+            demo::chance_baseline(
+                dataset
+                    .targets
+                    .iter()
+                    .map(|t| (t.id.as_str(), t.ground_truth.len())),
+                demo::DEFAULT_SEED,
+            )
+        },
+    )
     .await
     .context("cannot add the demo's chance baseline")?;
     Ok(report)

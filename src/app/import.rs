@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use sha2::{Digest, Sha256};
 
+use crate::core::audit::{Actor, AuditAction, AuditRecord};
 use crate::core::dataset::{FieldProblem, QaItem, parse_release_line};
 use crate::core::semantics::{self, ItemSemantics, SignatureSource};
 use crate::store;
@@ -442,6 +443,7 @@ fn content_hash(row: &ValidRow) -> String {
 /// Imports a release into `options.dataset`. See the module documentation for the phases.
 pub async fn import_release(
     hub: &super::Hub,
+    actor: &Actor,
     path: &Path,
     options: &ImportOptions,
 ) -> Result<ImportReport, ImportError> {
@@ -582,6 +584,23 @@ pub async fn import_release(
     }
     // Frames of unchanged items are reused as well.
     report.reused_frames = report.frames - report.new_frames;
+    let record = AuditRecord {
+        actor,
+        action: AuditAction::DatasetImport,
+        target: format!("dataset {}", options.dataset),
+        dataset: Some(&options.dataset),
+        detail: format!(
+            "{}: {} new, {} replaced, {} unchanged items; {} signature tables updated; {} \
+             lines skipped",
+            report.qa_file,
+            report.new_items,
+            report.replaced_items,
+            report.unchanged_items,
+            report.signatures_updated,
+            report.skipped.len()
+        ),
+    };
+    store::audit::insert(&mut tx, &record).await?;
     tx.commit().await?;
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)

@@ -15,6 +15,7 @@
 //! - [`agreement`]: the cross-annotation protocol, agreement statistics and the report.
 //! - [`error_analysis`]: the paper's error taxonomy of a submission, the Human row, a file, or
 //!   a whole leaderboard.
+//! - [`audit`]: the audit log every audited use case writes in its own transaction.
 //! - [`demo`]: the built-in demo dataset, its chance baseline and its login link.
 //! - [`backup`]: online snapshots of the database, and restoring one.
 //!
@@ -23,6 +24,7 @@
 pub mod agreement;
 pub mod annotation;
 pub mod annotators;
+pub mod audit;
 pub mod backup;
 pub mod cache;
 pub mod datasets;

@@ -8,7 +8,8 @@ use std::sync::{Arc, Mutex};
 use sha2::{Digest, Sha256};
 
 use super::tokens::Caller;
-use super::{AppError, Hub, datasets};
+use super::{AppError, Hub, audit, datasets};
+use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{NewToken, Role, Scope};
 use crate::core::dataset::AnswerVisibility;
 use crate::core::scoring::{self, ScoringTarget};
@@ -233,6 +234,15 @@ where
         return Ok(Submitted::Repeated(existing));
     };
     store::submissions::insert_items(&mut tx, id, &targets.item_rows, &scored.items).await?;
+    audit::record(
+        &mut tx,
+        &caller.actor(),
+        AuditAction::SubmissionCreate,
+        format!("submission {id}"),
+        Some(&dataset.name),
+        format!("model {}", metadata.model),
+    )
+    .await?;
     tx.commit().await?;
     hub.boards.changed();
     tracing::info!(
@@ -304,6 +314,7 @@ pub async fn readable(hub: &Hub, caller: &Caller, id: &str) -> Result<Submission
 /// An admin's change to a leaderboard row: mark a baseline, or hide, publish or withdraw it.
 pub async fn update_listing(
     hub: &Hub,
+    actor: &Actor,
     id: &str,
     baseline: Option<bool>,
     visibility: Option<&str>,
@@ -319,13 +330,32 @@ pub async fn update_listing(
             })
         })
         .transpose()?;
-    let mut conn = hub.conn().await?;
-    if !store::submissions::update_listing(&mut conn, numeric, baseline, visibility).await? {
+    let mut tx = hub.begin().await?;
+    if !store::submissions::update_listing(&mut tx, numeric, baseline, visibility).await? {
         return Err(not_found());
     }
-    drop(conn);
+    let row = store::submissions::by_id(&mut tx, numeric)
+        .await?
+        .ok_or_else(not_found)?;
+    let mut changes = Vec::new();
+    if let Some(baseline) = baseline {
+        changes.push(format!("baseline {baseline}"));
+    }
+    if let Some(visibility) = visibility {
+        changes.push(format!("visibility {}", visibility.as_str()));
+    }
+    audit::record(
+        &mut tx,
+        actor,
+        AuditAction::SubmissionListing,
+        format!("submission {numeric}"),
+        Some(&row.dataset),
+        changes.join(", "),
+    )
+    .await?;
+    tx.commit().await?;
     hub.boards.changed();
-    by_id(hub, numeric).await?.ok_or_else(not_found)
+    Ok(row)
 }
 
 /// Files a baseline on a dataset's leaderboard (once per account and model, even if an admin
@@ -333,6 +363,7 @@ pub async fn update_listing(
 /// only token is revoked at once, so nobody can submit as it. Returns whether it was added.
 pub async fn file_baseline(
     hub: &Hub,
+    actor: &Actor,
     dataset_name: &str,
     account_name: &str,
     metadata: SubmissionMetadata,
@@ -372,6 +403,15 @@ pub async fn file_baseline(
         .ok_or_else(|| AppError::internal("the baseline's submission row was not written"))?;
     store::submissions::insert_items(&mut tx, id, &targets.item_rows, &scored.items).await?;
     store::submissions::update_listing(&mut tx, id, Some(true), None).await?;
+    audit::record(
+        &mut tx,
+        actor,
+        AuditAction::BaselineFile,
+        format!("submission {id}"),
+        Some(&dataset.name),
+        format!("account {account_name}, model {}", metadata.model),
+    )
+    .await?;
     tx.commit().await?;
     hub.boards.changed();
     Ok(true)

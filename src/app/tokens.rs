@@ -3,7 +3,9 @@
 
 use serde::Serialize;
 
+use super::audit;
 use super::{AppError, Hub};
+use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{self, NewToken, Role, Scope};
 use crate::store;
 pub use crate::store::accounts::TokenListing;
@@ -20,6 +22,11 @@ pub struct Caller {
 }
 
 impl Caller {
+    /// Who this caller is in the audit log.
+    pub fn actor(&self) -> Actor {
+        Actor::Account(self.account_name.clone())
+    }
+
     pub fn has(&self, scope: Scope) -> bool {
         self.scopes.contains(&scope)
     }
@@ -91,6 +98,7 @@ pub(super) async fn ensure_account(
 /// the server's.
 pub async fn issue(
     hub: &Hub,
+    actor: &Actor,
     name: &str,
     role: Role,
     daily_quota: Option<i64>,
@@ -110,6 +118,21 @@ pub async fn issue(
     let id =
         store::accounts::insert_token(&mut tx, account, role, &token, daily_quota, total_quota)
             .await?;
+    let quotas = |q: Option<i64>| q.map_or_else(|| "server's".to_owned(), |q| q.to_string());
+    audit::record(
+        &mut tx,
+        actor,
+        AuditAction::TokenIssue,
+        format!("token {}", token.prefix),
+        None,
+        format!(
+            "account {name} ({}); daily quota {}, total quota {}",
+            role.as_str(),
+            quotas(daily_quota),
+            quotas(total_quota)
+        ),
+    )
+    .await?;
     tx.commit().await?;
     Ok(CreatedToken {
         id,
@@ -127,9 +150,19 @@ pub async fn list(hub: &Hub) -> Result<Vec<TokenListing>, AppError> {
 }
 
 /// Revokes the live token with this id or prefix; it stops working at once.
-pub async fn revoke(hub: &Hub, which: &str) -> Result<(), AppError> {
-    let mut conn = hub.conn().await?;
-    if store::accounts::revoke_token(&mut conn, which).await? {
+pub async fn revoke(hub: &Hub, actor: &Actor, which: &str) -> Result<(), AppError> {
+    let mut tx = hub.begin().await?;
+    if store::accounts::revoke_token(&mut tx, which).await? {
+        audit::record(
+            &mut tx,
+            actor,
+            AuditAction::TokenRevoke,
+            format!("token {which}"),
+            None,
+            "",
+        )
+        .await?;
+        tx.commit().await?;
         Ok(())
     } else {
         Err(AppError::NotFound(format!(
@@ -169,6 +202,19 @@ pub async fn ensure_admin_token(hub: &Hub, operator: Option<&str>) -> Result<Adm
     };
     let account = ensure_account(&mut tx, "admin", Role::Admin).await?;
     store::accounts::insert_token(&mut tx, account, Role::Admin, &token, None, None).await?;
+    audit::record(
+        &mut tx,
+        &Actor::Server,
+        AuditAction::TokenIssue,
+        format!("token {}", token.prefix),
+        None,
+        if generated {
+            "account admin (admin); generated at start: no live admin token"
+        } else {
+            "account admin (admin); from ENACT_HUB_ADMIN_TOKEN"
+        },
+    )
+    .await?;
     tx.commit().await?;
     Ok(if generated {
         AdminToken::Generated(token.token)

@@ -11,10 +11,12 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::app::import::{ImportError, ImportOptions, SkippedLine, import_release};
 use crate::app::{self, AppError, Hub, Quotas};
+use crate::core::audit::Actor;
 use crate::core::credentials::Role;
 use crate::core::scoring::{self, ScoringTarget, SemanticCoverage};
 use crate::web::{Server, WebConfig, shutdown_signal};
 
+mod audit;
 mod simulate;
 mod stored;
 
@@ -57,6 +59,9 @@ enum Command {
     Backup(BackupArgs),
     /// Put a snapshot in place as the database (the server must be stopped).
     Restore(RestoreArgs),
+    /// The audit log: who issued and revoked tokens, submitted, changed visibility, imported,
+    /// assigned, ran the protocol or finished annotations, and when.
+    Audit(audit::AuditArgs),
     /// Manage API tokens: create, list, revoke.
     #[command(subcommand)]
     Token(TokenCommand),
@@ -365,6 +370,16 @@ fn init_tracing() {
 }
 
 /// Entry point of the binary.
+/// Who runs a command, for the audit log: `$ENACT_HUB_OPERATOR`, else the login name.
+pub(crate) fn operator() -> Actor {
+    let name = ["ENACT_HUB_OPERATOR", "USER", "LOGNAME"]
+        .iter()
+        .filter_map(|var| std::env::var(var).ok())
+        .find(|name| !name.trim().is_empty())
+        .unwrap_or_else(|| "operator".to_owned());
+    Actor::Operator(name.trim().to_owned())
+}
+
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     init_tracing();
@@ -394,6 +409,7 @@ pub fn main() -> ExitCode {
             Command::Simulate(args) => simulate::run(args),
             Command::Backup(args) => backup(args).await,
             Command::Restore(args) => restore(args).await,
+            Command::Audit(args) => audit::audit(args).await,
             Command::Token(command) => token(command).await,
             Command::Annotator(AnnotatorCommand::Create(args)) => create_annotator(args).await,
         }
@@ -512,7 +528,7 @@ async fn backup(args: BackupArgs) -> anyhow::Result<ExitCode> {
         );
     }
     let hub = open(&args.db.db).await?;
-    let done = app::backup::backup(&hub, &args.out).await;
+    let done = app::backup::backup(&hub, &operator(), &args.out).await;
     hub.close().await;
     match done {
         Ok(snapshot) => {
@@ -558,7 +574,7 @@ async fn create_token(
     (daily_quota, total_quota): (Option<i64>, Option<i64>),
 ) -> anyhow::Result<ExitCode> {
     let hub = open(db).await?;
-    let created = app::tokens::issue(&hub, name, role, daily_quota, total_quota).await;
+    let created = app::tokens::issue(&hub, &operator(), name, role, daily_quota, total_quota).await;
     hub.close().await;
     let created = match created {
         Ok(c) => c,
@@ -608,7 +624,7 @@ async fn list_tokens(db: &Path) -> anyhow::Result<ExitCode> {
 /// `token revoke`: by id or prefix, effective at once.
 async fn revoke_token(db: &Path, token: &str) -> anyhow::Result<ExitCode> {
     let hub = open(db).await?;
-    let revoked = app::tokens::revoke(&hub, token).await;
+    let revoked = app::tokens::revoke(&hub, &operator(), token).await;
     hub.close().await;
     match revoked {
         Ok(()) => {
@@ -670,7 +686,7 @@ async fn import(args: ImportArgs) -> anyhow::Result<ExitCode> {
         progress: std::io::stderr().is_terminal(),
         scene_graphs: args.scene_graphs.clone(),
     };
-    let result = import_release(&hub, &args.data, &options).await;
+    let result = import_release(&hub, &operator(), &args.data, &options).await;
     hub.close().await;
     match result {
         Ok(report) => {
@@ -1042,7 +1058,7 @@ async fn score_strict(
 
 async fn create_annotator(args: CreateAnnotatorArgs) -> anyhow::Result<ExitCode> {
     let hub = open(&args.db.db).await?;
-    let created = app::annotators::create(&hub, &args.name, args.admin).await;
+    let created = app::annotators::create(&hub, &operator(), &args.name, args.admin).await;
     hub.close().await;
     let invited = match created {
         Ok(invited) => invited,

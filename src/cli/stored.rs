@@ -93,9 +93,15 @@ pub struct ProtocolArgs {
 /// `agreement-protocol`: runs the protocol once and prints what it drew as JSON.
 pub async fn agreement_protocol(args: &ProtocolArgs) -> anyhow::Result<ExitCode> {
     let hub = open(&args.db).await?;
-    let run =
-        app::agreement::run_protocol(&hub, &args.dataset, args.items_per_cell, args.seed, None)
-            .await;
+    let run = app::agreement::run_protocol(
+        &hub,
+        &super::operator(),
+        &args.dataset,
+        args.items_per_cell,
+        args.seed,
+        None,
+    )
+    .await;
     hub.close().await;
     let run = in_database(run, &args.db)?;
     println!(

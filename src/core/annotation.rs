@@ -3,6 +3,7 @@
 //! telemetry of a finished item, and the scoring of submitted answers into the same report
 //! models get. Passwords and tokens are in [`crate::core::credentials`].
 
+use crate::core::audit::Actor;
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
@@ -223,6 +224,13 @@ pub struct Session {
     pub name: String,
     pub is_admin: bool,
     pub csrf_token: String,
+}
+
+impl Session {
+    /// Who this session is in the audit log.
+    pub fn actor(&self) -> Actor {
+        Actor::Annotator(self.name.clone())
+    }
 }
 
 /// Where an assigned item stands for its annotator.

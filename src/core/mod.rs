@@ -18,6 +18,7 @@
 //!   cross-annotation [`agreement::protocol`] and the agreement [`agreement::report`].
 //! - [`annotation`]: human annotation without I/O: the balanced split, drafts, queue
 //!   standing, telemetry, and human answers scored like model answers.
+//! - [`audit`]: the audit log's actors, actions, entries and filters.
 //! - [`credentials`]: API tokens, session and invite tokens, passwords, roles, scopes and the
 //!   naming rules of accounts.
 //! - [`release`]: a stored dataset written back out as an ENACT release archive.
@@ -26,6 +27,7 @@
 
 pub mod agreement;
 pub mod annotation;
+pub mod audit;
 pub mod credentials;
 pub mod dataset;
 pub mod demo;

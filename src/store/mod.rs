@@ -6,6 +6,7 @@
 pub mod accounts;
 pub mod agreement;
 pub mod annotations;
+pub mod audit;
 pub mod datasets;
 pub mod frames;
 pub mod items;

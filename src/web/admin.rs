@@ -212,8 +212,13 @@ async fn create_annotator(
     request: Protected<NewAnnotator>,
 ) -> Result<Html<String>, PageError> {
     require_admin(&request.session)?;
-    let invited =
-        annotators::create(&state.hub, &request.body.name, request.body.admin.is_some()).await?;
+    let invited = annotators::create(
+        &state.hub,
+        &request.session.actor(),
+        &request.body.name,
+        request.body.admin.is_some(),
+    )
+    .await?;
     let url = annotators::invite_url(&request_base(&headers), &invited.invite_token);
     render_admin(
         &state,
@@ -311,7 +316,7 @@ async fn assign(
         }
     };
     let dataset = form.dataset.trim();
-    let done = annotation::assign(&state.hub, dataset, &how).await?;
+    let done = annotation::assign(&state.hub, &request.session.actor(), dataset, &how).await?;
     let added = done.added;
     render_admin(
         &state,

@@ -99,7 +99,15 @@ async fn create(
     };
     let daily = optional_quota("daily quota", &form.daily_quota)?;
     let total = optional_quota("total quota", &form.total_quota)?;
-    let created = tokens::issue(&state.hub, &form.name, role, daily, total).await?;
+    let created = tokens::issue(
+        &state.hub,
+        &request.session.actor(),
+        &form.name,
+        role,
+        daily,
+        total,
+    )
+    .await?;
     tracing::info!(
         token = created.id,
         account = %created.account,
@@ -125,7 +133,7 @@ async fn revoke(
 ) -> Result<Response, PageError> {
     require_admin(&request.session)?;
     let which = request.body.token.trim().to_owned();
-    tokens::revoke(&state.hub, &which).await?;
+    tokens::revoke(&state.hub, &request.session.actor(), &which).await?;
     tracing::info!(token = %which, by = %request.session.name, "API token revoked on the admin page");
     render(
         &state,

@@ -72,6 +72,7 @@ async fn run_protocol(
     let seed = parse_field("seed", &request.body.seed, rand::random::<u64>())?;
     let run = agreement::run_protocol(
         &state.hub,
+        &request.session.actor(),
         &name,
         items_per_cell,
         seed,

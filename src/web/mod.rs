@@ -3,13 +3,15 @@
 //!
 //! `api` serves JSON under `/api/v1`, `pages` the HTML site, `assets` the embedded CSS and
 //! scripts; `auth` reads API tokens, `session` logs annotators in, `annotate` is their side of
-//! human annotation and `admin` the admins'; `error_analysis` serves the error taxonomy as
-//! JSON and pages. Each page module exposes one `router()`; they are
+//! human annotation and `admin`, `admin_tokens` and `admin_audit` the admins';
+//! `error_analysis` serves the error taxonomy as JSON and pages. Each page module exposes one
+//! `router()`; they are
 //! merged once in [`router`]. The JSON routes are one table instead ([`api_routes`]): the
 //! `/api/v1` router and the OpenAPI document (`openapi`) are both built from it. `extract`
 //! holds the extractors whose rejections are the JSON error body.
 
 mod admin;
+mod admin_audit;
 mod admin_tokens;
 mod agreement;
 mod annotate;
@@ -181,6 +183,7 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
         .merge(admin::router())
         .merge(agreement::router())
         .merge(admin_tokens::router())
+        .merge(admin_audit::router())
         .merge(assets::router())
         .merge(openapi::page_router())
         .nest(openapi::API_PREFIX, openapi::api_router(api_routes()))

@@ -341,6 +341,7 @@ async fn update_listing(
     caller.require(Scope::Admin)?;
     let row = submissions::update_listing(
         &state.hub,
+        &caller.actor(),
         &id,
         change.baseline,
         change.visibility.as_deref(),
@@ -368,7 +369,9 @@ async fn set_answers(
     Json(change): Json<AnswersChange>,
 ) -> Result<Json<AnswersView>, AppError> {
     caller.require(Scope::Admin)?;
-    let dataset = datasets::set_answer_visibility(&state.hub, &dataset, change.answers).await?;
+    let dataset =
+        datasets::set_answer_visibility(&state.hub, &caller.actor(), &dataset, change.answers)
+            .await?;
     Ok(Json(AnswersView {
         dataset: dataset.name,
         answers: change.answers,
@@ -396,6 +399,7 @@ async fn create_token(
     };
     let created = tokens::issue(
         &state.hub,
+        &caller.actor(),
         &request.name,
         role,
         request.daily_quota,
@@ -425,6 +429,6 @@ async fn revoke_token(
     caller: Caller,
 ) -> Result<StatusCode, AppError> {
     caller.require(Scope::Admin)?;
-    tokens::revoke(&state.hub, &which).await?;
+    tokens::revoke(&state.hub, &caller.actor(), &which).await?;
     Ok(StatusCode::NO_CONTENT)
 }

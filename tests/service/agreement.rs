@@ -635,8 +635,9 @@ async fn end_to_end_primary_split_protocol_answers_and_report() {
         }
         names_in_tar.push(path);
     }
-    assert_eq!(names_in_tar.len(), 11);
+    assert_eq!(names_in_tar.len(), 12);
     assert!(names_in_tar.iter().any(|n| n.ends_with("/errors.csv")));
+    assert!(names_in_tar.iter().any(|n| n.ends_with("/audit.csv")));
     assert!(names_in_tar.iter().any(|n| n.ends_with("/tables.tex")));
 
     // Two submissions chosen by the admin: the ground truth itself against "ascending".

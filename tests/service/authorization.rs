@@ -233,6 +233,7 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("GET", "/admin/tokens", Page::Admin),
     ("POST", "/admin/tokens", Page::Admin),
     ("POST", "/admin/tokens/revoke", Page::Admin),
+    ("GET", "/admin/audit", Page::Admin),
     (
         "POST",
         "/admin/datasets/{dataset}/agreement-protocol",

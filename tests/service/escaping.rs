@@ -1,5 +1,5 @@
 //! Markup typed by users (a model name, a description, an account name, a flag reason) is shown
-//! as text on every page, in every SVG and in every report file. Annotator names cannot carry
+//! as text on every page (the audit log's included), in every SVG and in every report file. Annotator names cannot carry
 //! markup at all.
 
 use enact_hub::core::credentials::Role;
@@ -83,6 +83,11 @@ async fn markup_from_users_is_text_everywhere() {
         html.contains("&#60;iframe") || html.contains("&lt;iframe"),
         "the flag reason is shown, escaped: {html}"
     );
+    // The audit log holds the model name (submission) and the flag reason (annotation).
+    let (status, html) = root.text("/admin/audit").await;
+    assert_eq!(status, StatusCode::OK);
+    escaped("/admin/audit", &html, true);
+    assert!(html.contains("&#60;iframe") || html.contains("&lt;iframe"));
     let (status, html) = root.text("/admin/datasets/mini/report?bootstrap=0").await;
     assert_eq!(status, StatusCode::OK);
     escaped("/admin/datasets/mini/report", &html, true);
@@ -114,6 +119,6 @@ async fn markup_from_users_is_text_everywhere() {
         }
         files += 1;
     }
-    assert_eq!(files, 11);
+    assert_eq!(files, 12);
     server.stop().await;
 }

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use enact_hub::app::Hub;
 use enact_hub::app::import::{ImportOptions, ImportReport, import_release};
+use enact_hub::core::audit::Actor;
 use enact_hub::core::credentials::Role;
 use enact_hub::store;
 use enact_hub::web::{Server, WebConfig};
@@ -33,8 +34,13 @@ pub fn options(dataset: &str) -> ImportOptions {
     }
 }
 
+/// The actor the tests' own setup steps are logged under.
+pub fn tester() -> Actor {
+    Actor::Operator("tests".to_owned())
+}
+
 pub async fn import(pool: &SqlitePool, path: &Path, options: &ImportOptions) -> ImportReport {
-    import_release(&Hub::from(pool.clone()), path, options)
+    import_release(&Hub::from(pool.clone()), &tester(), path, options)
         .await
         .unwrap_or_else(|e| {
             panic!(
@@ -403,6 +409,7 @@ pub async fn api_token(
 ) -> (i64, String) {
     let created = enact_hub::app::tokens::issue(
         &Hub::from(pool.clone()),
+        &tester(),
         name,
         role,
         daily_quota,

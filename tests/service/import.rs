@@ -37,7 +37,7 @@ async fn problems_for(
     let raw = bad(&mut c, &root).unwrap_or_else(|| Value::Object(c).to_string());
     write_qa_file(&root, &[a.to_string(), b.to_string(), raw]);
     let pool = fresh_db(&dir).await;
-    let err = import_release(&pool.clone().into(), &root, &options("d"))
+    let err = import_release(&pool.clone().into(), &tester(), &root, &options("d"))
         .await
         .expect_err("the bad row must be rejected");
     let ImportError::Invalid { lines, rows, .. } = &err else {
@@ -135,7 +135,7 @@ async fn changed_item_is_a_conflict_unless_replace() {
         &root,
         &records.iter().map(Value::to_string).collect::<Vec<_>>(),
     );
-    let err = import_release(&pool.clone().into(), &root, &options("mini"))
+    let err = import_release(&pool.clone().into(), &tester(), &root, &options("mini"))
         .await
         .expect_err("conflict");
     assert!(matches!(err, ImportError::Conflict { .. }), "{err}");
@@ -328,9 +328,14 @@ async fn enact_sample_imports_16_items_and_rejects_rows_without_images() {
     let no_images = sample.join("QA").join("enact_ordering_320_no_images.jsonl");
     let fresh_dir = tempfile::tempdir().expect("tempdir");
     let fresh = fresh_db(&fresh_dir).await;
-    let err = import_release(&fresh.clone().into(), &no_images, &options("sample"))
-        .await
-        .expect_err("rows without images");
+    let err = import_release(
+        &fresh.clone().into(),
+        &tester(),
+        &no_images,
+        &options("sample"),
+    )
+    .await
+    .expect_err("rows without images");
     let ImportError::Invalid { lines, rows, .. } = &err else {
         panic!("expected Invalid, got {err}");
     };

@@ -7,6 +7,7 @@ mod annotate;
 mod api;
 mod app_layer;
 mod archive;
+mod audit;
 mod authorization;
 mod backup;
 mod browser;

@@ -491,7 +491,10 @@ mod tests {
             "The bowl becomes inside the node_transition_from_the apple_to_the basket.",
         )
         .unwrap_err();
-        assert!(matches!(err, SentenceParseError::Unrecognised { index: 0, .. }));
+        assert!(matches!(
+            err,
+            SentenceParseError::Unrecognised { index: 0, .. }
+        ));
         assert!(parse_action("The oven_1 becomes open.").is_err());
     }
 }

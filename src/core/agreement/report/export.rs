@@ -8,6 +8,7 @@ use askama::Template;
 use crate::core::agreement::WelchComparison;
 use crate::core::agreement::report::heatmap::Heatmap;
 use crate::core::agreement::report::{AgreementReport, ReportStamp};
+use crate::core::audit::AuditEntry;
 use crate::core::dataset::Direction;
 use crate::core::error_analysis::{ErrorAnalysis, present};
 use crate::core::leaderboard::{
@@ -692,6 +693,41 @@ pub fn error_files(
             bytes: csv(stamp, &header, &lines).into_bytes(),
         },
     ])
+}
+
+/// `audit.csv`: the audit entries that concern the dataset, oldest first, stamped like every
+/// file.
+pub fn audit_file(stamp: &ReportStamp, entries: &[AuditEntry]) -> BundleFile {
+    let header = [
+        "id",
+        "at",
+        "actor_kind",
+        "actor",
+        "action",
+        "target",
+        "dataset",
+        "detail",
+    ];
+    let rows: Vec<Vec<String>> = entries
+        .iter()
+        .rev()
+        .map(|e| {
+            vec![
+                e.id.to_string(),
+                e.at.clone(),
+                e.actor_kind.clone(),
+                e.actor.clone(),
+                e.action.clone(),
+                e.target.clone(),
+                e.dataset.clone().unwrap_or_default(),
+                e.detail.clone(),
+            ]
+        })
+        .collect();
+    BundleFile {
+        name: "audit.csv",
+        bytes: csv(stamp, &header, &rows).into_bytes(),
+    }
 }
 
 /// The files as one tar archive under `folder/`, with a fixed mtime so the same report gives
