@@ -1,0 +1,690 @@
+//! Crash safety: the server (and the import command) killed with SIGKILL at random moments,
+//! again and again, while they write. After every kill the database must pass
+//! `PRAGMA integrity_check` and `foreign_key_check`; every write acknowledged before the kill
+//! (a 2xx reply, or an import that exited 0) must be there with the content it was
+//! acknowledged with; nothing may be half-written (an import is all old or all new, a
+//! submission has every item verdict, an audit entry exists exactly for what was done); and no
+//! draft may outlive its finished item.
+//!
+//! `ENACT_CRASH_KILLS` sets the kills per kind (default 50); `ENACT_CRASH_SEED` the seed of the
+//! kill moments (default: random, printed so a failure can be replayed).
+
+#[path = "support/fixtures.rs"]
+mod fixtures;
+#[path = "service/helpers.rs"]
+#[allow(unused_imports)]
+mod helpers;
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use enact_hub::app::Hub;
+use enact_hub::core::credentials::{hash_password, random_token, token_hash};
+use enact_hub::store;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde_json::{Value, json};
+use sha2::{Digest, Sha256};
+use sqlx::SqlitePool;
+use tempfile::TempDir;
+
+use helpers::{write_balanced_release, write_qa_file};
+
+fn kills() -> usize {
+    std::env::var("ENACT_CRASH_KILLS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(50)
+}
+
+/// A seeded generator for one kind; the seed is printed so a failing run can be replayed.
+fn rng(kind: &str) -> ChaCha8Rng {
+    let seed = std::env::var("ENACT_CRASH_SEED")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(rand::random::<u64>);
+    eprintln!("crash {kind}: ENACT_CRASH_SEED={seed}");
+    ChaCha8Rng::seed_from_u64(seed)
+}
+
+fn enact_hub() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_enact-hub"))
+}
+
+/// A free loopback port (bound, read and released).
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .expect("bind")
+        .local_addr()
+        .expect("addr")
+        .port()
+}
+
+/// `enact-hub serve` on `db`, ready to answer.
+struct Server {
+    child: Child,
+    base: String,
+}
+
+impl Server {
+    async fn start(db: &Path) -> Server {
+        let port = free_port();
+        let child = enact_hub()
+            .args([
+                "serve",
+                "--daily-quota",
+                "1000000",
+                "--total-quota",
+                "1000000",
+            ])
+            .arg("--db")
+            .arg(db)
+            .arg("--addr")
+            .arg(format!("127.0.0.1:{port}"))
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("spawn serve");
+        let base = format!("http://127.0.0.1:{port}");
+        let client = reqwest::Client::new();
+        let deadline = Instant::now() + Duration::from_secs(30);
+        loop {
+            if let Ok(r) = client.get(format!("{base}/healthz")).send().await
+                && r.status().is_success()
+            {
+                break;
+            }
+            assert!(
+                Instant::now() < deadline,
+                "the server did not start on {db:?}"
+            );
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+        Server { child, base }
+    }
+
+    /// SIGKILL, and wait until the process is gone.
+    fn kill(mut self) {
+        self.child.kill().expect("SIGKILL");
+        self.child.wait().expect("reaped");
+    }
+}
+
+/// The checks every kill is followed by, on the database file itself.
+async fn check_database(pool: &SqlitePool, after: &str) {
+    let integrity: String = sqlx::query_scalar("PRAGMA integrity_check")
+        .fetch_one(pool)
+        .await
+        .expect("integrity_check");
+    assert_eq!(integrity, "ok", "after {after}");
+    let broken: Vec<(String,)> = sqlx::query_as("SELECT \"table\" FROM pragma_foreign_key_check")
+        .fetch_all(pool)
+        .await
+        .expect("foreign_key_check");
+    assert!(
+        broken.is_empty(),
+        "after {after}: dangling rows in {broken:?}"
+    );
+    let outlived: i64 = sqlx::query_scalar(
+        "SELECT count(*) FROM drafts d JOIN annotations a \
+         ON a.annotator = d.annotator AND a.item = d.item",
+    )
+    .fetch_one(pool)
+    .await
+    .expect("drafts");
+    assert_eq!(
+        outlived, 0,
+        "after {after}: a draft outlived its finished item"
+    );
+}
+
+async fn open(db: &Path) -> SqlitePool {
+    store::open(db).await.expect("open the database")
+}
+
+/// A release of `per_cell` items per direction × L in 3, 5, 8.
+fn release(dir: &Path, per_cell: u32) -> Vec<Value> {
+    write_balanced_release(dir, &[3, 5, 8], per_cell)
+}
+
+/// Imports killed at random moments, alternating two versions of the same release into one
+/// dataset with `--replace`: after each kill the dataset is wholly the old version or wholly
+/// the new one, never a mix, and its audit entries count exactly the imports that finished.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn imports_killed_at_random_are_all_or_nothing() {
+    let mut rng = rng("imports");
+    let dir = TempDir::new().expect("tempdir");
+    let db = dir.path().join("crash.db");
+    let a = dir.path().join("a");
+    let records = release(&a, 12);
+    // Version B: the same items, each question with another last line.
+    let b = dir.path().join("b");
+    std::fs::create_dir_all(&b).expect("dir");
+    copy_dir(&a.join("QA"), &b.join("QA"));
+    let changed: Vec<String> = records
+        .iter()
+        .map(|r| {
+            let mut r = r.clone();
+            let q = r["question"]
+                .as_str()
+                .expect("question")
+                .replace("Now please", "Please");
+            r["question"] = Value::String(q);
+            r.to_string()
+        })
+        .collect();
+    write_qa_file(&b, &changed);
+    let items = records.len() as i64;
+
+    let import = |from: &Path| {
+        enact_hub()
+            .arg("import")
+            .arg(from)
+            .args(["--dataset", "main", "--replace", "--db"])
+            .arg(&db)
+            .env("ENACT_HUB_OPERATOR", "crash")
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("spawn import")
+    };
+    // How long a replacing import takes here (frames stored already), to spread the kills
+    // over it.
+    assert!(import(&a).wait().expect("import").success());
+    let started = Instant::now();
+    assert!(import(&b).wait().expect("import").success());
+    let whole = started.elapsed();
+    let mut current = 'b';
+    let mut finished_imports = 2;
+    for k in 0..kills() {
+        let (version, from) = if k % 2 == 0 { ('a', &a) } else { ('b', &b) };
+        let mut child = import(from);
+        let at = whole.mul_f64(rng.random_range(0.0..1.3));
+        tokio::time::sleep(at).await;
+        let finished = matches!(child.try_wait(), Ok(Some(status)) if status.success());
+        let _ = child.kill();
+        let status = child.wait().expect("reaped");
+        if finished || status.success() {
+            current = version;
+            finished_imports += 1;
+        }
+        let pool = open(&db).await;
+        let after = format!("import kill {k} at {at:?}");
+        check_database(&pool, &after).await;
+        let (stored, new_version): (i64, i64) = sqlx::query_as(
+            "SELECT count(*), coalesce(sum(question NOT LIKE '%Now please%'), 0) FROM items \
+             WHERE dataset_id = (SELECT id FROM datasets WHERE name = 'main')",
+        )
+        .fetch_one(&pool)
+        .await
+        .expect("items");
+        assert_eq!(stored, items, "{after}: the dataset lost items");
+        // An import killed after its commit but before it exited counts as finished too.
+        let seen = if new_version == items {
+            'b'
+        } else if new_version == 0 {
+            'a'
+        } else {
+            panic!("{after}: {new_version} of {items} items are of the new version");
+        };
+        if seen != current {
+            assert!(!finished, "{after}: a finished import is not there");
+            current = seen;
+            finished_imports += 1;
+        }
+        let logged: i64 = sqlx::query_scalar(
+            "SELECT count(*) FROM audit_log WHERE action = 'dataset.import' AND dataset = 'main'",
+        )
+        .fetch_one(&pool)
+        .await
+        .expect("audit");
+        // Imports that changed nothing (killed ones that had committed included) are logged
+        // too, so the log has at least one entry per change seen.
+        assert!(
+            logged >= finished_imports,
+            "{after}: {logged} import entries"
+        );
+        pool.close().await;
+    }
+    eprintln!(
+        "crash imports: {} kills, {finished_imports} imports landed",
+        kills()
+    );
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).expect("dir");
+    for entry in std::fs::read_dir(from).expect("read_dir") {
+        let entry = entry.expect("entry");
+        let target = to.join(entry.file_name());
+        if entry.file_type().expect("type").is_dir() {
+            copy_dir(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), target).expect("copy");
+        }
+    }
+}
+
+/// A database with the release imported as dataset "mini".
+async fn seeded(dir: &TempDir, per_cell: u32) -> (PathBuf, Vec<Value>) {
+    let db = dir.path().join("crash.db");
+    let root = dir.path().join("release");
+    let records = release(&root, per_cell);
+    let out = enact_hub()
+        .arg("import")
+        .arg(&root)
+        .args(["--dataset", "mini", "--db"])
+        .arg(&db)
+        .output()
+        .expect("import");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (db, records)
+}
+
+/// A submission body answering every item, item `wrong` reversed.
+fn body(records: &[Value], wrong: usize) -> String {
+    records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let mut answer: Vec<u64> = r["gt_answer"]
+                .as_array()
+                .expect("gt")
+                .iter()
+                .map(|v| v.as_u64().expect("label"))
+                .collect();
+            if i == wrong {
+                answer.reverse();
+            }
+            json!({"id": r["id"], "answer": answer}).to_string() + "\n"
+        })
+        .collect()
+}
+
+/// Submissions posted one after another while the server is killed at a random moment; after
+/// each restart every acknowledged submission reads back as it was acknowledged.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn submissions_acknowledged_before_a_kill_survive_it() {
+    let mut rng = rng("submissions");
+    let dir = TempDir::new().expect("tempdir");
+    let (db, records) = seeded(&dir, 4).await;
+    let items = records.len() as i64;
+    let token = {
+        let out = enact_hub()
+            .args([
+                "token",
+                "create",
+                "--name",
+                "team",
+                "--role",
+                "submitter",
+                "--db",
+            ])
+            .arg(&db)
+            .output()
+            .expect("token");
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .last()
+            .expect("token line")
+            .trim()
+            .to_owned()
+    };
+    let client = reqwest::Client::new();
+    // id -> (model, body hash, the JSON the 201 carried)
+    let mut acknowledged: BTreeMap<i64, (String, String, Value)> = BTreeMap::new();
+    let mut sent = 0;
+    for k in 0..kills() {
+        let server = Server::start(&db).await;
+        // What the last round acknowledged reads back the same through the restarted server.
+        for (id, (_, _, reply)) in acknowledged.range(..).rev().take(3) {
+            let now: Value = client
+                .get(format!("{}/api/v1/submissions/{id}", server.base))
+                .bearer_auth(&token)
+                .send()
+                .await
+                .expect("read")
+                .json()
+                .await
+                .expect("json");
+            for field in ["id", "model", "scores", "created_at", "dataset"] {
+                assert_eq!(now[field], reply[field], "submission {id}: {field} changed");
+            }
+        }
+        let writer = {
+            let (client, base, token, records) = (
+                client.clone(),
+                server.base.clone(),
+                token.clone(),
+                records.clone(),
+            );
+            let first = sent;
+            tokio::spawn(async move {
+                let mut done = Vec::new();
+                for n in first.. {
+                    let body = body(&records, n % records.len());
+                    let model = format!("m{n}");
+                    let reply = client
+                        .post(format!(
+                            "{base}/api/v1/datasets/mini/submissions?model={model}"
+                        ))
+                        .bearer_auth(&token)
+                        .body(body.clone())
+                        .send()
+                        .await;
+                    // A refused connection or a cut reply is the kill; any other status is not.
+                    let Ok(reply) = reply else { break };
+                    assert_eq!(reply.status(), 201, "submission {model} refused");
+                    let Ok(json) = reply.json::<Value>().await else {
+                        break;
+                    };
+                    let hash = hex::encode(Sha256::digest(body.as_bytes()));
+                    done.push((json["id"].as_i64().expect("id"), model, hash, json));
+                }
+                done
+            })
+        };
+        let at = Duration::from_millis(rng.random_range(5..400));
+        tokio::time::sleep(at).await;
+        server.kill();
+        let done = writer.await.expect("writer");
+        sent += done.len() + 1;
+        for (id, model, hash, json) in done {
+            acknowledged.insert(id, (model, hash, json));
+        }
+
+        let pool = open(&db).await;
+        let after = format!("submission kill {k} at {at:?}");
+        check_database(&pool, &after).await;
+        let stored: BTreeMap<i64, (String, String)> = sqlx::query_as::<_, (i64, String, String)>(
+            "SELECT id, model, body_sha256 FROM submissions",
+        )
+        .fetch_all(&pool)
+        .await
+        .expect("submissions")
+        .into_iter()
+        .map(|(id, model, hash)| (id, (model, hash)))
+        .collect();
+        for (id, (model, hash, _)) in &acknowledged {
+            assert_eq!(
+                stored.get(id),
+                Some(&(model.clone(), hash.clone())),
+                "{after}: acknowledged submission {id} is lost or changed"
+            );
+        }
+        let partial: i64 = sqlx::query_scalar(
+            "SELECT count(*) FROM submissions s WHERE \
+             (SELECT count(*) FROM submission_items i WHERE i.submission = s.id) != ?",
+        )
+        .bind(items)
+        .fetch_one(&pool)
+        .await
+        .expect("items");
+        assert_eq!(partial, 0, "{after}: a submission without all its verdicts");
+        let logged: BTreeSet<String> =
+            sqlx::query_scalar("SELECT target FROM audit_log WHERE action = 'submission.create'")
+                .fetch_all(&pool)
+                .await
+                .expect("audit")
+                .into_iter()
+                .collect();
+        let expected: BTreeSet<String> =
+            stored.keys().map(|id| format!("submission {id}")).collect();
+        assert_eq!(
+            logged, expected,
+            "{after}: audit entries and submissions differ"
+        );
+        pool.close().await;
+    }
+    eprintln!(
+        "crash submissions: {} kills, {} submissions acknowledged and found",
+        kills(),
+        acknowledged.len()
+    );
+}
+
+/// One annotator saving drafts and finishing items while the server is killed at a random
+/// moment; after each restart every acknowledged answer is stored as acknowledged, and the
+/// stored draft of an unfinished item is the last acknowledged save or one sent after it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn annotation_saves_and_answers_acknowledged_before_a_kill_survive_it() {
+    let mut rng = rng("annotations");
+    let dir = TempDir::new().expect("tempdir");
+    let (db, records) = seeded(&dir, 60).await;
+    let gt: BTreeMap<String, Vec<u64>> = records
+        .iter()
+        .map(|r| {
+            let gt = r["gt_answer"].as_array().expect("gt");
+            (
+                r["id"].as_str().expect("id").to_owned(),
+                gt.iter().map(|v| v.as_u64().expect("label")).collect(),
+            )
+        })
+        .collect();
+    // The annotator, their queue and a login link, set up before the first start.
+    let link = {
+        let pool = open(&db).await;
+        let mut conn = pool.acquire().await.expect("conn");
+        let annotator = store::annotations::create_annotator(
+            &mut conn,
+            "ann",
+            false,
+            &token_hash(&random_token()),
+        )
+        .await
+        .expect("insert")
+        .expect("new");
+        sqlx::query("UPDATE annotators SET password_hash = ?, invite_hash = NULL WHERE id = ?")
+            .bind(hash_password("a long enough password").expect("hash"))
+            .bind(annotator)
+            .execute(&mut *conn)
+            .await
+            .expect("password");
+        let dataset = store::datasets::by_name(&mut conn, "mini")
+            .await
+            .expect("query")
+            .expect("dataset");
+        let ids: Vec<String> = gt.keys().cloned().collect();
+        let rows = store::annotations::item_rowids(&mut conn, dataset.id, &ids)
+            .await
+            .expect("query")
+            .expect("known");
+        let pairs: Vec<(i64, i64)> = rows.into_iter().map(|r| (annotator, r)).collect();
+        store::annotations::assign(&mut conn, &pairs)
+            .await
+            .expect("assign");
+        drop(conn);
+        let link = enact_hub::app::annotators::login_link(&Hub::from(pool.clone()), annotator)
+            .await
+            .expect("link");
+        pool.close().await;
+        link
+    };
+    let client = reqwest::Client::builder()
+        .redirect(reqwest::redirect::Policy::none())
+        .build()
+        .expect("client");
+    let (cookie, csrf) = {
+        let server = Server::start(&db).await;
+        let r = client
+            .get(format!("{}/login/link/{link}", server.base))
+            .send()
+            .await
+            .expect("link");
+        let set = r.headers()["set-cookie"]
+            .to_str()
+            .expect("cookie")
+            .to_owned();
+        let cookie = set.split(';').next().expect("pair").to_owned();
+        let html = client
+            .get(format!("{}/annotate", server.base))
+            .header("cookie", &cookie)
+            .send()
+            .await
+            .expect("queue")
+            .text()
+            .await
+            .expect("html");
+        let start = html.find("name=\"csrf\" value=\"").expect("csrf") + 19;
+        let csrf = html[start..start + 64].to_owned();
+        server.kill();
+        (cookie, csrf)
+    };
+
+    // item -> the answer its 2xx acknowledged; item -> drafts sent, and how many were acked.
+    let mut answered: BTreeMap<String, Vec<u64>> = BTreeMap::new();
+    let mut drafts: BTreeMap<String, (Vec<Value>, usize)> = BTreeMap::new();
+    let mut next_item = 0;
+    let items: Vec<String> = gt.keys().cloned().collect();
+    for k in 0..kills() {
+        let server = Server::start(&db).await;
+        let writer = {
+            let (client, base, cookie, csrf) = (
+                client.clone(),
+                server.base.clone(),
+                cookie.clone(),
+                csrf.clone(),
+            );
+            let (items, gt) = (items.clone(), gt.clone());
+            let first = next_item;
+            let seed: u64 = rng.random();
+            tokio::spawn(async move {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                let mut log: Vec<(String, Value, bool, bool)> = Vec::new();
+                let mut position = first;
+                while position < items.len() {
+                    let item = &items[position];
+                    let labels = &gt[item];
+                    let full = rng.random_bool(0.5);
+                    let slots: Vec<Value> = labels
+                        .iter()
+                        .enumerate()
+                        .map(|(i, l)| {
+                            if full || i == 0 {
+                                json!(l)
+                            } else {
+                                Value::Null
+                            }
+                        })
+                        .collect();
+                    let draft = json!({"slots": slots, "counts": {"placements": 1, "swaps": 0, "clears": 0, "undos": 0}});
+                    let finish = full && rng.random_bool(0.6);
+                    let path = if finish { "submit" } else { "draft" };
+                    let sent = client
+                        .post(format!("{base}/annotate/mini/{item}/{path}"))
+                        .header("cookie", &cookie)
+                        .header("x-csrf-token", &csrf)
+                        .json(&draft)
+                        .send()
+                        .await;
+                    let Ok(reply) = sent else {
+                        // The kill: this write may or may not have landed.
+                        log.push((item.clone(), draft, finish, false));
+                        break;
+                    };
+                    if reply.status() == 409 {
+                        // Finished by a submit whose reply the last kill cut.
+                        position += 1;
+                        continue;
+                    }
+                    assert!(
+                        reply.status().is_success(),
+                        "{item}/{path}: {}",
+                        reply.status()
+                    );
+                    log.push((item.clone(), draft, finish, true));
+                    if finish {
+                        position += 1;
+                    }
+                    // A person's pace, so the queue lasts through every kill.
+                    tokio::time::sleep(Duration::from_millis(rng.random_range(0..12))).await;
+                }
+                (log, position)
+            })
+        };
+        let at = Duration::from_millis(rng.random_range(5..300));
+        tokio::time::sleep(at).await;
+        server.kill();
+        let (log, position) = writer.await.expect("writer");
+        next_item = position;
+        for (item, draft, finish, ok) in log {
+            if finish && ok {
+                let answer = draft["slots"]
+                    .as_array()
+                    .expect("slots")
+                    .iter()
+                    .map(|v| v.as_u64().expect("label"))
+                    .collect();
+                answered.insert(item, answer);
+            } else {
+                let entry = drafts.entry(item).or_default();
+                entry.0.push(draft["slots"].clone());
+                if ok && !finish {
+                    entry.1 = entry.0.len();
+                }
+            }
+        }
+
+        let pool = open(&db).await;
+        let after = format!("annotation kill {k} at {at:?}");
+        check_database(&pool, &after).await;
+        let stored: BTreeMap<String, Option<String>> =
+            sqlx::query_as::<_, (String, Option<String>)>(
+                "SELECT i.item_id, a.answer FROM annotations a JOIN items i ON i.id = a.item",
+            )
+            .fetch_all(&pool)
+            .await
+            .expect("annotations")
+            .into_iter()
+            .collect();
+        for (item, answer) in &answered {
+            let stored = stored
+                .get(item)
+                .unwrap_or_else(|| panic!("{after}: the acknowledged answer of {item} is lost"));
+            let stored: Vec<u64> =
+                serde_json::from_str(stored.as_deref().expect("an answer")).expect("json");
+            assert_eq!(&stored, answer, "{after}: {item}");
+        }
+        let stored_drafts: BTreeMap<String, String> = sqlx::query_as::<_, (String, String)>(
+            "SELECT i.item_id, d.slots FROM drafts d JOIN items i ON i.id = d.item",
+        )
+        .fetch_all(&pool)
+        .await
+        .expect("drafts")
+        .into_iter()
+        .collect();
+        for (item, (sent, acked)) in &drafts {
+            if stored.contains_key(item) {
+                continue;
+            }
+            // A save acknowledged is there, or a later one sent after it (which may have
+            // landed without its reply).
+            if *acked > 0 {
+                let slots: Value = serde_json::from_str(
+                    stored_drafts
+                        .get(item)
+                        .unwrap_or_else(|| panic!("{after}: the draft of {item} is lost")),
+                )
+                .expect("json");
+                assert!(
+                    sent[acked - 1..].contains(&slots),
+                    "{after}: the draft of {item} is {slots}, not one sent since the last acknowledged"
+                );
+            }
+        }
+        pool.close().await;
+    }
+    eprintln!(
+        "crash annotations: {} kills, {} answers and {} drafted items checked",
+        kills(),
+        answered.len(),
+        drafts.len()
+    );
+}
