@@ -33,35 +33,10 @@ rm -f "$DB" "$DB-wal" "$DB-shm"
 
 "$BIN" import "$PARITY" --db "$DB" --dataset full --scene-graphs "$PARITY/replayed_activities" 2>/dev/null
 
-python3 - "$DB" "$PARITY" "$OUT" "$ITEMS" <<'PY'
-import json, sqlite3, sys
-db, parity, out, target = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
-con = sqlite3.connect(db)
-con.execute("PRAGMA foreign_keys=ON")
-base = con.execute("SELECT id, item_id FROM items ORDER BY id").fetchall()
-copies, n = [], len(base)
-copy = 1
-while n < target:
-    for row_id, item_id in base:
-        if n >= target:
-            break
-        new_id = f"{item_id}_r{copy}"
-        cur = con.execute(
-            "INSERT INTO items (dataset_id, item_id, item_type, direction, step_length, task_name,"
-            " key_frame_ids, question, actions, gt_answer, content_hash, source_line)"
-            " SELECT dataset_id, ?, item_type, direction, step_length, task_name, key_frame_ids,"
-            " question, actions, gt_answer, content_hash, source_line FROM items WHERE id = ?",
-            (new_id, row_id))
-        new_row = cur.lastrowid
-        con.execute("INSERT INTO item_images (item, position, path, frame) SELECT ?, position, path, frame"
-                    " FROM item_images WHERE item = ?", (new_row, row_id))
-        con.execute("INSERT INTO item_signatures (item, source, signatures) SELECT ?, source, signatures"
-                    " FROM item_signatures WHERE item = ?", (new_row, row_id))
-        n += 1
-    copy += 1
-con.execute("UPDATE content_generation SET value = value + 1")
-con.commit()
-print(f"dataset 'full': {n} items", file=sys.stderr)
+python3 scripts/lib/replicate_items.py "$DB" full "$ITEMS"
+python3 - "$PARITY" "$OUT" "$ITEMS" <<'PY'
+import json, sys
+parity, out, target = sys.argv[1], sys.argv[2], int(sys.argv[3])
 
 def replicate(lines, compact):
     rows = [json.loads(l) for l in lines if l.strip()]
