@@ -1,6 +1,7 @@
 //! API tokens and the accounts behind them: issuing, listing and revoking tokens, the admin
 //! token a server starts with, and who a presented token stands for.
 
+use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::audit;
@@ -66,7 +67,7 @@ pub async fn authenticate(hub: &Hub, presented: &str) -> Result<Caller, AppError
 }
 
 /// A token just created: its secret is in this value only.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, JsonSchema)]
 pub struct CreatedToken {
     pub id: i64,
     pub prefix: String,

@@ -6,6 +6,7 @@
 //! `token list`, used to find the row). Only SHA-256 hashes of tokens are stored, so the
 //! database never holds a usable secret.
 
+use schemars::JsonSchema;
 use std::fmt;
 
 use argon2::Argon2;
@@ -52,7 +53,7 @@ impl Scope {
 }
 
 /// The kind of account a token belongs to; it fixes the token's scopes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Role {
     Submitter,

@@ -3,13 +3,16 @@
 //! Pure and synchronous: the importer feeds it lines and reports what comes back; nothing here
 //! touches files or the database.
 
+use schemars::JsonSchema;
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 /// Which way an item asks the model to reason.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Direction {
     /// Current image + actions in order; order the shuffled future images.
@@ -44,7 +47,9 @@ impl fmt::Display for Direction {
 }
 
 /// Number of states in an item, the current one included (ENACT's L, 3..=10).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, JsonSchema,
+)]
 #[serde(try_from = "u8", into = "u8")]
 pub struct StepLength(u8);
 
@@ -466,7 +471,7 @@ fn check_permutation(gt: &[u8], actions: usize, problems: &mut Vec<FieldProblem>
 }
 
 /// Whether a dataset's ground truth and per-item correctness may be shown to submitters.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum AnswerVisibility {
     Public,

@@ -3,6 +3,7 @@
 //! column and paged; and the geometry of the accuracy-against-step-length chart (pure;
 //! templates draw it).
 
+use schemars::JsonSchema;
 use serde::Serialize;
 
 use crate::core::dataset::StepLength;
@@ -13,7 +14,7 @@ use crate::core::verifier::{
 
 /// Where a row comes from. Human performance rows (from annotations) will be a second kind:
 /// they carry the same cells, so the table and chart draw them without change.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum RowSource {
     Submission,
@@ -22,7 +23,7 @@ pub enum RowSource {
 }
 
 /// How much the Human row rests on: answers, distinct items and distinct annotators.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, JsonSchema)]
 pub struct HumanCoverage {
     pub answers: usize,
     pub items: usize,
@@ -57,27 +58,27 @@ impl HumanCoverage {
 pub const MIN_HUMAN_ANSWERS: usize = 5;
 
 /// TA and PA as fractions in [0, 1]; `None` where the group had no item.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, JsonSchema)]
 pub struct AccuracyCell {
     pub task_accuracy: Option<f64>,
     pub pairwise_accuracy: Option<f64>,
     pub count: usize,
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 pub struct DirectionColumns {
     pub total: AccuracyCell,
     /// Step lengths 3..=10, in order.
     pub per_step: Vec<(u8, AccuracyCell)>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
 pub struct Interval {
     pub low: f64,
     pub high: f64,
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 pub struct LeaderboardRow {
     /// The rank among ranked rows (submissions that are not baselines) by the board's sort;
     /// `None` for the Human row and baselines, which are shown for reference.

@@ -4,6 +4,7 @@
 //! Only `id` and `answer` are read from each record; a `gt_answer`, `type` or `key_frame_ids`
 //! in the body is ignored, since everything but the answer comes from the dataset.
 
+use schemars::JsonSchema;
 use std::collections::HashMap;
 
 use rayon::prelude::*;
@@ -80,7 +81,7 @@ pub fn submission_records(text: &str) -> Result<Vec<(usize, String)>, Vec<LinePr
 }
 
 /// Bootstrap intervals on the overall means.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ConfidenceIntervals {
     pub level: f64,
     pub resamples: usize,
@@ -90,7 +91,7 @@ pub struct ConfidenceIntervals {
 }
 
 /// What a submission's scores are, as stored and served.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct SubmissionScores {
     pub policy: ScoringPolicy,
     pub report: PerformanceReport,
@@ -123,7 +124,7 @@ impl SubmissionMetadata {
 }
 
 /// Where a submission stands on its dataset's leaderboard; admins change it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Visibility {
     /// Listed (the state every submission starts in).
@@ -156,7 +157,7 @@ impl Visibility {
 
 /// What has happened to a submission. Scoring is synchronous, so a stored submission is
 /// always scored; the state is kept so that queued scoring can be added without a new column.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum SubmissionStatus {
     Scored,

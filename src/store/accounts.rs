@@ -1,12 +1,13 @@
 //! Accounts and API tokens (hashed), and the submission attempts quotas count.
 
+use schemars::JsonSchema;
 use serde::Serialize;
 use sqlx::{Row, SqliteConnection};
 
 use crate::core::credentials::{NewToken, Role, Scope, scopes_from_text, scopes_to_text};
 
 /// A token as `token list` shows it: never its secret.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct TokenListing {
     pub id: i64,
     pub prefix: String,

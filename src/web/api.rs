@@ -1,11 +1,13 @@
 //! The JSON read API under `/api/v1`. Ground truth never appears in these responses.
 
+use serde_json::json;
 use std::collections::BTreeMap;
 
 use axum::body::{Body, Bytes};
 use axum::extract::State;
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::extract::{Json, Path, Query};
@@ -20,10 +22,10 @@ pub fn routes() -> Vec<ApiRoute> {
     vec![
         ApiRoute::new(Verb::Get, "/datasets", list_datasets, "List datasets")
             .describe("Every dataset with its item counts by direction and step length.")
-            .responds(200, Some("application/json"), "`{\"datasets\": [...]}`."),
+            .responds_json::<DatasetList>(200, "Every dataset."),
         ApiRoute::new(Verb::Get, "/datasets/{dataset}", get_dataset, "One dataset")
             .describe("A dataset's item counts by direction and step length, and its items URL.")
-            .responds(200, Some("application/json"), "The dataset.")
+            .responds_json::<DatasetView>(200, "The dataset.")
             .errors(&[404]),
         ApiRoute::new(
             Verb::Get,
@@ -35,12 +37,33 @@ pub fn routes() -> Vec<ApiRoute> {
             "A dataset's items in import order, filtered and paged; `next` is the URL of \
                  the following page, or null on the last. Never includes ground truth.",
         )
-        .query("direction", false, "`forward` or `inverse`.")
-        .query("step_length", false, "L, the number of images: 3 to 10.")
+        .query_with(
+            "direction",
+            false,
+            // Empty values mean "any", as the dataset page's filter form sends them.
+            json!({"enum": ["", "forward", "inverse"]}),
+            "`forward` or `inverse`.",
+        )
+        .query_with(
+            "step_length",
+            false,
+            json!({"anyOf": [{"type": "integer", "minimum": 3, "maximum": 10}, {"const": ""}]}),
+            "L, the number of images: 3 to 10.",
+        )
         .query("task", false, "An ENACT task name.")
-        .query("page", false, "1-based page number (default 1).")
-        .query("per_page", false, "Items per page, 1 to 500 (default 50).")
-        .responds(200, Some("application/json"), "A page of items.")
+        .query_with(
+            "page",
+            false,
+            json!({"anyOf": [{"type": "integer", "minimum": 1, "maximum": 1_000_000}, {"const": ""}]}),
+            "1-based page number (default 1).",
+        )
+        .query_with(
+            "per_page",
+            false,
+            json!({"anyOf": [{"type": "integer", "minimum": 1, "maximum": MAX_PER_PAGE}, {"const": ""}]}),
+            "Items per page, 1 to 500 (default 50).",
+        )
+        .responds_json::<ItemList>(200, "A page of items.")
         .errors(&[400, 404]),
         ApiRoute::new(
             Verb::Get,
@@ -52,14 +75,18 @@ pub fn routes() -> Vec<ApiRoute> {
             "An item as a model sees it: question, action texts, and its images' labels \
                  and URLs in order. Never includes ground truth or key frame ids.",
         )
-        .responds(200, Some("application/json"), "The item.")
+        .responds_json::<ItemView>(200, "The item.")
         .errors(&[404]),
         ApiRoute::new(Verb::Get, "/frames/{sha256}", get_frame, "A frame")
             .describe(
                 "A key frame as PNG, with a strong ETag and `Cache-Control: immutable`; \
                  `If-None-Match` with the ETag answers 304.",
             )
-            .header("If-None-Match", "The ETag of a copy the client holds.")
+            .header(
+                "If-None-Match",
+                json!({"type": "string"}),
+                "The ETag of a copy the client holds.",
+            )
             .responds(200, Some("image/png"), "The PNG bytes.")
             .responds(304, None, "The client's copy is current.")
             .errors(&[404]),
@@ -70,7 +97,7 @@ pub fn frame_url(sha256: &str) -> String {
     format!("/api/v1/frames/{sha256}")
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct DatasetView {
     name: String,
     created_at: String,
@@ -98,7 +125,7 @@ impl From<DatasetOverview> for DatasetView {
     }
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct DatasetList {
     datasets: Vec<DatasetView>,
 }
@@ -228,7 +255,7 @@ impl ItemQuery {
     }
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct ItemListEntry {
     id: String,
     #[serde(rename = "type")]
@@ -239,7 +266,7 @@ struct ItemListEntry {
     url: String,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct ItemList {
     dataset: String,
     total: i64,
@@ -284,13 +311,13 @@ async fn list_items(
     }))
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct ActionView {
     label: usize,
     text: String,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct ImageView {
     position: usize,
     label: String,
@@ -298,7 +325,7 @@ struct ImageView {
 }
 
 /// What a model or a person is shown of an item: never its ground truth.
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct ItemView {
     id: String,
     dataset: String,

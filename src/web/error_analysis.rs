@@ -2,6 +2,7 @@
 //! rows of a dataset side by side as JSON, and the two pages (all rows compared; one row with
 //! its examples).
 
+use crate::core::error_analysis::ErrorAnalysis;
 use askama::Template;
 use axum::Router;
 use axum::extract::FromRequestParts;
@@ -9,8 +10,9 @@ use axum::extract::State;
 use axum::http::request::Parts;
 use axum::response::Html;
 use axum::routing::get;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
+use serde_json::json;
 
 use super::error::PageError;
 use super::extract::{Json, Path, Query};
@@ -48,7 +50,7 @@ pub fn routes() -> Vec<ApiRoute> {
              otherwise `examples_withheld` says why. Same JSON as `enact-hub errors --json`.",
         )
         .bearer("read_own")
-        .responds(200, Some("application/json"), "The analysis.")
+        .responds_json::<AnalysisJson>(200, "The analysis.")
         .errors(&[401, 403, 404]),
         ApiRoute::new(
             Verb::Get,
@@ -61,13 +63,19 @@ pub fn routes() -> Vec<ApiRoute> {
              by default), then the Human row once annotators have answered. Examples only for \
              datasets whose answers are public. The page is /leaderboard/{dataset}/errors.",
         )
-        .query("top", false, "How many ranked rows, 1 to 50 (default 8).")
-        .query(
+        .query_with(
+            "top",
+            false,
+            json!({"type": "integer", "minimum": 1, "maximum": 50}),
+            "How many ranked rows, 1 to 50 (default 8).",
+        )
+        .query_with(
             "pick",
             false,
+            json!({"type": "string", "pattern": "^([0-9]{1,18}(,[0-9]{1,18})*)?$"}),
             "Comma-separated submission ids to compare instead.",
         )
-        .responds(200, Some("application/json"), "`dataset` and `rows`.")
+        .responds_json::<ComparisonJson>(200, "`dataset` and `rows`.")
         .errors(&[400, 404]),
     ]
 }
@@ -78,22 +86,31 @@ pub fn page_router() -> Router<AppState> {
         .route("/leaderboard/{dataset}/errors/{entry}", get(row_page))
 }
 
-/// The analysis as JSON, with `examples_withheld` when examples were removed.
-fn analysis_json(analysed: &Analysed) -> Result<Value, AppError> {
-    let mut value = serde_json::to_value(&analysed.analysis).map_err(AppError::internal)?;
-    if let (Some(why), Value::Object(map)) = (&analysed.withheld, &mut value) {
-        map.insert("examples_withheld".to_owned(), Value::String(why.clone()));
+/// The analysis as served, with `examples_withheld` when examples were removed.
+#[derive(Serialize, JsonSchema)]
+struct AnalysisJson {
+    #[serde(flatten)]
+    analysis: ErrorAnalysis,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    examples_withheld: Option<String>,
+}
+
+impl From<&Analysed> for AnalysisJson {
+    fn from(analysed: &Analysed) -> Self {
+        AnalysisJson {
+            analysis: analysed.analysis.clone(),
+            examples_withheld: analysed.withheld.clone(),
+        }
     }
-    Ok(value)
 }
 
 async fn submission_errors(
     State(state): State<AppState>,
     Path(id): Path<String>,
     caller: Caller,
-) -> Result<Json<Value>, AppError> {
+) -> Result<Json<AnalysisJson>, AppError> {
     let (_, analysed) = error_analysis::of_submission(&state.hub, &caller, &id).await?;
-    Ok(Json(analysis_json(&analysed)?))
+    Ok(Json(AnalysisJson::from(&analysed)))
 }
 
 #[derive(Deserialize, Default)]
@@ -142,38 +159,43 @@ impl CompareQuery {
     }
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct ComparedJson {
     submission: Option<i64>,
     label: String,
     account: String,
     baseline: bool,
-    analysis: Value,
+    analysis: AnalysisJson,
+}
+
+#[derive(Serialize, JsonSchema)]
+struct ComparisonJson {
+    dataset: String,
+    rows: Vec<ComparedJson>,
 }
 
 async fn dataset_errors(
     State(state): State<AppState>,
     Path(name): Path<String>,
     Query(query): Query<CompareQuery>,
-) -> Result<Json<Value>, AppError> {
+) -> Result<Json<ComparisonJson>, AppError> {
     let (dataset, rows) =
         error_analysis::comparison(&state.hub, &name, query.top()?, &query.picked()?, false)
             .await?;
     let rows: Vec<ComparedJson> = rows
         .iter()
-        .map(|r| {
-            Ok(ComparedJson {
-                submission: r.submission,
-                label: r.label.clone(),
-                account: r.account.clone(),
-                baseline: r.baseline,
-                analysis: analysis_json(&r.analysis)?,
-            })
+        .map(|r| ComparedJson {
+            submission: r.submission,
+            label: r.label.clone(),
+            account: r.account.clone(),
+            baseline: r.baseline,
+            analysis: AnalysisJson::from(&r.analysis),
         })
-        .collect::<Result<_, AppError>>()?;
-    Ok(Json(
-        serde_json::json!({ "dataset": dataset.name, "rows": rows }),
-    ))
+        .collect();
+    Ok(Json(ComparisonJson {
+        dataset: dataset.name,
+        rows,
+    }))
 }
 
 /// Whether the reader is a logged-in admin (pages show them examples of hidden datasets).

@@ -2,6 +2,8 @@
 //! chart (`/leaderboard/{dataset}`): one row per account and model (or every submission),
 //! ranked with ties, sorted by any column and paged, from the board kept in memory.
 
+use schemars::JsonSchema;
+use serde_json::json;
 use std::hash::{Hash, Hasher};
 
 use askama::Template;
@@ -45,28 +47,36 @@ pub fn api_routes() -> Vec<ApiRoute> {
              and baselines are on every page, unranked. Strong `ETag`; `If-None-Match` gives \
              304. The HTML page is /leaderboard/{dataset}.",
         )
-        .query(
+        .query_with(
             "sort",
             false,
+            json!({"type": "string", "pattern": "^(overall_(ta|pa)|(forward|inverse)_(ta|pa)(_([3-9]|10))?)?$"}),
             "overall_ta (default), overall_pa, forward_ta, forward_pa, inverse_ta, inverse_pa, \
              or a step length: forward_ta_5, inverse_pa_10, ….",
         )
-        .query("page", false, "1-based page of ranked rows (default 1).")
-        .query(
+        .query_with(
+            "page",
+            false,
+            // An empty value is the default, as the page's own filter form sends it.
+            json!({"anyOf": [{"type": "integer", "minimum": 1, "maximum": 1_000_000}, {"const": ""}]}),
+            "1-based page of ranked rows (default 1).",
+        )
+        .query_with(
             "per_page",
             false,
+            json!({"anyOf": [{"type": "integer", "minimum": 1, "maximum": MAX_PER_PAGE}, {"const": ""}]}),
             "Ranked rows per page, 1 to 1000 (default 50).",
         )
-        .query(
+        .query_with(
             "all",
             false,
+            json!({"enum": ["", "0", "1", "false", "true"]}),
             "`1` lists every published submission instead of one row per account and model.",
         )
         .query("model", false, "Only this model (exact name).")
         .query("account", false, "Only this account (exact name).")
-        .responds(
+        .responds_json::<LeaderboardView<'static>>(
             200,
-            Some("application/json"),
             "The page of rows, with `next` and `prev` links.",
         )
         .responds(
@@ -230,7 +240,7 @@ fn with_etag(headers: &HeaderMap, etag: &str, response: impl IntoResponse) -> Re
     response
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct RowView {
     #[serde(flatten)]
     row: LeaderboardRow,
@@ -238,7 +248,7 @@ struct RowView {
     history: Option<String>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct LeaderboardView<'a> {
     dataset: &'a str,
     policy: &'static str,

@@ -15,6 +15,8 @@ use axum::handler::Handler;
 use axum::http::Method;
 use axum::response::Html;
 use axum::routing::{MethodFilter, MethodRouter, get, on};
+use schemars::generate::SchemaSettings;
+use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde_json::{Map, Value, json};
 
 use super::error::PageError;
@@ -82,8 +84,8 @@ pub struct Param {
     pub location: &'static str,
     pub required: bool,
     pub description: &'static str,
-    /// JSON Schema type: `string` or `integer`.
-    pub kind: &'static str,
+    /// The values the server accepts, as JSON Schema: what a client may send without a 400.
+    pub schema: Value,
 }
 
 /// A request body: its media types and what it holds.
@@ -91,7 +93,10 @@ pub struct Param {
 pub struct RequestBody {
     pub media_types: &'static [&'static str],
     pub description: &'static str,
+    /// A JSON example, or the text of a non-JSON one.
     pub example: Option<&'static str>,
+    /// The JSON Schema of a JSON body, from the Rust type the handler reads.
+    pub schema: Option<SchemaFn>,
 }
 
 /// One documented response.
@@ -101,6 +106,15 @@ pub struct Outcome {
     pub description: String,
     /// The media type of the body, if any.
     pub media_type: Option<&'static str>,
+    /// The JSON Schema of the body, from the Rust type the handler serialises.
+    pub schema: Option<SchemaFn>,
+}
+
+/// Adds a type's schema to a generator's definitions and returns a reference to it.
+pub type SchemaFn = fn(&mut SchemaGenerator) -> Schema;
+
+fn schema_of<T: JsonSchema>(generator: &mut SchemaGenerator) -> Schema {
+    generator.subschema_for::<T>()
 }
 
 /// One route of the JSON API: what is mounted and what is documented, together.
@@ -132,6 +146,7 @@ fn error_meaning(status: u16) -> &'static str {
         }
         409 => "A conflict with what is stored (see the message).",
         413 => "The body is larger than the server's limit for this route.",
+        415 => "The body is not sent as `Content-Type: application/json`.",
         422 => {
             "The body was read but refused; nothing was stored. `problems` lists each bad \
              line: its 1-based number, a `kind` (empty_body, invalid_json, not_an_object, \
@@ -182,18 +197,36 @@ impl ApiRoute {
             location: "query",
             required,
             description,
-            kind: "string",
+            schema: json!({"type": "string"}),
         });
         self
     }
 
-    pub fn header(mut self, name: &'static str, description: &'static str) -> Self {
+    /// A query parameter whose accepted values `schema` describes (a range, a list, a pattern).
+    pub fn query_with(
+        mut self,
+        name: &'static str,
+        required: bool,
+        schema: Value,
+        description: &'static str,
+    ) -> Self {
+        self.params.push(Param {
+            name,
+            location: "query",
+            required,
+            description,
+            schema,
+        });
+        self
+    }
+
+    pub fn header(mut self, name: &'static str, schema: Value, description: &'static str) -> Self {
         self.params.push(Param {
             name,
             location: "header",
             required: false,
             description,
-            kind: "string",
+            schema,
         });
         self
     }
@@ -208,11 +241,27 @@ impl ApiRoute {
             media_types,
             description,
             example,
+            schema: None,
         });
         self
     }
 
-    /// A success (or other non-error) response.
+    /// A JSON body read as a `T`, documented with `T`'s schema; `example` is JSON text.
+    pub fn body_json<T: JsonSchema>(
+        mut self,
+        description: &'static str,
+        example: &'static str,
+    ) -> Self {
+        self.body = Some(RequestBody {
+            media_types: &["application/json"],
+            description,
+            example: Some(example),
+            schema: Some(schema_of::<T>),
+        });
+        self
+    }
+
+    /// A success (or other non-error) response without a JSON body.
     pub fn responds(
         mut self,
         status: u16,
@@ -223,6 +272,18 @@ impl ApiRoute {
             status,
             description: description.to_owned(),
             media_type,
+            schema: None,
+        });
+        self
+    }
+
+    /// A success response whose JSON body is a `T`, documented with `T`'s schema.
+    pub fn responds_json<T: JsonSchema>(mut self, status: u16, description: &'static str) -> Self {
+        self.outcomes.push(Outcome {
+            status,
+            description: description.to_owned(),
+            media_type: Some("application/json"),
+            schema: Some(schema_of::<T>),
         });
         self
     }
@@ -234,6 +295,7 @@ impl ApiRoute {
                 status,
                 description: error_meaning(status).to_owned(),
                 media_type: Some("application/json"),
+                schema: None,
             });
         }
         self
@@ -282,7 +344,8 @@ fn path_param_description(name: &str) -> &'static str {
         "item_id" => "ENACT item id within the dataset.",
         "sha256" => "The frame's SHA-256, 64 lowercase hex digits (from an item's image URLs).",
         "id" => "Submission id, as returned when it was posted.",
-        "token" => "A token's id or its public prefix.",
+        // Not `token`: the secret a client holds is not what revokes it.
+        "token_id_or_prefix" => "A token's id or its public prefix (never its secret).",
         _ => "Path parameter.",
     }
 }
@@ -292,28 +355,35 @@ fn parameter_json(
     location: &str,
     required: bool,
     description: &str,
-    kind: &str,
+    schema: &Value,
 ) -> Value {
     json!({
         "name": name,
         "in": location,
         "required": required,
         "description": description,
-        "schema": {"type": kind},
+        "schema": schema,
     })
 }
 
-fn operation_json(route: &ApiRoute) -> Value {
+fn operation_json(
+    route: &ApiRoute,
+    generator: &mut SchemaGenerator,
+    requests: &mut SchemaGenerator,
+) -> Value {
     let mut parameters: Vec<Value> = route
         .path_params()
         .into_iter()
-        .map(|p| parameter_json(p, "path", true, path_param_description(p), "string"))
+        .map(|p| {
+            let schema = json!({"type": "string", "minLength": 1});
+            parameter_json(p, "path", true, path_param_description(p), &schema)
+        })
         .collect();
     parameters.extend(
         route
             .params
             .iter()
-            .map(|p| parameter_json(p.name, p.location, p.required, p.description, p.kind)),
+            .map(|p| parameter_json(p.name, p.location, p.required, p.description, &p.schema)),
     );
     let mut responses = Map::new();
     for outcome in &route.outcomes {
@@ -321,6 +391,8 @@ fn operation_json(route: &ApiRoute) -> Value {
         if let Some(media) = outcome.media_type {
             let schema = if outcome.status >= 400 {
                 json!({"$ref": "#/components/schemas/Error"})
+            } else if let Some(schema) = outcome.schema {
+                schema(generator).to_value()
             } else if media == "application/json" {
                 json!({"type": "object"})
             } else {
@@ -347,12 +419,15 @@ fn operation_json(route: &ApiRoute) -> Value {
     if let Some(body) = &route.body {
         let mut content = Map::new();
         for media in body.media_types {
-            let mut entry = json!({"schema": {"type": "string"}});
-            if media.ends_with("json") && !media.contains("ndjson") {
-                entry["schema"] = json!({});
-            }
+            let mut entry = match body.schema {
+                Some(schema) => json!({"schema": schema(requests).to_value()}),
+                None => json!({"schema": {"type": "string", "minLength": 1}}),
+            };
             if let Some(example) = body.example {
-                entry["example"] = json!(example);
+                entry["example"] = match body.schema {
+                    Some(_) => serde_json::from_str(example).expect("a JSON example"),
+                    None => json!(example),
+                };
             }
             content.insert((*media).to_owned(), entry);
         }
@@ -367,14 +442,22 @@ fn operation_json(route: &ApiRoute) -> Value {
 
 /// The OpenAPI 3.1 document of `routes`.
 pub fn document(routes: &[ApiRoute]) -> Value {
+    // Response and request types' schemas become components that operations refer to; a
+    // response is described as it is written, a request as it is read (optional fields).
+    let settings = SchemaSettings::draft2020_12().with(|s| {
+        s.definitions_path = "/components/schemas".into();
+        s.meta_schema = None;
+    });
+    let mut generator = settings.clone().for_serialize().into_generator();
+    let mut requests = settings.for_deserialize().into_generator();
     let mut paths = Map::new();
     for route in routes {
         let item = paths
             .entry(route.full_path())
             .or_insert_with(|| Value::Object(Map::new()));
-        item[route.verb.key()] = operation_json(route);
+        item[route.verb.key()] = operation_json(route, &mut generator, &mut requests);
     }
-    json!({
+    let mut document = json!({
         "openapi": "3.1.0",
         "info": {
             "title": "enact-hub API",
@@ -419,7 +502,13 @@ pub fn document(routes: &[ApiRoute]) -> Value {
                 },
             },
         },
-    })
+    });
+    let schemas = document["components"]["schemas"]
+        .as_object_mut()
+        .expect("the document has components.schemas");
+    schemas.extend(generator.take_definitions(true));
+    schemas.extend(requests.take_definitions(true));
+    document
 }
 
 /// The document never changes while the server runs: build it once.

@@ -5,8 +5,9 @@ use axum::body::Body;
 use axum::extract::State;
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
+use serde_json::{Value, json};
 
 use super::extract::{IdempotencyKey, Json, Path, Query};
 use super::openapi::{ApiRoute, Verb};
@@ -39,27 +40,34 @@ pub fn routes() -> Vec<ApiRoute> {
              too) counts against the token's daily and total quotas; admin tokens are exempt.",
         )
         .bearer("submit")
-        .query("model", true, "The model's name on the leaderboard (1 to 200 characters).")
+        .query_with(
+            "model",
+            true,
+            json!({"type": "string", "maxLength": 200, "pattern": "\\S"}),
+            "The model's name on the leaderboard (1 to 200 characters).",
+        )
         .query("description", false, "Free text about the model or run.")
         .query("url", false, "A link to the model or paper.")
         .query("prompt_version", false, "Which prompt produced the answers.")
         .query("notes", false, "Anything else worth recording.")
         .header(
             "Idempotency-Key",
-            "1 to 200 characters. Repeating a request with the same key and body returns the \
+            json!({"type": "string", "pattern": "^[!-~]([ -~]{0,198}[!-~])?$"}),
+            "1 to 200 printable ASCII characters. Repeating a request with the same key and body returns the \
              first submission (200) instead of storing another; a different body is 409.",
         )
         .body(
-            &["application/x-ndjson", "application/json", "text/plain"],
-            "One JSON object per line, or one JSON array. The body limit is the server's \
+            &["text/plain"],
+            "One JSON object per line (sent as `text/plain`, `application/x-ndjson` or \
+             anything else), or one JSON array (`application/json` too). The body limit is the server's \
              `--submission-body-limit` (64 MiB by default, enough for a full ENACT file).",
             Some(
                 "{\"id\": \"cook_bacon_..._forward_world_modeling_ordering_3_steps_...\", \"answer\": \"[2, 1]\"}\n\
                  {\"id\": \"...\", \"answer\": [1, 3, 2]}",
             ),
         )
-        .responds(201, Some("application/json"), "Stored and scored: the submission with its `id`, `href` and `scores`; `Location` names it.")
-        .responds(200, Some("application/json"), "A repeat with the same `Idempotency-Key` and body: the first submission.")
+        .responds_json::<SubmissionView>(201, "Stored and scored: the submission with its `id`, `href` and `scores`; `Location` names it.")
+        .responds_json::<SubmissionView>(200, "A repeat with the same `Idempotency-Key` and body: the first submission.")
         .errors(&[400, 401, 403, 404, 409, 413, 422, 429]),
         ApiRoute::new(Verb::Get, "/submissions/{id}", get_submission, "A submission's scores")
             .describe(
@@ -69,7 +77,7 @@ pub fn routes() -> Vec<ApiRoute> {
                  answers are public; otherwise `items_withheld` says why.",
             )
             .bearer("read_own")
-            .responds(200, Some("application/json"), "The submission.")
+            .responds_json::<SubmissionView>(200, "The submission.")
             .errors(&[401, 403, 404]),
         ApiRoute::new(
             Verb::Patch,
@@ -79,13 +87,12 @@ pub fn routes() -> Vec<ApiRoute> {
         )
         .describe("Mark a baseline, or hide, publish or withdraw a leaderboard row.")
         .bearer("admin")
-        .body(
-            &["application/json"],
+        .body_json::<ListingChange>(
             "`baseline` (bool) and/or `visibility`: `published`, `hidden` or `withdrawn`.",
-            Some("{\"baseline\": true, \"visibility\": \"published\"}"),
+            "{\"baseline\": true, \"visibility\": \"published\"}",
         )
-        .responds(200, Some("application/json"), "The submission as changed.")
-        .errors(&[400, 401, 403, 404, 422]),
+        .responds_json::<SubmissionView>(200, "The submission as changed.")
+        .errors(&[400, 401, 403, 404, 415, 422]),
         ApiRoute::new(
             Verb::Put,
             "/admin/datasets/{dataset}/answers",
@@ -98,29 +105,31 @@ pub fn routes() -> Vec<ApiRoute> {
              both.",
         )
         .bearer("admin")
-        .body(&["application/json"], "`{\"answers\": \"public\" | \"hidden\"}`.", Some("{\"answers\": \"public\"}"))
-        .responds(200, Some("application/json"), "The dataset's setting.")
-        .errors(&[400, 401, 403, 404, 422]),
+        .body_json::<AnswersChange>(
+            "`{\"answers\": \"public\" | \"hidden\"}`.",
+            "{\"answers\": \"public\"}",
+        )
+        .responds_json::<AnswersView>(200, "The dataset's setting.")
+        .errors(&[400, 401, 403, 404, 415, 422]),
         ApiRoute::new(Verb::Post, "/admin/tokens", create_token, "Create an API token")
             .describe(
                 "Creates the account if it is new, and a token for it. The token's secret is in \
                  this response only; the server keeps its SHA-256.",
             )
             .bearer("admin")
-            .body(
-                &["application/json"],
+            .body_json::<TokenRequest>(
                 "`name` (1 to 100 characters), `role` (`submitter`, the default, or `admin`), \
                  optional `daily_quota` and `total_quota` (else the server's defaults).",
-                Some("{\"name\": \"team-a\", \"role\": \"submitter\", \"daily_quota\": 5}"),
+                "{\"name\": \"team-a\", \"role\": \"submitter\", \"daily_quota\": 5}",
             )
-            .responds(201, Some("application/json"), "`id`, `prefix`, `account`, `role`, and `token`, the secret.")
-            .errors(&[400, 401, 403, 409, 422]),
+            .responds_json::<CreatedToken>(201, "`id`, `prefix`, `account`, `role`, and `token`, the secret.")
+            .errors(&[400, 401, 403, 409, 415, 422]),
         ApiRoute::new(Verb::Get, "/admin/tokens", list_tokens, "List API tokens")
             .describe("Every token with its account, role, scopes, quotas, creation, last use and revocation; never a secret.")
             .bearer("admin")
-            .responds(200, Some("application/json"), "The tokens.")
+            .responds_json::<Vec<TokenListing>>(200, "The tokens.")
             .errors(&[401, 403]),
-        ApiRoute::new(Verb::Delete, "/admin/tokens/{token}", revoke_token, "Revoke an API token")
+        ApiRoute::new(Verb::Delete, "/admin/tokens/{token_id_or_prefix}", revoke_token, "Revoke an API token")
             .describe("Takes effect at once: the next request with the token gets 401.")
             .bearer("admin")
             .responds(204, None, "Revoked.")
@@ -187,7 +196,7 @@ fn is_length_limit(e: &axum::Error) -> bool {
 }
 
 /// What the API says about a submission.
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct SubmissionView {
     id: i64,
     href: String,
@@ -211,7 +220,7 @@ struct SubmissionView {
     items_withheld: Option<String>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct ItemVerdictView {
     id: String,
     direction: String,
@@ -278,10 +287,11 @@ impl From<SubmissionRow> for SubmissionView {
 
 async fn submit(
     State(state): State<AppState>,
+    // First, so a caller without a valid token hears 401 whatever else is wrong.
+    caller: Caller,
     Path(dataset): Path<String>,
     Query(query): Query<SubmitQuery>,
     IdempotencyKey(key): IdempotencyKey,
-    caller: Caller,
     headers: HeaderMap,
     body: Body,
 ) -> Result<Response, AppError> {
@@ -325,10 +335,12 @@ async fn get_submission(
     Ok(Json(view))
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct ListingChange {
     baseline: Option<bool>,
+    /// Read as text so a wrong value gets this API's own message.
+    #[schemars(with = "Option<Visibility>")]
     visibility: Option<String>,
 }
 
@@ -350,13 +362,13 @@ async fn update_listing(
     Ok(Json(row.into()))
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct AnswersChange {
     answers: AnswerVisibility,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct AnswersView {
     dataset: String,
     answers: AnswerVisibility,
@@ -378,13 +390,38 @@ async fn set_answers(
     }))
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct TokenRequest {
+    /// The account: 1 to 100 characters once trimmed.
+    #[schemars(length(max = 100), regex(pattern = r"\S"))]
     name: String,
+    #[schemars(with = "Option<Role>")]
     role: Option<String>,
+    #[serde(default, deserialize_with = "whole_number")]
+    #[schemars(with = "Option<i64>", range(min = 0))]
     daily_quota: Option<i64>,
+    #[serde(default, deserialize_with = "whole_number")]
+    #[schemars(with = "Option<i64>", range(min = 0))]
     total_quota: Option<i64>,
+}
+
+/// A JSON number that is a whole number: `5` or `5.0`, both JSON Schema integers (serde's
+/// `i64` alone would refuse the second).
+fn whole_number<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<i64>, D::Error> {
+    let Some(number) = Option::<serde_json::Number>::deserialize(d)? else {
+        return Ok(None);
+    };
+    number
+        .as_i64()
+        .or_else(|| {
+            number
+                .as_f64()
+                .filter(|f| f.fract() == 0.0 && f.abs() <= 9.0e15)
+                .map(|f| f as i64)
+        })
+        .map(Some)
+        .ok_or_else(|| serde::de::Error::custom(format!("{number} is not a whole number")))
 }
 
 async fn create_token(

@@ -70,7 +70,7 @@ fn body_of(verb: Verb, path: &str, records: &[Value], n: usize) -> Option<(Strin
             json!({"name": format!("made-{n}")}).to_string(),
             "application/json",
         )),
-        (Verb::Delete, "/admin/tokens/{token}") => Some((String::new(), "text/plain")),
+        (Verb::Delete, "/admin/tokens/{token_id_or_prefix}") => Some((String::new(), "text/plain")),
         (verb, path) => {
             panic!("the authorization matrix has no request for {verb:?} {path}: add it to body_of")
         }
@@ -125,7 +125,7 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                     "sha256" => sha.clone(),
                     "id" => submission.to_string(),
                     // A fresh token for every revocation.
-                    "token" => {
+                    "token_id_or_prefix" => {
                         api_token(&server.pool, &format!("t{n}"), Role::Submitter, None, None)
                             .await
                             .0

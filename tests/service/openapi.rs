@@ -75,7 +75,7 @@ async fn every_api_route_is_documented_and_every_documented_route_answers() {
             .replace("{item_id}", &item_id)
             .replace("{sha256}", &sha256)
             .replace("{id}", &submission)
-            .replace("{token}", &throwaway.to_string())
+            .replace("{token_id_or_prefix}", &throwaway.to_string())
     };
     for (method, path) in &documented {
         let url = server.url(&fill(path));
@@ -166,9 +166,52 @@ async fn the_document_covers_auth_bodies_parameters_and_errors() {
     }
     assert_eq!(param("Idempotency-Key")["in"], "header");
     assert_eq!(param("dataset")["in"], "path");
-    let content = submit["requestBody"]["content"].as_object().expect("body");
+    let body = &submit["requestBody"];
+    assert_eq!(body["content"]["text/plain"]["schema"]["minLength"], 1);
     assert!(
-        content.contains_key("application/x-ndjson") && content.contains_key("application/json")
+        body["description"]
+            .as_str()
+            .expect("text")
+            .contains("application/x-ndjson")
+    );
+    // Success bodies carry the schema of the Rust type the handler writes, JSON bodies the
+    // schema of the type it reads, and parameters the values the server accepts.
+    let schema_of = |response: &Value| {
+        let reference = response["content"]["application/json"]["schema"]["$ref"]
+            .as_str()
+            .expect("a $ref");
+        let name = reference.trim_start_matches("#/components/schemas/");
+        doc["components"]["schemas"][name].clone()
+    };
+    let created = schema_of(&submit["responses"]["201"]);
+    for field in ["id", "model", "scores", "visibility", "created_at"] {
+        assert!(
+            created["properties"][field].is_object(),
+            "SubmissionView.{field}"
+        );
+    }
+    let token = &doc["paths"]["/api/v1/admin/tokens"]["post"];
+    let request = &token["requestBody"]["content"]["application/json"];
+    assert_eq!(
+        request["example"]["name"], "team-a",
+        "the example is JSON, not a string"
+    );
+    let reference = request["schema"]["$ref"].as_str().expect("a $ref");
+    let name = reference.trim_start_matches("#/components/schemas/");
+    let request = &doc["components"]["schemas"][name];
+    assert_eq!(request["required"], json!(["name"]));
+    assert_eq!(request["additionalProperties"], false);
+    assert!(token["responses"]["415"].is_object());
+    let items = doc["paths"]["/api/v1/datasets/{dataset}/items"]["get"]["parameters"]
+        .as_array()
+        .expect("params");
+    let per_page = items
+        .iter()
+        .find(|p| p["name"] == "per_page")
+        .expect("per_page");
+    assert_eq!(
+        per_page["schema"]["anyOf"],
+        json!([{"type": "integer", "minimum": 1, "maximum": 500}, {"const": ""}])
     );
     let public = &doc["paths"]["/api/v1/datasets"]["get"];
     assert_eq!(public["security"], json!([]));

@@ -15,13 +15,16 @@
 //! - A paired error is labelled with the semantic category of its true component (what the
 //!   answer got wrong about the world); a hallucination with that of its predicted one.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::component::{Component, ComponentKind};
 use super::semantic::{SemanticCategory, category};
 
 /// The paper's structural error classes, in classification order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum StructuralClass {
     PolarityInversion,

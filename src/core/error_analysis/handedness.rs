@@ -10,6 +10,7 @@
 //! Standard errors are binomial, `sqrt(p (1 − p) / n)` over the ratio's denominator; a ratio
 //! with a zero denominator is `null`.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::classify::StepComparison;
@@ -68,7 +69,7 @@ fn proportion(part: usize, whole: usize) -> (Option<f64>, Option<f64>) {
 }
 
 /// One hand's figures.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct HandFigures {
     pub truth: usize,
     pub predicted: usize,

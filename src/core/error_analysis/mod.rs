@@ -19,6 +19,7 @@ pub mod present;
 pub mod semantic;
 pub mod steps;
 
+use schemars::JsonSchema;
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
@@ -193,7 +194,7 @@ fn ratio(part: usize, whole: usize) -> Option<f64> {
 
 /// Component totals: the identities `matched + paired + omissions = truth` and
 /// `matched + paired + hallucinations = predicted` hold.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 pub struct ComponentCounts {
     pub truth: usize,
     pub predicted: usize,
@@ -201,14 +202,14 @@ pub struct ComponentCounts {
 }
 
 /// Left- and right-hand figures.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Handedness {
     pub left: HandFigures,
     pub right: HandFigures,
 }
 
 /// The paper's table of semantically accepted answers that omit parts of transitions.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct AcceptedIncomplete {
     /// Analysed answers the verifier accepts (task accuracy).
     pub accepted_answers: usize,
@@ -225,7 +226,7 @@ pub struct AcceptedIncomplete {
 }
 
 /// A count per structural class.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 pub struct ClassCounts {
     pub polarity_inversion: usize,
     pub predicate_substitution: usize,
@@ -247,7 +248,7 @@ impl ClassCounts {
 }
 
 /// One semantic category's errors by structural class, and their total.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 pub struct CategoryCounts {
     #[serde(flatten)]
     pub classes: ClassCounts,
@@ -255,7 +256,7 @@ pub struct CategoryCounts {
 }
 
 /// Errors per semantic category.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 pub struct SemanticCounts {
     pub spatial_relations: CategoryCounts,
     pub functional_states: CategoryCounts,
@@ -275,7 +276,7 @@ impl SemanticCounts {
 }
 
 /// The figures of one group of answers (all, or one direction).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ErrorFigures {
     pub analysed_answers: usize,
     pub analysed_steps: usize,
@@ -301,7 +302,7 @@ impl ErrorFigures {
 }
 
 /// One wrong component, as shown to people.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ErrorExample {
     pub item: String,
     pub direction: Direction,
@@ -314,7 +315,7 @@ pub struct ErrorExample {
 }
 
 /// A component as signature and sentence.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ExampleChange {
     pub signature: String,
     pub sentence: String,
@@ -330,7 +331,7 @@ impl ExampleChange {
 }
 
 /// The whole analysis of a set of answers.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ErrorAnalysis {
     pub version: u32,
     #[serde(flatten)]
@@ -342,7 +343,7 @@ pub struct ErrorAnalysis {
 }
 
 /// The figures of each direction.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ByDirection {
     pub forward: ErrorFigures,
     pub inverse: ErrorFigures,

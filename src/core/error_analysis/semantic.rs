@@ -5,12 +5,15 @@
 //! (slicing, dicing, cooking into a new object) change what an object is made of, so they are
 //! material states.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::component::{Component, ComponentKind};
 
 /// What kind of world knowledge a wrong component is about.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum SemanticCategory {
     /// Where objects are relative to each other.

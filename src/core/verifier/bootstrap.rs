@@ -2,6 +2,7 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// Resamples the leaderboard uses.
@@ -12,7 +13,7 @@ pub const BOOTSTRAP_SEED: u64 = 0x0045_4e41_4354;
 /// Two-sided confidence level.
 pub const BOOTSTRAP_LEVEL: f64 = 0.95;
 
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ConfidenceInterval {
     pub low: f64,
     pub high: f64,

@@ -1,6 +1,7 @@
 //! Aggregation of verdicts into ENACT's performance report (overall / per direction / per step
 //! length) and its `meta_performance` JSON file.
 
+use schemars::JsonSchema;
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
@@ -22,7 +23,7 @@ pub struct ScoredEntry {
 }
 
 /// Counts and means over one set of items.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct StepPerformance {
     pub count: usize,
     /// Fraction in [0, 1].
@@ -34,7 +35,7 @@ pub struct StepPerformance {
 }
 
 /// A report group: its totals plus a breakdown by step length L (ascending).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct GroupPerformance {
     #[serde(flatten)]
     pub totals: StepPerformance,
@@ -42,7 +43,7 @@ pub struct GroupPerformance {
 }
 
 /// ENACT's `report_overall_score()`: groups with no items are absent.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct PerformanceReport {
     pub overall: Option<GroupPerformance>,
     pub forward_world_modeling: Option<GroupPerformance>,

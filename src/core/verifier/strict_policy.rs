@@ -5,6 +5,7 @@
 //! dropped from the denominator, and a submission cannot bring its own ground truth, type or
 //! key frames: those come from the dataset.
 
+use schemars::JsonSchema;
 use std::collections::HashMap;
 
 use serde::{Deserialize, Serialize};
@@ -19,7 +20,7 @@ use crate::core::verifier::unicode::py_strip;
 use crate::core::verifier::verify::{PairwiseAccuracy, Verdict, VerifyError, verify};
 
 /// How a prediction file is scored.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum ScoringPolicy {
     /// ENACT's own evaluator, quirks included (see `enact_policy`).
@@ -117,7 +118,7 @@ pub enum SubmissionProblem {
 }
 
 /// How much of the dataset the submission answered.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Coverage {
     pub dataset_items: usize,
     /// Items with a prediction line (readable or not).
