@@ -15,6 +15,8 @@ pub struct Browser {
     client: reqwest::Client,
     base: String,
     cookies: Vec<(String, String)>,
+    /// An `Authorization` header sent with every request (an API token on a page).
+    authorization: Option<String>,
 }
 
 impl Browser {
@@ -26,10 +28,29 @@ impl Browser {
                 .expect("client"),
             base: server.url(""),
             cookies: Vec::new(),
+            authorization: None,
         }
     }
 
-    fn cookie_header(&self) -> String {
+    /// Sends `Authorization: Bearer token` with every request, as an API client would.
+    pub fn with_bearer(mut self, token: &str) -> Browser {
+        self.authorization = Some(format!("Bearer {token}"));
+        self
+    }
+
+    fn request(&self, method: reqwest::Method, path: &str) -> reqwest::RequestBuilder {
+        let request = self
+            .client
+            .request(method, format!("{}{path}", self.base))
+            .header(COOKIE, self.cookie_header());
+        match &self.authorization {
+            Some(value) => request.header("authorization", value),
+            None => request,
+        }
+    }
+
+    /// The `Cookie` header this browser sends.
+    pub fn cookie_header(&self) -> String {
         self.cookies
             .iter()
             .map(|(k, v)| format!("{k}={v}"))
@@ -51,9 +72,7 @@ impl Browser {
 
     pub async fn get(&mut self, path: &str) -> reqwest::Response {
         let r = self
-            .client
-            .get(format!("{}{path}", self.base))
-            .header(COOKIE, self.cookie_header())
+            .request(reqwest::Method::GET, path)
             .send()
             .await
             .unwrap_or_else(|e| panic!("GET {path}: {e}"));
@@ -68,9 +87,7 @@ impl Browser {
 
     pub async fn post_form(&mut self, path: &str, fields: &[(&str, &str)]) -> reqwest::Response {
         let r = self
-            .client
-            .post(format!("{}{path}", self.base))
-            .header(COOKIE, self.cookie_header())
+            .request(reqwest::Method::POST, path)
             .header("content-type", "application/x-www-form-urlencoded")
             .body(serde_urlencoded::to_string(fields).expect("form"))
             .send()
@@ -86,11 +103,7 @@ impl Browser {
         csrf: Option<&str>,
         body: &Value,
     ) -> reqwest::Response {
-        let mut request = self
-            .client
-            .post(format!("{}{path}", self.base))
-            .header(COOKIE, self.cookie_header())
-            .json(body);
+        let mut request = self.request(reqwest::Method::POST, path).json(body);
         if let Some(token) = csrf {
             request = request.header("x-csrf-token", token);
         }

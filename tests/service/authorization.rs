@@ -1,6 +1,9 @@
-//! The authorization matrix of the JSON API: every route of the route table (the one the router
-//! and the OpenAPI document are built from) × every kind of caller, with the status each must
-//! get. A route the table below does not know fails the test, so no new route is left out.
+//! The authorization matrices: every route of the JSON API's route table (the one the router
+//! and the OpenAPI document are built from), and every page route found in the source, × every
+//! kind of caller (anonymous, malformed, revoked, submitter and admin tokens, another account,
+//! an annotator's or an admin's session, forms without or with a wrong CSRF token), with the
+//! status each must get. A route the tables below do not know fails the test, so no new route
+//! is left out.
 
 use enact_hub::core::credentials::Role;
 use enact_hub::web::api_routes;
@@ -20,15 +23,18 @@ enum Caller {
     /// Another submitter: someone else's submission.
     Stranger,
     Admin,
+    /// An annotator's browser session, which is no API credential.
+    Annotator,
 }
 
-const CALLERS: [Caller; 6] = [
+const CALLERS: [Caller; 7] = [
     Caller::Anonymous,
     Caller::Malformed,
     Caller::Revoked,
     Caller::Owner,
     Caller::Stranger,
     Caller::Admin,
+    Caller::Annotator,
 ];
 
 /// What a caller must get: success (2xx) or this status.
@@ -44,7 +50,9 @@ fn expected(access: Access, path: &str, caller: Caller) -> Expected {
         Access::Bearer(scope) => scope,
     };
     match caller {
-        Caller::Anonymous | Caller::Malformed | Caller::Revoked => Expected::Status(401),
+        Caller::Anonymous | Caller::Malformed | Caller::Revoked | Caller::Annotator => {
+            Expected::Status(401)
+        }
         Caller::Admin => Expected::Success,
         Caller::Owner | Caller::Stranger if scope == "admin" => Expected::Status(403),
         // Another account's submission is answered like a missing one.
@@ -101,6 +109,11 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
         assert_eq!(reply.status, 201, "{}", reply.text);
         reply.id()
     };
+    let session = {
+        crate::annotate::annotator(&server, "ann", true).await;
+        let (browser, _) = crate::annotate::logged_in_on(&server, "ann", "/annotate").await;
+        browser.cookie_header()
+    };
     let item = records[0]["id"].as_str().expect("id").to_owned();
     let (_, item_json) = server
         .get_json(&format!("/api/v1/datasets/mini/items/{item}"))
@@ -150,6 +163,7 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                 Caller::Owner => call.bearer(&owner),
                 Caller::Stranger => call.bearer(&stranger),
                 Caller::Admin => call.bearer(&admin),
+                Caller::Annotator => call.header("Cookie", &session),
             };
             if let Some((body, content_type)) = body_of(route.verb, route.path, &records, n) {
                 call = call.header("Content-Type", content_type).body(body);
@@ -279,12 +293,17 @@ async fn every_page_route_answers_every_caller_as_the_matrix_says() {
     let item = records[0]["id"].as_str().expect("id").to_owned();
     assign(&server, ann, &[&item]).await;
     assign(&server, root, &[&item]).await;
-    let submission = {
-        let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
-        submit_to(&server, "mini", "model=m", &token, answers(&records, &[]))
-            .await
-            .id()
-    };
+    let (_, submitter) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let (_, admin_token) = api_token(&server.pool, "boss", Role::Admin, None, None).await;
+    let submission = submit_to(
+        &server,
+        "mini",
+        "model=m",
+        &submitter,
+        answers(&records, &[]),
+    )
+    .await
+    .id();
 
     let mut cells = 0;
     for &(verb, pattern, page) in PAGES {
@@ -294,24 +313,48 @@ async fn every_page_route_answers_every_caller_as_the_matrix_says() {
             .replace("{entry}", &submission.to_string())
             .replace("{token}", "not-a-real-secret");
         let post = verb == "POST";
-        // Anonymous, annotator, admin (both with the page's CSRF token), and for forms an admin
-        // without it. Sessions are fresh per cell: logging out must not spoil the next one.
+        // Anonymous, API tokens (which pages do not take), annotator and admin (both with the
+        // page's CSRF token), and for forms an admin without it or with another one. Sessions
+        // are fresh per cell: logging out must not spoil the next one.
         let callers: &[&str] = if post {
-            &["anonymous", "annotator", "admin", "admin without CSRF"]
+            &[
+                "anonymous",
+                "submitter token",
+                "admin token",
+                "annotator",
+                "admin",
+                "admin without CSRF",
+                "admin with a wrong CSRF",
+            ]
         } else {
-            &["anonymous", "annotator", "admin"]
+            &[
+                "anonymous",
+                "submitter token",
+                "admin token",
+                "annotator",
+                "admin",
+            ]
         };
         for &caller in callers {
             let (mut browser, csrf) = match caller {
                 "anonymous" => (crate::annotate::Browser::new(&server), String::new()),
+                "submitter token" => (
+                    crate::annotate::Browser::new(&server).with_bearer(&submitter),
+                    String::new(),
+                ),
+                "admin token" => (
+                    crate::annotate::Browser::new(&server).with_bearer(&admin_token),
+                    String::new(),
+                ),
                 "annotator" => logged_in_on(&server, "ann", "/annotate").await,
                 _ => logged_in_on(&server, "root", "/admin").await,
             };
             let response = if post {
-                let fields: Vec<(&str, &str)> = if caller == "admin without CSRF" {
-                    Vec::new()
-                } else {
-                    vec![("csrf", csrf.as_str())]
+                let wrong = "0".repeat(64);
+                let fields: Vec<(&str, &str)> = match caller {
+                    "admin without CSRF" => Vec::new(),
+                    "admin with a wrong CSRF" => vec![("csrf", wrong.as_str())],
+                    _ => vec![("csrf", csrf.as_str())],
                 };
                 browser.post_form(&path, &fields).await
             } else {
@@ -329,10 +372,13 @@ async fn every_page_route_answers_every_caller_as_the_matrix_says() {
                 (Page::Link, _) => assert_eq!(status, 404, "{what}"),
                 // Refused: the form's own CSRF is missing (403), or the invite is unknown (404).
                 (Page::Form, _) => assert!(status == 403 || status == 404, "{what}"),
-                (Page::Session | Page::Admin, "anonymous") => {
+                // An API token is not a session: as anonymous.
+                (Page::Session | Page::Admin, "anonymous" | "submitter token" | "admin token") => {
                     assert!(status == 401 || (status == 303 && to_login), "{what}")
                 }
-                (_, "admin without CSRF") => assert_eq!(status, 403, "{what}"),
+                (_, "admin without CSRF" | "admin with a wrong CSRF") => {
+                    assert_eq!(status, 403, "{what}")
+                }
                 (Page::Admin, "annotator") => assert_eq!(status, 403, "{what}"),
                 // Allowed: anything but a refusal of who they are (a bad form is 400).
                 // (Logging out succeeds by going to the login page.)
@@ -344,6 +390,7 @@ async fn every_page_route_answers_every_caller_as_the_matrix_says() {
             cells += 1;
         }
     }
-    assert!(cells > 100, "{cells} cells");
+    let forms = PAGES.iter().filter(|(verb, _, _)| *verb == "POST").count();
+    assert_eq!(cells, PAGES.len() * 5 + forms * 2);
     server.stop().await;
 }
