@@ -132,6 +132,30 @@ impl Browser {
     }
 }
 
+/// The files of `/admin/datasets/{dataset}/report.tar{query}` as (path, text), read as `admin`.
+pub async fn report_bundle(
+    admin: &mut Browser,
+    dataset: &str,
+    query: &str,
+) -> Vec<(String, String)> {
+    let bytes = admin
+        .get(&format!("/admin/datasets/{dataset}/report.tar{query}"))
+        .await
+        .bytes()
+        .await
+        .expect("tar");
+    let mut archive = tar::Archive::new(bytes.as_ref());
+    let mut files = Vec::new();
+    for entry in archive.entries().expect("entries") {
+        let mut entry = entry.expect("entry");
+        let path = entry.path().expect("path").display().to_string();
+        let mut text = String::new();
+        std::io::Read::read_to_string(&mut entry, &mut text).expect("utf-8");
+        files.push((path, text));
+    }
+    files
+}
+
 pub fn hidden_csrf(html: &str) -> String {
     let start = html.find("name=\"csrf\" value=\"").expect("a csrf field") + 19;
     html[start..start + 64].to_owned()

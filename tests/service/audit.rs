@@ -8,7 +8,7 @@ use enact_hub::core::credentials::Role;
 use reqwest::{Method, StatusCode};
 use serde_json::{Value, json};
 
-use crate::annotate::{annotator, logged_in_on};
+use crate::annotate::{annotator, logged_in_on, report_bundle};
 use crate::helpers::*;
 
 /// `enact-hub audit --json` with extra arguments, as parsed JSON.
@@ -296,23 +296,12 @@ async fn every_audited_action_names_its_actor_target_and_dataset() {
     );
 
     // The report bundle carries the dataset's entries.
-    let bytes = root
-        .get("/admin/datasets/mini/report.tar?bootstrap=0")
+    let audit_csv = report_bundle(&mut root, "mini", "?bootstrap=0")
         .await
-        .bytes()
-        .await
-        .expect("tar");
-    let mut archive = tar::Archive::new(bytes.as_ref());
-    let mut audit_csv = None;
-    for file in archive.entries().expect("entries") {
-        let mut file = file.expect("entry");
-        if file.path().expect("path").ends_with("audit.csv") {
-            let mut text = String::new();
-            std::io::Read::read_to_string(&mut file, &mut text).expect("utf-8");
-            audit_csv = Some(text);
-        }
-    }
-    let audit_csv = audit_csv.expect("audit.csv in the bundle");
+        .into_iter()
+        .find(|(path, _)| path.ends_with("/audit.csv"))
+        .map(|(_, text)| text)
+        .expect("audit.csv in the bundle");
     assert!(audit_csv.contains("\nid,at,actor_kind,actor,action,target,dataset,detail\n"));
     assert!(audit_csv.contains(&format!(
         "submission.create,submission {submission},mini,model m1"

@@ -6,7 +6,7 @@ use enact_hub::core::credentials::Role;
 use reqwest::StatusCode;
 use serde_json::Value;
 
-use crate::annotate::{annotator, assign, logged_in_on};
+use crate::annotate::{annotator, assign, logged_in_on, report_bundle};
 use crate::helpers::*;
 
 const MODEL: &str = "<script>alert('m')</script>&x";
@@ -91,19 +91,8 @@ async fn markup_from_users_is_text_everywhere() {
     let (status, html) = root.text("/admin/datasets/mini/report?bootstrap=0").await;
     assert_eq!(status, StatusCode::OK);
     escaped("/admin/datasets/mini/report", &html, true);
-    let bytes = root
-        .get("/admin/datasets/mini/report.tar?bootstrap=0")
-        .await
-        .bytes()
-        .await
-        .expect("tar");
-    let mut archive = tar::Archive::new(bytes.as_ref());
     let mut files = 0;
-    for entry in archive.entries().expect("entries") {
-        let mut entry = entry.expect("entry");
-        let path = entry.path().expect("path").display().to_string();
-        let mut text = String::new();
-        std::io::Read::read_to_string(&mut entry, &mut text).expect("utf-8");
+    for (path, text) in report_bundle(&mut root, "mini", "?bootstrap=0").await {
         if path.ends_with(".svg") || path.ends_with(".md") {
             // Drawn or rendered as markup: escaped.
             escaped(&path, &text, path.ends_with(".md"));
