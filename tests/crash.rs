@@ -30,7 +30,7 @@ use sha2::{Digest, Sha256};
 use sqlx::SqlitePool;
 use tempfile::TempDir;
 
-use helpers::{write_balanced_release, write_qa_file};
+use helpers::{answers, write_balanced_release, write_qa_file};
 
 fn kills() -> usize {
     std::env::var("ENACT_CRASH_KILLS")
@@ -287,26 +287,6 @@ async fn seeded(dir: &TempDir, per_cell: u32) -> (PathBuf, Vec<Value>) {
     (db, records)
 }
 
-/// A submission body answering every item, item `wrong` reversed.
-fn body(records: &[Value], wrong: usize) -> String {
-    records
-        .iter()
-        .enumerate()
-        .map(|(i, r)| {
-            let mut answer: Vec<u64> = r["gt_answer"]
-                .as_array()
-                .expect("gt")
-                .iter()
-                .map(|v| v.as_u64().expect("label"))
-                .collect();
-            if i == wrong {
-                answer.reverse();
-            }
-            json!({"id": r["id"], "answer": answer}).to_string() + "\n"
-        })
-        .collect()
-}
-
 /// Submissions posted one after another while the server is killed at a random moment; after
 /// each restart every acknowledged submission reads back as it was acknowledged.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -369,7 +349,7 @@ async fn submissions_acknowledged_before_a_kill_survive_it() {
             tokio::spawn(async move {
                 let mut done = Vec::new();
                 for n in first.. {
-                    let body = body(&records, n % records.len());
+                    let body = answers(&records, &[n % records.len()]);
                     let model = format!("m{n}");
                     let reply = client
                         .post(format!(
