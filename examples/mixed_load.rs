@@ -4,7 +4,8 @@
 //! passwords, splits the dataset over their queues and issues 10 submitter tokens, writing
 //! the accounts to a JSON file. `mixed_load run --base URL --accounts FILE` then plays, for
 //! `--seconds`:
-//! - annotators: log in, open their next item, save one or two drafts, submit, repeat;
+//! - annotators: log in, open their next item, save one or two drafts, submit (one in ten
+//!   flagged instead), repeat;
 //! - submitters: POST a full-size submission (every item of the dataset), pause, repeat;
 //! - readers: the leaderboard page and JSON, item lists, item JSON and frames.
 //!
@@ -216,6 +217,22 @@ async fn annotator(load: Load, name: String, slots: Arc<BTreeMap<String, usize>>
             .await;
         }
         pause(&mut rng, 300..1500).await;
+        if rng.random_bool(0.1) {
+            // Now and then an item is flagged instead (its write starts with a read).
+            let form = [
+                ("csrf", csrf.as_str()),
+                ("reason", "unclear"),
+                ("action", "flag"),
+            ];
+            load.send(
+                "POST /annotate/{dataset}/{item}/skip",
+                load.post(&format!("{item_path}/skip"))
+                    .header(COOKIE, &session)
+                    .form(&form),
+            )
+            .await;
+            continue;
+        }
         let body = json!({"slots": answer, "counts": {"placements": n, "swaps": 0, "clears": 0, "undos": 0}});
         load.send(
             "POST /annotate/{dataset}/{item}/submit",

@@ -139,7 +139,10 @@ impl Hub {
         Ok(self.pool.acquire().await?)
     }
 
+    /// A write transaction. IMMEDIATE takes SQLite's write lock at once, waiting for it under
+    /// the busy timeout; a deferred one that read first and wrote after another writer's commit
+    /// would fail at once with `database is locked` instead of queueing.
     async fn begin(&self) -> Result<sqlx::Transaction<'static, sqlx::Sqlite>, AppError> {
-        Ok(self.pool.begin().await?)
+        Ok(self.pool.begin_with("BEGIN IMMEDIATE").await?)
     }
 }

@@ -842,3 +842,69 @@ async fn admins_create_annotators_and_split_datasets_evenly() {
     );
     server.stop().await;
 }
+
+/// Flags write after they read (the draft, for its telemetry). With other writers committing
+/// in between, a deferred transaction failed at once with `database is locked` (a 500 for
+/// about half the flags under the mixed load); write transactions now take the lock first and
+/// queue for it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn flags_queue_behind_concurrent_submissions_instead_of_failing() {
+    let server = spawn_app_with(|pool, dir| async move {
+        let root = dir.join("release");
+        write_balanced_release(&root, &[3, 4], 20);
+        import(&pool, &root, &options("mini")).await;
+    })
+    .await;
+    let records: Vec<Value> = {
+        let text = std::fs::read_to_string(
+            server
+                .db_path()
+                .with_file_name("release/QA/enact_ordering.jsonl"),
+        )
+        .expect("release");
+        text.lines()
+            .map(|l| serde_json::from_str(l).expect("json"))
+            .collect()
+    };
+    let (_, token) = api_token(
+        &server.pool,
+        "team",
+        enact_hub::core::credentials::Role::Admin,
+        None,
+        None,
+    )
+    .await;
+    let (alice, csrf, ids) = alice_with_every_item(&server, &records).await;
+    let server = std::sync::Arc::new(server);
+    let writers: Vec<_> = (0..3)
+        .map(|w| {
+            let (server, token, body) = (server.clone(), token.clone(), answers(&records, &[w]));
+            tokio::spawn(async move {
+                for k in 0..8 {
+                    let reply = submit_to(
+                        &server,
+                        "mini",
+                        &format!("model=w{w}-{k}"),
+                        &token,
+                        body.clone(),
+                    )
+                    .await;
+                    assert_eq!(reply.status, 201, "{}", reply.text);
+                }
+            })
+        })
+        .collect();
+    let mut alice = alice;
+    for item in ids.iter().take(40) {
+        let r = alice
+            .post_form(
+                &format!("/annotate/mini/{item}/skip"),
+                &[("csrf", &csrf), ("reason", "unclear"), ("action", "flag")],
+            )
+            .await;
+        assert_eq!(r.status(), StatusCode::SEE_OTHER, "flag of {item}");
+    }
+    for writer in writers {
+        writer.await.expect("writer");
+    }
+}
