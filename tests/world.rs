@@ -401,3 +401,119 @@ fn key_frame_changes_are_visible_at_thumbnail_size() {
         report.join("\n")
     );
 }
+
+fn enact_hub(args: &[&std::ffi::OsStr]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_enact-hub"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// The paper's camera ablation in small: the same activity and seed rendered with a 30° field
+/// of view keeps every item of the baseline (the same QA file, byte for byte) with images of
+/// its own; a variant missing a key frame or replaying other tasks is refused by name.
+#[test]
+fn a_variant_release_keeps_the_baseline_items_with_its_own_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name);
+    let mut baseline = options(Activity::SliceFruit, 3);
+    baseline.camera.image_size = 96;
+    let simulation = write(&path("base-replay"), &baseline);
+    let mut narrow = baseline.clone();
+    narrow.camera.fov_deg = 30.0;
+    write(&path("fov-replay"), &narrow);
+
+    let out = enact_hub(&[
+        "generate".as_ref(),
+        path("base-replay").as_os_str(),
+        "--out".as_ref(),
+        path("base").as_os_str(),
+        "--steps".as_ref(),
+        "3..4".as_ref(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let variant = |replay: &str, out: &str| {
+        enact_hub(&[
+            "generate".as_ref(),
+            path(replay).as_os_str(),
+            "--out".as_ref(),
+            path(out).as_os_str(),
+            "--items-from".as_ref(),
+            path("base").as_os_str(),
+        ])
+    };
+    let out = variant("fov-replay", "fov");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let qa = |release: &str| std::fs::read(path(release).join("QA/enact_ordering.jsonl")).unwrap();
+    assert_eq!(qa("fov"), qa("base"), "the variant changes no item");
+    let text = String::from_utf8(qa("base")).unwrap();
+    let (mut images, mut differing) = (0, 0);
+    for line in text.lines() {
+        let item: serde_json::Value = serde_json::from_str(line).unwrap();
+        for image in item["images"].as_array().unwrap() {
+            let image = image.as_str().unwrap();
+            images += 1;
+            differing += usize::from(
+                std::fs::read(path("base").join(image)).unwrap()
+                    != std::fs::read(path("fov").join(image)).unwrap(),
+            );
+        }
+    }
+    assert!(images > 0);
+    assert_eq!(
+        differing, images,
+        "every image is the variant's own rendering"
+    );
+
+    // A key frame the variant has no image of is named.
+    let frame = simulation.key_frames[1].to_string();
+    let missing = path("fov-replay")
+        .join(&simulation.task_name)
+        .join("external_sensor1")
+        .join(format!("{:05}.png", simulation.key_frames[1]));
+    std::fs::remove_file(&missing).unwrap();
+    let out = variant("fov-replay", "fov-missing");
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(&format!("key frame {frame} has no image")),
+        "{stderr}"
+    );
+    assert!(
+        !path("fov-missing").exists(),
+        "nothing written before the refusal"
+    );
+
+    // Another seed replays other tasks.
+    write(&path("other-replay"), &options(Activity::SliceFruit, 4));
+    let out = variant("other-replay", "other");
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(&simulation.task_name) && stderr.contains("same tasks"),
+        "{stderr}"
+    );
+
+    // Sampling options mean nothing for a variant.
+    let out = enact_hub(&[
+        "generate".as_ref(),
+        path("fov-replay").as_os_str(),
+        "--out".as_ref(),
+        path("x").as_os_str(),
+        "--items-from".as_ref(),
+        path("base").as_os_str(),
+        "--seed".as_ref(),
+        "7".as_ref(),
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot be used with"));
+}

@@ -104,6 +104,17 @@ struct GenerateArgs {
     /// instead of ENACT's code (`*_world_modeling_{L}_steps`).
     #[arg(long)]
     ordering_type_names: bool,
+    /// A variant of this release: its items unchanged (ids, questions, answers, key frames),
+    /// each image drawn from the replay's frame instead. No segmentation or sampling is done.
+    #[arg(
+        long,
+        value_name = "BASELINE_DATA_DIR",
+        conflicts_with_all = [
+            "seed", "num_to_sample", "steps", "preset", "cosine_threshold", "min_gap",
+            "stability_frames", "ordering_type_names",
+        ]
+    )]
+    items_from: Option<PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -1172,7 +1183,36 @@ fn parse_steps(text: &str) -> anyhow::Result<Vec<usize>> {
     Ok(steps)
 }
 
+/// `generate --items-from`: the baseline's items with the replay's images.
+async fn generate_variant(args: &GenerateArgs, baseline: PathBuf) -> anyhow::Result<ExitCode> {
+    let (replayed, out) = (args.replayed.clone(), args.out.clone());
+    let started = std::time::Instant::now();
+    let done = tokio::task::spawn_blocking(move || {
+        crate::core::pipeline::variant::items_from(&replayed, &baseline, &out)
+    })
+    .await
+    .context("generation task failed")??;
+    eprintln!(
+        "wrote {} items of {} tasks with {} images from {} into {} in {:.1} s",
+        done.items,
+        done.tasks,
+        done.images,
+        args.replayed.display(),
+        args.out.display(),
+        started.elapsed().as_secs_f64()
+    );
+    eprintln!(
+        "import it with: enact-hub import {} --dataset NAME --scene-graphs {}",
+        args.out.display(),
+        args.replayed.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
 async fn generate(args: GenerateArgs) -> anyhow::Result<ExitCode> {
+    if let Some(baseline) = args.items_from.clone() {
+        return generate_variant(&args, baseline).await;
+    }
     use crate::core::pipeline::{
         GenerateOptions, GenerateProgress, SegmentationParams, TypeNaming,
     };

@@ -1,7 +1,8 @@
 //! ENACT's data pipeline in Rust: key-frame segmentation of replayed tasks ([`segment`]), the
 //! KFTS transition DAG with exact path counts and uniform path sampling ([`kfts`]), forward and
 //! inverse ordering items ([`qa`]), and [`generate`], which runs all of it over a
-//! `replayed_activities/` folder and writes an ENACT-layout release ([`release`]).
+//! `replayed_activities/` folder and writes an ENACT-layout release ([`release`]);
+//! [`variant`] re-renders a baseline release's items from another replay of the same tasks.
 //!
 //! Randomness is seeded ChaCha8, so a run is reproducible; it does not reproduce ENACT's
 //! Python `random` stream (which is not reproducible across Python hash seeds anyway).
@@ -12,6 +13,7 @@ pub(crate) mod prompt;
 pub mod qa;
 pub mod release;
 pub mod segment;
+pub mod variant;
 
 use std::path::{Path, PathBuf};
 
@@ -172,6 +174,17 @@ pub enum PipelineError {
         #[source]
         source: serde_json::Error,
     },
+    #[error("{path}, line {line}: {message}")]
+    Baseline {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
+    #[error(
+        "task {task} of the baseline is not in {dir}: a variant must replay the same tasks \
+         (same activity and seed)"
+    )]
+    TaskNotInVariant { task: String, dir: PathBuf },
     #[error("the bundled label font is unreadable: {0}")]
     Font(#[from] ab_glyph::InvalidFont),
 }

@@ -23,7 +23,7 @@ pub struct TaskRelease<'a> {
     pub items: &'a [&'a GeneratedItem],
 }
 
-fn create_dir(dir: &Path) -> Result<(), PipelineError> {
+pub(crate) fn create_dir(dir: &Path) -> Result<(), PipelineError> {
     std::fs::create_dir_all(dir).map_err(|source| PipelineError::Write {
         path: dir.to_path_buf(),
         source,
@@ -49,7 +49,7 @@ fn write_json<T: Serialize + ?Sized>(path: &Path, value: &T) -> Result<(), Pipel
     writer.flush().map_err(write)
 }
 
-fn copy_file(from: &Path, to: &Path) -> Result<(), PipelineError> {
+pub(crate) fn copy_file(from: &Path, to: &Path) -> Result<(), PipelineError> {
     std::fs::copy(from, to)
         .map(|_| ())
         .map_err(|source| PipelineError::Write {
@@ -59,7 +59,7 @@ fn copy_file(from: &Path, to: &Path) -> Result<(), PipelineError> {
 }
 
 /// Whether two paths name the same existing folder.
-fn same_dir(a: &Path, b: &Path) -> bool {
+pub(crate) fn same_dir(a: &Path, b: &Path) -> bool {
     match (a.canonicalize(), b.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
         _ => false,
@@ -67,7 +67,7 @@ fn same_dir(a: &Path, b: &Path) -> bool {
 }
 
 /// Draws `label` on the frame image `source` and saves it as `target` (PNG).
-fn write_labelled(
+pub(crate) fn write_labelled(
     task: &str,
     frame: &str,
     source: &Path,
