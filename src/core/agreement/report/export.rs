@@ -99,10 +99,21 @@ fn percent(value: Option<f64>) -> String {
 }
 
 fn csv_field(text: &str) -> String {
+    // A spreadsheet runs a cell that starts with = + - @ (or a tab or CR) as a formula, and
+    // model names, descriptions and reasons are anyone's text: such a cell gets a leading `'`
+    // (OWASP's advice), unless it is a number or the lone `-` of a missing value.
+    let formula = text.starts_with(['=', '+', '-', '@', '\t', '\r'])
+        && text != "-"
+        && text.parse::<f64>().is_err();
+    let text: std::borrow::Cow<'_, str> = if formula {
+        format!("'{text}").into()
+    } else {
+        text.into()
+    };
     if text.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", text.replace('"', "\"\""))
     } else {
-        text.to_owned()
+        text.into_owned()
     }
 }
 
@@ -747,4 +758,23 @@ pub fn tar_archive(folder: &str, files: &[BundleFile]) -> std::io::Result<Vec<u8
         )?;
     }
     builder.into_inner()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::csv_field;
+
+    #[test]
+    fn csv_fields_that_a_spreadsheet_would_run_are_made_text() {
+        assert_eq!(csv_field("=HYPERLINK(\"x\")"), "\"'=HYPERLINK(\"\"x\"\")\"");
+        assert_eq!(csv_field("+cmd|' /C calc'!A0"), "'+cmd|' /C calc'!A0");
+        assert_eq!(csv_field("@SUM(A1)"), "'@SUM(A1)");
+        assert_eq!(csv_field("-2+3"), "'-2+3");
+        // Numbers, the missing-value dash and ordinary text stay as they are.
+        assert_eq!(csv_field("-0.125"), "-0.125");
+        assert_eq!(csv_field("+1e-3"), "+1e-3");
+        assert_eq!(csv_field("-"), "-");
+        assert_eq!(csv_field("gpt, mini"), "\"gpt, mini\"");
+        assert_eq!(csv_field("model-1"), "model-1");
+    }
 }
