@@ -517,3 +517,59 @@ fn a_variant_release_keeps_the_baseline_items_with_its_own_images() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot be used with"));
 }
+
+/// ENACT's download layout (QA/ beside replayed_activities/) imports with one command: the
+/// scene graphs are found and every item is scored from them; `--no-scene-graphs` skips them.
+#[test]
+fn a_release_with_its_replays_imports_them_without_being_told() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name);
+    let mut o = options(Activity::MakeTea, 2);
+    o.camera.image_size = 96;
+    write(&path("replay"), &o);
+    let out = enact_hub(&[
+        "generate".as_ref(),
+        path("replay").as_os_str(),
+        "--out".as_ref(),
+        path("release").as_os_str(),
+        "--steps".as_ref(),
+        "3".as_ref(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (release, db) = (path("release"), path("hub.db"));
+    let import = |dataset: &str, extra: &[&str]| {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "import".as_ref(),
+            release.as_os_str(),
+            "--db".as_ref(),
+            db.as_os_str(),
+            "--dataset".as_ref(),
+            dataset.as_ref(),
+            "--json".as_ref(),
+        ];
+        args.extend(extra.iter().map(|a| std::ffi::OsStr::new(*a)));
+        let out = enact_hub(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (report, String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (found, stderr) = import("found", &[]);
+    let items = found["rows"].as_u64().unwrap();
+    assert!(items > 0);
+    assert_eq!(found["scene_graph_items"], items, "{found}");
+    assert!(
+        stderr.contains("replayed_activities (the release's own"),
+        "{stderr}"
+    );
+    let (skipped, _) = import("skipped", &["--no-scene-graphs"]);
+    assert_eq!(skipped["scene_graph_items"], 0, "{skipped}");
+    assert_eq!(skipped["rows"], items);
+}

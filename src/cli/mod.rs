@@ -9,7 +9,9 @@ use std::time::Duration;
 use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
 
-use crate::app::import::{ImportError, ImportOptions, SkippedLine, import_release};
+use crate::app::import::{
+    ImportError, ImportOptions, ReleaseLocation, SkippedLine, import_release,
+};
 use crate::app::{self, AppError, Hub, Quotas};
 use crate::core::audit::Actor;
 use crate::core::credentials::Role;
@@ -357,9 +359,13 @@ struct ImportArgs {
     #[arg(long)]
     replace: bool,
     /// ENACT's replayed_activities folder: compute transition signatures from
-    /// {task}/scene_graph_0.json for semantic scoring.
+    /// {task}/scene_graph_0.json for semantic scoring. Default: the release's own
+    /// replayed_activities/ beside QA/, when there is one.
     #[arg(long, value_name = "REPLAYED_DIR")]
     scene_graphs: Option<PathBuf>,
+    /// Do not read the release's replayed_activities/ even if it has one.
+    #[arg(long, conflicts_with = "scene_graphs")]
+    no_scene_graphs: bool,
     /// Print the full report as JSON on standard output.
     #[arg(long)]
     json: bool,
@@ -689,13 +695,29 @@ async fn import(args: ImportArgs) -> anyhow::Result<ExitCode> {
         .dataset
         .clone()
         .unwrap_or_else(|| default_dataset_name(&args.data));
+    let scene_graphs = match (&args.scene_graphs, args.no_scene_graphs) {
+        (Some(dir), _) => Some(dir.clone()),
+        (None, true) => None,
+        // ENACT's download layout: QA/ beside replayed_activities/ (and segmented_activities/).
+        (None, false) => ReleaseLocation::resolve(&args.data)
+            .ok()
+            .map(|location| location.root.join("replayed_activities"))
+            .filter(|dir| dir.is_dir())
+            .inspect(|dir| {
+                eprintln!(
+                    "scene graphs: {} (the release's own; --scene-graphs DIR overrides, \
+                     --no-scene-graphs skips)",
+                    dir.display()
+                );
+            }),
+    };
     let hub = open(&args.db.db).await?;
     let options = ImportOptions {
         dataset,
         skip_invalid: args.skip_invalid,
         replace: args.replace,
         progress: std::io::stderr().is_terminal(),
-        scene_graphs: args.scene_graphs.clone(),
+        scene_graphs,
     };
     let result = import_release(&hub, &operator(), &args.data, &options).await;
     hub.close().await;
