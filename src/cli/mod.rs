@@ -1300,10 +1300,7 @@ async fn generate(args: GenerateArgs) -> anyhow::Result<ExitCode> {
         args.out.display(),
         started.elapsed().as_secs_f64()
     );
-    eprintln!(
-        "import it with: enact-hub import {} --scene-graphs {}",
-        args.out.display(),
-        args.out.join("replayed_activities").display()
-    );
+    // Import finds the release's own replayed_activities/ by itself.
+    eprintln!("import it with: enact-hub import {}", args.out.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -67,7 +67,7 @@ pub(crate) fn same_dir(a: &Path, b: &Path) -> bool {
 }
 
 /// Draws `label` on the frame image `source` and saves it as `target` (PNG).
-pub(crate) fn write_labelled(
+fn write_labelled(
     task: &str,
     frame: &str,
     source: &Path,
@@ -144,16 +144,29 @@ pub(crate) fn write_release(
         }
     }
 
-    // QA/images/{type}/{task}/: each distinct (frame, label) is drawn once, then copied.
-    let mut targets: BTreeMap<(&str, &str), Vec<PathBuf>> = BTreeMap::new();
+    // QA/images/{type}/{task}/
+    let mut targets = LabelledTargets::new();
     for item in release.items {
         for image in &item.labelled_images {
             targets
-                .entry((image.frame.as_str(), image.label.as_str()))
+                .entry((task, image.frame.as_str(), image.label.clone()))
                 .or_default()
                 .push(out.join(&image.path));
         }
     }
+    write_labelled_targets(release.replayed_dir, &targets, font)
+}
+
+/// Item images to write: (task, frame, label) -> the files that show that frame so labelled.
+pub(crate) type LabelledTargets<'a> = BTreeMap<(&'a str, &'a str, String), Vec<PathBuf>>;
+
+/// Draws each distinct labelled frame of `targets` once, from `replayed_dir`'s image of it,
+/// and copies it to its other files; returns the number of files written.
+pub(crate) fn write_labelled_targets(
+    replayed_dir: &Path,
+    targets: &LabelledTargets<'_>,
+    font: &LabelFont,
+) -> Result<usize, PipelineError> {
     let dirs: std::collections::BTreeSet<&Path> = targets
         .values()
         .flatten()
@@ -162,12 +175,14 @@ pub(crate) fn write_release(
     for dir in dirs {
         create_dir(dir)?;
     }
-    targets.par_iter().try_for_each(|((frame, label), paths)| {
-        let source = frame_image_path(release.replayed_dir, task, frame);
-        let (first, rest) = paths.split_first().expect("every entry has a path");
-        write_labelled(task, frame, &source, label, first, font)?;
-        rest.iter().try_for_each(|p| copy_file(first, p))
-    })?;
+    targets
+        .par_iter()
+        .try_for_each(|((task, frame, label), paths)| {
+            let source = frame_image_path(replayed_dir, task, frame);
+            let (first, rest) = paths.split_first().expect("every entry has a path");
+            write_labelled(task, frame, &source, label, first, font)?;
+            rest.iter().try_for_each(|p| copy_file(first, p))
+        })?;
     Ok(targets.values().map(Vec::len).sum())
 }
 

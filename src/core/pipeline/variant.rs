@@ -3,14 +3,14 @@
 //! `QA/enact_ordering.jsonl` is the baseline's, byte for byte, and only the images change:
 //! each is drawn, with its label, from the variant replay's image of the same key frame.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
-
-use rayon::prelude::*;
 
 use crate::core::dataset::{Direction, QaItem, parse_release_line};
 use crate::core::pipeline::label::LabelFont;
-use crate::core::pipeline::release::{copy_file, create_dir, same_dir, write_labelled};
+use crate::core::pipeline::release::{
+    LabelledTargets, copy_file, create_dir, same_dir, write_labelled_targets,
+};
 use crate::core::pipeline::{PipelineError, frame_image_path, task_names};
 use crate::core::release::QA_FILE;
 
@@ -93,7 +93,7 @@ pub fn items_from(
         });
     }
     // (task, frame, label) -> the images showing it.
-    let mut targets: BTreeMap<(&str, &str, String), Vec<PathBuf>> = BTreeMap::new();
+    let mut targets = LabelledTargets::new();
     for item in &items {
         for (position, frame) in image_frames(item).into_iter().enumerate() {
             let source = frame_image_path(variant_replayed, &item.task_name, frame);
@@ -111,23 +111,7 @@ pub fn items_from(
         }
     }
 
-    let font = LabelFont::load()?;
-    let dirs: BTreeSet<&Path> = targets
-        .values()
-        .flatten()
-        .filter_map(|p| p.parent())
-        .collect();
-    for dir in dirs {
-        create_dir(dir)?;
-    }
-    targets
-        .par_iter()
-        .try_for_each(|((task, frame, label), paths)| {
-            let source = frame_image_path(variant_replayed, task, frame);
-            let (first, rest) = paths.split_first().expect("every entry has a path");
-            write_labelled(task, frame, &source, label, first, &font)?;
-            rest.iter().try_for_each(|p| copy_file(first, p))
-        })?;
+    let images = write_labelled_targets(variant_replayed, &targets, &LabelFont::load()?)?;
     let jsonl_path = out.join(QA_FILE);
     if let Some(dir) = jsonl_path.parent() {
         create_dir(dir)?;
@@ -138,7 +122,7 @@ pub fn items_from(
     Ok(VariantRelease {
         items: items.len(),
         tasks: tasks.len(),
-        images: targets.values().map(Vec::len).sum(),
+        images,
         jsonl_path,
     })
 }
