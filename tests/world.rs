@@ -409,6 +409,23 @@ fn enact_hub(args: &[&std::ffi::OsStr]) -> std::process::Output {
         .unwrap()
 }
 
+/// `enact-hub generate REPLAY --out RELEASE --steps STEPS`, which must succeed.
+fn generate(replay: &Path, release: &Path, steps: &str) {
+    let out = enact_hub(&[
+        "generate".as_ref(),
+        replay.as_os_str(),
+        "--out".as_ref(),
+        release.as_os_str(),
+        "--steps".as_ref(),
+        steps.as_ref(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// The paper's camera ablation in small: the same activity and seed rendered with a 30° field
 /// of view keeps every item of the baseline (the same QA file, byte for byte) with images of
 /// its own; a variant missing a key frame or replaying other tasks is refused by name.
@@ -423,19 +440,7 @@ fn a_variant_release_keeps_the_baseline_items_with_its_own_images() {
     narrow.camera.fov_deg = 30.0;
     write(&path("fov-replay"), &narrow);
 
-    let out = enact_hub(&[
-        "generate".as_ref(),
-        path("base-replay").as_os_str(),
-        "--out".as_ref(),
-        path("base").as_os_str(),
-        "--steps".as_ref(),
-        "3..4".as_ref(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    generate(&path("base-replay"), &path("base"), "3..4");
     let variant = |replay: &str, out: &str| {
         enact_hub(&[
             "generate".as_ref(),
@@ -527,19 +532,7 @@ fn a_release_with_its_replays_imports_them_without_being_told() {
     let mut o = options(Activity::MakeTea, 2);
     o.camera.image_size = 96;
     write(&path("replay"), &o);
-    let out = enact_hub(&[
-        "generate".as_ref(),
-        path("replay").as_os_str(),
-        "--out".as_ref(),
-        path("release").as_os_str(),
-        "--steps".as_ref(),
-        "3".as_ref(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    generate(&path("replay"), &path("release"), "3");
     let (release, db) = (path("release"), path("hub.db"));
     let import = |dataset: &str, extra: &[&str]| {
         let mut args: Vec<&std::ffi::OsStr> = vec![
