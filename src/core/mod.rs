@@ -22,6 +22,8 @@
 //! - [`credentials`]: API tokens, session and invite tokens, passwords, roles, scopes and the
 //!   naming rules of accounts.
 //! - [`release`]: a stored dataset written back out as an ENACT release archive.
+//! - [`study`]: ablation studies: variant datasets aligned with a baseline, the Welch, paired t
+//!   and sign tests per variant and direction, the paper's heatmap and handedness panel.
 //! - [`world`]: a synthetic household world and its BEHAVIOR-format replays; [`demo`] plays it
 //!   through the pipeline for `serve --demo`.
 
@@ -38,6 +40,7 @@ pub mod release;
 pub mod scene_graph;
 pub mod scoring;
 pub mod semantics;
+pub mod study;
 pub mod submission;
 pub mod verifier;
 pub mod world;

@@ -2,7 +2,7 @@
 //! row for the structural classes, and grouped bars (one per row) for semantic categories and
 //! for hand precision, recall and mixing with standard-error whiskers.
 
-use super::{ErrorFigures, Hand, HandFigures, SemanticCategory, StructuralClass};
+use super::{ErrorFigures, Hand, HandFigures, Handedness, SemanticCategory, StructuralClass};
 
 /// Series colours, chosen to stay apart for colour-blind readers (Okabe–Ito).
 pub const PALETTE: [&str; 8] = [
@@ -180,6 +180,12 @@ pub fn semantic_chart(rows: &[(&str, &ErrorFigures)]) -> BarChart {
 
 /// Per hand and measure, each row's value with its standard error.
 pub fn hand_chart(rows: &[(&str, &ErrorFigures)]) -> BarChart {
+    let hands: Vec<(&str, &Handedness)> = rows.iter().map(|(l, f)| (*l, &f.handedness)).collect();
+    hand_chart_of(&hands)
+}
+
+/// [`hand_chart`] of hand figures alone.
+pub fn hand_chart_of(rows: &[(&str, &Handedness)]) -> BarChart {
     type Pick = fn(&HandFigures) -> (Option<f64>, Option<f64>);
     let measures: [(&str, Pick); 3] = [
         ("precision", |h| (h.precision, h.precision_se)),
@@ -199,8 +205,8 @@ pub fn hand_chart(rows: &[(&str, &ErrorFigures)]) -> BarChart {
         let (label, f) = rows[s];
         let (hand, pick) = picks[g];
         let figures = match hand {
-            Hand::Left => &f.handedness.left,
-            Hand::Right => &f.handedness.right,
+            Hand::Left => &f.left,
+            Hand::Right => &f.right,
         };
         let (v, se) = pick(figures);
         let title = match (v, se) {

@@ -90,7 +90,7 @@ pub fn accuracy_chart_svg(report: &AgreementReport) -> Result<String, askama::Er
     .render()
 }
 
-fn fixed(value: Option<f64>, decimals: usize) -> String {
+pub(crate) fn fixed(value: Option<f64>, decimals: usize) -> String {
     value.map_or_else(String::new, |v| format!("{v:.decimals$}"))
 }
 
@@ -98,7 +98,7 @@ fn percent(value: Option<f64>) -> String {
     value.map_or_else(String::new, |v| format!("{:.2}", v * 100.0))
 }
 
-fn csv_field(text: &str) -> String {
+pub(crate) fn csv_field(text: &str) -> String {
     // A spreadsheet runs a cell that starts with = + - @ (or a tab or CR) as a formula, and
     // model names, descriptions and reasons are anyone's text: such a cell gets a leading `'`
     // (OWASP's advice), unless it is a number or the lone `-` of a missing value.
@@ -118,7 +118,12 @@ fn csv_field(text: &str) -> String {
 }
 
 fn csv(stamp: &ReportStamp, header: &[&str], rows: &[Vec<String>]) -> String {
-    let mut out: String = stamp_lines(stamp)
+    csv_document(&stamp_lines(stamp), header, rows)
+}
+
+/// A CSV file: the stamp as `# ` comment lines, the header, the rows.
+pub(crate) fn csv_document(stamp: &[String], header: &[&str], rows: &[Vec<String>]) -> String {
+    let mut out: String = stamp
         .iter()
         .map(|line| format!("# {line}\n"))
         .collect();
@@ -488,7 +493,7 @@ pub fn markdown(report: &AgreementReport) -> String {
     out
 }
 
-fn tex_escape(text: &str) -> String {
+pub(crate) fn tex_escape(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
         match c {

@@ -76,7 +76,9 @@ pub struct Heatmap {
     pub legend: Vec<LegendEntry>,
 }
 
-fn class_of(p: Option<f64>) -> (&'static str, &'static str) {
+/// Fill and text colour of a cell with two-tailed p-value `p` (`None`: no test), in the four
+/// bands of the paper's ablation figures plus one for no test.
+pub fn significance(p: Option<f64>) -> (&'static str, &'static str) {
     let Some(p) = p else {
         return (UNDEFINED.0, UNDEFINED.1);
     };
@@ -84,6 +86,18 @@ fn class_of(p: Option<f64>) -> (&'static str, &'static str) {
         (NOT_SIGNIFICANT.0, NOT_SIGNIFICANT.1),
         |(_, fill, text, _)| (*fill, *text),
     )
+}
+
+/// The legend of [`significance`]: (fill, label), most significant first.
+pub fn significance_legend() -> Vec<(&'static str, &'static str)> {
+    CLASSES
+        .iter()
+        .map(|(_, fill, _, label)| (*fill, *label))
+        .chain([
+            (NOT_SIGNIFICANT.0, NOT_SIGNIFICANT.2),
+            (UNDEFINED.0, UNDEFINED.2),
+        ])
+        .collect()
 }
 
 impl Heatmap {
@@ -113,7 +127,7 @@ impl Heatmap {
                         .enumerate()
                         .map(|(c, cell)| {
                             let welch = &cell.welch;
-                            let (fill, text_fill) = class_of(welch.p);
+                            let (fill, text_fill) = significance(welch.p);
                             let delta = welch.delta.map(|d| format!("{d:+.2}"));
                             let p = welch.p.map_or_else(
                                 || {
@@ -161,13 +175,8 @@ impl Heatmap {
             })
             .collect();
         let legend_y = TOP + rows.len() as f64 * CELL_HEIGHT + 16.0;
-        let legend = CLASSES
-            .iter()
-            .map(|(_, fill, _, label)| (*fill, *label))
-            .chain([
-                (NOT_SIGNIFICANT.0, NOT_SIGNIFICANT.2),
-                (UNDEFINED.0, UNDEFINED.2),
-            ])
+        let legend = significance_legend()
+            .into_iter()
             .enumerate()
             .map(|(i, (fill, label))| LegendEntry {
                 x: label_width + i as f64 * 110.0,
