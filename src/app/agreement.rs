@@ -99,7 +99,10 @@ pub async fn run_protocol(
 
 /// The content hash of a stored dataset (over its items' ids and content hashes), and its
 /// number of items.
-async fn dataset_hash(hub: &Hub, dataset: &Dataset) -> Result<(String, usize), AppError> {
+pub(crate) async fn dataset_hash(
+    hub: &Hub,
+    dataset: &Dataset,
+) -> Result<(String, usize), AppError> {
     let mut conn = hub.conn().await?;
     let rows = store::items::content_hashes(&mut conn, dataset.id).await?;
     let hash = dataset_content_hash(rows.iter().map(|(id, hash)| (id.as_str(), hash.as_str())));

@@ -113,7 +113,10 @@ fn analyse_verdicts(
 }
 
 /// A submission's analysis, from the stored result when it is of this version.
-async fn submission_analysis(hub: &Hub, row: &SubmissionRow) -> Result<ErrorAnalysis, AppError> {
+pub(crate) async fn submission_analysis(
+    hub: &Hub,
+    row: &SubmissionRow,
+) -> Result<ErrorAnalysis, AppError> {
     let mut conn = hub.conn().await?;
     if let Some(json) = store::submissions::error_analysis(&mut conn, row.id).await?
         && let Ok(stored) = serde_json::from_str::<ErrorAnalysis>(&json)

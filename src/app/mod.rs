@@ -15,6 +15,7 @@
 //! - [`agreement`]: the cross-annotation protocol, agreement statistics and the report.
 //! - [`error_analysis`]: the paper's error taxonomy of a submission, the Human row, a file, or
 //!   a whole leaderboard.
+//! - [`studies`]: ablation studies (a baseline and variant datasets) and their reports.
 //! - [`audit`]: the audit log every audited use case writes in its own transaction.
 //! - [`demo`]: the built-in demo dataset, its chance baseline and its login link.
 //! - [`backup`]: online snapshots of the database, and restoring one.
@@ -36,6 +37,7 @@ pub mod items;
 pub mod leaderboard;
 pub mod scoring;
 pub mod standings;
+pub mod studies;
 pub mod submissions;
 pub mod tokens;
 

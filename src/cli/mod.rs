@@ -21,6 +21,7 @@ use crate::web::{Server, WebConfig, shutdown_signal};
 mod audit;
 mod simulate;
 mod stored;
+mod study;
 
 #[derive(Parser)]
 #[command(
@@ -64,6 +65,10 @@ enum Command {
     /// The audit log: who issued and revoked tokens, submitted, changed visibility, imported,
     /// assigned, ran the protocol or finished annotations, and when.
     Audit(audit::AuditArgs),
+    /// Ablation studies: a baseline dataset and variant datasets that ask its questions with
+    /// other images; create, list, show, delete, and report a model's Δ and p per variant.
+    #[command(subcommand)]
+    Study(study::StudyCommand),
     /// Manage API tokens: create, list, revoke.
     #[command(subcommand)]
     Token(TokenCommand),
@@ -427,6 +432,7 @@ pub fn main() -> ExitCode {
             Command::Backup(args) => backup(args).await,
             Command::Restore(args) => restore(args).await,
             Command::Audit(args) => audit::audit(args).await,
+            Command::Study(command) => study::study(command).await,
             Command::Token(command) => token(command).await,
             Command::Annotator(AnnotatorCommand::Create(args)) => create_annotator(args).await,
         }

@@ -186,6 +186,28 @@ pub fn human_entries(answers: &[HumanAnswer]) -> Result<Vec<ScoredEntry>, String
         .collect()
 }
 
+/// Each answered item's mean pairwise accuracy over its human answers (an item answered by
+/// several annotators is one observation), by item id; answers without a value are left out.
+pub fn mean_by_item<'a>(
+    scored: impl IntoIterator<Item = (&'a HumanAnswer, Option<f64>)>,
+) -> std::collections::BTreeMap<String, (Direction, StepLength, f64)> {
+    let mut sums: std::collections::BTreeMap<&str, (Direction, StepLength, f64, usize)> =
+        std::collections::BTreeMap::new();
+    for (answer, value) in scored {
+        let Some(value) = value else { continue };
+        let sum =
+            sums.entry(&answer.item_id)
+                .or_insert((answer.direction, answer.step_length, 0.0, 0));
+        sum.2 += value;
+        sum.3 += 1;
+    }
+    sums.into_iter()
+        .map(|(id, (direction, length, sum, n))| {
+            (id.to_owned(), (direction, length, sum / n as f64))
+        })
+        .collect()
+}
+
 /// The error analysis of human answers, each read like a model's (an item answered by two
 /// people counts twice), with the verifier's task accuracy for it.
 pub fn human_error_analysis(answers: &[HumanAnswer]) -> Result<ErrorAnalysis, String> {

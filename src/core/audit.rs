@@ -71,10 +71,12 @@ pub enum AuditAction {
     AnnotationAnswer,
     AnnotationSkip,
     BackupCreate,
+    StudyCreate,
+    StudyDelete,
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 14] = [
+    pub const ALL: [AuditAction; 16] = [
         AuditAction::DatasetImport,
         AuditAction::DatasetAnswerVisibility,
         AuditAction::TokenIssue,
@@ -89,6 +91,8 @@ impl AuditAction {
         AuditAction::AnnotationAnswer,
         AuditAction::AnnotationSkip,
         AuditAction::BackupCreate,
+        AuditAction::StudyCreate,
+        AuditAction::StudyDelete,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -107,6 +111,8 @@ impl AuditAction {
             AuditAction::AnnotationAnswer => "annotation.answer",
             AuditAction::AnnotationSkip => "annotation.skip",
             AuditAction::BackupCreate => "backup.create",
+            AuditAction::StudyCreate => "study.create",
+            AuditAction::StudyDelete => "study.delete",
         }
     }
 

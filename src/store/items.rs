@@ -380,3 +380,27 @@ pub async fn release_images(
         .map(|row| Ok((row.try_get("path")?, row.try_get("png")?)))
         .collect()
 }
+
+/// What study alignment reads of each item of a dataset, in import order.
+pub async fn align_keys(
+    conn: &mut SqliteConnection,
+    dataset_id: i64,
+) -> Result<Vec<crate::core::study::AlignKey>, sqlx::Error> {
+    let rows = sqlx::query(
+        "SELECT item_id, item_type, task_name, key_frame_ids FROM items \
+         WHERE dataset_id = ? ORDER BY id",
+    )
+    .bind(dataset_id)
+    .fetch_all(conn)
+    .await?;
+    rows.iter()
+        .map(|row| {
+            Ok(crate::core::study::AlignKey {
+                item_id: row.try_get("item_id")?,
+                item_type: row.try_get("item_type")?,
+                task_name: row.try_get("task_name")?,
+                key_frame_ids: json_column(row, "key_frame_ids")?,
+            })
+        })
+        .collect()
+}

@@ -10,6 +10,7 @@ pub mod audit;
 pub mod datasets;
 pub mod frames;
 pub mod items;
+pub mod studies;
 pub mod submissions;
 
 use std::path::Path;

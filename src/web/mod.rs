@@ -27,6 +27,7 @@ mod leaderboard;
 pub mod openapi;
 mod pages;
 pub mod session;
+mod studies;
 mod submissions;
 
 use std::future::Future;
@@ -108,6 +109,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(submissions::routes());
     routes.extend(leaderboard::api_routes());
     routes.extend(error_analysis::routes());
+    routes.extend(studies::routes());
     routes.push(
         openapi::ApiRoute::new(
             openapi::Verb::Get,
@@ -184,6 +186,7 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
         .merge(agreement::router())
         .merge(admin_tokens::router())
         .merge(admin_audit::router())
+        .merge(studies::page_router())
         .merge(assets::router())
         .merge(openapi::page_router())
         .nest(openapi::API_PREFIX, openapi::api_router(api_routes()))

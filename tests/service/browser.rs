@@ -258,3 +258,95 @@ async fn a_newcomer_follows_the_demo_link_and_annotates_at_once() {
     let human = found["human_row"].as_str().expect("a Human row");
     assert!(human.contains("1 annotator, 2 answers"), "{human}");
 }
+
+/// The paper's ablation figure for a study with three families (two variants in one), drawn
+/// on the study page: every label inside its figure and none running into another.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_study_of_three_families_draws_every_label_whole() {
+    if !browser_available() {
+        return;
+    }
+    let rig = |change: &dyn Fn(&mut enact_hub::core::world::CameraRig)| {
+        let mut rig = enact_hub::core::world::CameraRig {
+            image_size: 96,
+            ..Default::default()
+        };
+        change(&mut rig);
+        rig
+    };
+    let (server, records) = crate::studies::world_with_variants(&[
+        ("world-fov30", rig(&|r| r.fov_deg = 30.0)),
+        ("world-fov80", rig(&|r| r.fov_deg = 80.0)),
+        ("world-low", rig(&|r| r.height_m = 1.0)),
+        ("world-skin", rig(&|r| r.robot_colour = [224, 172, 105])),
+    ])
+    .await;
+    let (_, token) = api_token(
+        &server.pool,
+        "admin",
+        enact_hub::core::credentials::Role::Admin,
+        None,
+        None,
+    )
+    .await;
+    server
+        .call(reqwest::Method::POST, "/api/v1/admin/studies")
+        .bearer(&token)
+        .json(&json!({
+            "name": "three",
+            "baseline": crate::studies::BASELINE,
+            "variants": [
+                "Camera FOV/Aperture 30=world-fov30",
+                "Camera height/Low camera (1.0 m)=world-low",
+                "Camera FOV/Aperture 80=world-fov80",
+                "Robot appearance/Skin colour=world-skin",
+            ],
+        }))
+        .expect(201)
+        .await;
+    let datasets = [
+        crate::studies::BASELINE,
+        "world-fov30",
+        "world-fov80",
+        "world-low",
+        "world-skin",
+    ];
+    for (d, dataset) in datasets.iter().enumerate() {
+        let wrong: Vec<usize> = (0..records.len()).filter(|i| i % (d + 2) == 0).collect();
+        server
+            .call(
+                reqwest::Method::POST,
+                &format!("/api/v1/datasets/{dataset}/submissions?model=gpt-5-mini"),
+            )
+            .bearer(&token)
+            .body(answers(&records, &wrong))
+            .expect(201)
+            .await;
+    }
+    let shot = std::env::var("ENACT_STUDY_SHOT").ok();
+    let found = run_node(
+        "study.mjs",
+        json!({
+            "url": server.url("/studies/three?row=model:gpt-5-mini"),
+            "chromium": CHROMIUM,
+            "shot": shot,
+        }),
+    )
+    .await;
+    assert_eq!(found["panels"], 3, "{found}");
+    assert_eq!(
+        found["cell_rows"], 8,
+        "four variants, two directions: {found}"
+    );
+    for figure in ["heatmap", "handedness"] {
+        let measured = &found[figure];
+        assert!(measured["texts"].as_u64() > Some(10), "{figure}: {found}");
+        assert_eq!(
+            measured["outside"],
+            json!([]),
+            "{figure}: labels cut: {found}"
+        );
+    }
+    assert_eq!(found["heatmap"]["overlapping"], json!([]), "{found}");
+    server.stop().await;
+}

@@ -25,5 +25,6 @@ mod leaderboard;
 mod openapi;
 mod pages;
 mod score;
+mod studies;
 mod submissions;
 mod world;

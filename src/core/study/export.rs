@@ -8,9 +8,9 @@ use askama::Template;
 use super::figure::StudyFigure;
 use super::report::{StudyReport, StudyStamp};
 use crate::core::agreement::report::export::{BundleFile, csv_document, fixed, tex_escape};
+use crate::core::dataset::Direction;
 use crate::core::error_analysis::HandFigures;
 use crate::core::error_analysis::chart::{BarChart, hand_chart_of};
-use crate::core::dataset::Direction;
 
 /// The stamp as `key: value` lines, the same in every file.
 pub fn stamp_lines(stamp: &StudyStamp) -> Vec<String> {
@@ -236,7 +236,11 @@ fn handedness_csv(report: &StudyReport) -> String {
 
 /// The cells as one CSV document (stamp lines first, as `# ` comments).
 pub fn cells_csv(report: &StudyReport) -> String {
-    csv_document(&stamp_lines(&report.stamp), &CELL_HEADER, &cell_rows(report))
+    csv_document(
+        &stamp_lines(&report.stamp),
+        &CELL_HEADER,
+        &cell_rows(report),
+    )
 }
 
 /// The cells as a booktabs table: Δ, Welch's p and the paired p-values.
@@ -257,8 +261,10 @@ pub fn cells_tex(report: &StudyReport) -> String {
             tex_escape(&c.family),
             tex_escape(&c.variant),
             c.direction,
-            c.step_length.map_or_else(|| "all".to_owned(), |l| l.to_string()),
-            c.delta.map_or_else(|| "--".to_owned(), |d| format!("{d:+.3}")),
+            c.step_length
+                .map_or_else(|| "all".to_owned(), |l| l.to_string()),
+            c.delta
+                .map_or_else(|| "--".to_owned(), |d| format!("{d:+.3}")),
             c.t.map_or_else(|| "--".to_owned(), |t| format!("{t:.2}")),
             c.df.map_or_else(|| "--".to_owned(), |df| format!("{df:.1}")),
             p(c.p),

@@ -226,16 +226,19 @@ fn figure_cell(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::core::study::Alignment;
     use crate::core::study::report::{
-        DatasetRef, StudyCell, StudyStamp, VariantSummary, STUDY_METRIC_VERSION,
+        DatasetRef, STUDY_METRIC_VERSION, StudyCell, StudyStamp, VariantSummary,
     };
     use crate::core::study::stats::{paired_t_test, sign_test};
-    use crate::core::study::Alignment;
 
     fn report(variants: &[(&str, &str)]) -> StudyReport {
         let mut cells = Vec::new();
         for (family, variant) in variants {
-            for (direction, p) in [(Direction::Forward, Some(0.0004)), (Direction::Inverse, None)] {
+            for (direction, p) in [
+                (Direction::Forward, Some(0.0004)),
+                (Direction::Inverse, None),
+            ] {
                 cells.push(StudyCell {
                     family: (*family).into(),
                     variant: (*variant).into(),
@@ -249,7 +252,9 @@ mod tests {
                     n_variant: 20,
                     mean_baseline: None,
                     mean_variant: None,
-                    undefined: p.is_none().then(|| "both samples have zero variance".into()),
+                    undefined: p
+                        .is_none()
+                        .then(|| "both samples have zero variance".into()),
                     paired_t: paired_t_test(&[]),
                     sign_test: sign_test(&[]),
                 });
@@ -298,12 +303,20 @@ mod tests {
         let titles: Vec<&str> = figure.panels.iter().map(|p| p.title.as_str()).collect();
         assert_eq!(
             titles,
-            ["Camera FOV", "Image realism", "Robot appearance with a long family name"]
+            [
+                "Camera FOV",
+                "Image realism",
+                "Robot appearance with a long family name"
+            ]
         );
         assert_eq!(figure.panels[0].columns.len(), 2);
         for panel in &figure.panels {
             let left = panel.cells.iter().map(|c| c.x).fold(f64::MAX, f64::min);
-            let right = panel.cells.iter().map(|c| c.x + c.width).fold(0.0, f64::max);
+            let right = panel
+                .cells
+                .iter()
+                .map(|c| c.x + c.width)
+                .fold(0.0, f64::max);
             assert!(right - left >= text_width(&panel.title, BOLD_CHAR_WIDTH) - 1e-9);
             for (column, cell) in panel.columns.iter().zip(panel.cells.iter().step_by(2)) {
                 assert!(cell.width >= text_width(&column.label, CHAR_WIDTH));
@@ -311,7 +324,10 @@ mod tests {
             assert!(right <= figure.width);
         }
         let cell = &figure.panels[0].cells[0];
-        assert_eq!((cell.delta.as_str(), cell.p.as_str()), ("Δ=-0.12", "p<0.001"));
+        assert_eq!(
+            (cell.delta.as_str(), cell.p.as_str()),
+            ("Δ=-0.12", "p<0.001")
+        );
         assert_eq!(cell.fill, significance(Some(0.0004)).0);
         let inverse = &figure.panels[0].cells[1];
         assert_eq!(inverse.p, "no test");

@@ -29,9 +29,7 @@ pub const MAX_VARIANTS: usize = 64;
 pub fn study_name(name: &str) -> Result<&str, String> {
     let name = name.trim();
     if name.is_empty() || name.chars().count() > MAX_NAME_CHARS {
-        return Err(format!(
-            "a study name has 1 to {MAX_NAME_CHARS} characters"
-        ));
+        return Err(format!("a study name has 1 to {MAX_NAME_CHARS} characters"));
     }
     if let Some(c) = name
         .chars()
@@ -125,10 +123,7 @@ pub fn check_variants(baseline: &str, variants: &[VariantSpec]) -> Result<(), St
             return Err(format!("variant {}/{} is named twice", v.family, v.label));
         }
         if !datasets.insert(&v.dataset) {
-            return Err(format!(
-                "dataset '{}' is given for two variants",
-                v.dataset
-            ));
+            return Err(format!("dataset '{}' is given for two variants", v.dataset));
         }
     }
     Ok(())
@@ -210,7 +205,11 @@ pub fn align(baseline: &[AlignKey], variant: &[AlignKey]) -> Alignment {
         open_variant.entry(content(key)).or_default().push(v);
     }
     let mut open_baseline: BTreeMap<Content<'_>, Vec<usize>> = BTreeMap::new();
-    for (b, key) in baseline.iter().enumerate().filter(|(b, _)| partner[*b].is_none()) {
+    for (b, key) in baseline
+        .iter()
+        .enumerate()
+        .filter(|(b, _)| partner[*b].is_none())
+    {
         open_baseline.entry(content(key)).or_default().push(b);
     }
     for (key, bs) in &open_baseline {
@@ -256,11 +255,30 @@ mod tests {
         );
         // The label may hold '/', the family may not; the dataset is after the last '='.
         let v = VariantSpec::parse("Realism/Ray tracing/only=a=b").unwrap();
-        assert_eq!((v.label.as_str(), v.dataset.as_str()), ("Ray tracing/only=a", "b"));
-        assert!(VariantSpec::parse("Camera=fov").unwrap_err().contains("no '/'"));
-        assert!(VariantSpec::parse("Camera/fov").unwrap_err().contains("no '='"));
-        assert!(VariantSpec::parse("/x=d").unwrap_err().contains("the family"));
-        assert!(VariantSpec::parse("f/x=").unwrap_err().contains("dataset name is empty"));
+        assert_eq!(
+            (v.label.as_str(), v.dataset.as_str()),
+            ("Ray tracing/only=a", "b")
+        );
+        assert!(
+            VariantSpec::parse("Camera=fov")
+                .unwrap_err()
+                .contains("no '/'")
+        );
+        assert!(
+            VariantSpec::parse("Camera/fov")
+                .unwrap_err()
+                .contains("no '='")
+        );
+        assert!(
+            VariantSpec::parse("/x=d")
+                .unwrap_err()
+                .contains("the family")
+        );
+        assert!(
+            VariantSpec::parse("f/x=")
+                .unwrap_err()
+                .contains("dataset name is empty")
+        );
         assert!(study_name("fov study").unwrap_err().contains("' '"));
         assert_eq!(study_name(" fov-1 ").unwrap(), "fov-1");
     }
@@ -268,7 +286,11 @@ mod tests {
     #[test]
     fn variant_lists_are_checked_as_a_whole() {
         let v = |f: &str, l: &str, d: &str| VariantSpec::new(f, l, d).unwrap();
-        assert!(check_variants("base", &[]).unwrap_err().contains("at least one"));
+        assert!(
+            check_variants("base", &[])
+                .unwrap_err()
+                .contains("at least one")
+        );
         assert!(
             check_variants("base", &[v("a", "b", "base")])
                 .unwrap_err()
@@ -284,7 +306,11 @@ mod tests {
                 .unwrap_err()
                 .contains("two variants")
         );
-        let list = [v("Cam", "30", "d1"), v("Real", "RT", "d2"), v("Cam", "80", "d3")];
+        let list = [
+            v("Cam", "30", "d1"),
+            v("Real", "RT", "d2"),
+            v("Cam", "80", "d3"),
+        ];
         check_variants("base", &list).unwrap();
         let grouped = families(&list);
         assert_eq!(grouped.len(), 2);

@@ -171,8 +171,7 @@ struct CellKey {
 
 impl CellKey {
     fn covers(self, score: &ItemScore) -> bool {
-        score.direction == self.direction
-            && self.step_length.is_none_or(|l| l == score.step_length)
+        score.direction == self.direction && self.step_length.is_none_or(|l| l == score.step_length)
     }
 }
 
@@ -182,7 +181,13 @@ pub fn build_study_report(inputs: &StudyInputs) -> Result<StudyReport, String> {
     let mut variants = Vec::new();
     let mut handedness = Vec::new();
     if let Some(hands) = &inputs.baseline_row.hands {
-        push_hands(&mut handedness, "Baseline", None, &inputs.baseline.name, hands);
+        push_hands(
+            &mut handedness,
+            "Baseline",
+            None,
+            &inputs.baseline.name,
+            hands,
+        );
     }
     for variant in &inputs.variants {
         let spec = &variant.spec;
@@ -216,9 +221,11 @@ pub fn build_study_report(inputs: &StudyInputs) -> Result<StudyReport, String> {
                     StepLength::all()
                         .filter(|&l| {
                             variant.pairs.iter().any(|(b, _)| {
-                                inputs.baseline_row.items.get(b).is_some_and(|s| {
-                                    s.direction == direction && s.step_length == l
-                                })
+                                inputs
+                                    .baseline_row
+                                    .items
+                                    .get(b)
+                                    .is_some_and(|s| s.direction == direction && s.step_length == l)
                             })
                         })
                         .map(|l| CellKey {
@@ -428,8 +435,7 @@ mod tests {
             ("c", F, 4, 0.0),
             ("d", I, 3, 1.0),
         ];
-        let report =
-            build_study_report(&inputs(row(1, &scores), Ok(row(2, &scores)))).unwrap();
+        let report = build_study_report(&inputs(row(1, &scores), Ok(row(2, &scores)))).unwrap();
         let forward = &report.cells[0];
         assert_eq!((forward.direction, forward.step_length), (F, None));
         assert_eq!(forward.delta, Some(0.0));
@@ -445,9 +451,21 @@ mod tests {
             .collect();
         assert_eq!(
             lengths,
-            [(F, None), (F, Some(3)), (F, Some(4)), (I, None), (I, Some(3))]
+            [
+                (F, None),
+                (F, Some(3)),
+                (F, Some(4)),
+                (I, None),
+                (I, Some(3))
+            ]
         );
-        assert!(report.cells[3].undefined.as_ref().unwrap().contains("at least 2"));
+        assert!(
+            report.cells[3]
+                .undefined
+                .as_ref()
+                .unwrap()
+                .contains("at least 2")
+        );
         assert_eq!(report.stamp.variants[0].submission, Some(2));
     }
 
@@ -455,11 +473,21 @@ mod tests {
     fn a_planted_drop_is_measured_on_the_aligned_items() {
         let baseline = row(
             1,
-            &[("a", F, 3, 1.0), ("b", F, 3, 0.8), ("c", F, 3, 0.6), ("d", F, 3, 0.9)],
+            &[
+                ("a", F, 3, 1.0),
+                ("b", F, 3, 0.8),
+                ("c", F, 3, 0.6),
+                ("d", F, 3, 0.9),
+            ],
         );
         let variant = row(
             2,
-            &[("a", F, 3, 0.5), ("b", F, 3, 0.5), ("c", F, 3, 0.2), ("d", F, 3, 0.4)],
+            &[
+                ("a", F, 3, 0.5),
+                ("b", F, 3, 0.5),
+                ("c", F, 3, 0.2),
+                ("d", F, 3, 0.4),
+            ],
         );
         let report = build_study_report(&inputs(baseline, Ok(variant))).unwrap();
         let c = &report.cells[0];
@@ -468,7 +496,10 @@ mod tests {
         assert!((c.paired_t.mean_difference.unwrap() + 0.425).abs() < 1e-12);
         assert_eq!((c.sign_test.negative, c.sign_test.positive), (4, 0));
         assert!((c.sign_test.p - 0.125).abs() < 1e-12);
-        assert!(c.paired_t.p.unwrap() < c.p.unwrap(), "pairing removes item spread");
+        assert!(
+            c.paired_t.p.unwrap() < c.p.unwrap(),
+            "pairing removes item spread"
+        );
     }
 
     #[test]
@@ -478,7 +509,10 @@ mod tests {
             Err("no published submission".into()),
         ))
         .unwrap();
-        assert_eq!(report.variants[0].missing.as_deref(), Some("no published submission"));
+        assert_eq!(
+            report.variants[0].missing.as_deref(),
+            Some("no published submission")
+        );
         assert!(report.cells.iter().all(|c| c.delta.is_none()));
         assert_eq!(
             report.cells[0].undefined.as_deref(),

@@ -66,8 +66,11 @@ pub fn paired_t_test(differences: &[f64]) -> PairedT {
         result.reason = Some(PairedUndefined::TooFewPairs { n });
         return result;
     };
-    let variance =
-        differences.iter().map(|d| (d - mean) * (d - mean)).sum::<f64>() / (n - 1) as f64;
+    let variance = differences
+        .iter()
+        .map(|d| (d - mean) * (d - mean))
+        .sum::<f64>()
+        / (n - 1) as f64;
     // Differences equal up to rounding (sums of the same floats in another order) are equal.
     if variance <= f64::EPSILON * f64::EPSILON * mean.abs().max(1.0) {
         result.reason = Some(PairedUndefined::ConstantDifference { difference: mean });

@@ -123,10 +123,7 @@ fn csv(stamp: &ReportStamp, header: &[&str], rows: &[Vec<String>]) -> String {
 
 /// A CSV file: the stamp as `# ` comment lines, the header, the rows.
 pub(crate) fn csv_document(stamp: &[String], header: &[&str], rows: &[Vec<String>]) -> String {
-    let mut out: String = stamp
-        .iter()
-        .map(|line| format!("# {line}\n"))
-        .collect();
+    let mut out: String = stamp.iter().map(|line| format!("# {line}\n")).collect();
     out.push_str(&header.join(","));
     out.push('\n');
     for row in rows {

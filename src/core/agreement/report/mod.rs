@@ -20,7 +20,7 @@ use crate::core::agreement::{
     MeasurementLevel, OrderingAnnotations, OrderingEncoding, OrderingError, PreparedAlpha,
     WelchComparison, mean_pairwise_alpha, pairwise_alphas, welch_t_test,
 };
-use crate::core::annotation::{HumanAnswer, human_entries};
+use crate::core::annotation::{HumanAnswer, human_entries, mean_by_item};
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::leaderboard::{HumanCoverage, LeaderboardRow};
 use crate::core::verifier::PerformanceReport;
@@ -424,27 +424,14 @@ pub fn build_report(inputs: &ReportInputs) -> Result<AgreementReport, ReportErro
         })?;
         entries.extend(scored);
     }
-    let mut human_sums: BTreeMap<&str, (Direction, StepLength, f64, usize)> = BTreeMap::new();
-    for (answer, entry) in inputs.answers.iter().zip(&entries) {
-        let Some(value) = entry.pairwise_accuracy else {
-            continue;
-        };
-        let sum = human_sums.entry(&answer.item_id).or_insert((
-            answer.human.direction,
-            answer.human.step_length,
-            0.0,
-            0,
-        ));
-        sum.2 += value;
-        sum.3 += 1;
-    }
     // An item answered by several annotators is one human observation: their mean.
-    let human_items: ItemValues = human_sums
-        .into_iter()
-        .map(|(id, (direction, length, sum, n))| {
-            (id.to_owned(), (direction, length, sum / n as f64))
-        })
-        .collect();
+    let human_items: ItemValues = mean_by_item(
+        inputs
+            .answers
+            .iter()
+            .map(|a| &a.human)
+            .zip(entries.iter().map(|e| e.pairwise_accuracy)),
+    );
 
     let mut submissions: Vec<&SubmissionInput> = inputs.submissions.iter().collect();
     submissions.sort_by_key(|s| s.row.submission);

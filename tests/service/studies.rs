@@ -1,0 +1,475 @@
+//! Ablation studies end to end on the synthetic world: a baseline release and variants made
+//! with `items_from` from replays rendered another way, imported with their scene graphs; a
+//! study over them; submissions; and the report checked against figures computed here.
+
+use std::collections::HashSet;
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+
+use enact_hub::core::credentials::Role;
+use enact_hub::core::pipeline::variant::items_from;
+use enact_hub::core::pipeline::{GenerateOptions, generate};
+use enact_hub::core::world::{Activity, CameraRig, FrameImages, SimulateOptions, simulate};
+use reqwest::Method;
+use serde_json::{Value, json};
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+use crate::helpers::{Call, TestServer, api_token, enact_hub, import, options, spawn_app_with};
+
+/// The baseline's dataset name.
+pub const BASELINE: &str = "world";
+
+fn camera(change: impl Fn(&mut CameraRig)) -> CameraRig {
+    let mut rig = CameraRig {
+        image_size: 96,
+        ..CameraRig::default()
+    };
+    change(&mut rig);
+    rig
+}
+
+fn replay(dir: &Path, rig: CameraRig) {
+    simulate(&SimulateOptions {
+        seed: 5,
+        activity: Activity::MakeTea,
+        length: Some(9),
+        camera: rig,
+    })
+    .expect("simulate")
+    .write_replay(dir, FrameImages::KeyFrames)
+    .expect("write replay");
+}
+
+/// A server holding the world baseline (`world`, L = 3..5) and one variant dataset per
+/// `(dataset, camera)`, each made with `items_from` and imported with its replay's scene
+/// graphs; and the baseline's QA records.
+pub async fn world_with_variants(variants: &[(&str, CameraRig)]) -> (TestServer, Vec<Value>) {
+    let variants: Vec<(String, CameraRig)> = variants
+        .iter()
+        .map(|(name, rig)| ((*name).to_owned(), rig.clone()))
+        .collect();
+    let records = Arc::new(Mutex::new(Vec::new()));
+    let shared = records.clone();
+    let server = spawn_app_with(|pool, dir| async move {
+        replay(&dir.join("base-replay"), camera(|_| {}));
+        let base = dir.join("base");
+        generate(
+            &dir.join("base-replay"),
+            &base,
+            &GenerateOptions {
+                num_to_sample: 2,
+                step_lengths: vec![3, 4, 5],
+                ..GenerateOptions::default()
+            },
+            &|_| {},
+        )
+        .expect("generate the baseline");
+        let mut base_options = options(BASELINE);
+        base_options.scene_graphs = Some(base.join("replayed_activities"));
+        import(&pool, &base, &base_options).await;
+        for (name, rig) in &variants {
+            let replayed = dir.join(format!("{name}-replay"));
+            replay(&replayed, rig.clone());
+            let out = dir.join(name);
+            items_from(&replayed, &base, &out).expect("items_from");
+            let mut variant_options = options(name);
+            variant_options.scene_graphs = Some(replayed);
+            import(&pool, &out, &variant_options).await;
+        }
+        let qa = std::fs::read_to_string(base.join("QA/enact_ordering.jsonl")).expect("QA");
+        *shared.lock().expect("lock") = qa
+            .lines()
+            .map(|l| serde_json::from_str(l).expect("record"))
+            .collect();
+    })
+    .await;
+    let records = records.lock().expect("lock").clone();
+    (server, records)
+}
+
+/// The indices of records whose place among their direction's records, k, has `pick(k)`.
+fn within_direction(records: &[Value], pick: impl Fn(usize) -> bool) -> HashSet<usize> {
+    let mut seen = std::collections::HashMap::new();
+    let mut chosen = HashSet::new();
+    for (i, r) in records.iter().enumerate() {
+        let direction = r["type"].as_str().expect("type").starts_with("forward");
+        let k = seen.entry(direction).or_insert(0usize);
+        if pick(*k) {
+            chosen.insert(i);
+        }
+        *k += 1;
+    }
+    chosen
+}
+
+/// Compact answers: each record's ground truth, except the records in `skip` (not answered:
+/// the strict policy scores them 0).
+fn answers_without(records: &[Value], skip: &HashSet<usize>) -> String {
+    records
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !skip.contains(i))
+        .map(|(_, r)| json!({"id": r["id"], "answer": r["gt_answer"]}).to_string() + "\n")
+        .collect()
+}
+
+async fn admin(server: &TestServer) -> String {
+    api_token(&server.pool, "admin", Role::Admin, None, None)
+        .await
+        .1
+}
+
+fn create(server: &TestServer, token: &str, body: Value) -> Call {
+    server
+        .call(Method::POST, "/api/v1/admin/studies")
+        .bearer(token)
+        .json(&body)
+}
+
+async fn submit(server: &TestServer, token: &str, dataset: &str, model: &str, body: String) {
+    server
+        .call(
+            Method::POST,
+            &format!("/api/v1/datasets/{dataset}/submissions?model={model}"),
+        )
+        .bearer(token)
+        .body(body)
+        .expect(201)
+        .await;
+}
+
+fn direction_cell<'a>(report: &'a Value, variant: &str, direction: &str) -> &'a Value {
+    report["cells"]
+        .as_array()
+        .expect("cells")
+        .iter()
+        .find(|c| {
+            c["variant"] == variant && c["direction"] == direction && c["step_length"].is_null()
+        })
+        .unwrap_or_else(|| panic!("no {variant} {direction} cell in {report}"))
+}
+
+fn close(actual: &Value, expected: f64, what: &str) {
+    let actual = actual
+        .as_f64()
+        .unwrap_or_else(|| panic!("{what}: {actual} is not a number"));
+    assert!(
+        (actual - expected).abs() <= 1e-9 * expected.abs().max(1.0),
+        "{what}: {actual} vs {expected}"
+    );
+}
+
+fn mean(xs: &[f64]) -> f64 {
+    xs.iter().sum::<f64>() / xs.len() as f64
+}
+
+fn variance(xs: &[f64]) -> f64 {
+    let m = mean(xs);
+    xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (xs.len() - 1) as f64
+}
+
+/// C(n, k) / 2ⁿ summed for k ≤ kmax, in exact integers.
+fn binomial_lower_tail(n: u64, kmax: u64) -> f64 {
+    let mut c: u128 = 1;
+    let mut sum: u128 = 0;
+    for k in 0..=kmax {
+        if k > 0 {
+            c = c * u128::from(n - k + 1) / u128::from(k);
+        }
+        sum += c;
+    }
+    sum as f64 / 2f64.powi(n as i32)
+}
+
+#[tokio::test]
+async fn a_study_reports_no_difference_for_the_same_answers_and_the_planted_one_exactly() {
+    let (server, records) =
+        world_with_variants(&[("world-fov30", camera(|r| r.fov_deg = 30.0))]).await;
+    let token = admin(&server).await;
+    let created = create(
+        &server,
+        &token,
+        json!({"name": "camera", "baseline": BASELINE,
+               "variants": ["Camera FOV/Aperture 30=world-fov30"]}),
+    )
+    .expect(201)
+    .await;
+    let study = created.json();
+    let n = records.len();
+    assert!(n >= 12, "the world gives {n} items");
+    assert_eq!(study["variants"][0]["aligned"], n);
+    assert_eq!(study["variants"][0]["alignment"]["by_id"], n);
+
+    // The same answers on both datasets (a few missed, so the scores vary).
+    let missed = within_direction(&records, |k| k % 4 == 1);
+    for dataset in [BASELINE, "world-fov30"] {
+        submit(
+            &server,
+            &token,
+            dataset,
+            "same",
+            answers_without(&records, &missed),
+        )
+        .await;
+    }
+    let (status, report) = server
+        .get_json("/api/v1/studies/camera/report?model=same&by_step_length=true")
+        .await;
+    assert_eq!(status, 200, "{report}");
+    for direction in ["forward", "inverse"] {
+        let cell = direction_cell(&report, "Aperture 30", direction);
+        assert_eq!(cell["delta"], 0.0, "{cell}");
+        assert_eq!(cell["t"], 0.0, "{cell}");
+        close(&cell["p"], 1.0, "Welch p of equal samples");
+        assert_eq!(cell["sign_test"]["p"], 1.0);
+        assert_eq!(cell["sign_test"]["ties"], cell["n_baseline"]);
+        // Every difference is 0: the paired t has no value and says why.
+        assert!(cell["paired_t"]["p"].is_null());
+        assert_eq!(cell["paired_t"]["reason"]["kind"], "constant_difference");
+    }
+    assert!(
+        report["cells"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|c| c["step_length"] == 4),
+        "per step length on request"
+    );
+    let stamp = &report["stamp"];
+    assert_eq!(stamp["baseline"]["name"], BASELINE);
+    assert_eq!(stamp["baseline"]["hash"].as_str().unwrap().len(), 64);
+    assert_eq!(stamp["variants"][0]["dataset"], "world-fov30");
+    assert!(stamp["variants"][0]["submission"].is_i64());
+
+    // A planted difference: the baseline misses every 5th item, the variant every 3rd.
+    let base_missed = within_direction(&records, |k| k % 5 == 0);
+    let variant_missed = within_direction(&records, |k| k % 3 == 0);
+    submit(
+        &server,
+        &token,
+        BASELINE,
+        "planted",
+        answers_without(&records, &base_missed),
+    )
+    .await;
+    submit(
+        &server,
+        &token,
+        "world-fov30",
+        "planted",
+        answers_without(&records, &variant_missed),
+    )
+    .await;
+    let (status, report) = server
+        .get_json("/api/v1/studies/camera/report?model=planted")
+        .await;
+    assert_eq!(status, 200, "{report}");
+    for direction in ["forward", "inverse"] {
+        // The figures computed here: a correct answer scores 1, a missing one 0.
+        let indices: Vec<usize> = (0..n)
+            .filter(|&i| records[i]["type"].as_str().unwrap().starts_with(direction))
+            .collect();
+        let score = |missed: &HashSet<usize>, i: usize| f64::from(u8::from(!missed.contains(&i)));
+        let b: Vec<f64> = indices.iter().map(|&i| score(&base_missed, i)).collect();
+        let v: Vec<f64> = indices.iter().map(|&i| score(&variant_missed, i)).collect();
+        let (sb, sv) = (variance(&b) / b.len() as f64, variance(&v) / v.len() as f64);
+        let t = (mean(&v) - mean(&b)) / (sb + sv).sqrt();
+        let df = (sb + sv).powi(2)
+            / (sb.powi(2) / (b.len() - 1) as f64 + sv.powi(2) / (v.len() - 1) as f64);
+        let p = 2.0 * StudentsT::new(0.0, 1.0, df).unwrap().sf(t.abs());
+        let cell = direction_cell(&report, "Aperture 30", direction);
+        close(&cell["delta"], mean(&v) - mean(&b), "Δ");
+        close(&cell["t"], t, "Welch t");
+        close(&cell["df"], df, "Welch df");
+        close(&cell["p"], p, "Welch p");
+        assert_eq!(cell["n_baseline"], b.len());
+
+        let d: Vec<f64> = v.iter().zip(&b).map(|(v, b)| v - b).collect();
+        let paired_t = mean(&d) / (variance(&d) / d.len() as f64).sqrt();
+        let paired_p = 2.0
+            * StudentsT::new(0.0, 1.0, (d.len() - 1) as f64)
+                .unwrap()
+                .sf(paired_t.abs());
+        close(&cell["paired_t"]["t"], paired_t, "paired t");
+        close(&cell["paired_t"]["p"], paired_p, "paired p");
+        let up = d.iter().filter(|x| **x > 0.0).count() as u64;
+        let down = d.iter().filter(|x| **x < 0.0).count() as u64;
+        assert_eq!(cell["sign_test"]["positive"], up);
+        assert_eq!(cell["sign_test"]["negative"], down);
+        let sign_p = (2.0 * binomial_lower_tail(up + down, up.min(down))).min(1.0);
+        close(&cell["sign_test"]["p"], sign_p, "sign p");
+    }
+
+    // The other representations, each stamped with the datasets' hashes.
+    let hash = report["stamp"]["baseline"]["hash"]
+        .as_str()
+        .unwrap()
+        .to_owned();
+    for format in ["csv", "tex", "svg", "handedness-svg"] {
+        let response = server
+            .get(&format!(
+                "/api/v1/studies/camera/report?model=planted&format={format}"
+            ))
+            .await;
+        assert_eq!(response.status(), 200, "{format}");
+        let text = response.text().await.unwrap();
+        assert!(text.contains(&hash), "{format} is stamped");
+    }
+    let svg = server
+        .get("/api/v1/studies/camera/report?model=planted&format=svg")
+        .await
+        .text()
+        .await
+        .unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("Camera FOV") && svg.contains("Aperture 30"));
+
+    // The command line writes the same report's files.
+    let out = tempfile::tempdir().unwrap();
+    let run = enact_hub()
+        .args(["study", "report", "camera", "--model", "planted", "--db"])
+        .arg(server.db_path())
+        .arg("--out")
+        .arg(out.path())
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let written: Value =
+        serde_json::from_slice(&std::fs::read(out.path().join("study.json")).expect("study.json"))
+            .unwrap();
+    assert_eq!(written["cells"], report["cells"]);
+    for file in [
+        "cells.csv",
+        "cells.tex",
+        "heatmap.svg",
+        "handedness.csv",
+        "handedness.svg",
+    ] {
+        let text = std::fs::read_to_string(out.path().join(file)).expect(file);
+        assert!(text.contains(&hash), "{file} is stamped");
+    }
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn studies_refuse_what_cannot_be_compared_and_are_audited() {
+    let (server, records) =
+        world_with_variants(&[("world-fov30", camera(|r| r.fov_deg = 30.0))]).await;
+    let token = admin(&server).await;
+    // A dataset with other items: nothing aligns.
+    let other = tempfile::tempdir().unwrap();
+    crate::helpers::write_release(other.path(), &[3]);
+    {
+        let pool = server.pool.clone();
+        import(&pool, other.path(), &options("other")).await;
+    }
+    let refusal = |body: Value, status: u16, needle: &'static str| {
+        let server = &server;
+        let token = token.clone();
+        async move {
+            let reply = create(server, &token, body).expect(status).await;
+            assert!(reply.error().contains(needle), "{}", reply.error());
+        }
+    };
+    refusal(
+        json!({"name": "s", "baseline": BASELINE, "variants": ["Camera=world-fov30"]}),
+        400,
+        "variants[0]",
+    )
+    .await;
+    refusal(
+        json!({"name": "s", "baseline": BASELINE, "variants": ["Camera/30=nope"]}),
+        400,
+        "no dataset named 'nope'",
+    )
+    .await;
+    refusal(
+        json!({"name": "s", "baseline": BASELINE, "variants": ["Camera/30=other"]}),
+        400,
+        "none of dataset 'other'",
+    )
+    .await;
+    refusal(
+        json!({"name": "bad name", "baseline": BASELINE, "variants": ["Camera/30=world-fov30"]}),
+        400,
+        "not allowed",
+    )
+    .await;
+    let body = json!({"name": "cam", "baseline": BASELINE,
+                      "variants": [{"family": "Camera", "label": "30", "dataset": "world-fov30"}]});
+    let submitter = api_token(&server.pool, "team", Role::Submitter, None, None)
+        .await
+        .1;
+    create(&server, &submitter, body.clone()).expect(403).await;
+    create(&server, &token, body.clone()).expect(201).await;
+    refusal(body, 409, "exists already").await;
+
+    // Reports name what is missing.
+    let (status, missing) = server.get_json("/api/v1/studies/cam/report").await;
+    assert_eq!(status, 400);
+    assert!(
+        missing["error"]
+            .as_str()
+            .unwrap()
+            .contains("`model` is required")
+    );
+    let (status, nobody) = server
+        .get_json("/api/v1/studies/cam/report?model=ghost")
+        .await;
+    assert_eq!(status, 404);
+    assert!(
+        nobody["error"]
+            .as_str()
+            .unwrap()
+            .contains("no published submission of model 'ghost'")
+    );
+    submit(
+        &server,
+        &token,
+        BASELINE,
+        "half",
+        answers_without(&records, &HashSet::new()),
+    )
+    .await;
+    let (status, half) = server
+        .get_json("/api/v1/studies/cam/report?model=half")
+        .await;
+    assert_eq!(status, 200);
+    assert!(
+        half["variants"][0]["missing"]
+            .as_str()
+            .unwrap()
+            .contains("world-fov30")
+    );
+    let (status, human) = server
+        .get_json("/api/v1/studies/cam/report?human=true")
+        .await;
+    assert_eq!(status, 404, "{human}");
+
+    // Listed, shown on the pages, audited, deleted.
+    let (_, list) = server.get_json("/api/v1/studies").await;
+    assert_eq!(list[0]["name"], "cam");
+    let page = server.get("/studies/cam?row=model:half").await;
+    assert_eq!(page.status(), 200);
+    let html = page.text().await.unwrap();
+    assert!(html.contains("class=\"study-heatmap\"") && html.contains("no published submission"));
+    let audit = enact_hub()
+        .args(["audit", "--action", "study", "--json", "--db"])
+        .arg(server.db_path())
+        .output()
+        .unwrap();
+    let entries: Value = serde_json::from_slice(&audit.stdout).unwrap();
+    assert_eq!(entries[0]["action"], "study.create");
+    assert!(entries[0]["detail"].as_str().unwrap().contains("1"));
+    server
+        .call(Method::DELETE, "/api/v1/admin/studies/cam")
+        .bearer(&token)
+        .expect(204)
+        .await;
+    let (status, _) = server.get_json("/api/v1/studies/cam").await;
+    assert_eq!(status, 404);
+    server.stop().await;
+}
