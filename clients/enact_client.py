@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Example enact-hub client: ask a model every item of a dataset, then submit its answers.
+"""Example enact-hub client: ask a model every item of a dataset (or of every dataset of an
+ablation study), then submit its answers.
 
 For each item of DATASET on the hub, this script
 
@@ -22,6 +23,12 @@ Needs Python 3.8+ and `requests`. Example:
     export OPENAI_API_KEY=sk-...             # if the model endpoint needs one
     python3 clients/enact_client.py --hub http://127.0.0.1:8080 --dataset enact \\
         --model-url https://api.openai.com/v1 --model gpt-4o --limit 5
+
+With `--study NAME` instead of `--dataset`, the client reads the study
+(`GET /api/v1/studies/{study}`), runs the model over its baseline and then every variant
+dataset in turn, submits each under the same model name, and prints the study report
+(`GET /api/v1/studies/{study}/report?model=...`): Δ and p per variant and direction.
+`--answers-out` is then a folder, with one `{dataset}.jsonl` per dataset.
 
 Exit status: 0 when the submission was stored, 1 on any error (the message says which
 request failed and why).
@@ -120,6 +127,18 @@ class Hub:
     def item(self, url):
         return self.get(url, "reading item {}".format(url)).json()
 
+    def study_datasets(self, study):
+        """The baseline and then each variant dataset of a study."""
+        view = self.get("/api/v1/studies/{}".format(study), "reading study '{}'".format(study)).json()
+        return [view["baseline"]] + [v["dataset"] for v in view["variants"]]
+
+    def study_report(self, study, model):
+        return self.get(
+            "/api/v1/studies/{}/report".format(study),
+            "reading the report of study '{}'".format(study),
+            params={"model": model},
+        ).json()
+
     def image_data_url(self, url):
         png = self.get(url, "reading frame {}".format(url)).content
         return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
@@ -204,7 +223,9 @@ def parse_args(argv):
         description="Answer an enact-hub dataset with an OpenAI-compatible model and submit the answers."
     )
     parser.add_argument("--hub", default="http://127.0.0.1:8080", help="enact-hub base URL (default: %(default)s)")
-    parser.add_argument("--dataset", required=True, help="dataset name on the hub")
+    target = parser.add_mutually_exclusive_group(required=True)
+    target.add_argument("--dataset", help="dataset name on the hub")
+    target.add_argument("--study", help="an ablation study on the hub: answer its baseline and every variant dataset")
     parser.add_argument("--model-url", required=True, help="base URL of the chat-completions API, e.g. https://api.openai.com/v1")
     parser.add_argument("--model", required=True, help="model name sent to the endpoint")
     parser.add_argument("--api-key-env", default="OPENAI_API_KEY", help="environment variable holding the endpoint's API key, if any (default: %(default)s)")
@@ -217,7 +238,7 @@ def parse_args(argv):
     parser.add_argument("--max-retries", type=int, default=5, help="retries on 429/5xx from the model endpoint (default: %(default)s)")
     parser.add_argument("--retry-delay", type=float, default=2.0, help="first backoff delay in seconds, doubled each retry (default: %(default)s)")
     parser.add_argument("--max-tokens", type=int, default=0, help="max_tokens for the model (0: not sent)")
-    parser.add_argument("--answers-out", help="also write the answers JSONL to this file")
+    parser.add_argument("--answers-out", help="also write the answers JSONL to this file (with --study: to DIR/{dataset}.jsonl)")
     args = parser.parse_args(argv)
     if args.limit is not None and args.limit < 1:
         parser.error("--limit must be at least 1")
@@ -241,35 +262,69 @@ def main(argv=None):
         args.max_tokens,
     )
     try:
-        urls = hub.item_urls(args.dataset, args.limit)
-        print("answering {} items of '{}' with {}".format(len(urls), args.dataset, args.model), file=sys.stderr)
-        answers = []
-        for n, url in enumerate(urls, 1):
-            item = hub.item(url)
-            images = [hub.image_data_url(image["url"]) for image in item["images"]]
-            answers.append((item["id"], model.answer(item, images)))
-            print("  {}/{} {}".format(n, len(urls), item["id"]), file=sys.stderr)
-        if args.answers_out:
-            with open(args.answers_out, "w", encoding="utf-8") as out:
-                for item_id, answer in answers:
-                    out.write(json.dumps({"id": item_id, "answer": answer}, ensure_ascii=False) + "\n")
-        metadata = {
-            "model": args.name or args.model,
-            "description": args.description,
-            "prompt_version": args.prompt_version,
-            "notes": "sent by clients/enact_client.py; {} items answered".format(len(answers)),
-        }
-        submission = hub.submit(args.dataset, answers, metadata)
+        if args.study:
+            datasets = hub.study_datasets(args.study)
+            print("study '{}': {} datasets".format(args.study, len(datasets)), file=sys.stderr)
+        else:
+            datasets = [args.dataset]
+        submissions = []
+        for dataset in datasets:
+            answers_out = args.answers_out
+            if args.study and answers_out:
+                os.makedirs(answers_out, exist_ok=True)
+                answers_out = os.path.join(answers_out, dataset + ".jsonl")
+            submission = run_dataset(hub, model, args, dataset, answers_out)
+            print_scores(submission)
+            submissions.append(submission)
+        report = hub.study_report(args.study, args.name or args.model) if args.study else None
     except ClientError as error:
         print("error: {}".format(error), file=sys.stderr)
         return 1
-    print(json.dumps(submission, indent=2))
+    if report is None:
+        print(json.dumps(submissions[0], indent=2))
+        return 0
+    print(json.dumps({"submissions": submissions, "report": report}, indent=2))
+    for cell in report["cells"]:
+        print(
+            "{}/{} {}: delta {} p {}".format(
+                cell["family"], cell["variant"], cell["direction"], cell["delta"], cell["p"]
+            ),
+            file=sys.stderr,
+        )
+    return 0
+
+
+def run_dataset(hub, model, args, dataset, answers_out):
+    """Asks the model every item of `dataset` and submits the answers; the stored submission."""
+    urls = hub.item_urls(dataset, args.limit)
+    print("answering {} items of '{}' with {}".format(len(urls), dataset, args.model), file=sys.stderr)
+    answers = []
+    for n, url in enumerate(urls, 1):
+        item = hub.item(url)
+        images = [hub.image_data_url(image["url"]) for image in item["images"]]
+        answers.append((item["id"], model.answer(item, images)))
+        print("  {}/{} {}".format(n, len(urls), item["id"]), file=sys.stderr)
+    if answers_out:
+        with open(answers_out, "w", encoding="utf-8") as out:
+            for item_id, answer in answers:
+                out.write(json.dumps({"id": item_id, "answer": answer}, ensure_ascii=False) + "\n")
+    metadata = {
+        "model": args.name or args.model,
+        "description": args.description,
+        "prompt_version": args.prompt_version,
+        "notes": "sent by clients/enact_client.py; {} items answered".format(len(answers)),
+    }
+    return hub.submit(dataset, answers, metadata)
+
+
+def print_scores(submission):
     scores = submission.get("scores") or {}
     overall = (scores.get("report") or {}).get("overall") or {}
     coverage = scores.get("coverage") or {}
     print(
-        "submission {}: overall TA {} PA {}; coverage {}, parse failures {}".format(
+        "submission {} on '{}': overall TA {} PA {}; coverage {}, parse failures {}".format(
             submission.get("id"),
+            submission.get("dataset"),
             overall.get("task_accuracy"),
             overall.get("pairwise_accuracy"),
             coverage.get("coverage"),
@@ -277,7 +332,6 @@ def main(argv=None):
         ),
         file=sys.stderr,
     )
-    return 0
 
 
 if __name__ == "__main__":

@@ -79,6 +79,12 @@ fn body_of(verb: Verb, path: &str, records: &[Value], n: usize) -> Option<(Strin
             "application/json",
         )),
         (Verb::Delete, "/admin/tokens/{token_id_or_prefix}") => Some((String::new(), "text/plain")),
+        (Verb::Post, "/admin/studies") => Some((
+            json!({"name": format!("made-{n}"), "baseline": "mini", "variants": ["Copy/same=mini-copy"]})
+                .to_string(),
+            "application/json",
+        )),
+        (Verb::Delete, "/admin/studies/{study}") => Some((String::new(), "text/plain")),
         (verb, path) => {
             panic!("the authorization matrix has no request for {verb:?} {path}: add it to body_of")
         }
@@ -109,6 +115,7 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
         assert_eq!(reply.status, 201, "{}", reply.text);
         reply.id()
     };
+    mini_study(&server, "matrix").await;
     let session = {
         crate::annotate::annotator(&server, "ann", true).await;
         let (browser, _) = crate::annotate::logged_in_on(&server, "ann", "/annotate").await;
@@ -144,6 +151,12 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                             .0
                             .to_string()
                     }
+                    // A fresh study for every deletion.
+                    "study" if route.verb == Verb::Delete => {
+                        mini_study(&server, &format!("doomed-{n}")).await;
+                        format!("doomed-{n}")
+                    }
+                    "study" => "matrix".to_owned(),
                     other => panic!(
                         "the authorization matrix cannot fill {{{other}}} in {}",
                         route.path
@@ -151,9 +164,12 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                 };
                 path = path.replace(&format!("{{{param}}}"), &value);
             }
-            // The one required query parameter among the routes: a submission's model.
+            // The required query parameters among the routes: a submission's model, a report's.
             if route.path == "/datasets/{dataset}/submissions" {
                 path.push_str("?model=matrix");
+            }
+            if route.path == "/studies/{study}/report" {
+                path.push_str("?model=m");
             }
             let mut call = server.call(method(route.verb), &format!("/api/v1{path}"));
             call = match caller {
@@ -256,6 +272,11 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("GET", "/admin/datasets/{dataset}/report", Page::Admin),
     ("GET", "/admin/datasets/{dataset}/report.json", Page::Admin),
     ("GET", "/admin/datasets/{dataset}/report.tar", Page::Admin),
+    ("GET", "/studies", Page::Public),
+    ("GET", "/studies/{study}", Page::Public),
+    ("GET", "/admin/studies", Page::Admin),
+    ("POST", "/admin/studies", Page::Admin),
+    ("POST", "/admin/studies/delete", Page::Admin),
 ];
 
 /// The literal paths of every `.route(` in the web adapter's source.
@@ -295,6 +316,7 @@ async fn every_page_route_answers_every_caller_as_the_matrix_says() {
     assign(&server, root, &[&item]).await;
     let (_, submitter) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
     let (_, admin_token) = api_token(&server.pool, "boss", Role::Admin, None, None).await;
+    mini_study(&server, "pages").await;
     let submission = submit_to(
         &server,
         "mini",
@@ -311,7 +333,8 @@ async fn every_page_route_answers_every_caller_as_the_matrix_says() {
             .replace("{dataset}", "mini")
             .replace("{item_id}", &item)
             .replace("{entry}", &submission.to_string())
-            .replace("{token}", "not-a-real-secret");
+            .replace("{token}", "not-a-real-secret")
+            .replace("{study}", "pages");
         let post = verb == "POST";
         // Anonymous, API tokens (which pages do not take), annotator and admin (both with the
         // page's CSRF token), and for forms an admin without it or with another one. Sessions

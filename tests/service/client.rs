@@ -166,9 +166,21 @@ async fn spawn_fake(records: &[Value]) -> (Arc<Fake>, String, tokio::task::JoinH
     (fake, format!("http://{fake_addr}/v1"), handle)
 }
 
-/// Runs the client against the hub and the fake endpoint, with `extra` arguments.
+/// Runs the client against the hub and the fake endpoint on dataset `mini`, with `extra`
+/// arguments.
 async fn run_client(
     server: &TestServer,
+    model_url: &str,
+    hub_token: &str,
+    extra: &[&str],
+) -> std::process::Output {
+    run_client_on(server, ["--dataset", "mini"], model_url, hub_token, extra).await
+}
+
+/// Runs the client on `target` (`--dataset NAME` or `--study NAME`).
+async fn run_client_on(
+    server: &TestServer,
+    target: [&str; 2],
     model_url: &str,
     hub_token: &str,
     extra: &[&str],
@@ -177,7 +189,8 @@ async fn run_client(
     let mut command = Command::new("python3");
     command
         .arg(script)
-        .args(["--hub", &server.url(""), "--dataset", "mini"])
+        .args(["--hub", &server.url("")])
+        .args(target)
         .args(["--model-url", model_url, "--model", "fake-vlm"])
         .args(["--name", "Fake VLM", "--retry-delay", "0.01"])
         .args(["--api-key-env", "FAKE_ENDPOINT_KEY"])
@@ -338,5 +351,77 @@ async fn the_example_client_stops_with_a_clear_message_when_the_model_endpoint_r
         0
     );
     drop(conn);
+    server.stop().await;
+}
+
+/// `--study`: the client answers the baseline and every variant of a study (the same questions
+/// with other images), submits each, and prints the study report; the fake model answers by
+/// question, so nothing changes between the datasets.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_example_client_runs_a_model_over_every_dataset_of_a_study() {
+    if !python_with_requests() {
+        eprintln!("skipping: python3 with `requests` is absent (run scripts/test.sh)");
+        return;
+    }
+    let fov = enact_hub::core::world::CameraRig {
+        image_size: 96,
+        fov_deg: 30.0,
+        ..Default::default()
+    };
+    let (server, records) = crate::studies::world_with_variants(&[("world-fov30", fov)]).await;
+    let (_, admin) = api_token(&server.pool, "admin", Role::Admin, None, None).await;
+    server
+        .call(reqwest::Method::POST, "/api/v1/admin/studies")
+        .bearer(&admin)
+        .json(
+            &json!({"name": "camera", "baseline": crate::studies::BASELINE,
+                      "variants": ["Camera FOV/Aperture 30=world-fov30"]}),
+        )
+        .expect(201)
+        .await;
+    let token = submitter_token(&server).await;
+    let (fake, model_url, fake_server) = spawn_fake(&records).await;
+    let answers = tempfile::tempdir().expect("tempdir");
+    let answers_dir = answers.path().join("answers");
+    let output = run_client_on(
+        &server,
+        ["--study", "camera"],
+        &model_url,
+        &token,
+        &["--answers-out", answers_dir.to_str().expect("utf-8 path")],
+    )
+    .await;
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "client failed: {stderr}");
+    {
+        let log = fake.log.lock().expect("log");
+        assert!(log.problems.is_empty(), "{:?}", log.problems);
+        assert_eq!(
+            log.answered.len(),
+            2 * records.len(),
+            "each item of each dataset"
+        );
+    }
+    let printed: Value = serde_json::from_slice(&output.stdout).expect("client prints JSON");
+    let datasets: Vec<&str> = printed["submissions"]
+        .as_array()
+        .expect("submissions")
+        .iter()
+        .map(|s| s["dataset"].as_str().expect("dataset"))
+        .collect();
+    assert_eq!(datasets, [crate::studies::BASELINE, "world-fov30"]);
+    for file in ["world.jsonl", "world-fov30.jsonl"] {
+        assert!(answers_dir.join(file).is_file(), "{file}");
+    }
+    let report = &printed["report"];
+    assert_eq!(report["stamp"]["row"], "Fake VLM");
+    for cell in report["cells"].as_array().expect("cells") {
+        assert_eq!(cell["delta"], 0.0, "the same answers: {cell}");
+    }
+    assert!(
+        stderr.contains("Camera FOV/Aperture 30 forward: delta 0.0"),
+        "{stderr}"
+    );
+    fake_server.abort();
     server.stop().await;
 }

@@ -424,3 +424,25 @@ pub async fn api_token(
 pub fn enact_hub() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_enact-hub"))
 }
+
+/// Creates the study `name` over `mini` (from [`spawn_app_with_release`]) with one variant:
+/// the same release imported again as `mini-copy` (on first use).
+pub async fn mini_study(server: &TestServer, name: &str) {
+    let hub = Hub::from(server.pool.clone());
+    if enact_hub::app::datasets::by_name(&hub, "mini-copy")
+        .await
+        .is_err()
+    {
+        let root = server
+            .db_path()
+            .parent()
+            .expect("db folder")
+            .join("release");
+        import(&server.pool, &root, &options("mini-copy")).await;
+    }
+    let copy =
+        enact_hub::core::study::VariantSpec::new("Copy", "same", "mini-copy").expect("variant");
+    enact_hub::app::studies::create(&hub, &tester(), name, "mini", &[copy])
+        .await
+        .expect("study created");
+}
