@@ -474,3 +474,83 @@ async fn studies_refuse_what_cannot_be_compared_and_are_audited() {
     assert_eq!(status, 404);
     server.stop().await;
 }
+
+/// The Human row as the compared "model": an annotator answers every item of the baseline
+/// right and reverses some on the variant; the report is the annotators' and can only fall.
+#[tokio::test]
+async fn the_human_row_is_reported_like_a_model() {
+    use enact_hub::app::Hub;
+    use enact_hub::core::annotation::{Draft, InteractionCounts, Session};
+
+    let (server, records) =
+        world_with_variants(&[("world-fov30", camera(|r| r.fov_deg = 30.0))]).await;
+    let token = admin(&server).await;
+    create(
+        &server,
+        &token,
+        json!({"name": "camera", "baseline": BASELINE,
+               "variants": ["Camera FOV/Aperture 30=world-fov30"]}),
+    )
+    .expect(201)
+    .await;
+    let hub = Hub::from(server.pool.clone());
+    let ann = crate::annotate::annotator(&server, "ann", false).await;
+    let session = Session {
+        annotator: ann,
+        name: "ann".to_owned(),
+        is_admin: false,
+        csrf_token: String::new(),
+    };
+    let ids: Vec<&str> = records
+        .iter()
+        .map(|r| r["id"].as_str().expect("id"))
+        .collect();
+    let reversed = within_direction(&records, |k| k % 3 == 0);
+    for dataset in [BASELINE, "world-fov30"] {
+        crate::annotate::assign_in(&server, dataset, ann, &ids).await;
+        for (i, record) in records.iter().enumerate() {
+            let mut slots: Vec<Option<u8>> = record["gt_answer"]
+                .as_array()
+                .expect("gt")
+                .iter()
+                .map(|l| Some(l.as_u64().expect("label") as u8))
+                .collect();
+            if dataset != BASELINE && reversed.contains(&i) {
+                slots.reverse();
+            }
+            let draft = Draft {
+                slots,
+                counts: InteractionCounts::default(),
+                history: Vec::new(),
+            };
+            enact_hub::app::annotation::answer(&hub, &session, dataset, ids[i], &draft)
+                .await
+                .expect("answered");
+        }
+    }
+    let (status, report) = server
+        .get_json("/api/v1/studies/camera/report?human=true")
+        .await;
+    assert_eq!(status, 200, "{report}");
+    assert_eq!(report["stamp"]["row"], "Human");
+    assert!(report["stamp"]["baseline_submission"].is_null());
+    for direction in ["forward", "inverse"] {
+        let cell = direction_cell(&report, "Aperture 30", direction);
+        assert_eq!(cell["mean_baseline"], 1.0, "{cell}");
+        assert!(cell["delta"].as_f64().expect("delta") < 0.0, "{cell}");
+        assert_eq!(cell["sign_test"]["positive"], 0, "{cell}");
+        assert!(cell["sign_test"]["negative"].as_u64() > Some(0), "{cell}");
+    }
+    let handedness = report["handedness"].as_array().expect("handedness");
+    assert_eq!(
+        handedness.len(),
+        4,
+        "baseline and variant, two directions each"
+    );
+    let (status, both) = server
+        .get_json("/api/v1/studies/camera/report?human=true&model=m")
+        .await;
+    assert_eq!(status, 400);
+    assert!(both["error"].as_str().unwrap().contains("not both"));
+    server.stop().await;
+}
