@@ -240,16 +240,27 @@ pub fn account_name(name: &str) -> Result<&str, String> {
 /// The login name of an annotator, trimmed. Names are shown on pages and typed at login, so
 /// they stay plain: 1 to 64 letters, digits, `.`, `_` and `-`.
 pub fn annotator_name(name: &str) -> Result<&str, String> {
+    plain_name(name, "annotator", 64)
+}
+
+/// A name that goes into pages, URLs and file names as it is, trimmed: 1 to `max` letters,
+/// digits, `.`, `_` and `-`. `kind` names it in messages ("annotator", "study").
+pub fn plain_name<'a>(name: &'a str, kind: &str, max: usize) -> Result<&'a str, String> {
     let name = name.trim();
-    if name.is_empty() || name.chars().count() > 64 {
-        return Err("an annotator name has 1 to 64 characters".to_owned());
+    if name.is_empty() || name.chars().count() > max {
+        let article = if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
+            "an"
+        } else {
+            "a"
+        };
+        return Err(format!("{article} {kind} name has 1 to {max} characters"));
     }
     if let Some(c) = name
         .chars()
         .find(|c| !(c.is_alphanumeric() || matches!(c, '.' | '_' | '-')))
     {
         return Err(format!(
-            "annotator name '{name}': character {c:?} is not allowed (letters, digits, . _ -)"
+            "{kind} name '{name}': character {c:?} is not allowed (letters, digits, . _ -)"
         ));
     }
     Ok(name)

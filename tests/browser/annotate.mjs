@@ -2,23 +2,13 @@
 // (mode "e2e") and by scripts/screenshots.sh (mode "screenshots"); parameters come as JSON in
 // the first argument. Prints one JSON line of findings on success; on failure saves a
 // screenshot and exits 1.
-import { chromium } from "playwright-core";
-import { mkdtempSync, mkdirSync } from "node:fs";
+import { mkdirSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
+import { openPage } from "./chromium.mjs";
 
 const params = JSON.parse(process.argv[2]);
 const { base, mode } = params;
-const CHROMIUM_FLAGS = [
-  "--headless",
-  "--no-sandbox",
-  "--disable-gpu",
-  "--disable-dev-shm-usage",
-  "--no-first-run",
-  "--disable-background-networking",
-  "--disable-component-update",
-  "--disable-sync",
-];
 
 function check(condition, message) {
   if (!condition) throw new Error(message);
@@ -200,19 +190,8 @@ async function screenshots(page) {
   return { written: params.shots.length };
 }
 
-const userDataDir = mkdtempSync(join(tmpdir(), "enact-hub-chromium-"));
-const context = await chromium.launchPersistentContext(userDataDir, {
-  executablePath: params.chromium || "/usr/bin/chromium",
-  headless: true,
-  args: CHROMIUM_FLAGS,
-  viewport: { width: 1280, height: 800 },
-});
-const page = context.pages()[0] || (await context.newPage());
 // Any console error (a refused script or style, a missing favicon, a script error) fails e2e.
-const consoleErrors = [];
-page.on("console", (m) => m.type() === "error" && consoleErrors.push(`${page.url()}: ${m.text()}`));
-page.on("pageerror", (e) => consoleErrors.push(`${page.url()}: ${e.message}`));
-page.setDefaultTimeout(15000);
+const { context, page, consoleErrors } = await openPage(params);
 try {
   const found = mode === "screenshots" ? await screenshots(page) : await e2e(page);
   check(consoleErrors.length === 0, `console errors:\n${consoleErrors.join("\n")}`);

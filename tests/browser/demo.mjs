@@ -2,10 +2,9 @@
 // item with the mouse and one inverse item with the keyboard, then reads the Human row on the
 // demo's leaderboard. Started by tests/service/browser.rs; parameters come as JSON in the first
 // argument. Prints one JSON line of findings; on failure saves a screenshot and exits 1.
-import { chromium } from "playwright-core";
-import { mkdtempSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
+import { openPage } from "./chromium.mjs";
 
 const params = JSON.parse(process.argv[2]);
 const base = new URL(params.link).origin;
@@ -26,18 +25,7 @@ async function waitSaved(page) {
   await page.waitForFunction(() => document.getElementById("save-status")?.textContent === "Saved");
 }
 
-const userDataDir = mkdtempSync(join(tmpdir(), "enact-hub-chromium-"));
-const context = await chromium.launchPersistentContext(userDataDir, {
-  executablePath: params.chromium || "/usr/bin/chromium",
-  headless: true,
-  args: ["--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run"],
-  viewport: { width: 1280, height: 800 },
-});
-const page = context.pages()[0] || (await context.newPage());
-page.setDefaultTimeout(20000);
-const consoleErrors = [];
-page.on("console", (m) => m.type() === "error" && consoleErrors.push(`${page.url()}: ${m.text()}`));
-page.on("pageerror", (e) => consoleErrors.push(`${page.url()}: ${e.message}`));
+const { context, page, consoleErrors } = await openPage(params, 20000);
 try {
   const found = { done: [] };
   await page.goto(params.link);

@@ -1,25 +1,11 @@
 // Loads a crowded leaderboard page in headless Chromium at 1280x800 and reports what a reader
 // gets: table rows, lines per chart panel, page width, load time. Started by
 // tests/service/browser.rs; parameters come as JSON in the first argument. Prints one JSON line.
-import { chromium } from "playwright-core";
-import { mkdtempSync } from "node:fs";
-import { tmpdir } from "node:os";
-import { join } from "node:path";
+import { openPage } from "./chromium.mjs";
 
 const params = JSON.parse(process.argv[2]);
-const userDataDir = mkdtempSync(join(tmpdir(), "enact-hub-chromium-"));
-const context = await chromium.launchPersistentContext(userDataDir, {
-  executablePath: params.chromium || "/usr/bin/chromium",
-  headless: true,
-  args: ["--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run"],
-  viewport: { width: 1280, height: 800 },
-});
-const page = context.pages()[0] || (await context.newPage());
-page.setDefaultTimeout(15000);
 // Any console error (a refused script or style, a missing file, a script error) fails the run.
-const consoleErrors = [];
-page.on("console", (m) => m.type() === "error" && consoleErrors.push(`${page.url()}: ${m.text()}`));
-page.on("pageerror", (e) => consoleErrors.push(`${page.url()}: ${e.message}`));
+const { context, page, consoleErrors } = await openPage(params);
 try {
   const started = Date.now();
   await page.goto(params.url, { waitUntil: "load" });

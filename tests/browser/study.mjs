@@ -3,24 +3,10 @@
 // texts on one line of the heatmap may overlap (a label cut or run into its neighbour fails).
 // Started by tests/service/browser.rs; parameters come as JSON in the first argument. Prints
 // one JSON line.
-import { chromium } from "playwright-core";
-import { mkdtempSync } from "node:fs";
-import { tmpdir } from "node:os";
-import { join } from "node:path";
+import { openPage } from "./chromium.mjs";
 
 const params = JSON.parse(process.argv[2]);
-const userDataDir = mkdtempSync(join(tmpdir(), "enact-hub-chromium-"));
-const context = await chromium.launchPersistentContext(userDataDir, {
-  executablePath: params.chromium || "/usr/bin/chromium",
-  headless: true,
-  args: ["--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run"],
-  viewport: { width: 1280, height: 800 },
-});
-const page = context.pages()[0] || (await context.newPage());
-page.setDefaultTimeout(15000);
-const consoleErrors = [];
-page.on("console", (m) => m.type() === "error" && consoleErrors.push(`${page.url()}: ${m.text()}`));
-page.on("pageerror", (e) => consoleErrors.push(`${page.url()}: ${e.message}`));
+const { context, page, consoleErrors } = await openPage(params);
 try {
   await page.goto(params.url, { waitUntil: "load" });
   const found = await page.evaluate(() => {

@@ -324,3 +324,49 @@ pub fn study_files(report: &StudyReport) -> Result<Vec<BundleFile>, String> {
     }
     Ok(files)
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::core::dataset::Direction;
+    use crate::core::study::report::fixtures::{inputs, row};
+    use crate::core::study::report::{STUDY_METRIC_VERSION, build_study_report};
+
+    const F: Direction = Direction::Forward;
+    const I: Direction = Direction::Inverse;
+
+    #[test]
+    fn every_file_is_stamped_with_the_datasets() {
+        let baseline = row(1, &[("a", F, 3, 1.0), ("b", F, 3, 0.5), ("c", I, 4, 0.0)]);
+        let variant = row(2, &[("a", F, 3, 0.5), ("b", F, 3, 0.5), ("c", I, 4, 1.0)]);
+        let mut with_hands = inputs(baseline, Ok(variant));
+        let hands = crate::core::error_analysis::analyse([]).overall.handedness;
+        with_hands.baseline_row.hands = Some([hands.clone(), hands]);
+        let report = build_study_report(&with_hands).unwrap();
+        let files = super::study_files(&report).unwrap();
+        let names: Vec<&str> = files.iter().map(|f| f.name).collect();
+        assert_eq!(
+            names,
+            [
+                "study.json",
+                "cells.csv",
+                "cells.tex",
+                "heatmap.svg",
+                "handedness.csv",
+                "handedness.svg"
+            ]
+        );
+        for file in &files {
+            let text = String::from_utf8(file.bytes.clone()).unwrap();
+            for needle in ["h0", "h1", STUDY_METRIC_VERSION, "m (team)"] {
+                assert!(text.contains(needle), "{} lacks {needle}", file.name);
+            }
+        }
+        let csv = String::from_utf8(files[1].bytes.clone()).unwrap();
+        assert!(csv.contains("\nCamera,Fisheye,forward,,-0.2500,"), "{csv}");
+        let tex = String::from_utf8(files[2].bytes.clone()).unwrap();
+        assert!(
+            tex.contains("Camera & Fisheye & forward & all & -0.250 &"),
+            "{tex}"
+        );
+    }
+}

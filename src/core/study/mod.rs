@@ -27,19 +27,7 @@ pub const MAX_VARIANTS: usize = 64;
 /// A study's name, trimmed: it appears in URLs and file names, so it stays plain (1 to 64
 /// letters, digits, `.`, `_` and `-`).
 pub fn study_name(name: &str) -> Result<&str, String> {
-    let name = name.trim();
-    if name.is_empty() || name.chars().count() > MAX_NAME_CHARS {
-        return Err(format!("a study name has 1 to {MAX_NAME_CHARS} characters"));
-    }
-    if let Some(c) = name
-        .chars()
-        .find(|c| !(c.is_alphanumeric() || matches!(c, '.' | '_' | '-')))
-    {
-        return Err(format!(
-            "study name '{name}': character {c:?} is not allowed (letters, digits, . _ -)"
-        ));
-    }
-    Ok(name)
+    crate::core::credentials::plain_name(name, "study", MAX_NAME_CHARS)
 }
 
 /// One variant of a study: its family ("Camera FOV"), its label in the family ("Aperture 30")

@@ -98,7 +98,7 @@ fn percent(value: Option<f64>) -> String {
     value.map_or_else(String::new, |v| format!("{:.2}", v * 100.0))
 }
 
-pub(crate) fn csv_field(text: &str) -> String {
+fn csv_field(text: &str) -> String {
     // A spreadsheet runs a cell that starts with = + - @ (or a tab or CR) as a formula, and
     // model names, descriptions and reasons are anyone's text: such a cell gets a leading `'`
     // (OWASP's advice), unless it is a number or the lone `-` of a missing value.
