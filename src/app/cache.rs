@@ -1,111 +1,328 @@
-//! Items kept in memory (the API's JSON and the annotation pages' decoded items), so hot read
-//! paths do no database work for item content.
+//! The server's in-memory caches, each bounded (in bytes or entries, set on `serve`) by a
+//! [`BoundedCache`] over `moka` (TinyLFU admission, LRU eviction) that also counts hits and
+//! misses; [`watch_generation`] logs them once a minute while they are used.
 //!
-//! Items change only through imports, which may run in another process. A background task
-//! watches the store's content generation and clears the cache when it moves, so a replaced
-//! item is served stale for at most one poll interval.
+//! Items (the API's JSON and the annotation pages' decoded items) change only through imports,
+//! which may run in another process. The watcher polls the store's content generation and
+//! clears what depends on items when it moves, so a replaced item is served stale for at most
+//! one poll interval.
 
-use std::collections::HashMap;
-use std::sync::{Arc, RwLock};
+use std::hash::Hash;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
 use bytes::Bytes;
+use serde::Serialize;
 use sqlx::SqlitePool;
 
 use super::leaderboard::BoardCache;
 use super::standings::StandingCache;
+use super::submissions::TargetCache;
 use crate::store;
 use crate::store::items::StoredItem;
 
 /// How often running servers look for imports made by other processes.
 pub const POLL_INTERVAL: Duration = Duration::from_millis(500);
 
-/// Entries kept at most per map; past this the map starts over (items are cheap to rebuild).
-const MAX_ENTRIES: usize = 50_000;
+/// How often cache statistics are logged (when a cache was used since the last time).
+const STATS_INTERVAL: Duration = Duration::from_secs(60);
+
+/// The bounds of the server's caches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CacheLimits {
+    /// Item JSON and decoded items together, in bytes (half each).
+    pub item_bytes: u64,
+    /// Annotators' standings on items, in entries.
+    pub standing_entries: u64,
+    /// Datasets whose scoring targets are kept (each holds every item's signatures).
+    pub target_datasets: u64,
+    /// Datasets whose leaderboard is kept built.
+    pub board_datasets: u64,
+    /// Frame PNGs, in bytes.
+    pub frame_bytes: u64,
+}
+
+impl Default for CacheLimits {
+    fn default() -> Self {
+        CacheLimits {
+            item_bytes: 64 * 1024 * 1024,
+            standing_entries: 100_000,
+            target_datasets: 8,
+            board_datasets: 32,
+            frame_bytes: 128 * 1024 * 1024,
+        }
+    }
+}
+
+/// What a cache says about itself.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CacheStats {
+    pub name: &'static str,
+    pub hits: u64,
+    pub misses: u64,
+    pub entries: u64,
+    /// Bytes for caches bounded in bytes, else entries.
+    pub weight: u64,
+    pub capacity: u64,
+}
+
+impl CacheStats {
+    pub fn hit_rate(&self) -> Option<f64> {
+        let total = self.hits + self.misses;
+        (total > 0).then(|| self.hits as f64 / total as f64)
+    }
+}
+
+/// A concurrent cache with a bound, counting its hits and misses.
+pub struct BoundedCache<K, V> {
+    name: &'static str,
+    capacity: u64,
+    inner: moka::sync::Cache<K, V>,
+    hits: AtomicU64,
+    misses: AtomicU64,
+}
+
+impl<K, V> BoundedCache<K, V>
+where
+    K: Hash + Eq + Send + Sync + 'static,
+    V: Clone + Send + Sync + 'static,
+{
+    /// At most `max_entries` entries.
+    pub fn by_entries(name: &'static str, max_entries: u64) -> Self {
+        BoundedCache::with(name, max_entries, moka::sync::Cache::new(max_entries))
+    }
+
+    /// At most `max_bytes` as `weigh` counts them (an entry heavier than `u32::MAX` bytes
+    /// counts as that).
+    pub fn by_bytes(name: &'static str, max_bytes: u64, weigh: fn(&K, &V) -> u64) -> Self {
+        let inner = moka::sync::Cache::builder()
+            .max_capacity(max_bytes)
+            .weigher(move |k: &K, v: &V| u32::try_from(weigh(k, v)).unwrap_or(u32::MAX))
+            .build();
+        BoundedCache::with(name, max_bytes, inner)
+    }
+
+    fn with(name: &'static str, capacity: u64, inner: moka::sync::Cache<K, V>) -> Self {
+        BoundedCache {
+            name,
+            capacity,
+            inner,
+            hits: AtomicU64::new(0),
+            misses: AtomicU64::new(0),
+        }
+    }
+
+    pub fn get(&self, key: &K) -> Option<V> {
+        let found = self.inner.get(key);
+        let counter = if found.is_some() {
+            &self.hits
+        } else {
+            &self.misses
+        };
+        counter.fetch_add(1, Ordering::Relaxed);
+        found
+    }
+
+    pub fn insert(&self, key: K, value: V) {
+        self.inner.insert(key, value);
+    }
+
+    pub fn remove(&self, key: &K) {
+        self.inner.invalidate(key);
+    }
+
+    pub fn clear(&self) {
+        self.inner.invalidate_all();
+    }
+
+    pub fn stats(&self) -> CacheStats {
+        // Counts are settled lazily; settle them so the figures are current.
+        self.inner.run_pending_tasks();
+        CacheStats {
+            name: self.name,
+            hits: self.hits.load(Ordering::Relaxed),
+            misses: self.misses.load(Ordering::Relaxed),
+            entries: self.inner.entry_count(),
+            weight: self.inner.weighted_size(),
+            capacity: self.capacity,
+        }
+    }
+}
+
+/// Key of an item: (dataset name, item id).
+type ItemKey = (String, String);
+
+fn key(dataset: &str, item_id: &str) -> ItemKey {
+    (dataset.to_owned(), item_id.to_owned())
+}
+
+/// Bytes an item's decoded form holds, roughly: its strings and lists, and fixed overhead.
+fn stored_weight(key: &ItemKey, item: &Arc<StoredItem>) -> u64 {
+    let strings = item.summary.item_id.len()
+        + item.summary.item_type.len()
+        + item.summary.task_name.len()
+        + item.question.len()
+        + item.gt_answer.len()
+        + item
+            .key_frame_ids
+            .iter()
+            .map(|f| f.len() + 24)
+            .sum::<usize>()
+        + item.actions.iter().map(|a| a.len() + 24).sum::<usize>()
+        + item
+            .images
+            .iter()
+            .map(|i| i.path.len() + i.sha256.len() + 64)
+            .sum::<usize>();
+    (key.0.len() + key.1.len() + strings + 256) as u64
+}
 
 /// Items in memory, by (dataset name, item id): the public JSON view for the API, and the
 /// decoded stored item for annotation pages. Both are cleared together.
-#[derive(Default)]
 pub struct ItemCache {
-    json: KeyedCache<Bytes>,
-    stored: KeyedCache<Arc<StoredItem>>,
+    json: BoundedCache<ItemKey, Bytes>,
+    stored: BoundedCache<ItemKey, Arc<StoredItem>>,
 }
 
 impl ItemCache {
+    /// At most `bytes` in all: half for JSON, half for decoded items.
+    pub fn new(bytes: u64) -> ItemCache {
+        ItemCache {
+            json: BoundedCache::by_bytes("item_json", bytes / 2, |k, v| {
+                (k.0.len() + k.1.len() + v.len() + 64) as u64
+            }),
+            stored: BoundedCache::by_bytes("item_stored", bytes / 2, stored_weight),
+        }
+    }
+
     pub fn json(&self, dataset: &str, item_id: &str) -> Option<Bytes> {
-        self.json.get(dataset, item_id)
+        // Tuple keys need owned strings; this allocation is far cheaper than a query.
+        self.json.get(&key(dataset, item_id))
     }
 
     pub fn insert_json(&self, dataset: &str, item_id: &str, json: Bytes) {
-        self.json.insert(dataset, item_id, json);
+        self.json.insert(key(dataset, item_id), json);
     }
 
     pub fn stored(&self, dataset: &str, item_id: &str) -> Option<Arc<StoredItem>> {
-        self.stored.get(dataset, item_id)
+        self.stored.get(&key(dataset, item_id))
     }
 
     pub fn insert_stored(&self, dataset: &str, item_id: &str, item: Arc<StoredItem>) {
-        self.stored.insert(dataset, item_id, item);
+        self.stored.insert(key(dataset, item_id), item);
     }
 
     pub fn clear(&self) {
         self.json.clear();
         self.stored.clear();
     }
+
+    pub fn stats(&self) -> [CacheStats; 2] {
+        [self.json.stats(), self.stored.stats()]
+    }
 }
 
-struct KeyedCache<V> {
-    entries: RwLock<HashMap<(String, String), V>>,
+/// Frame PNGs by content hash. Frames never change, so entries never go stale; the bound is
+/// only for memory.
+pub struct FrameCache(BoundedCache<String, Bytes>);
+
+impl FrameCache {
+    pub fn new(bytes: u64) -> FrameCache {
+        FrameCache(BoundedCache::by_bytes("frames", bytes, |k, v| {
+            (k.len() + v.len() + 64) as u64
+        }))
+    }
+
+    pub fn get(&self, sha256: &str) -> Option<Bytes> {
+        self.0.get(&sha256.to_owned())
+    }
+
+    pub fn insert(&self, sha256: &str, png: Bytes) {
+        self.0.insert(sha256.to_owned(), png);
+    }
+
+    pub fn stats(&self) -> CacheStats {
+        self.0.stats()
+    }
 }
 
-impl<V> Default for KeyedCache<V> {
-    fn default() -> Self {
-        KeyedCache {
-            entries: RwLock::default(),
+/// Every cache of a hub, built to its limits.
+#[derive(Clone)]
+pub struct Caches {
+    pub items: Arc<ItemCache>,
+    pub standings: Arc<StandingCache>,
+    pub targets: Arc<TargetCache>,
+    pub boards: Arc<BoardCache>,
+    pub frames: Arc<FrameCache>,
+}
+
+impl Caches {
+    pub fn new(limits: &CacheLimits) -> Caches {
+        Caches {
+            items: Arc::new(ItemCache::new(limits.item_bytes)),
+            standings: Arc::new(StandingCache::new(limits.standing_entries)),
+            targets: Arc::new(TargetCache::new(limits.target_datasets)),
+            boards: Arc::new(BoardCache::new(limits.board_datasets)),
+            frames: Arc::new(FrameCache::new(limits.frame_bytes)),
         }
     }
+
+    /// Every cache's figures.
+    pub fn stats(&self) -> Vec<CacheStats> {
+        let mut all = self.items.stats().to_vec();
+        all.push(self.standings.stats());
+        all.push(self.targets.stats());
+        all.push(self.boards.stats());
+        all.push(self.frames.stats());
+        all
+    }
 }
 
-impl<V: Clone> KeyedCache<V> {
-    fn get(&self, dataset: &str, item_id: &str) -> Option<V> {
-        let entries = self.entries.read().unwrap_or_else(|p| p.into_inner());
-        // Tuple keys need owned strings; this allocation is far cheaper than a query.
-        entries
-            .get(&(dataset.to_owned(), item_id.to_owned()))
-            .cloned()
-    }
-
-    fn insert(&self, dataset: &str, item_id: &str, value: V) {
-        let mut entries = self.entries.write().unwrap_or_else(|p| p.into_inner());
-        if entries.len() >= MAX_ENTRIES {
-            entries.clear();
+/// Logs each cache's figures when any was used since the last call; returns the lookups seen.
+fn log_stats(stats: &[CacheStats], last_lookups: u64) -> u64 {
+    let lookups: u64 = stats.iter().map(|s| s.hits + s.misses).sum();
+    if lookups != last_lookups {
+        for s in stats {
+            tracing::info!(
+                cache = s.name,
+                hits = s.hits,
+                misses = s.misses,
+                hit_rate = s
+                    .hit_rate()
+                    .map_or_else(|| "-".to_owned(), |r| format!("{r:.3}")),
+                entries = s.entries,
+                weight = s.weight,
+                capacity = s.capacity,
+                "cache statistics"
+            );
         }
-        entries.insert((dataset.to_owned(), item_id.to_owned()), value);
     }
-
-    fn clear(&self) {
-        self.entries
-            .write()
-            .unwrap_or_else(|p| p.into_inner())
-            .clear();
-    }
+    lookups
 }
 
-/// Clears `cache`, `standings` and `boards` whenever the store's content generation changes.
-/// Runs until the pool closes.
-pub async fn watch_generation(
-    pool: SqlitePool,
-    cache: Arc<ItemCache>,
-    standings: Arc<StandingCache>,
-    boards: Arc<BoardCache>,
-) {
+/// Clears the item-dependent caches whenever the store's content generation changes, and logs
+/// cache statistics once a minute. Runs until the pool closes.
+pub async fn watch_generation(pool: SqlitePool, caches: Caches) {
+    let Caches {
+        items: cache,
+        standings,
+        boards,
+        ..
+    } = &caches;
     let mut seen = None;
     let mut ticker = tokio::time::interval(POLL_INTERVAL);
     ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let mut last_stats = tokio::time::Instant::now();
+    let mut lookups = 0;
     loop {
         ticker.tick().await;
         if pool.is_closed() {
             return;
+        }
+        if last_stats.elapsed() >= STATS_INTERVAL {
+            last_stats = tokio::time::Instant::now();
+            lookups = log_stats(&caches.stats(), lookups);
         }
         let current = match pool.acquire().await {
             Ok(mut conn) => store::content_generation(&mut conn).await,
@@ -129,5 +346,39 @@ pub async fn watch_generation(
                 boards.changed();
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_byte_bound_holds_and_hits_are_counted() {
+        let cache = FrameCache::new(10_000);
+        for i in 0..100 {
+            cache.insert(&format!("{i:064}"), Bytes::from(vec![0u8; 1_000]));
+        }
+        let stats = cache.stats();
+        assert!(stats.weight <= 10_000, "{stats:?}");
+        assert!(stats.entries <= 10, "{stats:?}");
+        let kept = (0..100)
+            .filter(|i| cache.get(&format!("{i:064}")).is_some())
+            .count();
+        let stats = cache.stats();
+        assert_eq!(stats.hits as usize, kept);
+        assert_eq!(stats.misses as usize, 100 - kept);
+        assert_eq!(stats.hit_rate(), Some(kept as f64 / 100.0));
+    }
+
+    #[test]
+    fn an_entry_bound_holds_and_clearing_empties() {
+        let cache: BoundedCache<u32, u32> = BoundedCache::by_entries("test", 50);
+        for i in 0..1_000 {
+            cache.insert(i, i);
+        }
+        assert!(cache.stats().entries <= 50);
+        cache.clear();
+        assert!((0..1_000).all(|i| cache.get(&i).is_none()));
     }
 }

@@ -8,10 +8,11 @@
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, RwLock};
+use std::sync::{Arc, Mutex, RwLock};
 
 use bytes::Bytes;
 
+use super::cache::{BoundedCache, CacheLimits, CacheStats};
 use super::{AppError, Hub, datasets};
 use crate::core::annotation::human_entries;
 use crate::core::leaderboard::{HumanCoverage, LeaderboardRow, RowIdentity, rank};
@@ -125,30 +126,47 @@ impl Board {
 }
 
 /// Built boards by dataset name, and a count of the changes that outdate them.
-#[derive(Default)]
 pub struct BoardCache {
-    boards: RwLock<HashMap<String, Arc<Board>>>,
+    boards: BoundedCache<String, Arc<Board>>,
     /// Bumped by every change; a build stores its board only if no change came in between.
-    changes: AtomicU64,
+    /// Held while storing and while dropping, so a check and its insert are one step.
+    changes: Mutex<u64>,
     builds: AtomicU64,
 }
 
+impl Default for BoardCache {
+    fn default() -> Self {
+        BoardCache::new(CacheLimits::default().board_datasets)
+    }
+}
+
 impl BoardCache {
+    /// At most `datasets` boards.
+    pub fn new(datasets: u64) -> BoardCache {
+        BoardCache {
+            boards: BoundedCache::by_entries("boards", datasets),
+            changes: Mutex::new(0),
+            builds: AtomicU64::new(0),
+        }
+    }
+
+    fn changes(&self) -> std::sync::MutexGuard<'_, u64> {
+        self.changes.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
     /// Something that boards show has changed: drop them all (they rebuild in milliseconds).
     pub fn changed(&self) {
-        self.changes.fetch_add(1, Ordering::SeqCst);
-        self.boards
-            .write()
-            .unwrap_or_else(|p| p.into_inner())
-            .clear();
+        let mut changes = self.changes();
+        *changes += 1;
+        self.boards.clear();
     }
 
     fn get(&self, dataset: &str) -> Option<Arc<Board>> {
-        self.boards
-            .read()
-            .unwrap_or_else(|p| p.into_inner())
-            .get(dataset)
-            .cloned()
+        self.boards.get(&dataset.to_owned())
+    }
+
+    pub fn stats(&self) -> CacheStats {
+        self.boards.stats()
     }
 }
 
@@ -158,7 +176,7 @@ pub async fn board(hub: &Hub, name: &str) -> Result<Arc<Board>, AppError> {
     if let Some(board) = cache.get(name) {
         return Ok(board);
     }
-    let ticket = cache.changes.load(Ordering::SeqCst);
+    let ticket = *cache.changes();
     let (dataset, rows) = of(hub, name).await?;
     let board = Arc::new(Board {
         dataset,
@@ -166,10 +184,11 @@ pub async fn board(hub: &Hub, name: &str) -> Result<Arc<Board>, AppError> {
         version: cache.builds.fetch_add(1, Ordering::SeqCst) + 1,
         views: RwLock::default(),
     });
-    let mut boards = cache.boards.write().unwrap_or_else(|p| p.into_inner());
+    let changes = cache.changes();
     // A change during the build may predate what was read: serve this board, keep none.
-    if cache.changes.load(Ordering::SeqCst) == ticket {
-        boards.insert(name.to_owned(), board.clone());
+    if *changes == ticket {
+        cache.boards.insert(name.to_owned(), board.clone());
     }
+    drop(changes);
     Ok(board)
 }

@@ -76,6 +76,7 @@ pub struct Hub {
     standings: Arc<standings::StandingCache>,
     targets: Arc<submissions::TargetCache>,
     boards: Arc<leaderboard::BoardCache>,
+    frames: Arc<cache::FrameCache>,
     quotas: Quotas,
 }
 
@@ -87,13 +88,38 @@ impl From<SqlitePool> for Hub {
 
 impl Hub {
     pub fn new(pool: SqlitePool, quotas: Quotas) -> Hub {
+        let caches = cache::Caches::new(&cache::CacheLimits::default());
         Hub {
             pool,
-            items: Arc::default(),
-            standings: Arc::default(),
-            targets: Arc::default(),
-            boards: Arc::default(),
+            items: caches.items,
+            standings: caches.standings,
+            targets: caches.targets,
+            boards: caches.boards,
+            frames: caches.frames,
             quotas,
+        }
+    }
+
+    /// The hub with empty caches bounded by `limits` (call before serving).
+    pub fn with_cache_limits(self, limits: &cache::CacheLimits) -> Hub {
+        let caches = cache::Caches::new(limits);
+        Hub {
+            items: caches.items,
+            standings: caches.standings,
+            targets: caches.targets,
+            boards: caches.boards,
+            frames: caches.frames,
+            ..self
+        }
+    }
+
+    fn caches(&self) -> cache::Caches {
+        cache::Caches {
+            items: self.items.clone(),
+            standings: self.standings.clone(),
+            targets: self.targets.clone(),
+            boards: self.boards.clone(),
+            frames: self.frames.clone(),
         }
     }
 
@@ -120,6 +146,16 @@ impl Hub {
         &self.items
     }
 
+    /// The frame cache.
+    pub fn frames(&self) -> &cache::FrameCache {
+        &self.frames
+    }
+
+    /// Every cache's size, bound, hits and misses.
+    pub fn cache_stats(&self) -> Vec<cache::CacheStats> {
+        self.caches().stats()
+    }
+
     /// Whether the database answers.
     pub async fn healthy(&self) -> bool {
         match store::ping(&self.pool).await {
@@ -134,7 +170,8 @@ impl Hub {
     /// Clears the caches whenever stored items change, also through another process's
     /// import. Runs until the database is closed.
     pub async fn watch_content(self) {
-        cache::watch_generation(self.pool, self.items, self.standings, self.boards).await;
+        let caches = self.caches();
+        cache::watch_generation(self.pool, caches).await;
     }
 
     async fn conn(&self) -> Result<sqlx::pool::PoolConnection<sqlx::Sqlite>, AppError> {

@@ -7,25 +7,23 @@
 //! "Not assigned" is never stored, so new assignments need no notice. Imports, which may delete
 //! items and reuse their row ids, clear the whole cache through the content-generation watcher.
 
-use std::collections::HashMap;
 use std::sync::Mutex;
 
+use super::cache::{BoundedCache, CacheLimits, CacheStats};
 use crate::core::annotation::AssignmentState;
 
-/// Entries kept at most; past this the cache starts over.
-const MAX_ENTRIES: usize = 100_000;
-
-#[derive(Default)]
 pub struct StandingCache {
-    inner: Mutex<Standings>,
+    /// By (annotator id, item row id).
+    entries: BoundedCache<(i64, i64), AssignmentState>,
+    /// Counts forgets; a reader's ticket is this count when it started reading the store. Held
+    /// while remembering and forgetting, so a check and its insert are one step.
+    forgets: Mutex<u64>,
 }
 
-#[derive(Default)]
-struct Standings {
-    /// By (annotator id, item row id).
-    entries: HashMap<(i64, i64), AssignmentState>,
-    /// Counts forgets; a reader's ticket is this count when it started reading the store.
-    forgets: u64,
+impl Default for StandingCache {
+    fn default() -> Self {
+        StandingCache::new(CacheLimits::default().standing_entries)
+    }
 }
 
 /// Taken before reading the store; [`StandingCache::remember`] refuses a stale one.
@@ -33,42 +31,50 @@ struct Standings {
 pub struct ReadTicket(u64);
 
 impl StandingCache {
-    fn lock(&self) -> std::sync::MutexGuard<'_, Standings> {
-        self.inner.lock().unwrap_or_else(|p| p.into_inner())
+    /// At most `max_entries` standings.
+    pub fn new(max_entries: u64) -> StandingCache {
+        StandingCache {
+            entries: BoundedCache::by_entries("standings", max_entries),
+            forgets: Mutex::new(0),
+        }
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, u64> {
+        self.forgets.lock().unwrap_or_else(|p| p.into_inner())
     }
 
     pub fn get(&self, annotator: i64, item: i64) -> Option<AssignmentState> {
-        self.lock().entries.get(&(annotator, item)).cloned()
+        self.entries.get(&(annotator, item))
     }
 
     pub fn ticket(&self) -> ReadTicket {
-        ReadTicket(self.lock().forgets)
+        ReadTicket(*self.lock())
     }
 
     /// Stores a state read from the store after `ticket` was taken, unless something was
     /// forgotten since (the read may then predate a write).
     pub fn remember(&self, ticket: ReadTicket, annotator: i64, item: i64, state: AssignmentState) {
-        let mut standings = self.lock();
-        if standings.forgets != ticket.0 {
-            return;
+        let forgets = self.lock();
+        if *forgets == ticket.0 {
+            self.entries.insert((annotator, item), state);
         }
-        if standings.entries.len() >= MAX_ENTRIES {
-            standings.entries.clear();
-        }
-        standings.entries.insert((annotator, item), state);
     }
 
     /// Drops what is known of one annotator's item; call after writing its draft or answer.
     pub fn forget(&self, annotator: i64, item: i64) {
-        let mut standings = self.lock();
-        standings.entries.remove(&(annotator, item));
-        standings.forgets += 1;
+        let mut forgets = self.lock();
+        self.entries.remove(&(annotator, item));
+        *forgets += 1;
     }
 
     pub fn clear(&self) {
-        let mut standings = self.lock();
-        standings.entries.clear();
-        standings.forgets += 1;
+        let mut forgets = self.lock();
+        self.entries.clear();
+        *forgets += 1;
+    }
+
+    pub fn stats(&self) -> CacheStats {
+        self.entries.stats()
     }
 }
 

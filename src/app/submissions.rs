@@ -1,12 +1,12 @@
 //! Leaderboard submissions: submitting (quota, idempotency, scoring and storing, all or
 //! nothing), reading one back with what its reader may see, and the admin's listing controls.
 
-use std::collections::HashMap;
 use std::future::Future;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use sha2::{Digest, Sha256};
 
+use super::cache::{BoundedCache, CacheLimits};
 use super::tokens::Caller;
 use super::{AppError, Hub, audit, datasets};
 use crate::core::audit::{Actor, AuditAction};
@@ -29,24 +29,36 @@ pub struct DatasetTargets {
 
 /// Scoring targets per dataset, kept until the stored items change: deserialising the
 /// signature tables of a full dataset costs more than scoring a submission against them.
-#[derive(Default)]
 pub struct TargetCache {
-    entries: Mutex<HashMap<i64, (i64, Arc<DatasetTargets>)>>,
+    /// By (dataset id, content generation): a newer generation is a new key, and the old
+    /// entry ages out.
+    entries: BoundedCache<(i64, i64), Arc<DatasetTargets>>,
+}
+
+impl Default for TargetCache {
+    fn default() -> Self {
+        TargetCache::new(CacheLimits::default().target_datasets)
+    }
 }
 
 impl TargetCache {
+    /// At most `datasets` datasets' targets.
+    pub fn new(datasets: u64) -> TargetCache {
+        TargetCache {
+            entries: BoundedCache::by_entries("scoring_targets", datasets),
+        }
+    }
+
     fn get(&self, dataset: i64, generation: i64) -> Option<Arc<DatasetTargets>> {
-        let entries = self.entries.lock().ok()?;
-        entries
-            .get(&dataset)
-            .filter(|(g, _)| *g == generation)
-            .map(|(_, t)| t.clone())
+        self.entries.get(&(dataset, generation))
     }
 
     fn put(&self, dataset: i64, generation: i64, targets: Arc<DatasetTargets>) {
-        if let Ok(mut entries) = self.entries.lock() {
-            entries.insert(dataset, (generation, targets));
-        }
+        self.entries.insert((dataset, generation), targets);
+    }
+
+    pub fn stats(&self) -> super::cache::CacheStats {
+        self.entries.stats()
     }
 }
 

@@ -9,6 +9,7 @@ use std::time::Duration;
 use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
 
+use crate::app::cache::CacheLimits;
 use crate::app::import::{
     ImportError, ImportOptions, ReleaseLocation, SkippedLine, import_release,
 };
@@ -17,6 +18,9 @@ use crate::core::audit::Actor;
 use crate::core::credentials::Role;
 use crate::core::scoring::{self, ScoringTarget, SemanticCoverage};
 use crate::web::{Server, WebConfig, shutdown_signal};
+
+/// Bytes in a mebibyte.
+const MIB: u64 = 1024 * 1024;
 
 mod audit;
 mod simulate;
@@ -335,8 +339,20 @@ struct ServeArgs {
     #[arg(long, default_value_t = 30)]
     request_timeout: u64,
     /// Memory for caching frame images, in MiB.
-    #[arg(long, default_value_t = 256)]
-    frame_cache_mib: usize,
+    #[arg(long, default_value_t = CacheLimits::default().frame_bytes / MIB)]
+    frame_cache_mib: u64,
+    /// Memory for caching items (their JSON and decoded form), in MiB.
+    #[arg(long, default_value_t = CacheLimits::default().item_bytes / MIB)]
+    item_cache_mib: u64,
+    /// Annotators' item standings kept in memory, in entries.
+    #[arg(long, default_value_t = CacheLimits::default().standing_entries)]
+    standing_cache_entries: u64,
+    /// Datasets whose scoring targets (every item's signatures) are kept in memory.
+    #[arg(long, default_value_t = CacheLimits::default().target_datasets)]
+    target_cache_datasets: u64,
+    /// Datasets whose leaderboard is kept built in memory.
+    #[arg(long, default_value_t = CacheLimits::default().board_datasets)]
+    board_cache_datasets: u64,
     /// Largest submission body accepted, in bytes.
     #[arg(long, default_value_t = WebConfig::default().submission_body_limit)]
     submission_body_limit: usize,
@@ -475,10 +491,19 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         }
         (None, false) => PathBuf::from("enact-hub.db"),
     };
-    let hub = open(&db).await?.with_quotas(Quotas {
-        daily: args.daily_quota,
-        total: args.total_quota,
-    });
+    let hub = open(&db)
+        .await?
+        .with_quotas(Quotas {
+            daily: args.daily_quota,
+            total: args.total_quota,
+        })
+        .with_cache_limits(&CacheLimits {
+            item_bytes: args.item_cache_mib * MIB,
+            standing_entries: args.standing_cache_entries,
+            target_datasets: args.target_cache_datasets,
+            board_datasets: args.board_cache_datasets,
+            frame_bytes: args.frame_cache_mib * MIB,
+        });
     if args.demo {
         app::demo::load(&hub).await?;
     }
@@ -486,7 +511,6 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     let config = WebConfig {
         body_limit: args.body_limit,
         request_timeout: Duration::from_secs(args.request_timeout),
-        frame_cache_bytes: args.frame_cache_mib * 1024 * 1024,
         submission_body_limit: args.submission_body_limit,
     };
     let server = Server::bind(args.addr, hub.clone(), &config)

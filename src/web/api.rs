@@ -423,11 +423,12 @@ async fn get_frame(
     if !is_sha256_hex(&sha256) {
         return Err(not_found());
     }
-    let png = match state.frames.get(&sha256) {
+    let frames = state.hub.frames();
+    let png = match frames.get(&sha256) {
         Some(png) => png,
         None => {
             let png = Bytes::from(items::frame_png(&state.hub, &sha256).await?);
-            state.frames.insert(&sha256, png.clone());
+            frames.insert(&sha256, png.clone());
             png
         }
     };

@@ -22,7 +22,6 @@ mod auth;
 pub mod error;
 mod error_analysis;
 mod extract;
-mod frame_cache;
 mod leaderboard;
 pub mod openapi;
 mod pages;
@@ -43,7 +42,6 @@ use tower_http::timeout::TimeoutLayer;
 use tower_http::trace::TraceLayer;
 
 pub use error::AppError;
-use frame_cache::FrameCache;
 
 use crate::app::Hub;
 
@@ -54,8 +52,6 @@ pub struct WebConfig {
     pub body_limit: usize,
     /// A request taking longer than this is answered with 408.
     pub request_timeout: Duration,
-    /// Memory the frame cache may use, in bytes.
-    pub frame_cache_bytes: usize,
     /// Largest submission body accepted, in bytes (other routes use `body_limit`).
     pub submission_body_limit: usize,
 }
@@ -65,7 +61,6 @@ impl Default for WebConfig {
         WebConfig {
             body_limit: 2 * 1024 * 1024,
             request_timeout: Duration::from_secs(30),
-            frame_cache_bytes: 256 * 1024 * 1024,
             // A full ENACT-format file (8,972 QA records with answers) is about 27 MB.
             submission_body_limit: 64 * 1024 * 1024,
         }
@@ -76,7 +71,6 @@ impl Default for WebConfig {
 #[derive(Clone)]
 pub struct AppState {
     pub hub: Hub,
-    frames: Arc<FrameCache>,
     submission_body_limit: usize,
     logins: Arc<session::LoginLimiter>,
     sessions: Arc<session::SessionCache>,
@@ -86,7 +80,6 @@ impl AppState {
     pub fn new(hub: Hub, config: &WebConfig) -> Self {
         AppState {
             hub,
-            frames: Arc::new(FrameCache::new(config.frame_cache_bytes)),
             submission_body_limit: config.submission_body_limit,
             logins: Arc::new(session::LoginLimiter::default()),
             sessions: Arc::new(session::SessionCache::default()),

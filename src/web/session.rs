@@ -27,6 +27,7 @@ use serde::de::DeserializeOwned;
 use super::error::PageError;
 use super::{AppError, AppState};
 use crate::app::annotators::{self, SESSION_LIFETIME, now_ms};
+use crate::app::cache::BoundedCache;
 use crate::core::annotation::Session;
 use crate::core::credentials::{MIN_PASSWORD_CHARS, constant_time_eq, random_token, token_hash};
 
@@ -122,21 +123,28 @@ impl LoginLimiter {
 
 /// Sessions already looked up, by token hash, so that a page view costs no session query.
 /// Sessions never change once created; logout removes its entry, expiry is checked on use.
-#[derive(Default)]
 pub struct SessionCache {
-    entries: Mutex<HashMap<String, (Session, i64)>>,
+    entries: BoundedCache<String, (Session, i64)>,
+}
+
+impl Default for SessionCache {
+    fn default() -> Self {
+        SessionCache {
+            entries: BoundedCache::by_entries("sessions", Self::MAX_ENTRIES),
+        }
+    }
 }
 
 impl SessionCache {
-    /// Entries kept at most; past this the cache starts over.
-    const MAX_ENTRIES: usize = 100_000;
+    /// Entries kept at most.
+    const MAX_ENTRIES: u64 = 100_000;
 
     fn get(&self, token_hash: &str, now_ms: i64) -> Option<Session> {
-        let mut entries = self.entries.lock().unwrap_or_else(|p| p.into_inner());
-        match entries.get(token_hash) {
-            Some((session, expires)) if *expires > now_ms => Some(session.clone()),
+        let key = token_hash.to_owned();
+        match self.entries.get(&key) {
+            Some((session, expires)) if expires > now_ms => Some(session),
             Some(_) => {
-                entries.remove(token_hash);
+                self.entries.remove(&key);
                 None
             }
             None => None,
@@ -144,18 +152,11 @@ impl SessionCache {
     }
 
     fn insert(&self, token_hash: String, session: Session, expires_at_ms: i64) {
-        let mut entries = self.entries.lock().unwrap_or_else(|p| p.into_inner());
-        if entries.len() >= Self::MAX_ENTRIES {
-            entries.clear();
-        }
-        entries.insert(token_hash, (session, expires_at_ms));
+        self.entries.insert(token_hash, (session, expires_at_ms));
     }
 
     fn remove(&self, token_hash: &str) {
-        self.entries
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .remove(token_hash);
+        self.entries.remove(&token_hash.to_owned());
     }
 }
 
