@@ -45,7 +45,8 @@ with open(out, "w") as f:
         q = urllib.parse.quote(item_id, safe="")
         f.write(f'url = "http://127.0.0.1:{port}/api/v1/datasets/bench/items/{q}"\noutput = "/dev/null"\n')
 PY
-  RUST_LOG=warn "$BIN" serve --db "$db" --addr "127.0.0.1:$PORT" >"$OUT/server-$items.log" 2>&1 &
+  # shellcheck disable=SC2086
+  RUST_LOG=warn "$BIN" serve --db "$db" --addr "127.0.0.1:$PORT" ${SERVE_FLAGS:-} >"$OUT/server-$items.log" 2>&1 &
   local server=$!
   for _ in $(seq 100); do
     curl -fsS "http://127.0.0.1:$PORT/healthz" >/dev/null 2>&1 && break

@@ -41,16 +41,20 @@ pub struct CacheLimits {
     pub board_datasets: u64,
     /// Frame PNGs, in bytes.
     pub frame_bytes: u64,
+    /// SQLite's page cache over all of a server's connections, in bytes (the OS caches the
+    /// database file as well).
+    pub db_page_cache_bytes: u64,
 }
 
 impl Default for CacheLimits {
     fn default() -> Self {
         CacheLimits {
-            item_bytes: 64 * 1024 * 1024,
+            item_bytes: 32 * 1024 * 1024,
             standing_entries: 100_000,
             target_datasets: 8,
             board_datasets: 32,
             frame_bytes: 128 * 1024 * 1024,
+            db_page_cache_bytes: 32 * 1024 * 1024,
         }
     }
 }

@@ -131,6 +131,16 @@ impl Hub {
         Ok(Hub::new(pool, Quotas::default()))
     }
 
+    /// Opens the database for a server: every cache bounded by `limits`, SQLite's page cache
+    /// (shared out over the pool's connections) included.
+    pub async fn open_serving(path: &Path, limits: &cache::CacheLimits) -> anyhow::Result<Hub> {
+        let per_connection = limits.db_page_cache_bytes / 1024 / u64::from(store::MAX_CONNECTIONS);
+        let pool = store::open_with_page_cache(path, per_connection)
+            .await
+            .map_err(|e| anyhow::anyhow!("cannot open database {}: {e}", path.display()))?;
+        Ok(Hub::new(pool, Quotas::default()).with_cache_limits(limits))
+    }
+
     pub fn with_quotas(mut self, quotas: Quotas) -> Hub {
         self.quotas = quotas;
         self

@@ -353,6 +353,9 @@ struct ServeArgs {
     /// Datasets whose leaderboard is kept built in memory.
     #[arg(long, default_value_t = CacheLimits::default().board_datasets)]
     board_cache_datasets: u64,
+    /// SQLite's page cache over all connections, in MiB.
+    #[arg(long, default_value_t = CacheLimits::default().db_page_cache_bytes / MIB)]
+    db_cache_mib: u64,
     /// Largest submission body accepted, in bytes.
     #[arg(long, default_value_t = WebConfig::default().submission_body_limit)]
     submission_body_limit: usize,
@@ -491,19 +494,18 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         }
         (None, false) => PathBuf::from("enact-hub.db"),
     };
-    let hub = open(&db)
-        .await?
-        .with_quotas(Quotas {
-            daily: args.daily_quota,
-            total: args.total_quota,
-        })
-        .with_cache_limits(&CacheLimits {
-            item_bytes: args.item_cache_mib * MIB,
-            standing_entries: args.standing_cache_entries,
-            target_datasets: args.target_cache_datasets,
-            board_datasets: args.board_cache_datasets,
-            frame_bytes: args.frame_cache_mib * MIB,
-        });
+    let limits = CacheLimits {
+        item_bytes: args.item_cache_mib * MIB,
+        standing_entries: args.standing_cache_entries,
+        target_datasets: args.target_cache_datasets,
+        board_datasets: args.board_cache_datasets,
+        frame_bytes: args.frame_cache_mib * MIB,
+        db_page_cache_bytes: args.db_cache_mib * MIB,
+    };
+    let hub = Hub::open_serving(&db, &limits).await?.with_quotas(Quotas {
+        daily: args.daily_quota,
+        total: args.total_quota,
+    });
     if args.demo {
         app::demo::load(&hub).await?;
     }

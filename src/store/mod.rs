@@ -20,8 +20,27 @@ use std::time::Duration;
 use sqlx::SqlitePool;
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
 
-/// Opens (creating if missing) the database at `path` and applies the embedded migrations.
+/// Connections in a pool.
+pub const MAX_CONNECTIONS: u32 = 8;
+
+/// SQLite's page cache per connection for commands (imports and scoring read and write much
+/// in one transaction), in KiB.
+pub const COMMAND_PAGE_CACHE_KIB: u64 = 64 * 1024;
+
+/// Opens (creating if missing) the database at `path` and applies the embedded migrations,
+/// with the page cache of commands.
 pub async fn open(path: &Path) -> Result<SqlitePool, sqlx::Error> {
+    open_with_page_cache(path, COMMAND_PAGE_CACHE_KIB).await
+}
+
+/// [`open`] with `page_cache_kib` of SQLite page cache per connection (a server keeps
+/// [`MAX_CONNECTIONS`] of them; the OS caches the file beneath).
+pub async fn open_with_page_cache(
+    path: &Path,
+    page_cache_kib: u64,
+) -> Result<SqlitePool, sqlx::Error> {
+    // A negative cache_size is in KiB.
+    let cache_size = format!("-{}", page_cache_kib.max(1));
     let options = SqliteConnectOptions::from_str("sqlite://")?
         .filename(path)
         .create_if_missing(true)
@@ -31,10 +50,10 @@ pub async fn open(path: &Path) -> Result<SqlitePool, sqlx::Error> {
         .synchronous(SqliteSynchronous::Normal)
         .foreign_keys(true)
         .busy_timeout(Duration::from_secs(10))
-        .pragma("cache_size", "-65536")
+        .pragma("cache_size", cache_size)
         .pragma("temp_store", "memory");
     let pool = SqlitePoolOptions::new()
-        .max_connections(8)
+        .max_connections(MAX_CONNECTIONS)
         .min_connections(1)
         .acquire_timeout(Duration::from_secs(15))
         // A local file connection does not go stale; pinging it on every acquire would cost a
