@@ -3,7 +3,8 @@
 # enact-sample) replicated to 8,972 items, every image made distinct so that nothing
 # deduplicates (scripts/lib/full_size_release.py), then imported into a fresh database.
 # Reports the release's size, the import's time, images per second, peak RSS and the database
-# size. Needs about twice the release's size in free disk (~30 GB); both are deleted at the end
+# size. Needs about three times the release's size in free disk (~42 GB: the release, the
+# import's write-ahead log and the database); all are deleted at the end
 # unless KEEP=1.
 #
 #   scripts/bench-full-import.sh [ITEMS]
