@@ -180,6 +180,14 @@ fn study_table(view: &StudyView) -> String {
             "  {}/{} = {}{alignment}\n",
             v.spec.family, v.spec.label, v.spec.dataset
         ));
+        if let Some(a) = v.alignment.as_ref().filter(|a| a.verified_differently > 0) {
+            out.push_str(&format!(
+                "  warning: {} aligned items are judged by other rules than the baseline's \
+                 (another ground truth or signature table); import the variant with the \
+                 baseline's scene graphs\n",
+                a.verified_differently
+            ));
+        }
     }
     out
 }

@@ -572,8 +572,14 @@ async fn admin_create(
         .variants
         .iter()
         .map(|v| {
+            let differently = v.alignment.as_ref().map_or(0, |a| a.verified_differently);
+            let warning = if differently > 0 {
+                format!(", {differently} of them judged by other rules than the baseline's")
+            } else {
+                String::new()
+            };
             format!(
-                "{}/{}: {} aligned",
+                "{}/{}: {} aligned{warning}",
                 v.spec.family,
                 v.spec.label,
                 v.aligned.unwrap_or(0)

@@ -200,6 +200,10 @@ async fn a_study_reports_no_difference_for_the_same_answers_and_the_planted_one_
     assert!(n >= 12, "the world gives {n} items");
     assert_eq!(study["variants"][0]["aligned"], n);
     assert_eq!(study["variants"][0]["alignment"]["by_id"], n);
+    assert_eq!(
+        study["variants"][0]["alignment"]["verified_differently"], 0,
+        "imported with the baseline's scene graphs"
+    );
 
     // The same answers on both datasets (a few missed, so the scores vary).
     let missed = within_direction(&records, |k| k % 4 == 1);
@@ -408,6 +412,30 @@ async fn studies_refuse_what_cannot_be_compared_and_are_audited() {
     create(&server, &token, body.clone()).expect(201).await;
     refusal(body, 409, "exists already").await;
 
+    // The variant imported with its own replay's scene graphs: a 30° camera sees less, so some
+    // items are judged by other signatures, and the study says so.
+    let dir = server.db_path().parent().expect("folder").to_path_buf();
+    let mut own = options("world-own");
+    own.scene_graphs = Some(dir.join("world-fov30-replay"));
+    import(&server.pool, &dir.join("world-fov30"), &own).await;
+    let judged = create(
+        &server,
+        &token,
+        json!({"name": "own", "baseline": BASELINE, "variants": ["Camera/own=world-own"]}),
+    )
+    .expect(201)
+    .await
+    .json();
+    let differently = judged["variants"][0]["alignment"]["verified_differently"]
+        .as_u64()
+        .expect("count");
+    assert!(differently > 0, "{judged}");
+    let page = server.get("/studies/own").await.text().await.unwrap();
+    assert!(
+        page.contains("judged by other rules than the baseline"),
+        "{page}"
+    );
+
     // Reports name what is missing.
     let (status, missing) = server.get_json("/api/v1/studies/cam/report").await;
     assert_eq!(status, 400);
@@ -453,6 +481,7 @@ async fn studies_refuse_what_cannot_be_compared_and_are_audited() {
     // Listed, shown on the pages, audited, deleted.
     let (_, list) = server.get_json("/api/v1/studies").await;
     assert_eq!(list[0]["name"], "cam");
+    assert_eq!(list[1]["name"], "own");
     let page = server.get("/studies/cam?row=model:half").await;
     assert_eq!(page.status(), 200);
     let html = page.text().await.unwrap();

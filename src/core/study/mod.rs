@@ -136,6 +136,27 @@ pub struct AlignKey {
     pub item_type: String,
     pub task_name: String,
     pub key_frame_ids: Vec<String>,
+    /// [`verification_fingerprint`] of the item: aligned items with different ones are scored
+    /// by different rules.
+    pub verification: String,
+}
+
+/// A fingerprint of how an item's answers are judged: its ground truth and its signature table
+/// (`(source, table)` as stored), sha256 in hex.
+pub fn verification_fingerprint(gt_answer: &str, signatures: Option<(&str, &str)>) -> String {
+    use sha2::{Digest, Sha256};
+    let mut hasher = Sha256::new();
+    hasher.update(gt_answer.as_bytes());
+    match signatures {
+        Some((source, table)) => {
+            hasher.update(b"\0");
+            hasher.update(source.as_bytes());
+            hasher.update(b"\0");
+            hasher.update(table.as_bytes());
+        }
+        None => hasher.update(b"\0exact match only"),
+    }
+    hex::encode(hasher.finalize())
 }
 
 /// Which variant item answers which baseline item.
@@ -154,6 +175,10 @@ pub struct Alignment {
     pub variant_unaligned: usize,
     /// Items left unaligned because their task, type and key frames match several items.
     pub ambiguous: usize,
+    /// Aligned pairs judged by different rules (another ground truth or another signature
+    /// table): their scores differ for reasons other than the images. A variant made with
+    /// `generate --items-from` and imported with the baseline's scene graphs has none.
+    pub verified_differently: usize,
 }
 
 impl Alignment {
@@ -216,6 +241,11 @@ pub fn align(baseline: &[AlignKey], variant: &[AlignKey]) -> Alignment {
         .enumerate()
         .filter_map(|(b, v)| v.map(|v| (b, v)))
         .collect();
+    alignment.verified_differently = alignment
+        .pairs
+        .iter()
+        .filter(|&&(b, v)| baseline[b].verification != variant[v].verification)
+        .count();
     alignment.baseline_unaligned = baseline.len() - alignment.pairs.len();
     alignment.variant_unaligned = variant.len() - alignment.pairs.len();
     alignment
@@ -231,6 +261,7 @@ mod tests {
             item_type: "forward_world_modeling_3_steps".to_owned(),
             task_name: task.to_owned(),
             key_frame_ids: frames.iter().map(|f| (*f).to_owned()).collect(),
+            verification: verification_fingerprint("[1, 2]", Some(("scene_graph", "{}"))),
         }
     }
 
@@ -327,5 +358,14 @@ mod tests {
         assert_eq!(a.pairs, vec![(0, 1), (1, 0)]);
         assert_eq!((a.by_id, a.by_key_frames, a.ambiguous), (1, 1, 3));
         assert_eq!((a.baseline_unaligned, a.variant_unaligned), (3, 2));
+        assert_eq!(a.verified_differently, 0);
+        // The same item judged by other signatures (its variant's own scene graphs).
+        let mut other = variant.clone();
+        other[0].verification = verification_fingerprint("[1, 2]", Some(("scene_graph", "[]")));
+        assert_eq!(align(&baseline, &other).verified_differently, 1);
+        assert_ne!(
+            verification_fingerprint("[1, 2]", None),
+            verification_fingerprint("[2, 1]", None)
+        );
     }
 }

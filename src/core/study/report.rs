@@ -396,6 +396,7 @@ pub(crate) mod fixtures {
                 item_type: "t".into(),
                 task_name: "task".into(),
                 key_frame_ids: Vec::new(),
+                verification: String::new(),
             })
             .collect();
         let alignment = align(&keys, &keys);
