@@ -566,3 +566,59 @@ fn a_release_with_its_replays_imports_them_without_being_told() {
     assert_eq!(skipped["scene_graph_items"], 0, "{skipped}");
     assert_eq!(skipped["rows"], items);
 }
+
+/// BEHAVIOR's writer stores either every frame's record `full` (ENACT's published replays) or a
+/// `full` record every 200 frames with diffs between: the same run written both ways gives the
+/// same key frames, path counts, items and signatures.
+#[test]
+fn full_and_mixed_record_replays_give_the_same_items() {
+    use enact_hub::core::pipeline::{GenerateOptions, generate};
+    use enact_hub::core::world::RecordMode;
+
+    let dir = tempfile::tempdir().unwrap();
+    let mut options = options(Activity::MakeTea, 4);
+    options.camera.image_size = 96;
+    let simulation = simulate(&options).unwrap();
+    let mut sizes = Vec::new();
+    let mut summaries = Vec::new();
+    for (name, mode) in [("mixed", RecordMode::Mixed), ("full", RecordMode::Full)] {
+        let replay = dir.path().join(format!("{name}-replay"));
+        simulation
+            .write_replay_with(&replay, FrameImages::KeyFrames, mode)
+            .unwrap();
+        let graph = replay
+            .join(&simulation.task_name)
+            .join("scene_graph_0.json");
+        sizes.push(std::fs::metadata(&graph).unwrap().len());
+        let out = dir.path().join(name);
+        let mut summary = generate(
+            &replay,
+            &out,
+            &GenerateOptions {
+                num_to_sample: 2,
+                step_lengths: vec![3, 4, 6],
+                ..GenerateOptions::default()
+            },
+            &|_| {},
+        )
+        .unwrap();
+        summary.jsonl_path = Default::default();
+        let signatures =
+            transition_signatures(&timeline(&replay, &simulation), &frames(&simulation)).unwrap();
+        let qa = std::fs::read(out.join("QA/enact_ordering.jsonl")).unwrap();
+        summaries.push((summary, signatures, qa));
+    }
+    assert!(
+        sizes[1] > 20 * sizes[0],
+        "a full record per frame is far larger: {sizes:?}"
+    );
+    let (mixed, full) = (&summaries[0], &summaries[1]);
+    assert_eq!(
+        full.0.tasks[0].key_frames,
+        frames(&simulation),
+        "segmentation finds the intended key frames"
+    );
+    assert_eq!(mixed.0, full.0, "key frames, path counts and items");
+    assert_eq!(mixed.1, full.1, "signatures at the key frames");
+    assert_eq!(mixed.2, full.2, "the same QA file");
+}

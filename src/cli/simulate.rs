@@ -8,7 +8,7 @@ use anyhow::Context;
 use clap::Args;
 
 use crate::core::world::{
-    Activity, CameraRig, FrameImages, SimulateOptions, parse_colour, simulate,
+    Activity, CameraRig, FrameImages, RecordMode, SimulateOptions, parse_colour, simulate,
 };
 
 #[derive(Args)]
@@ -43,6 +43,10 @@ pub struct SimulateArgs {
     /// only).
     #[arg(long)]
     pub all_frames: bool,
+    /// How scene graphs are stored: `mixed` (a full record every 200 frames, diffs between)
+    /// or `full` (every frame's record full, as ENACT's published replays; large).
+    #[arg(long, default_value = "mixed", value_parser = ["mixed", "full"])]
+    pub record_mode: String,
 }
 
 pub fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
@@ -79,7 +83,8 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
             camera,
         };
         let simulation = simulate(&options)?;
-        let written = simulation.write_replay(&args.out, images)?;
+        let mode = RecordMode::parse(&args.record_mode).context("--record-mode: mixed or full")?;
+        let written = simulation.write_replay_with(&args.out, images, mode)?;
         println!(
             "{}: {} actions over {} frames, {} key frames, {} glitches, {} images in {}",
             simulation.task_name,

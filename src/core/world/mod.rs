@@ -326,6 +326,28 @@ pub enum FrameImages {
     All,
 }
 
+/// How `scene_graph_0.json` stores the frames, as BEHAVIOR's writer can.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RecordMode {
+    /// A `full` record every 200 frames, `diff` records where the graph changes between
+    /// them, `empty` records elsewhere: compact.
+    #[default]
+    Mixed,
+    /// Every frame's record `full`, as ENACT's published replays are written: as large as a
+    /// replay gets.
+    Full,
+}
+
+impl RecordMode {
+    pub fn parse(text: &str) -> Option<RecordMode> {
+        match text {
+            "mixed" => Some(RecordMode::Mixed),
+            "full" => Some(RecordMode::Full),
+            _ => None,
+        }
+    }
+}
+
 /// What [`Simulation::write_replay`] wrote.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct WrittenReplay {
@@ -369,6 +391,11 @@ impl Simulation {
     /// BEHAVIOR's writer), otherwise a `diff` of whole nodes and edges when anything changed,
     /// or `empty`.
     pub fn records(&self) -> impl Iterator<Item = (u64, FrameRecord)> + '_ {
+        self.records_in(RecordMode::Mixed)
+    }
+
+    /// Every frame's record, stored as `mode` says.
+    pub fn records_in(&self, mode: RecordMode) -> impl Iterator<Item = (u64, FrameRecord)> + '_ {
         // The recorded graph only changes where a state or a glitch starts or ends.
         let mut changes: std::collections::BTreeSet<u64> = self.starts.iter().copied().collect();
         for f in &self.flickers {
@@ -377,7 +404,8 @@ impl Simulation {
         }
         let mut previous: Option<SceneGraph> = None;
         (0..self.num_frames).map(move |frame| {
-            let full = frame % FULL_RECORD_INTERVAL == FULL_RECORD_INTERVAL - 1;
+            let full = mode == RecordMode::Full
+                || frame % FULL_RECORD_INTERVAL == FULL_RECORD_INTERVAL - 1;
             if previous.is_some() && !full && !changes.contains(&frame) {
                 return (frame, FrameRecord::Empty);
             }
@@ -400,6 +428,16 @@ impl Simulation {
         replayed_dir: &Path,
         images: FrameImages,
     ) -> Result<WrittenReplay, WorldError> {
+        self.write_replay_with(replayed_dir, images, RecordMode::Mixed)
+    }
+
+    /// [`Simulation::write_replay`] with the scene graphs stored as `mode` says.
+    pub fn write_replay_with(
+        &self,
+        replayed_dir: &Path,
+        images: FrameImages,
+        mode: RecordMode,
+    ) -> Result<WrittenReplay, WorldError> {
         let task_dir = replayed_dir.join(&self.task_name);
         let sensor_dir = task_dir.join(render::SENSOR);
         let io = |path: &Path| {
@@ -412,7 +450,7 @@ impl Simulation {
         let file = std::fs::File::create(&graph_path).map_err(io(&graph_path))?;
         let mut out = std::io::BufWriter::new(file);
         out.write_all(b"{").map_err(io(&graph_path))?;
-        for (frame, record) in self.records() {
+        for (frame, record) in self.records_in(mode) {
             if frame > 0 {
                 out.write_all(b", ").map_err(io(&graph_path))?;
             }
