@@ -16,6 +16,10 @@ use serde::de::{self, DeserializeSeed, IgnoredAny, MapAccess, Visitor};
 use crate::core::scene_graph::record::{FrameRecord, SceneGraph};
 use crate::core::scene_graph::transient::for_each_filtered_graph;
 
+/// Scene-graph files larger than this are streamed when only some frames are wanted (smaller
+/// ones are read whole: parsing from memory is faster).
+pub const STREAM_THRESHOLD_BYTES: u64 = 64 * 1024 * 1024;
+
 /// Which frames a loaded timeline can answer for.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum FrameSelection {
@@ -113,16 +117,50 @@ impl SceneGraphTimeline {
     }
 
     /// Loads `scene_graph_0.json`, optionally through ENACT's transient filter.
+    ///
+    /// A file over [`STREAM_THRESHOLD_BYTES`] loaded for a frame selection without the filter
+    /// is read as a stream, twice (record kinds, then the records needed), so memory holds
+    /// only what the selected frames are rebuilt from, never the text.
     pub fn load_with(
         path: &Path,
         selection: FrameSelection,
         filter: TransientFilter,
     ) -> Result<Self, TimelineError> {
-        let bytes = std::fs::read(path).map_err(|source| TimelineError::Io {
+        let io = |source| TimelineError::Io {
             path: path.to_path_buf(),
             source,
-        })?;
+        };
+        if let (FrameSelection::Only(ids), TransientFilter::Off) = (&selection, filter) {
+            let size = std::fs::metadata(path).map_err(io)?.len();
+            if size > STREAM_THRESHOLD_BYTES {
+                return Self::stream_selected(path, ids);
+            }
+        }
+        let bytes = std::fs::read(path).map_err(io)?;
         Self::from_json_slice(&bytes, path, selection, filter)
+    }
+
+    /// Reads the selected frames of the file at `path` as a stream, in two passes.
+    fn stream_selected(path: &Path, ids: &BTreeSet<String>) -> Result<Self, TimelineError> {
+        let open = || -> Result<_, TimelineError> {
+            let file = std::fs::File::open(path).map_err(|source| TimelineError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+            Ok(serde_json::Deserializer::from_reader(
+                std::io::BufReader::with_capacity(1 << 20, file),
+            ))
+        };
+        let kinds = scan_kinds_with(open()?, path)?;
+        let selected: BTreeSet<u64> = ids.iter().filter_map(|id| canonical_frame(id)).collect();
+        let needed = records_needed(&kinds, &selected);
+        let (known, records) = parse_records_with(open()?, path, &KeepRecords::Only(&needed))?;
+        let loaded = SceneGraphTimeline {
+            source: path.to_path_buf(),
+            known,
+            records,
+        };
+        Ok(loaded.keep_only(&selected))
     }
 
     /// Parses scene-graph JSON already in memory; `source` names it in errors.
@@ -415,8 +453,16 @@ fn parse_records(
     source: &Path,
     keep: &KeepRecords<'_>,
 ) -> Result<ParsedRecords, TimelineError> {
+    parse_records_with(serde_json::Deserializer::from_slice(bytes), source, keep)
+}
+
+/// [`parse_records`] from any JSON source (a slice, or a file read as a stream).
+fn parse_records_with<'de, R: serde_json::de::Read<'de>>(
+    mut de: serde_json::Deserializer<R>,
+    source: &Path,
+    keep: &KeepRecords<'_>,
+) -> Result<ParsedRecords, TimelineError> {
     let mut cursor = Cursor::default();
-    let mut de = serde_json::Deserializer::from_slice(bytes);
     let visitor = RecordMapVisitor {
         keep,
         cursor: &mut cursor,
@@ -470,8 +516,15 @@ fn scan_record_kinds(
     bytes: &[u8],
     source: &Path,
 ) -> Result<BTreeMap<u64, RecordKind>, TimelineError> {
+    scan_kinds_with(serde_json::Deserializer::from_slice(bytes), source)
+}
+
+/// [`scan_record_kinds`] from any JSON source.
+fn scan_kinds_with<'de, R: serde_json::de::Read<'de>>(
+    mut de: serde_json::Deserializer<R>,
+    source: &Path,
+) -> Result<BTreeMap<u64, RecordKind>, TimelineError> {
     let mut cursor = Cursor::default();
-    let mut de = serde_json::Deserializer::from_slice(bytes);
     let visitor = KindMapVisitor {
         cursor: &mut cursor,
     };
@@ -628,6 +681,45 @@ mod tests {
             sel.with_transients_filtered(),
             Err(TimelineError::FrameNotLoaded { .. })
         ));
+    }
+
+    #[test]
+    fn a_streamed_selection_equals_one_read_from_memory() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("scene_graph_0.json");
+        std::fs::write(&path, FILE).unwrap();
+        let FrameSelection::Only(ids) = only(&["3", "11", "999"]) else {
+            unreachable!()
+        };
+        let streamed = SceneGraphTimeline::stream_selected(&path, &ids).unwrap();
+        let in_memory = load(only(&["3", "11", "999"]));
+        for f in ["3", "11"] {
+            assert_eq!(
+                *streamed.scene_graph(f).unwrap(),
+                *in_memory.scene_graph(f).unwrap()
+            );
+        }
+        assert_eq!(
+            streamed.frame_ids().collect::<Vec<_>>(),
+            in_memory.frame_ids().collect::<Vec<_>>()
+        );
+        assert_eq!(
+            streamed.loaded_frame_ids().collect::<Vec<_>>(),
+            in_memory.loaded_frame_ids().collect::<Vec<_>>()
+        );
+        // Errors name the frame and place as the in-memory reader does.
+        let broken = FILE.replace(r#""3": {"type": "diff""#, r#""3": {"type": "diff" ,,"#);
+        std::fs::write(&path, &broken).unwrap();
+        let streamed = SceneGraphTimeline::stream_selected(&path, &ids).unwrap_err();
+        let in_memory = SceneGraphTimeline::from_json_slice(
+            broken.as_bytes(),
+            &path,
+            only(&["3", "11", "999"]),
+            TransientFilter::Off,
+        )
+        .unwrap_err();
+        assert_eq!(streamed.to_string(), in_memory.to_string());
+        assert!(streamed.to_string().contains("in frame 3"), "{streamed}");
     }
 
     #[test]
