@@ -1,32 +1,16 @@
 //! The server's in-memory caches, each bounded (in bytes or entries, set on `serve`) by a
 //! [`BoundedCache`] over `moka` (TinyLFU admission, LRU eviction) that also counts hits and
-//! misses; [`watch_generation`] logs them once a minute while they are used.
-//!
-//! Items (the API's JSON and the annotation pages' decoded items) change only through imports,
-//! which may run in another process. The watcher polls the store's content generation and
-//! clears what depends on items when it moves, so a replaced item is served stale for at most
-//! one poll interval.
+//! misses. `watch` clears the item-dependent ones when stored items change and logs the
+//! figures.
 
 use std::hash::Hash;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::Duration;
 
 use bytes::Bytes;
 use serde::Serialize;
-use sqlx::SqlitePool;
 
-use super::leaderboard::BoardCache;
-use super::standings::StandingCache;
-use super::submissions::TargetCache;
-use crate::store;
 use crate::store::items::StoredItem;
-
-/// How often running servers look for imports made by other processes.
-pub const POLL_INTERVAL: Duration = Duration::from_millis(500);
-
-/// How often cache statistics are logged (when a cache was used since the last time).
-const STATS_INTERVAL: Duration = Duration::from_secs(60);
 
 /// The bounds of the server's caches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -248,108 +232,6 @@ impl FrameCache {
 
     pub fn stats(&self) -> CacheStats {
         self.0.stats()
-    }
-}
-
-/// Every cache of a hub, built to its limits.
-#[derive(Clone)]
-pub struct Caches {
-    pub items: Arc<ItemCache>,
-    pub standings: Arc<StandingCache>,
-    pub targets: Arc<TargetCache>,
-    pub boards: Arc<BoardCache>,
-    pub frames: Arc<FrameCache>,
-}
-
-impl Caches {
-    pub fn new(limits: &CacheLimits) -> Caches {
-        Caches {
-            items: Arc::new(ItemCache::new(limits.item_bytes)),
-            standings: Arc::new(StandingCache::new(limits.standing_entries)),
-            targets: Arc::new(TargetCache::new(limits.target_datasets)),
-            boards: Arc::new(BoardCache::new(limits.board_datasets)),
-            frames: Arc::new(FrameCache::new(limits.frame_bytes)),
-        }
-    }
-
-    /// Every cache's figures.
-    pub fn stats(&self) -> Vec<CacheStats> {
-        let mut all = self.items.stats().to_vec();
-        all.push(self.standings.stats());
-        all.push(self.targets.stats());
-        all.push(self.boards.stats());
-        all.push(self.frames.stats());
-        all
-    }
-}
-
-/// Logs each cache's figures when any was used since the last call; returns the lookups seen.
-fn log_stats(stats: &[CacheStats], last_lookups: u64) -> u64 {
-    let lookups: u64 = stats.iter().map(|s| s.hits + s.misses).sum();
-    if lookups != last_lookups {
-        for s in stats {
-            tracing::info!(
-                cache = s.name,
-                hits = s.hits,
-                misses = s.misses,
-                hit_rate = s
-                    .hit_rate()
-                    .map_or_else(|| "-".to_owned(), |r| format!("{r:.3}")),
-                entries = s.entries,
-                weight = s.weight,
-                capacity = s.capacity,
-                "cache statistics"
-            );
-        }
-    }
-    lookups
-}
-
-/// Clears the item-dependent caches whenever the store's content generation changes, and logs
-/// cache statistics once a minute. Runs until the pool closes.
-pub async fn watch_generation(pool: SqlitePool, caches: Caches) {
-    let Caches {
-        items: cache,
-        standings,
-        boards,
-        ..
-    } = &caches;
-    let mut seen = None;
-    let mut ticker = tokio::time::interval(POLL_INTERVAL);
-    ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-    let mut last_stats = tokio::time::Instant::now();
-    let mut lookups = 0;
-    loop {
-        ticker.tick().await;
-        if pool.is_closed() {
-            return;
-        }
-        if last_stats.elapsed() >= STATS_INTERVAL {
-            last_stats = tokio::time::Instant::now();
-            lookups = log_stats(&caches.stats(), lookups);
-        }
-        let current = match pool.acquire().await {
-            Ok(mut conn) => store::content_generation(&mut conn).await,
-            Err(e) => Err(e),
-        };
-        match current {
-            Ok(generation) => {
-                if seen.is_some_and(|s| s != generation) {
-                    tracing::info!(generation, "stored items changed: item cache cleared");
-                    cache.clear();
-                    standings.clear();
-                    boards.changed();
-                }
-                seen = Some(generation);
-            }
-            Err(e) => {
-                // Serving stale items is worse than serving none: drop the cache.
-                tracing::warn!(error = %e, "cannot read the content generation");
-                cache.clear();
-                standings.clear();
-                boards.changed();
-            }
-        }
     }
 }
 

@@ -3,7 +3,7 @@
 //! [`crate::core`] holds the benchmark's logic.
 //!
 //! - [`Hub`]: the database and the in-memory caches every use case shares ([`cache`],
-//!   [`standings`]), and the quotas submissions count against.
+//!   [`standings`]; [`watch`] keeps them current), and the quotas submissions count against.
 //! - [`datasets`] and [`items`]: reading what is stored, frames and release archives included;
 //!   [`import`]: an ENACT release read from disk, all or nothing.
 //! - [`scoring`]: a prediction file scored against a stored dataset or a release folder.
@@ -40,6 +40,7 @@ pub mod standings;
 pub mod studies;
 pub mod submissions;
 pub mod tokens;
+pub mod watch;
 
 use std::path::Path;
 use std::sync::Arc;
@@ -88,7 +89,7 @@ impl From<SqlitePool> for Hub {
 
 impl Hub {
     pub fn new(pool: SqlitePool, quotas: Quotas) -> Hub {
-        let caches = cache::Caches::new(&cache::CacheLimits::default());
+        let caches = watch::Caches::new(&cache::CacheLimits::default());
         Hub {
             pool,
             items: caches.items,
@@ -102,7 +103,7 @@ impl Hub {
 
     /// The hub with empty caches bounded by `limits` (call before serving).
     pub fn with_cache_limits(self, limits: &cache::CacheLimits) -> Hub {
-        let caches = cache::Caches::new(limits);
+        let caches = watch::Caches::new(limits);
         Hub {
             items: caches.items,
             standings: caches.standings,
@@ -113,8 +114,8 @@ impl Hub {
         }
     }
 
-    fn caches(&self) -> cache::Caches {
-        cache::Caches {
+    fn caches(&self) -> watch::Caches {
+        watch::Caches {
             items: self.items.clone(),
             standings: self.standings.clone(),
             targets: self.targets.clone(),
@@ -161,11 +162,6 @@ impl Hub {
         &self.frames
     }
 
-    /// Every cache's size, bound, hits and misses.
-    pub fn cache_stats(&self) -> Vec<cache::CacheStats> {
-        self.caches().stats()
-    }
-
     /// Whether the database answers.
     pub async fn healthy(&self) -> bool {
         match store::ping(&self.pool).await {
@@ -181,7 +177,7 @@ impl Hub {
     /// import. Runs until the database is closed.
     pub async fn watch_content(self) {
         let caches = self.caches();
-        cache::watch_generation(self.pool, caches).await;
+        watch::watch_generation(self.pool, caches).await;
     }
 
     async fn conn(&self) -> Result<sqlx::pool::PoolConnection<sqlx::Sqlite>, AppError> {

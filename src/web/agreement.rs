@@ -317,7 +317,8 @@ struct ReportPage {
     bootstrap: usize,
 }
 
-fn fixed(value: Option<f64>, decimals: usize) -> String {
+/// A figure with `decimals` places, or a dash where there is none.
+pub(super) fn fixed(value: Option<f64>, decimals: usize) -> String {
     value.map_or_else(|| "–".to_owned(), |v| format!("{v:.decimals$}"))
 }
 

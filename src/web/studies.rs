@@ -14,6 +14,7 @@ use serde::Deserialize;
 use serde_json::json;
 
 use super::admin::require_admin;
+use super::agreement::fixed;
 use super::error::PageError;
 use super::extract::{Json, Path, Query};
 use super::openapi::{ApiRoute, Verb};
@@ -343,10 +344,6 @@ struct CellText {
     sign: String,
     sign_title: String,
     sign_p: String,
-}
-
-fn fixed(value: Option<f64>, decimals: usize) -> String {
-    value.map_or_else(|| "–".to_owned(), |v| format!("{v:.decimals$}"))
 }
 
 fn cell_texts(report: &StudyReport) -> Vec<CellText> {
