@@ -12,11 +12,18 @@
 //! integers, other node fields referenced rather than copied) because it visits every frame
 //! about forty times.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, VecDeque};
+use std::ops::Deref;
 
 use crate::core::scene_graph::record::{
     FrameRecord, SceneEdge, SceneGraph, SceneNode, apply_delta_to,
 };
+
+/// How a filtered node refers to the record entry that carries its other fields: a reference
+/// into records held in memory, or a shared copy when records are read as a stream.
+pub(crate) trait Fields: Clone + Deref<Target = SceneNode> {}
+
+impl<T: Clone + Deref<Target = SceneNode>> Fields for T {}
 
 /// A change shorter than this many frames is treated as a glitch (ENACT's
 /// `TRANSIENT_FRAME_THRESHOLD`); windows span at most this many frames minus one.
@@ -25,13 +32,13 @@ pub const TRANSIENT_FRAME_THRESHOLD: usize = 10;
 pub const STRIDE: usize = TRANSIENT_FRAME_THRESHOLD / 2;
 
 #[derive(Debug, Clone)]
-struct Node<'a> {
+struct Node<R> {
     name: u32,
     /// As stored until the filter rewrites them; then a set (sorted, no repeats).
     states: Vec<u32>,
     rewritten: bool,
     /// The record entry whose other fields (category, visibility, parent) this node carries.
-    fields: &'a SceneNode,
+    fields: R,
 }
 
 #[derive(Debug, Clone)]
@@ -41,9 +48,9 @@ struct Edge {
     rewritten: bool,
 }
 
-#[derive(Debug, Clone, Default)]
-struct Frame<'a> {
-    nodes: Vec<Node<'a>>,
+#[derive(Debug, Clone)]
+struct Frame<R> {
+    nodes: Vec<Node<R>>,
     edges: Vec<Edge>,
 }
 
@@ -83,10 +90,7 @@ pub(crate) fn for_each_filtered_graph(
     records: &BTreeMap<u64, FrameRecord>,
     mut emit: impl FnMut(u64, SceneGraph),
 ) -> Result<(), u64> {
-    let mut words = Interner::default();
-    let mut edge_ids: HashMap<(u32, u32), u32> = HashMap::new();
-    let mut edge_keys: Vec<(u32, u32)> = Vec::new();
-    let mut frames: Vec<(u64, Frame<'_>)> = Vec::with_capacity(records.len());
+    let mut windows = Windows::default();
     // Reconstruction on references: each frame is a list of record entries.
     let mut current: Option<(Vec<&SceneNode>, Vec<&SceneEdge>)> = None;
     for (&id, record) in records {
@@ -102,8 +106,57 @@ pub(crate) fn for_each_filtered_graph(
             FrameRecord::Empty => {}
         }
         let (nodes, edges) = current.as_ref().ok_or(id)?;
+        windows.push(id, nodes.iter().copied(), edges.iter().copied(), &mut emit);
+    }
+    windows.finish(&mut emit);
+    Ok(())
+}
+
+/// ENACT's transient filter fed one frame at a time. Window starts come every [`STRIDE`]
+/// frames and reach [`TRANSIENT_FRAME_THRESHOLD`] − 1 frames ahead; a start runs as soon as
+/// its widest window's frames are in. A window changes only frames after its start, so once a
+/// start has run, every frame before the next start is final: it is emitted and dropped. Memory
+/// holds about two windows of frames, whatever the length of the replay.
+pub(crate) struct Windows<R> {
+    words: Interner,
+    edge_ids: HashMap<(u32, u32), u32>,
+    edge_keys: Vec<(u32, u32)>,
+    /// Frames not yet emitted; `frames[0]` has index `first` in the whole replay.
+    frames: VecDeque<(u64, Frame<R>)>,
+    first: usize,
+    /// Frames pushed so far.
+    total: usize,
+    /// The next window start to run (a multiple of STRIDE).
+    next_start: usize,
+    scratch: Scratch,
+}
+
+impl<R> Default for Windows<R> {
+    fn default() -> Self {
+        Windows {
+            words: Interner::default(),
+            edge_ids: HashMap::new(),
+            edge_keys: Vec::new(),
+            frames: VecDeque::new(),
+            first: 0,
+            total: 0,
+            next_start: 0,
+            scratch: Scratch::new(0, 0),
+        }
+    }
+}
+
+impl<R: Fields> Windows<R> {
+    /// Adds the next frame's reconstructed (unfiltered) graph, and emits what became final.
+    pub(crate) fn push<'e>(
+        &mut self,
+        id: u64,
+        nodes: impl Iterator<Item = R>,
+        edges: impl Iterator<Item = &'e SceneEdge>,
+        emit: &mut impl FnMut(u64, SceneGraph),
+    ) {
+        let words = &mut self.words;
         let nodes = nodes
-            .iter()
             .map(|n| Node {
                 name: words.id(&n.name),
                 states: n.states.iter().map(|s| words.id(s)).collect(),
@@ -112,12 +165,11 @@ pub(crate) fn for_each_filtered_graph(
             })
             .collect();
         let edges = edges
-            .iter()
             .map(|e| {
                 let pair = (words.id(&e.from), words.id(&e.to));
-                let key = *edge_ids.entry(pair).or_insert_with(|| {
-                    edge_keys.push(pair);
-                    edge_keys.len() as u32 - 1
+                let key = *self.edge_ids.entry(pair).or_insert_with(|| {
+                    self.edge_keys.push(pair);
+                    self.edge_keys.len() as u32 - 1
                 });
                 Edge {
                     key,
@@ -126,27 +178,51 @@ pub(crate) fn for_each_filtered_graph(
                 }
             })
             .collect();
-        frames.push((id, Frame { nodes, edges }));
+        self.frames.push_back((id, Frame { nodes, edges }));
+        self.total += 1;
+        // A start's widest window ends TRANSIENT_FRAME_THRESHOLD − 1 frames after it.
+        while self.total >= self.next_start + TRANSIENT_FRAME_THRESHOLD {
+            self.run_start(TRANSIENT_FRAME_THRESHOLD - 1, emit);
+        }
     }
 
-    let mut scratch = Scratch::new(words.strings.len(), edge_keys.len());
-    let n = frames.len();
-    for start in (0..n).step_by(STRIDE) {
-        // ENACT: `range(2, min(THRESHOLD, n - start))`, so the end index stays below n.
-        let widest = (TRANSIENT_FRAME_THRESHOLD - 1).min(n - start - 1);
+    /// Runs the windows of `next_start` up to `widest`, then emits and drops the frames that
+    /// no later window changes or reads.
+    fn run_start(&mut self, widest: usize, emit: &mut impl FnMut(u64, SceneGraph)) {
+        self.scratch
+            .grow(self.words.strings.len(), self.edge_keys.len());
+        let start = self.next_start - self.first;
+        let frames = self.frames.make_contiguous();
         for window in 2..=widest {
             let (head, tail) = frames.split_at_mut(start + 1);
             let (middle, rest) = tail.split_at_mut(window - 1);
             let (base, end) = (&head[start].1, &rest[0].1);
-            scratch.fix_nodes(base, end, middle);
-            scratch.fix_edges(base, end, middle);
+            self.scratch.fix_nodes(base, end, middle);
+            self.scratch.fix_edges(base, end, middle);
+        }
+        self.next_start += STRIDE;
+        // Windows of later starts change only frames after those starts and read from them on.
+        while self.first < self.next_start.min(self.total) {
+            let (id, frame) = self
+                .frames
+                .pop_front()
+                .expect("a frame before the next start");
+            emit(id, rebuild(&frame, &self.words.strings, &self.edge_keys));
+            self.first += 1;
         }
     }
 
-    for (id, frame) in &frames {
-        emit(*id, rebuild(frame, &words.strings, &edge_keys));
+    /// Runs the starts left once the last frame is in, and emits every remaining frame.
+    pub(crate) fn finish(mut self, emit: &mut impl FnMut(u64, SceneGraph)) {
+        while self.next_start < self.total {
+            // ENACT: `range(2, min(THRESHOLD, n - start))`, so the end index stays below n.
+            let widest = (TRANSIENT_FRAME_THRESHOLD - 1).min(self.total - self.next_start - 1);
+            self.run_start(widest, emit);
+        }
+        for (id, frame) in self.frames.drain(..) {
+            emit(id, rebuild(&frame, &self.words.strings, &self.edge_keys));
+        }
     }
-    Ok(())
 }
 
 fn strings(ids: &[u32], rewritten: bool, words: &[String]) -> Vec<String> {
@@ -157,7 +233,7 @@ fn strings(ids: &[u32], rewritten: bool, words: &[String]) -> Vec<String> {
     out
 }
 
-fn rebuild(frame: &Frame<'_>, words: &[String], edge_keys: &[(u32, u32)]) -> SceneGraph {
+fn rebuild<R: Fields>(frame: &Frame<R>, words: &[String], edge_keys: &[(u32, u32)]) -> SceneGraph {
     SceneGraph {
         nodes: frame
             .nodes
@@ -216,12 +292,12 @@ fn repaired_states(current: &[u32], base: &[u32], end: &[u32], stable: &[u32]) -
 /// every other field (category, visibility, parent) is copied from the *first node of the base
 /// frame* (`base_graph['nodes'][0]`, normally the robot), not from the node itself. It is also
 /// appended to middle frames that still had the node, which duplicates it there.
-fn restored_node<'a>(first_of_base: &Node<'a>, name: u32, stable: &[u32]) -> Node<'a> {
+fn restored_node<R: Fields>(first_of_base: &Node<R>, name: u32, stable: &[u32]) -> Node<R> {
     Node {
         name,
         states: stable.to_vec(),
         rewritten: true,
-        fields: first_of_base.fields,
+        fields: first_of_base.fields.clone(),
     }
 }
 
@@ -264,11 +340,31 @@ impl Scratch {
         }
     }
 
-    fn fix_nodes<'a>(
+    /// Makes room for `words` interned strings and `edges` edge keys (new slots are unstamped).
+    fn grow(&mut self, words: usize, edges: usize) {
+        if words > self.base_stamp.len() {
+            self.base_stamp.resize(words, 0);
+            self.base_states.resize(words, Vec::new());
+            self.end_stamp.resize(words, 0);
+            self.end_states.resize(words, Vec::new());
+            self.holders.resize(words, 0);
+            self.seen_stamp.resize(words, 0);
+        }
+        if edges > self.edge_base_stamp.len() {
+            self.edge_base_stamp.resize(edges, 0);
+            self.edge_base.resize(edges, Vec::new());
+            self.edge_end_stamp.resize(edges, 0);
+            self.edge_end.resize(edges, Vec::new());
+            self.edge_last.resize(edges, 0);
+            self.edge_last_stamp.resize(edges, 0);
+        }
+    }
+
+    fn fix_nodes<R: Fields>(
         &mut self,
-        base: &Frame<'a>,
-        end: &Frame<'a>,
-        middle: &mut [(u64, Frame<'a>)],
+        base: &Frame<R>,
+        end: &Frame<R>,
+        middle: &mut [(u64, Frame<R>)],
     ) {
         self.stamp += 1;
         let stamp = self.stamp;
@@ -343,7 +439,7 @@ impl Scratch {
         }
     }
 
-    fn fix_edges(&mut self, base: &Frame<'_>, end: &Frame<'_>, middle: &mut [(u64, Frame<'_>)]) {
+    fn fix_edges<R>(&mut self, base: &Frame<R>, end: &Frame<R>, middle: &mut [(u64, Frame<R>)]) {
         self.stamp += 1;
         let stamp = self.stamp;
         // The last entry with a key gives its states.
