@@ -263,6 +263,14 @@ fn transient_filter_unit_matches_enact() {
         TransientFilter::Enact,
     )
     .unwrap();
+    // The same file read as a stream (as replays over 64 MB are).
+    let streamed = SceneGraphTimeline::load_streamed(
+        &unit.join("scene_graph_0.json"),
+        &FrameSelection::All,
+        TransientFilter::Enact,
+    )
+    .unwrap()
+    .expect("frame ids in order");
     let rows = read_jsonl(&unit.join("filtered_graphs.jsonl"));
     for row in &rows {
         let frame = row["frame"].as_str().unwrap();
@@ -272,6 +280,11 @@ fn transient_filter_unit_matches_enact() {
         );
         let got = our_bag(&filtered.scene_graph(frame).unwrap());
         assert_eq!(got, want, "frame {frame}");
+        assert_eq!(
+            our_bag(&streamed.scene_graph(frame).unwrap()),
+            want,
+            "streamed, frame {frame}"
+        );
     }
     assert_eq!(rows.len(), 40);
     assert_eq!(filtered.frame_ids().count(), 40);
@@ -390,6 +403,18 @@ fn transient_filter_changes_match_enact() {
             .join("scene_graph_0.json");
         let raw = SceneGraphTimeline::load(&path, FrameSelection::All).unwrap();
         let filtered = raw.with_transients_filtered().unwrap();
+        // Read as a stream through the filter, every frame is the same.
+        let streamed =
+            SceneGraphTimeline::load_streamed(&path, &FrameSelection::All, TransientFilter::Enact)
+                .unwrap()
+                .expect("frame ids in order");
+        for frame in raw.frame_ids() {
+            assert_eq!(
+                *streamed.scene_graph(&frame).unwrap(),
+                *filtered.scene_graph(&frame).unwrap(),
+                "{task} frame {frame}"
+            );
+        }
         for frame in raw.frame_ids() {
             let (raw_graph, filtered_graph) = (
                 raw.scene_graph(&frame).unwrap(),

@@ -622,3 +622,42 @@ fn full_and_mixed_record_replays_give_the_same_items() {
     assert_eq!(mixed.1, full.1, "signatures at the key frames");
     assert_eq!(mixed.2, full.2, "the same QA file");
 }
+
+/// Large replays are read as a stream through the transient filter (one window of frames in
+/// memory): on a full-record replay with glitches, every filtered frame equals the in-memory
+/// filter's, and segmentation on it finds the intended key frames.
+#[test]
+fn a_streamed_filtered_replay_equals_the_in_memory_one() {
+    use enact_hub::core::scene_graph::TransientFilter;
+    use enact_hub::core::world::RecordMode;
+
+    let dir = tempfile::tempdir().unwrap();
+    let mut options = options(Activity::SliceFruit, 6);
+    options.camera.image_size = 64;
+    let simulation = simulate(&options).unwrap();
+    assert!(!simulation.flickers.is_empty());
+    simulation
+        .write_replay_with(dir.path(), FrameImages::KeyFrames, RecordMode::Full)
+        .unwrap();
+    let path = dir
+        .path()
+        .join(&simulation.task_name)
+        .join("scene_graph_0.json");
+    let in_memory =
+        SceneGraphTimeline::load_with(&path, FrameSelection::All, TransientFilter::Enact).unwrap();
+    let streamed =
+        SceneGraphTimeline::load_streamed(&path, &FrameSelection::All, TransientFilter::Enact)
+            .unwrap()
+            .expect("frame ids in order");
+    let ids: Vec<String> = in_memory.frame_ids().collect();
+    assert_eq!(ids, streamed.frame_ids().collect::<Vec<_>>());
+    for f in &ids {
+        assert_eq!(
+            *in_memory.scene_graph(f).unwrap(),
+            *streamed.scene_graph(f).unwrap(),
+            "frame {f}"
+        );
+    }
+    let segmented = segment_key_frames(&streamed, &SegmentationParams::default()).unwrap();
+    assert_eq!(segmented.key_frames, frames(&simulation));
+}

@@ -24,7 +24,10 @@ use serde::Serialize;
 use sha2::{Digest, Sha256};
 
 use crate::core::dataset::Direction;
-use crate::core::scene_graph::{FrameRecord, SceneGraphTimeline, TimelineError};
+use crate::core::scene_graph::timeline::STREAM_THRESHOLD_BYTES;
+use crate::core::scene_graph::{
+    FrameRecord, FrameSelection, SceneGraphTimeline, TimelineError, TransientFilter,
+};
 
 pub use kfts::{KftsError, PathTable, SampledPaths, TransitionGraph, sample_paths};
 pub use qa::{GeneratedItem, TypeNaming};
@@ -254,15 +257,31 @@ pub fn segment_task(
         task: task.to_string(),
         source: Box::new(source),
     };
-    let raw = SceneGraphTimeline::load(&path, crate::core::scene_graph::FrameSelection::All)
-        .map_err(graph_error)?;
-    let filtered = raw.with_transients_filtered().map_err(graph_error)?;
-    let segmentation =
-        segment_key_frames(&filtered, params).map_err(|source| PipelineError::Segmentation {
+    let segment = |filtered: &SceneGraphTimeline| {
+        segment_key_frames(filtered, params).map_err(|source| PipelineError::Segmentation {
             task: task.to_string(),
             source: Box::new(source),
-        })?;
-    drop(filtered);
+        })
+    };
+    let large = std::fs::metadata(&path).is_ok_and(|m| m.len() > STREAM_THRESHOLD_BYTES);
+    let (segmentation, raw) = if large {
+        // Read as a stream twice: through the filter for segmentation, then only the records
+        // the key frames are rebuilt from. Neither pass holds the file or every frame.
+        let filtered =
+            SceneGraphTimeline::load_with(&path, FrameSelection::All, TransientFilter::Enact)
+                .map_err(graph_error)?;
+        let segmentation = segment(&filtered)?;
+        drop(filtered);
+        let key_frames = segmentation.key_frames.iter().cloned().collect();
+        let raw = SceneGraphTimeline::load(&path, FrameSelection::Only(key_frames))
+            .map_err(graph_error)?;
+        (segmentation, raw)
+    } else {
+        // Small enough to read once and keep whole.
+        let raw = SceneGraphTimeline::load(&path, FrameSelection::All).map_err(graph_error)?;
+        let filtered = raw.with_transients_filtered().map_err(graph_error)?;
+        (segment(&filtered)?, raw)
+    };
     let mut records = Vec::with_capacity(segmentation.key_frames.len());
     for frame in &segmentation.key_frames {
         let graph = raw.scene_graph(frame).map_err(graph_error)?.into_owned();

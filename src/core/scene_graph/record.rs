@@ -173,6 +173,15 @@ impl<'a> NodeEntry<'a> for &'a SceneNode {
     }
 }
 
+impl<'a> NodeEntry<'a> for std::sync::Arc<SceneNode> {
+    fn from_record(node: &'a SceneNode) -> Self {
+        std::sync::Arc::new(node.clone())
+    }
+    fn name(&self) -> &str {
+        &self.name
+    }
+}
+
 impl<'a> EdgeEntry<'a> for SceneEdge {
     fn from_record(edge: &'a SceneEdge) -> Self {
         edge.clone()

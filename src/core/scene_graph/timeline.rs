@@ -14,7 +14,8 @@ use std::path::{Path, PathBuf};
 use serde::de::{self, DeserializeSeed, IgnoredAny, MapAccess, Visitor};
 
 use crate::core::scene_graph::record::{FrameRecord, SceneGraph};
-use crate::core::scene_graph::transient::for_each_filtered_graph;
+use crate::core::scene_graph::record::{SceneEdge, SceneNode, apply_delta_to};
+use crate::core::scene_graph::transient::{Windows, for_each_filtered_graph};
 
 /// Scene-graph files larger than this are streamed when only some frames are wanted (smaller
 /// ones are read whole: parsing from memory is faster).
@@ -130,14 +131,82 @@ impl SceneGraphTimeline {
             path: path.to_path_buf(),
             source,
         };
-        if let (FrameSelection::Only(ids), TransientFilter::Off) = (&selection, filter) {
-            let size = std::fs::metadata(path).map_err(io)?.len();
-            if size > STREAM_THRESHOLD_BYTES {
-                return Self::stream_selected(path, ids);
-            }
+        let size = std::fs::metadata(path).map_err(io)?.len();
+        if size > STREAM_THRESHOLD_BYTES
+            && let Some(timeline) = Self::load_streamed(path, &selection, filter)?
+        {
+            return Ok(timeline);
         }
         let bytes = std::fs::read(path).map_err(io)?;
         Self::from_json_slice(&bytes, path, selection, filter)
+    }
+
+    /// Loads `scene_graph_0.json` as a stream, never holding its text: a selection without
+    /// the filter keeps only the records its frames are rebuilt from (two passes); with the
+    /// filter, frames go through it one at a time and only the filtered graphs where they
+    /// change are kept. `None` for a file whose frame ids are not in ascending order (a
+    /// stream cannot sort them; read it whole instead) or, without the filter, a request for
+    /// every frame (which holds every record anyway).
+    pub fn load_streamed(
+        path: &Path,
+        selection: &FrameSelection,
+        filter: TransientFilter,
+    ) -> Result<Option<Self>, TimelineError> {
+        match (selection, filter) {
+            (FrameSelection::All, TransientFilter::Off) => Ok(None),
+            (FrameSelection::Only(ids), TransientFilter::Off) => {
+                Self::stream_selected(path, ids).map(Some)
+            }
+            (_, TransientFilter::Enact) => {
+                let Some(filtered) = Self::stream_filtered(path)? else {
+                    return Ok(None);
+                };
+                Ok(Some(match selection {
+                    FrameSelection::All => filtered,
+                    FrameSelection::Only(ids) => {
+                        let selected: BTreeSet<u64> =
+                            ids.iter().filter_map(|id| canonical_frame(id)).collect();
+                        filtered.keep_only(&selected)
+                    }
+                }))
+            }
+        }
+    }
+
+    /// Every frame of the file through ENACT's transient filter, read as a stream; `None`
+    /// when the frame ids are not in ascending order.
+    fn stream_filtered(path: &Path) -> Result<Option<Self>, TimelineError> {
+        let file = std::fs::File::open(path).map_err(|source| TimelineError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut de =
+            serde_json::Deserializer::from_reader(std::io::BufReader::with_capacity(1 << 20, file));
+        let mut state = FilterStream::default();
+        let parsed = de::Deserializer::deserialize_map(&mut de, FilterStreamVisitor(&mut state))
+            .and_then(|()| de.end());
+        match (parsed, state.stop) {
+            (_, Some(Stop::OutOfOrder)) => Ok(None),
+            (_, Some(Stop::NoFullRecordBefore(frame))) => Err(TimelineError::NoFullRecordBefore {
+                path: path.to_path_buf(),
+                frame: frame.to_string(),
+            }),
+            (Err(e), None) => Err(json_error(path, &state.cursor, e)),
+            (Ok(()), None) => {
+                let FilterStream {
+                    windows,
+                    mut kept,
+                    known,
+                    ..
+                } = state;
+                windows.finish(&mut |id, graph| kept.keep(id, graph));
+                Ok(Some(SceneGraphTimeline {
+                    source: path.to_path_buf(),
+                    known,
+                    records: kept.records,
+                }))
+            }
+        }
     }
 
     /// Reads the selected frames of the file at `path` as a stream, in two passes.
@@ -323,27 +392,17 @@ impl SceneGraphTimeline {
         // A frame whose filtered graph equals the one before it is kept as an empty record
         // (no change), so memory grows with the number of distinct states rather than frames:
         // replays hold each state for hundreds of frames.
-        let mut records = BTreeMap::new();
-        let mut last_full: Option<u64> = None;
-        for_each_filtered_graph(&self.records, |id, graph| {
-            let unchanged = last_full
-                .and_then(|n| records.get(&n))
-                .is_some_and(|r| matches!(r, FrameRecord::Full(g) if *g == graph));
-            if unchanged {
-                records.insert(id, FrameRecord::Empty);
-            } else {
-                records.insert(id, FrameRecord::Full(graph));
-                last_full = Some(id);
-            }
-        })
-        .map_err(|frame| TimelineError::NoFullRecordBefore {
-            path: self.source.clone(),
-            frame: frame.to_string(),
-        })?;
+        let mut kept = KeptChanges::default();
+        for_each_filtered_graph(&self.records, |id, graph| kept.keep(id, graph)).map_err(
+            |frame| TimelineError::NoFullRecordBefore {
+                path: self.source.clone(),
+                frame: frame.to_string(),
+            },
+        )?;
         Ok(SceneGraphTimeline {
             source: self.source.clone(),
             known: self.known.clone(),
-            records,
+            records: kept.records,
         })
     }
 
@@ -366,6 +425,102 @@ impl SceneGraphTimeline {
             known: self.known,
             records: kept,
         }
+    }
+}
+
+/// Filtered graphs as a timeline stores them: a frame whose graph equals the one before it is
+/// an empty (unchanged) record, so memory grows with the number of distinct states rather than
+/// frames (replays hold each state for hundreds of frames).
+#[derive(Default)]
+struct KeptChanges {
+    records: BTreeMap<u64, FrameRecord>,
+    last_full: Option<u64>,
+}
+
+impl KeptChanges {
+    fn keep(&mut self, id: u64, graph: SceneGraph) {
+        let unchanged = self
+            .last_full
+            .and_then(|n| self.records.get(&n))
+            .is_some_and(|r| matches!(r, FrameRecord::Full(g) if *g == graph));
+        if unchanged {
+            self.records.insert(id, FrameRecord::Empty);
+        } else {
+            self.records.insert(id, FrameRecord::Full(graph));
+            self.last_full = Some(id);
+        }
+    }
+}
+
+/// Why a streamed read stopped early.
+enum Stop {
+    /// A frame id not above the one before: the file must be read whole and sorted.
+    OutOfOrder,
+    NoFullRecordBefore(u64),
+}
+
+/// What the streamed filtered read holds: the graph under reconstruction (record entries
+/// shared, not copied, between frames), the filter's windows and the kept changes.
+#[derive(Default)]
+struct FilterStream {
+    current: Option<(Vec<std::sync::Arc<SceneNode>>, Vec<SceneEdge>)>,
+    windows: Windows<std::sync::Arc<SceneNode>>,
+    kept: KeptChanges,
+    known: BTreeSet<u64>,
+    cursor: Cursor,
+    stop: Option<Stop>,
+}
+
+struct FilterStreamVisitor<'a>(&'a mut FilterStream);
+
+impl<'de> Visitor<'de> for FilterStreamVisitor<'_> {
+    type Value = ();
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("an object keyed by frame id")
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let state = self.0;
+        while let Some(key) = map.next_key::<Cow<'de, str>>()? {
+            let Some(n) = canonical_frame(&key) else {
+                state.cursor.bad_key = Some(key.into_owned());
+                return Err(de::Error::custom("frame key is not a decimal frame number"));
+            };
+            if state.known.last().is_some_and(|&last| n <= last) {
+                state.stop = Some(Stop::OutOfOrder);
+                return Err(de::Error::custom("frame ids out of order"));
+            }
+            state.cursor.inside = Some(key.into_owned());
+            let record: FrameRecord = map.next_value()?;
+            match record {
+                FrameRecord::Full(graph) => {
+                    state.current = Some((
+                        graph.nodes.into_iter().map(std::sync::Arc::new).collect(),
+                        graph.edges,
+                    ));
+                }
+                FrameRecord::Diff(delta) => {
+                    if let Some((nodes, edges)) = state.current.as_mut() {
+                        apply_delta_to(nodes, edges, &delta);
+                    }
+                }
+                FrameRecord::Empty => {}
+            }
+            let Some((nodes, edges)) = state.current.as_ref() else {
+                state.stop = Some(Stop::NoFullRecordBefore(n));
+                return Err(de::Error::custom("no full record before this frame"));
+            };
+            let kept = &mut state.kept;
+            state
+                .windows
+                .push(n, nodes.iter().cloned(), edges.iter(), &mut |id, graph| {
+                    kept.keep(id, graph)
+                });
+            state.known.insert(n);
+            state.cursor.last_done = state.cursor.inside.take();
+        }
+        Ok(())
     }
 }
 
@@ -720,6 +875,97 @@ mod tests {
         .unwrap_err();
         assert_eq!(streamed.to_string(), in_memory.to_string());
         assert!(streamed.to_string().contains("in frame 3"), "{streamed}");
+    }
+
+    /// Every frame of `a` and `b` has the same graph.
+    fn same_graphs(a: &SceneGraphTimeline, b: &SceneGraphTimeline) {
+        let ids: Vec<String> = a.frame_ids().collect();
+        assert_eq!(ids, b.frame_ids().collect::<Vec<_>>());
+        for f in &ids {
+            assert_eq!(
+                *a.scene_graph(f).unwrap(),
+                *b.scene_graph(f).unwrap(),
+                "frame {f}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_streamed_filtered_read_equals_one_from_memory() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("scene_graph_0.json");
+        // A flicker every few frames, long enough to span several window starts.
+        let frames: Vec<String> = (0..47)
+            .map(|i| {
+                let fridge = if i % 7 == 3 { "[]" } else { r#"["Open"]"# };
+                let apple = if i % 11 < 2 {
+                    ""
+                } else {
+                    r#", {"name": "apple_1", "category": "apple", "states": ["Cooked"]}"#
+                };
+                let edges = if i % 13 == 5 {
+                    "[]"
+                } else {
+                    r#"[{"from": "robot_r1", "to": "fridge_1", "states": ["LeftGrasping"]}]"#
+                };
+                format!(
+                    r#""{i}": {{"type": "full", "edges": {edges}, "nodes": [
+                        {{"name": "robot_r1", "category": "agent", "states": []}},
+                        {{"name": "fridge_1", "category": "fridge", "states": {fridge}}}{apple}]}}"#
+                )
+            })
+            .collect();
+        for text in [format!("{{{}}}", frames.join(",")), FILE.to_owned()] {
+            std::fs::write(&path, &text).unwrap();
+            let in_memory = SceneGraphTimeline::from_json_slice(
+                text.as_bytes(),
+                &path,
+                FrameSelection::All,
+                TransientFilter::Enact,
+            )
+            .unwrap();
+            let streamed = SceneGraphTimeline::load_streamed(
+                &path,
+                &FrameSelection::All,
+                TransientFilter::Enact,
+            )
+            .unwrap()
+            .expect("ids in order");
+            same_graphs(&in_memory, &streamed);
+            let some = SceneGraphTimeline::load_streamed(
+                &path,
+                &only(&["3", "11"]),
+                TransientFilter::Enact,
+            )
+            .unwrap()
+            .unwrap();
+            for f in ["3", "11"] {
+                assert_eq!(
+                    *some.scene_graph(f).unwrap(),
+                    *in_memory.scene_graph(f).unwrap()
+                );
+            }
+        }
+        // Ids out of order: a stream cannot sort them, so the caller reads the file whole.
+        std::fs::write(
+            &path,
+            r#"{"1": {"type": "full", "nodes": [], "edges": []}, "0": {"type": "empty"}}"#,
+        )
+        .unwrap();
+        assert!(
+            SceneGraphTimeline::load_streamed(&path, &FrameSelection::All, TransientFilter::Enact)
+                .unwrap()
+                .is_none()
+        );
+        // No full record before a frame: the same error as in memory.
+        std::fs::write(&path, r#"{"0": {"type": "empty"}}"#).unwrap();
+        let err =
+            SceneGraphTimeline::load_streamed(&path, &FrameSelection::All, TransientFilter::Enact)
+                .unwrap_err();
+        assert!(
+            matches!(err, TimelineError::NoFullRecordBefore { ref frame, .. } if frame == "0"),
+            "{err}"
+        );
     }
 
     #[test]
