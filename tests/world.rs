@@ -457,6 +457,13 @@ fn a_variant_release_keeps_the_baseline_items_with_its_own_images() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // The hint imports the variant with the baseline's scene graphs, not the replay's.
+    let hint = String::from_utf8_lossy(&out.stderr).into_owned();
+    let baseline_graphs = path("base").join("replayed_activities");
+    assert!(
+        hint.contains(&format!("--scene-graphs {}", baseline_graphs.display())),
+        "{hint}"
+    );
 
     let qa = |release: &str| std::fs::read(path(release).join("QA/enact_ordering.jsonl")).unwrap();
     assert_eq!(qa("fov"), qa("base"), "the variant changes no item");

@@ -1240,6 +1240,7 @@ fn parse_steps(text: &str) -> anyhow::Result<Vec<usize>> {
 /// `generate --items-from`: the baseline's items with the replay's images.
 async fn generate_variant(args: &GenerateArgs, baseline: PathBuf) -> anyhow::Result<ExitCode> {
     let (replayed, out) = (args.replayed.clone(), args.out.clone());
+    let baseline_graphs = baseline.join("replayed_activities");
     let started = std::time::Instant::now();
     let done = tokio::task::spawn_blocking(move || {
         crate::core::pipeline::variant::items_from(&replayed, &baseline, &out)
@@ -1255,10 +1256,12 @@ async fn generate_variant(args: &GenerateArgs, baseline: PathBuf) -> anyhow::Res
         args.out.display(),
         started.elapsed().as_secs_f64()
     );
+    // The baseline's scene graphs, so that answers are judged as on the baseline and only the
+    // images differ (a replay's own graphs record what its camera sees).
     eprintln!(
         "import it with: enact-hub import {} --dataset NAME --scene-graphs {}",
         args.out.display(),
-        args.replayed.display()
+        baseline_graphs.display()
     );
     Ok(ExitCode::SUCCESS)
 }
