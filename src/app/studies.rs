@@ -80,7 +80,8 @@ pub enum StudyRowChoice {
 
 async fn keys(hub: &Hub, dataset: i64) -> Result<Vec<AlignKey>, AppError> {
     let mut conn = hub.conn().await?;
-    Ok(store::items::align_keys(&mut conn, dataset).await?)
+    let items = store::items::scoring_items(&mut conn, dataset).await?;
+    Ok(items.into_iter().map(AlignKey::of_stored).collect())
 }
 
 /// Each variant's alignment with the baseline, in the study's order.

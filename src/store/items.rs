@@ -380,35 +380,3 @@ pub async fn release_images(
         .map(|row| Ok((row.try_get("path")?, row.try_get("png")?)))
         .collect()
 }
-
-/// What study alignment reads of each item of a dataset, in import order.
-pub async fn align_keys(
-    conn: &mut SqliteConnection,
-    dataset_id: i64,
-) -> Result<Vec<crate::core::study::AlignKey>, sqlx::Error> {
-    let rows = sqlx::query(
-        "SELECT i.item_id, i.item_type, i.task_name, i.key_frame_ids, i.gt_answer, \
-         s.source, s.signatures FROM items i LEFT JOIN item_signatures s ON s.item = i.id \
-         WHERE i.dataset_id = ? ORDER BY i.id",
-    )
-    .bind(dataset_id)
-    .fetch_all(conn)
-    .await?;
-    rows.iter()
-        .map(|row| {
-            let gt: String = row.try_get("gt_answer")?;
-            let source: Option<String> = row.try_get("source")?;
-            let signatures: Option<String> = row.try_get("signatures")?;
-            Ok(crate::core::study::AlignKey {
-                item_id: row.try_get("item_id")?,
-                item_type: row.try_get("item_type")?,
-                task_name: row.try_get("task_name")?,
-                key_frame_ids: json_column(row, "key_frame_ids")?,
-                verification: crate::core::study::verification_fingerprint(
-                    &gt,
-                    source.as_deref().zip(signatures.as_deref()),
-                ),
-            })
-        })
-        .collect()
-}

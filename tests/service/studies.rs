@@ -493,7 +493,17 @@ async fn studies_refuse_what_cannot_be_compared_and_are_audited() {
         .unwrap();
     let entries: Value = serde_json::from_slice(&audit.stdout).unwrap();
     assert_eq!(entries[0]["action"], "study.create");
-    assert!(entries[0]["detail"].as_str().unwrap().contains("1"));
+    // Newest first: the study `own`, with its baseline, variant and alignment.
+    assert_eq!(entries[0]["target"], "study own");
+    assert_eq!(entries[0]["dataset"], BASELINE);
+    assert_eq!(
+        entries[0]["detail"],
+        format!(
+            "baseline {BASELINE}; Camera/own=world-own ({} aligned)",
+            records.len()
+        )
+    );
+    assert_eq!(entries[1]["target"], "study cam");
     server
         .call(Method::DELETE, "/api/v1/admin/studies/cam")
         .bearer(&token)
@@ -501,6 +511,21 @@ async fn studies_refuse_what_cannot_be_compared_and_are_audited() {
         .await;
     let (status, _) = server.get_json("/api/v1/studies/cam").await;
     assert_eq!(status, 404);
+    let audit = enact_hub()
+        .args(["audit", "--action", "study.delete", "--json", "--db"])
+        .arg(server.db_path())
+        .output()
+        .unwrap();
+    let deleted: Value = serde_json::from_slice(&audit.stdout).unwrap();
+    assert_eq!(deleted[0]["target"], "study cam");
+    assert_eq!(deleted[0]["actor"], "admin");
+    // Deleting it again names what is missing.
+    let again = server
+        .call(Method::DELETE, "/api/v1/admin/studies/cam")
+        .bearer(&token)
+        .expect(404)
+        .await;
+    assert!(again.error().contains("no study named 'cam'"));
     server.stop().await;
 }
 

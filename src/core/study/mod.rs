@@ -19,6 +19,8 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use crate::core::scoring::ScoringItem;
+
 /// Longest study name, family or variant label, in characters.
 pub const MAX_NAME_CHARS: usize = 64;
 /// Most variants in one study.
@@ -139,6 +141,26 @@ pub struct AlignKey {
     /// [`verification_fingerprint`] of the item: aligned items with different ones are scored
     /// by different rules.
     pub verification: String,
+}
+
+impl AlignKey {
+    /// What alignment reads of a stored item.
+    pub fn of_stored(item: ScoringItem) -> AlignKey {
+        let gt: Vec<String> = item.gt_answer.iter().map(u8::to_string).collect();
+        let verification = verification_fingerprint(
+            &gt.join(","),
+            item.semantics
+                .as_ref()
+                .map(|(source, table)| (source.as_str(), table.as_str())),
+        );
+        AlignKey {
+            item_id: item.item_id,
+            item_type: item.item_type,
+            task_name: item.task_name,
+            key_frame_ids: item.key_frame_ids,
+            verification,
+        }
+    }
 }
 
 /// A fingerprint of how an item's answers are judged: its ground truth and its signature table
