@@ -7,7 +7,9 @@ use serde::Serialize;
 
 use super::families;
 use super::report::StudyReport;
-use crate::core::agreement::report::heatmap::{significance, significance_legend};
+use crate::core::agreement::report::heatmap::{
+    HeatmapHeader, LegendEntry, significance, significance_legend,
+};
 use crate::core::dataset::Direction;
 
 /// A generous advance of an 11 px sans-serif character, and of a 12 px bold one, so that
@@ -38,25 +40,13 @@ pub struct FigureCell {
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FigureColumn {
-    pub x: f64,
-    pub label: String,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FigurePanel {
     pub title: String,
     /// Centre of the title.
     pub x: f64,
-    pub columns: Vec<FigureColumn>,
+    /// Centres of the variant headings.
+    pub columns: Vec<HeatmapHeader>,
     pub cells: Vec<FigureCell>,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FigureLegend {
-    pub x: f64,
-    pub fill: &'static str,
-    pub label: &'static str,
 }
 
 /// The whole figure in SVG user units.
@@ -71,7 +61,7 @@ pub struct StudyFigure {
     pub rows: Vec<(f64, String)>,
     pub panels: Vec<FigurePanel>,
     pub legend_y: f64,
-    pub legend: Vec<FigureLegend>,
+    pub legend: Vec<LegendEntry>,
 }
 
 fn text_width(text: &str, char_width: f64) -> f64 {
@@ -120,7 +110,7 @@ impl StudyFigure {
             let mut columns = Vec::new();
             let mut cells = Vec::new();
             for (v, width) in members.iter().zip(&widths) {
-                columns.push(FigureColumn {
+                columns.push(HeatmapHeader {
                     x: x + width / 2.0,
                     label: v.label.clone(),
                 });
@@ -146,10 +136,10 @@ impl StudyFigure {
         }
         let plot_right = x - PANEL_GAP;
         let legend_y = TOP + 2.0 * CELL_HEIGHT + 18.0;
-        let legend: Vec<FigureLegend> = significance_legend()
+        let legend: Vec<LegendEntry> = significance_legend()
             .into_iter()
             .enumerate()
-            .map(|(i, (fill, label))| FigureLegend {
+            .map(|(i, (fill, label))| LegendEntry {
                 x: ROW_LABEL_WIDTH + i as f64 * LEGEND_ENTRY_WIDTH,
                 fill,
                 label,
