@@ -125,7 +125,7 @@ pub fn page_router() -> Router<AppState> {
 }
 
 /// A variant in a request: `"FAMILY/LABEL=DATASET"` or its three parts.
-#[derive(Deserialize, JsonSchema)]
+#[derive(JsonSchema)]
 #[serde(untagged)]
 enum VariantBody {
     Text(String),
@@ -134,6 +134,40 @@ enum VariantBody {
         label: String,
         dataset: String,
     },
+}
+
+/// Read by hand so that a wrong variant is told what a variant is (an untagged enum only says
+/// that nothing matched).
+impl<'de> Deserialize<'de> for VariantBody {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Parts {
+            family: String,
+            label: String,
+            dataset: String,
+        }
+        use serde::de::Error;
+        match serde_json::Value::deserialize(d)? {
+            serde_json::Value::String(text) => Ok(VariantBody::Text(text)),
+            object @ serde_json::Value::Object(_) => serde_json::from_value::<Parts>(object)
+                .map(|p| VariantBody::Parts {
+                    family: p.family,
+                    label: p.label,
+                    dataset: p.dataset,
+                })
+                .map_err(|e| {
+                    D::Error::custom(format!(
+                        "a variant object has string fields `family`, `label` and `dataset` \
+                         ({e})"
+                    ))
+                }),
+            other => Err(D::Error::custom(format!(
+                "a variant is \"FAMILY/LABEL=DATASET\" or {{\"family\", \"label\", \
+                 \"dataset\"}}, not {other}"
+            ))),
+        }
+    }
 }
 
 #[derive(Deserialize, JsonSchema)]

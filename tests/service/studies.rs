@@ -385,6 +385,27 @@ async fn studies_refuse_what_cannot_be_compared_and_are_audited() {
         "variants[0]",
     )
     .await;
+    // A malformed variant is told what a variant is, and which one it was.
+    for (variant, needle) in [
+        (
+            json!({"family": "Camera", "label": "30"}),
+            "missing field `dataset`",
+        ),
+        (json!(42), "a variant is \"FAMILY/LABEL=DATASET\""),
+    ] {
+        let reply = create(
+            &server,
+            &token,
+            json!({"name": "s", "baseline": BASELINE, "variants": ["Camera/20=world-fov30", variant]}),
+        )
+        .expect(422)
+        .await;
+        let error = reply.error();
+        assert!(
+            error.contains("variants[1]") && error.contains(needle),
+            "{error}"
+        );
+    }
     refusal(
         json!({"name": "s", "baseline": BASELINE, "variants": ["Camera/30=nope"]}),
         400,
