@@ -152,10 +152,12 @@ fn sample_variance(values: &[f64], mean: f64) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn close(actual: Option<f64>, expected: f64, tolerance: f64) {
+    /// Asserts `actual` is defined and within `tolerance` of `expected` (shared by the
+    /// statistics tests).
+    pub(crate) fn close(actual: Option<f64>, expected: f64, tolerance: f64) {
         let actual = actual.expect("value should be defined");
         assert!(
             (actual - expected).abs() <= tolerance,

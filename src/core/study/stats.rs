@@ -111,14 +111,7 @@ pub fn sign_test(differences: &[f64]) -> SignTest {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn close(actual: Option<f64>, expected: f64, tolerance: f64) {
-        let actual = actual.expect("value should be defined");
-        assert!(
-            (actual - expected).abs() <= tolerance,
-            "{actual} differs from {expected}"
-        );
-    }
+    use crate::core::agreement::welch::tests::close;
 
     #[test]
     fn hand_computed_paired_t() {
