@@ -193,6 +193,11 @@ pub async fn list(hub: &Hub) -> Result<Vec<StudyView>, AppError> {
     Ok(rows.iter().map(StudyView::of_row).collect())
 }
 
+/// One study, without computing alignments (a report computes them itself).
+pub async fn get(hub: &Hub, name: &str) -> Result<StudyView, AppError> {
+    Ok(StudyView::of_row(&row_named(hub, name).await?))
+}
+
 /// One study with each variant's alignment.
 pub async fn show(hub: &Hub, name: &str) -> Result<StudyView, AppError> {
     let row = row_named(hub, name).await?;

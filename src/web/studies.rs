@@ -458,7 +458,6 @@ async fn study_page(
     Path(name): Path<String>,
     Query(query): Query<PageQuery>,
 ) -> Result<Html<String>, PageError> {
-    let study = studies::show(&state.hub, &name).await?;
     let models = studies::models(&state.hub, &name).await?;
     let chosen = query.row.clone().unwrap_or_default();
     let by_step_length = query
@@ -482,9 +481,12 @@ async fn study_page(
             }
         },
     };
-    let report = match choice {
-        None => None,
+    // Alignment reads every item's signature table: computed once, by the report when there
+    // is one.
+    let (mut study, report) = match choice {
+        None => (studies::show(&state.hub, &name).await?, None),
         Some(choice) => {
+            let study = studies::get(&state.hub, &name).await?;
             let report = studies::report(&state.hub, &name, &choice, by_step_length).await?;
             let render = |e: askama::Error| AppError::internal(format!("study '{name}': {e}"));
             let mut api_query = match &choice {
@@ -500,7 +502,7 @@ async fn study_page(
             if by_step_length {
                 api_query.push_str("&by_step_length=true");
             }
-            Some(ReportView {
+            let view = ReportView {
                 row: report.stamp.row.clone(),
                 heatmap: heatmap_svg(&report).map_err(render)?,
                 handedness: handedness_svg(&report).map_err(render)?,
@@ -515,9 +517,18 @@ async fn study_page(
                     })
                     .collect(),
                 api_query,
-            })
+            };
+            (study, Some((view, report.variants)))
         }
     };
+    let report = report.map(|(view, variants)| {
+        // The report's variants are the study's, in the same order.
+        for (shown, reported) in study.variants.iter_mut().zip(variants) {
+            shown.aligned = Some(reported.aligned);
+            shown.alignment = Some(reported.alignment);
+        }
+        view
+    });
     let page = StudyPage {
         study,
         models,
