@@ -3,6 +3,7 @@
 //! compared with ENACT's plain-mode output (`reference/eval_plain/`) and skip list
 //! (`reference/skipped_items.json`, "plain").
 
+use std::borrow::Cow;
 use std::collections::{BTreeSet, HashMap, HashSet};
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -81,27 +82,31 @@ impl EnactSignatureSource for FixtureScenes {
         task_name: &str,
         key_frame_ids: &[String],
         coverage: VisibleCoverage,
-    ) -> ItemSignatures {
+    ) -> Cow<'_, ItemSignatures> {
         let TaskScenes { frames, pairs } = &self.tasks[task_name];
-        ItemSignatures::build(key_frame_ids, coverage, |from, to, view| {
-            for frame in [from, to] {
-                if !frames.contains(frame) {
-                    return Err(format!("'Frame ID {frame} not found in scene graph data'"));
+        Cow::Owned(ItemSignatures::build(
+            key_frame_ids,
+            coverage,
+            |from, to, view| {
+                for frame in [from, to] {
+                    if !frames.contains(frame) {
+                        return Err(format!("'Frame ID {frame} not found in scene graph data'"));
+                    }
                 }
-            }
-            if from == to {
-                // ENACT's diff of a frame with itself is empty.
-                return Ok(BTreeSet::new());
-            }
-            match pairs.get(&(from.to_owned(), to.to_owned())) {
-                Some(Ok((visible, full))) => Ok(match view {
-                    View::Visible => visible.clone(),
-                    View::Full => full.clone(),
-                }),
-                Some(Err(error)) => Err(error.clone()),
-                None => Err(format!("pair ({from}, {to}) is not in the fixture")),
-            }
-        })
+                if from == to {
+                    // ENACT's diff of a frame with itself is empty.
+                    return Ok(BTreeSet::new());
+                }
+                match pairs.get(&(from.to_owned(), to.to_owned())) {
+                    Some(Ok((visible, full))) => Ok(match view {
+                        View::Visible => visible.clone(),
+                        View::Full => full.clone(),
+                    }),
+                    Some(Err(error)) => Err(error.clone()),
+                    None => Err(format!("pair ({from}, {to}) is not in the fixture")),
+                }
+            },
+        ))
     }
 }
 

@@ -1,6 +1,7 @@
 //! Scoring whole prediction files: the sources of items and signatures each policy needs, the
 //! TA/PA table, and ENACT's output files. The verdicts themselves come from [`crate::core::verifier`].
 
+use std::borrow::Cow;
 use std::collections::{BTreeSet, HashMap};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -10,7 +11,7 @@ use serde_json::Value;
 
 use crate::core::dataset::{Direction, QaItem, StepLength};
 use crate::core::scene_graph::{
-    FrameSelection, SceneGraphTimeline, TimelineError, pair_signatures,
+    FrameSelection, PairSignatureMemo, SceneGraphTimeline, TimelineError,
 };
 use crate::core::semantics::{self, ItemSemantics, SignatureSource};
 use crate::core::verifier::{
@@ -21,17 +22,28 @@ use crate::core::verifier::{
 /// ENACT's evaluator reads signatures from the scene graphs of the tasks a prediction file
 /// names, at the key frames its records carry.
 pub struct SceneGraphSignatures {
-    timelines: HashMap<String, SceneGraphTimeline>,
+    tasks: HashMap<String, TaskSignatures>,
+}
+
+/// A task's timeline, the pairs its records need, and each record's table at the coverage
+/// nearly every record asks for, all computed ahead in parallel (ENACT's evaluator loop is
+/// sequential; the signatures need not be).
+struct TaskSignatures {
+    timeline: SceneGraphTimeline,
+    memo: PairSignatureMemo,
+    tables: HashMap<Vec<String>, ItemSignatures>,
 }
 
 impl SceneGraphSignatures {
-    /// Loads, for every task the prediction lines name, the frames they use. A task without a
-    /// scene graph is left out (ENACT skips its lines); an unreadable one is an error.
+    /// Loads, for every task the prediction lines name, the frames they use, and computes the
+    /// tables of each line's key frames. A task without a scene graph is left out (ENACT skips
+    /// its lines); an unreadable one is an error.
     pub fn for_predictions<'a>(
         replayed_dir: &Path,
         lines: impl IntoIterator<Item = &'a str>,
     ) -> Result<SceneGraphSignatures, TimelineError> {
-        let mut frames: HashMap<String, BTreeSet<String>> = HashMap::new();
+        // Per task: each line's key frames as ENACT looks them up (`str(id)`).
+        let mut frames: HashMap<String, BTreeSet<Vec<String>>> = HashMap::new();
         for line in lines {
             let Ok(Value::Object(record)) = serde_json::from_str::<Value>(line) else {
                 continue;
@@ -41,40 +53,63 @@ impl SceneGraphSignatures {
             };
             let entry = frames.entry(task.clone()).or_default();
             if let Some(Value::Array(ids)) = record.get("key_frame_ids") {
-                for id in ids {
-                    match id {
-                        Value::String(s) => entry.insert(s.clone()),
-                        // ENACT looks frames up by `str(id)`.
-                        Value::Number(n) => entry.insert(n.to_string()),
-                        _ => false,
-                    };
-                }
+                let ids: Vec<String> = ids
+                    .iter()
+                    .filter_map(|id| match id {
+                        Value::String(s) => Some(s.clone()),
+                        Value::Number(n) => Some(n.to_string()),
+                        _ => None,
+                    })
+                    .collect();
+                entry.insert(ids);
             }
         }
-        let loaded: Vec<Result<Option<(String, SceneGraphTimeline)>, TimelineError>> = frames
+        let loaded: Vec<Result<Option<(String, TaskSignatures)>, TimelineError>> = frames
             .into_par_iter()
-            .map(|(task, frames)| {
+            .map(|(task, lines)| {
                 let path = semantics::scene_graph_path(replayed_dir, &task);
                 if !path.is_file() {
                     return Ok(None);
                 }
-                let timeline = SceneGraphTimeline::load(&path, FrameSelection::Only(frames))?;
-                Ok(Some((task, timeline)))
+                let selected = lines.iter().flatten().cloned().collect();
+                let timeline = SceneGraphTimeline::load(&path, FrameSelection::Only(selected))?;
+                let pairs = lines
+                    .iter()
+                    .flat_map(|ids| PairSignatureMemo::item_pairs(ids))
+                    .collect();
+                let memo = PairSignatureMemo::compute(&timeline, pairs);
+                let tables = lines
+                    .into_par_iter()
+                    .map(|ids| {
+                        let table = ItemSignatures::build(
+                            &ids,
+                            VisibleCoverage::Chronological,
+                            |from, to, view| memo.signatures(&timeline, from, to, view),
+                        );
+                        (ids, table)
+                    })
+                    .collect();
+                let signatures = TaskSignatures {
+                    timeline,
+                    memo,
+                    tables,
+                };
+                Ok(Some((task, signatures)))
             })
             .collect();
-        let mut timelines = HashMap::new();
+        let mut tasks = HashMap::new();
         for entry in loaded {
-            if let Some((task, timeline)) = entry? {
-                timelines.insert(task, timeline);
+            if let Some((task, signatures)) = entry? {
+                tasks.insert(task, signatures);
             }
         }
-        Ok(SceneGraphSignatures { timelines })
+        Ok(SceneGraphSignatures { tasks })
     }
 }
 
 impl EnactSignatureSource for SceneGraphSignatures {
     fn has_task(&self, task_name: &str) -> bool {
-        self.timelines.contains_key(task_name)
+        self.tasks.contains_key(task_name)
     }
 
     fn item_signatures(
@@ -82,14 +117,21 @@ impl EnactSignatureSource for SceneGraphSignatures {
         task_name: &str,
         key_frame_ids: &[String],
         coverage: VisibleCoverage,
-    ) -> ItemSignatures {
-        ItemSignatures::build(key_frame_ids, coverage, |from, to, view| {
-            let timeline = self
-                .timelines
-                .get(task_name)
-                .ok_or_else(|| format!("no scene graph for task {task_name}"))?;
-            pair_signatures(timeline, from, to, view).map_err(|e| e.to_string())
-        })
+    ) -> Cow<'_, ItemSignatures> {
+        let task = self.tasks.get(task_name);
+        if let (Some(task), VisibleCoverage::Chronological) = (task, coverage)
+            && let Some(table) = task.tables.get(key_frame_ids)
+        {
+            return Cow::Borrowed(table);
+        }
+        Cow::Owned(ItemSignatures::build(
+            key_frame_ids,
+            coverage,
+            |from, to, view| {
+                let task = task.ok_or_else(|| format!("no scene graph for task {task_name}"))?;
+                task.memo.signatures(&task.timeline, from, to, view)
+            },
+        ))
     }
 }
 
@@ -126,13 +168,13 @@ impl EnactSignatureSource for StoredSignatures {
         task_name: &str,
         key_frame_ids: &[String],
         coverage: VisibleCoverage,
-    ) -> ItemSignatures {
+    ) -> Cow<'_, ItemSignatures> {
         let key = (task_name.to_owned(), key_frame_ids.to_vec());
         match (self.tables.get(&key), coverage) {
-            (Some(table), VisibleCoverage::Chronological) => table.clone(),
-            _ => ItemSignatures::build(key_frame_ids, coverage, |_, _, _| {
+            (Some(table), VisibleCoverage::Chronological) => Cow::Borrowed(table),
+            _ => Cow::Owned(ItemSignatures::build(key_frame_ids, coverage, |_, _, _| {
                 Err("these key frames are not a stored item of the dataset".to_owned())
-            }),
+            })),
         }
     }
 }

@@ -11,7 +11,7 @@
 //!
 //! Forward items without scene graphs are scored by exact match only.
 
-use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
@@ -19,8 +19,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::core::dataset::{Direction, FieldProblem, QaItem};
 use crate::core::scene_graph::{
-    FrameSelection, SceneGraphTimeline, TimelineError, View, pair_signature_views, pair_signatures,
-    parse_action,
+    FrameSelection, PairSignatureMemo, SceneGraphTimeline, TimelineError, View, parse_action,
 };
 use crate::core::verifier::{ItemSignatures, VisibleCoverage};
 
@@ -64,14 +63,15 @@ pub fn scene_graph_path(replayed_dir: &Path, task_name: &str) -> PathBuf {
     replayed_dir.join(task_name).join("scene_graph_0.json")
 }
 
-/// Builds one item's table from a loaded timeline. Pairs on which ENACT raises are kept as
-/// errors inside the table (the verifier reproduces what ENACT does with them).
+/// Builds one item's table from a loaded timeline, reading pairs from `memo` (a task's pairs
+/// computed once, see [`PairSignatureMemo`]). Pairs on which ENACT raises are kept as errors
+/// inside the table (the verifier reproduces what ENACT does with them).
 ///
 /// A forward item's table holds the visible sets of every ordered pair, not only the
 /// chronological ones the verifier reads: the error analysis compares each step of a forward
-/// answer with the visible change between the frames the answer put side by side. Each pair's
-/// diff is computed once for both views.
+/// answer with the visible change between the frames the answer put side by side.
 pub fn item_signatures(
+    memo: &PairSignatureMemo,
     timeline: &SceneGraphTimeline,
     key_frame_ids: &[String],
     direction: Direction,
@@ -80,21 +80,8 @@ pub fn item_signatures(
         Direction::Forward => VisibleCoverage::AllPairs,
         Direction::Inverse => VisibleCoverage::Chronological,
     };
-    // Per pair, the visible and full sets until the table takes them.
-    type Views = [Option<Result<BTreeSet<String>, String>>; 2];
-    let mut computed: HashMap<(String, String), Views> = HashMap::new();
     ItemSignatures::build(key_frame_ids, coverage, |from, to, view| {
-        let views = computed
-            .entry((from.to_owned(), to.to_owned()))
-            .or_insert_with(|| pair_signature_views(timeline, from, to).map(Some));
-        let slot = match view {
-            View::Visible => 0,
-            View::Full => 1,
-        };
-        // Each (pair, view) is asked for once, so the set can be moved out.
-        views[slot]
-            .take()
-            .unwrap_or_else(|| pair_signatures(timeline, from, to, view).map_err(|e| e.to_string()))
+        memo.signatures(timeline, from, to, view)
     })
 }
 
@@ -127,7 +114,17 @@ pub fn from_scene_graphs(replayed_dir: &Path, items: &[&QaItem]) -> Vec<Signatur
                     ),
                 })
             };
-            // Items of one task in parallel too: a forward item of L = 10 needs 90 pairs.
+            // Each distinct pair of the task once (in parallel), then the items' tables.
+            let memo = match &timeline {
+                Ok(tl) => PairSignatureMemo::compute(
+                    tl,
+                    indexes
+                        .iter()
+                        .flat_map(|&i| PairSignatureMemo::item_pairs(&items[i].key_frame_ids))
+                        .collect(),
+                ),
+                Err(_) => PairSignatureMemo::default(),
+            };
             indexes
                 .into_par_iter()
                 .map(|i| {
@@ -148,6 +145,7 @@ pub fn from_scene_graphs(replayed_dir: &Path, items: &[&QaItem]) -> Vec<Signatur
                                 .collect();
                             if missing.is_empty() {
                                 Ok(item_signatures(
+                                    &memo,
                                     tl,
                                     &items[i].key_frame_ids,
                                     items[i].direction,

@@ -2,8 +2,9 @@
 //! which states each object and relation gained or lost, and which objects appeared or
 //! disappeared as a whole.
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::BTreeSet;
 
+use rustc_hash::FxHashMap;
 use serde::Serialize;
 
 use crate::core::scene_graph::names::NameError;
@@ -198,21 +199,60 @@ fn appeared_parent(node: &SceneNode, removed: &[&str]) -> Result<Option<Vec<Stri
     Ok(Some(matches))
 }
 
-/// Each relation's states, the last entry winning for a repeated `(from, to)`.
-fn edge_states(g: &SceneGraph) -> HashMap<(&str, &str), &[String]> {
-    g.edges
-        .iter()
-        .map(|e| ((e.from.as_str(), e.to.as_str()), e.states.as_slice()))
-        .collect()
+/// A scene graph's lookups, built once per frame and shared by every pair the frame is in
+/// (a task's key frames take part in dozens of pairs each).
+#[derive(Debug)]
+pub struct GraphIndex<'a> {
+    pub graph: &'a SceneGraph,
+    /// Each name's last node: ENACT's diff builds dicts, so a repeated name's last entry counts.
+    last_node: FxHashMap<&'a str, &'a SceneNode>,
+    /// Each name's first node: ENACT's visibility lookups scan the list and stop at the first.
+    first_node: FxHashMap<&'a str, &'a SceneNode>,
+    /// Each relation's states, the last entry winning for a repeated `(from, to)`.
+    edges: FxHashMap<(&'a str, &'a str), &'a [String]>,
+}
+
+impl<'a> GraphIndex<'a> {
+    pub fn new(graph: &'a SceneGraph) -> Self {
+        let mut last_node =
+            FxHashMap::with_capacity_and_hasher(graph.nodes.len(), Default::default());
+        let mut first_node =
+            FxHashMap::with_capacity_and_hasher(graph.nodes.len(), Default::default());
+        for n in &graph.nodes {
+            last_node.insert(n.name.as_str(), n);
+            first_node.entry(n.name.as_str()).or_insert(n);
+        }
+        let edges = graph
+            .edges
+            .iter()
+            .map(|e| ((e.from.as_str(), e.to.as_str()), e.states.as_slice()))
+            .collect();
+        GraphIndex {
+            graph,
+            last_node,
+            first_node,
+            edges,
+        }
+    }
+
+    /// The first node named `name`, as ENACT's visibility lookups find it.
+    pub fn first_node(&self, name: &str) -> Option<&'a SceneNode> {
+        self.first_node.get(name).copied()
+    }
 }
 
 /// The state-centric diff from `prev` to `next`. When a name or `(from, to)` pair occurs more
 /// than once in a graph, its last entry counts (ENACT builds dicts).
 pub fn state_centric_diff(prev: &SceneGraph, next: &SceneGraph) -> Result<StateDiff, DiffFault> {
-    let prev_nodes: HashMap<&str, &SceneNode> =
-        prev.nodes.iter().map(|n| (n.name.as_str(), n)).collect();
-    let next_nodes: HashMap<&str, &SceneNode> =
-        next.nodes.iter().map(|n| (n.name.as_str(), n)).collect();
+    state_centric_diff_indexed(&GraphIndex::new(prev), &GraphIndex::new(next))
+}
+
+/// [`state_centric_diff`] over graphs already indexed.
+pub fn state_centric_diff_indexed(
+    prev: &GraphIndex<'_>,
+    next: &GraphIndex<'_>,
+) -> Result<StateDiff, DiffFault> {
+    let (prev_nodes, next_nodes) = (&prev.last_node, &next.last_node);
     let mut diff = StateDiff::default();
 
     let mut removed: Vec<&str> = prev_nodes
@@ -247,14 +287,17 @@ pub fn state_centric_diff(prev: &SceneGraph, next: &SceneGraph) -> Result<StateD
         });
     }
 
-    let mut common: Vec<&str> = prev_nodes
-        .keys()
-        .copied()
-        .filter(|n| next_nodes.contains_key(n))
+    // Most objects keep their states between two key frames: equal lists cannot differ as
+    // sets, so only the others are compared (and sorted).
+    let mut changed: Vec<(&str, &SceneNode, &SceneNode)> = prev_nodes
+        .iter()
+        .filter_map(|(&name, &old)| {
+            let new = *next_nodes.get(name)?;
+            (old.states != new.states).then_some((name, old, new))
+        })
         .collect();
-    common.sort_unstable();
-    for name in common {
-        let (old, new) = (prev_nodes[name], next_nodes[name]);
+    changed.sort_unstable_by_key(|&(name, _, _)| name);
+    for (name, old, new) in changed {
         let (old_states, new_states) = (state_set(&old.states), state_set(&new.states));
         let gained: Vec<String> = owned(new_states.difference(&old_states));
         if !gained.is_empty() {
@@ -276,14 +319,20 @@ pub fn state_centric_diff(prev: &SceneGraph, next: &SceneGraph) -> Result<StateD
         }
     }
 
-    let (prev_edges, next_edges) = (edge_states(prev), edge_states(next));
+    // Relations present on one side only, or with other states; an absent relation has none.
+    let (prev_edges, next_edges) = (&prev.edges, &next.edges);
     let mut keys: Vec<(&str, &str)> = prev_edges
-        .keys()
-        .chain(next_edges.keys())
-        .copied()
+        .iter()
+        .filter(|(key, states)| next_edges.get(*key).copied().unwrap_or_default() != **states)
+        .map(|(key, _)| *key)
+        .chain(
+            next_edges
+                .iter()
+                .filter(|(key, states)| !prev_edges.contains_key(*key) && !states.is_empty())
+                .map(|(key, _)| *key),
+        )
         .collect();
     keys.sort_unstable();
-    keys.dedup();
     for key in keys {
         let old = state_set(prev_edges.get(&key).copied().unwrap_or_default());
         let new = state_set(next_edges.get(&key).copied().unwrap_or_default());

@@ -15,18 +15,22 @@ pub mod timeline;
 pub mod transient;
 pub mod visibility;
 
-use std::collections::BTreeSet;
+use std::borrow::Cow;
+use std::collections::{BTreeSet, HashMap};
 use std::path::PathBuf;
 
+use rayon::prelude::*;
+
 pub use diff::{
-    ChangeOp, DiffFault, DiffSide, EdgeChange, NodeChange, StateDiff, state_centric_diff,
+    ChangeOp, DiffFault, DiffSide, EdgeChange, GraphIndex, NodeChange, StateDiff,
+    state_centric_diff, state_centric_diff_indexed,
 };
 pub use names::{NameError, format_object_name};
 pub use record::{FrameRecord, GraphDelta, SceneEdge, SceneGraph, SceneNode};
 pub use sentence::{SentenceParseError, parse_action, render_diff, sentence_count};
 pub use signature::diff_signatures;
 pub use timeline::{FrameSelection, SceneGraphTimeline, TimelineError, TransientFilter};
-pub use visibility::{EVALUATION_SENSORS, View, restrict_to_view};
+pub use visibility::{EVALUATION_SENSORS, View, restrict_to_view, restrict_to_view_indexed};
 
 /// Why the change between two frames could not be computed.
 #[derive(Debug, thiserror::Error)]
@@ -118,18 +122,34 @@ pub fn pair_signature_views(
     from: &str,
     to: &str,
 ) -> [Result<BTreeSet<String>, String>; 2] {
-    let fault = pair_fault(timeline, from, to);
     let graphs = timeline
         .scene_graph(from)
         .and_then(|a| Ok((a, timeline.scene_graph(to)?)));
-    let (a, b) = match graphs {
-        Ok(graphs) => graphs,
+    match graphs {
+        Ok((a, b)) => indexed_signature_views(
+            timeline,
+            from,
+            to,
+            &GraphIndex::new(&a),
+            &GraphIndex::new(&b),
+        ),
         Err(e) => {
             let message = DiffError::from(e).to_string();
-            return [Err(message.clone()), Err(message)];
+            [Err(message.clone()), Err(message)]
         }
-    };
-    let full = match state_centric_diff(&a, &b) {
+    }
+}
+
+/// [`pair_signature_views`] over the two frames' graphs, already indexed.
+fn indexed_signature_views(
+    timeline: &SceneGraphTimeline,
+    from: &str,
+    to: &str,
+    a: &GraphIndex<'_>,
+    b: &GraphIndex<'_>,
+) -> ViewSets {
+    let fault = pair_fault(timeline, from, to);
+    let full = match state_centric_diff_indexed(a, b) {
         Ok(full) => full,
         Err(e) => {
             let message = fault(e).to_string();
@@ -137,11 +157,83 @@ pub fn pair_signature_views(
         }
     };
     [View::Visible, View::Full].map(|view| {
-        restrict_to_view(&a, &b, &full, view, &EVALUATION_SENSORS)
+        restrict_to_view_indexed(a, b, &full, view, &EVALUATION_SENSORS)
             .map_err(&fault)
             .and_then(|diff| diff_signatures(&diff).map_err(|e| fault(DiffFault::Name(e))))
             .map_err(|e| e.to_string())
     })
+}
+
+/// One pair's signature sets: visible, then full; an `Err` is the message of what ENACT raises.
+type ViewSets = [Result<BTreeSet<String>, String>; 2];
+
+/// The signature sets of many frame pairs of one timeline, each pair diffed once.
+///
+/// Items of one task share most of their pairs (an ENACT task yields up to 16 items over a few
+/// dozen key frames), and each pair's two views come from one state-centric diff, so a task's
+/// distinct pairs are computed once, in parallel, and items read their tables from here.
+#[derive(Debug, Default)]
+pub struct PairSignatureMemo {
+    sets: HashMap<(String, String), ViewSets>,
+}
+
+impl PairSignatureMemo {
+    /// Computes both views of every pair in `pairs`.
+    pub fn compute(timeline: &SceneGraphTimeline, pairs: BTreeSet<(String, String)>) -> Self {
+        // Each frame's graph is indexed once for all the pairs it is in.
+        let frames: BTreeSet<&str> = pairs
+            .iter()
+            .flat_map(|(from, to)| [from.as_str(), to.as_str()])
+            .collect();
+        let graphs: Vec<(&str, Cow<'_, SceneGraph>)> = frames
+            .into_iter()
+            .filter_map(|f| Some((f, timeline.scene_graph(f).ok()?)))
+            .collect();
+        let indexes: HashMap<&str, GraphIndex<'_>> = graphs
+            .par_iter()
+            .map(|(f, graph)| (*f, GraphIndex::new(graph)))
+            .collect();
+        let sets = pairs
+            .par_iter()
+            .map(|(from, to)| {
+                let sets = match (indexes.get(from.as_str()), indexes.get(to.as_str())) {
+                    (Some(a), Some(b)) => indexed_signature_views(timeline, from, to, a, b),
+                    // A frame that cannot be rebuilt: the same error as for the pair alone.
+                    _ => pair_signature_views(timeline, from, to),
+                };
+                ((from.clone(), to.clone()), sets)
+            })
+            .collect();
+        PairSignatureMemo { sets }
+    }
+
+    /// Every ordered pair of `key_frame_ids`, the diagonal included: what an item's table
+    /// asks for (see [`crate::core::verifier::ItemSignatures::build`]).
+    pub fn item_pairs(key_frame_ids: &[String]) -> impl Iterator<Item = (String, String)> + '_ {
+        key_frame_ids.iter().flat_map(move |from| {
+            key_frame_ids
+                .iter()
+                .map(move |to| (from.clone(), to.clone()))
+        })
+    }
+
+    /// The set of `from -> to` in `view`: from the memo, or computed now for a pair it lacks.
+    pub fn signatures(
+        &self,
+        timeline: &SceneGraphTimeline,
+        from: &str,
+        to: &str,
+        view: View,
+    ) -> Result<BTreeSet<String>, String> {
+        let slot = match view {
+            View::Visible => 0,
+            View::Full => 1,
+        };
+        match self.sets.get(&(from.to_owned(), to.to_owned())) {
+            Some(sets) => sets[slot].clone(),
+            None => pair_signatures(timeline, from, to, view).map_err(|e| e.to_string()),
+        }
+    }
 }
 
 /// The C (visible) and F (full) signature sets of one transition.

@@ -6,6 +6,10 @@
 //! on ASCII, which is all BEHAVIOR object names use; for exotic non-ASCII names (e.g. '½',
 //! which Python does not count as a digit) results may differ.
 
+use std::sync::LazyLock;
+
+use rustc_hash::FxHashSet;
+
 /// A name ENACT cannot format.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum NameError {
@@ -67,7 +71,10 @@ fn all_alpha(s: &str) -> bool {
 
 /// ENACT's `_is_strange_string`: a six-character part that is not a whitelisted word.
 pub fn is_strange_string(part: &str) -> bool {
-    part.chars().count() == 6 && !WHITELIST_6.contains(&part)
+    // A set, not a scan of 273 words: every six-letter part of every name asks.
+    static WHITELIST: LazyLock<FxHashSet<&str>> =
+        LazyLock::new(|| WHITELIST_6.iter().copied().collect());
+    part.chars().count() == 6 && !WHITELIST.contains(part)
 }
 
 /// `_remove_trailing_numbers`: strips trailing digits; an all-digit part is returned whole.

@@ -4,7 +4,9 @@
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 
-use crate::core::scene_graph::diff::{ChangeOp, DiffFault, DiffSide, NodeChange, StateDiff};
+use crate::core::scene_graph::diff::{
+    ChangeOp, DiffFault, DiffSide, GraphIndex, NodeChange, StateDiff,
+};
 use crate::core::scene_graph::record::{SceneGraph, SceneNode};
 
 /// The camera ENACT evaluates with.
@@ -63,24 +65,15 @@ pub fn node_is_visible(node: &SceneNode, sensors: &[&str]) -> Result<bool, DiffF
     Ok(false)
 }
 
-/// First node of each name (ENACT's lookups scan the node list and stop at the first match).
-fn first_by_name(graph: &SceneGraph) -> HashMap<&str, &SceneNode> {
-    let mut map = HashMap::with_capacity(graph.nodes.len());
-    for n in &graph.nodes {
-        map.entry(n.name.as_str()).or_insert(n);
-    }
-    map
-}
-
 /// The objects among `active` seen in a graph.
 fn seen<'a>(
     active: &BTreeSet<&'a str>,
-    nodes: &HashMap<&str, &SceneNode>,
+    graph: &GraphIndex<'_>,
     sensors: &[&str],
 ) -> Result<BTreeSet<&'a str>, DiffFault> {
     let mut out = BTreeSet::new();
     for &name in active {
-        if let Some(node) = nodes.get(name)
+        if let Some(node) = graph.first_node(name)
             && node_is_visible(node, sensors)?
         {
             out.insert(name);
@@ -96,14 +89,14 @@ fn seen<'a>(
 /// a category is an error (ENACT's assertion).
 fn ambiguous_categories<'a>(
     seen_either: &BTreeSet<&'a str>,
-    from_nodes: &HashMap<&str, &'a SceneNode>,
-    to_nodes: &HashMap<&str, &'a SceneNode>,
+    from: &GraphIndex<'a>,
+    to: &GraphIndex<'a>,
 ) -> Result<(HashMap<&'a str, &'a str>, BTreeSet<&'a str>), DiffFault> {
     let mut category: HashMap<&str, &str> = HashMap::with_capacity(seen_either.len());
     let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
     for &name in seen_either {
         // Looked up in `from` first, as ENACT searches `from_graph['nodes'] + to_graph['nodes']`.
-        let node = from_nodes.get(name).or_else(|| to_nodes.get(name));
+        let node = from.first_node(name).or_else(|| to.first_node(name));
         let cat =
             node.and_then(|n| n.category.as_deref())
                 .ok_or_else(|| DiffFault::MissingCategory {
@@ -154,13 +147,29 @@ pub fn restrict_to_view(
     view: View,
     sensors: &[&str],
 ) -> Result<StateDiff, DiffFault> {
+    restrict_to_view_indexed(
+        &GraphIndex::new(from),
+        &GraphIndex::new(to),
+        full,
+        view,
+        sensors,
+    )
+}
+
+/// [`restrict_to_view`] over graphs already indexed.
+pub fn restrict_to_view_indexed(
+    from: &GraphIndex<'_>,
+    to: &GraphIndex<'_>,
+    full: &StateDiff,
+    view: View,
+    sensors: &[&str],
+) -> Result<StateDiff, DiffFault> {
     if full.is_empty() {
         return Ok(StateDiff::default());
     }
     let active = full.active_objects();
-    let (from_nodes, to_nodes) = (first_by_name(from), first_by_name(to));
-    let seen_from = seen(&active, &from_nodes, sensors)?;
-    let seen_to = seen(&active, &to_nodes, sensors)?;
+    let seen_from = seen(&active, from, sensors)?;
+    let seen_to = seen(&active, to, sensors)?;
     let seen_either: BTreeSet<&str> = seen_from.union(&seen_to).copied().collect();
     let visible: BTreeSet<&str> = match view {
         View::Full => seen_either.clone(),
@@ -175,7 +184,7 @@ pub fn restrict_to_view(
             both
         }
     };
-    let (category, ambiguous) = ambiguous_categories(&seen_either, &from_nodes, &to_nodes)?;
+    let (category, ambiguous) = ambiguous_categories(&seen_either, from, to)?;
     let is_ambiguous = |name: &str| category.get(name).is_some_and(|c| ambiguous.contains(c));
 
     let mut out = StateDiff::default();

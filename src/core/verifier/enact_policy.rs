@@ -5,6 +5,7 @@
 //! skipped lines leave the denominators, exactly as ENACT does. Use the strict policy for a
 //! leaderboard; this one exists to give the same numbers as ENACT's own `enact eval`.
 
+use std::borrow::Cow;
 use std::collections::{HashMap, HashSet};
 use std::fmt;
 
@@ -27,12 +28,13 @@ pub trait EnactSignatureSource {
 
     /// The signature tables of a record's own key frames (`str()` of each element), with at
     /// least the visible `coverage` asked for. Only called for tasks with `has_task` true.
+    /// Borrowed when the source holds the table already.
     fn item_signatures(
         &self,
         task_name: &str,
         key_frame_ids: &[String],
         coverage: VisibleCoverage,
-    ) -> ItemSignatures;
+    ) -> Cow<'_, ItemSignatures>;
 }
 
 /// ENACT's reasons for leaving a line out of every metric.
@@ -453,19 +455,21 @@ fn evaluate_record(
             };
             source.item_signatures(task, &frames, coverage)
         }
-        KeyFrameShape::Mapping(_) | KeyFrameShape::Unsized(_) => ItemSignatures::empty(),
-    };
-    let verdict = match verify_enact_record(direction, shape, &gt, &model_answer, Some(&signatures))
-    {
-        Ok(verdict) => verdict,
-        Err(VerifyError::Evaluation { message }) => return Ok(Err(evaluation_error(message))),
-        Err(other) => {
-            return Err(EnactRunError::Signatures {
-                line,
-                source: other,
-            });
+        KeyFrameShape::Mapping(_) | KeyFrameShape::Unsized(_) => {
+            Cow::Owned(ItemSignatures::empty())
         }
     };
+    let verdict =
+        match verify_enact_record(direction, shape, &gt, &model_answer, Some(&*signatures)) {
+            Ok(verdict) => verdict,
+            Err(VerifyError::Evaluation { message }) => return Ok(Err(evaluation_error(message))),
+            Err(other) => {
+                return Err(EnactRunError::Signatures {
+                    line,
+                    source: other,
+                });
+            }
+        };
     Ok(Ok(EvaluatedRecord {
         line,
         id,
@@ -524,20 +528,24 @@ mod tests {
             _task: &str,
             key_frame_ids: &[String],
             coverage: VisibleCoverage,
-        ) -> ItemSignatures {
-            ItemSignatures::build(key_frame_ids, coverage, |from, to, view| {
-                let known = ["10", "20", "30"];
-                if !known.contains(&from) || !known.contains(&to) {
-                    return Err(format!("'Frame ID {from} not found in scene graph data'"));
-                }
-                let set: &[&str] = match (from, to, view) {
-                    (f, t, _) if f == t => &[],
-                    ("10", "20", _) => &["open"],
-                    ("20", "30", _) => &["grasp"],
-                    _ => &["far"],
-                };
-                Ok(set.iter().map(|s| s.to_string()).collect::<BTreeSet<_>>())
-            })
+        ) -> Cow<'_, ItemSignatures> {
+            Cow::Owned(ItemSignatures::build(
+                key_frame_ids,
+                coverage,
+                |from, to, view| {
+                    let known = ["10", "20", "30"];
+                    if !known.contains(&from) || !known.contains(&to) {
+                        return Err(format!("'Frame ID {from} not found in scene graph data'"));
+                    }
+                    let set: &[&str] = match (from, to, view) {
+                        (f, t, _) if f == t => &[],
+                        ("10", "20", _) => &["open"],
+                        ("20", "30", _) => &["grasp"],
+                        _ => &["far"],
+                    };
+                    Ok(set.iter().map(|s| s.to_string()).collect::<BTreeSet<_>>())
+                },
+            ))
         }
     }
 
