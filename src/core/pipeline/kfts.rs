@@ -7,7 +7,10 @@ use std::collections::HashSet;
 use rand::Rng;
 use rayon::prelude::*;
 
-use crate::core::scene_graph::{DiffError, SceneGraphTimeline, View, sentence_count, visible_diff};
+use crate::core::scene_graph::{
+    DiffError, GraphIndex, SceneGraphTimeline, StateDiff, View, sentence_count, visible_diff,
+    visible_diff_indexed,
+};
 
 /// Fewest and most sentences an action may have for its transition to be usable.
 pub const SENTENCES_PER_ACTION: std::ops::RangeInclusive<usize> = 1..=5;
@@ -96,12 +99,27 @@ impl TransitionGraph {
         let mut frames = key_frames.to_vec();
         frames.sort_by_key(|f| f.parse::<u64>().unwrap_or(u64::MAX));
         let n = frames.len();
+        // Each key frame is in n - 1 tests: its graph is indexed once for all of them.
+        let graphs = frames
+            .iter()
+            .map(|f| timeline.scene_graph(f))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(DiffError::from)?;
+        let indexes: Vec<GraphIndex<'_>> = graphs.par_iter().map(|g| GraphIndex::new(g)).collect();
         let rows: Vec<Vec<(usize, usize)>> = (0..n)
             .into_par_iter()
             .map(|i| {
                 let mut row = Vec::new();
                 for j in i + 1..n {
-                    if is_valid_transition(timeline, &frames[i], &frames[j])? {
+                    let diff = visible_diff_indexed(
+                        timeline,
+                        &frames[i],
+                        &frames[j],
+                        &indexes[i],
+                        &indexes[j],
+                        View::Visible,
+                    )?;
+                    if is_valid_diff(timeline, &frames[i], &frames[j], &diff)? {
                         row.push((i, j));
                     }
                 }
@@ -135,10 +153,20 @@ pub fn is_valid_transition(
     to: &str,
 ) -> Result<bool, KftsError> {
     let diff = visible_diff(timeline, from, to, View::Visible)?;
+    is_valid_diff(timeline, from, to, &diff)
+}
+
+/// The test of [`is_valid_transition`] on the pair's visible diff.
+fn is_valid_diff(
+    timeline: &SceneGraphTimeline,
+    from: &str,
+    to: &str,
+    diff: &StateDiff,
+) -> Result<bool, KftsError> {
     if diff.is_empty() || !diff.has_meaningful_change() {
         return Ok(false);
     }
-    let sentences = sentence_count(&diff).map_err(|source| KftsError::Name {
+    let sentences = sentence_count(diff).map_err(|source| KftsError::Name {
         file: timeline.source().display().to_string(),
         from: from.to_string(),
         to: to.to_string(),

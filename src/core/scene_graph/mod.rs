@@ -11,6 +11,7 @@ pub mod names;
 pub mod record;
 pub mod sentence;
 pub mod signature;
+mod split;
 pub mod timeline;
 pub mod transient;
 pub mod visibility;
@@ -80,10 +81,29 @@ pub fn visible_diff(
     to: &str,
     view: View,
 ) -> Result<StateDiff, DiffError> {
-    let fault = pair_fault(timeline, from, to);
     let (a, b) = (timeline.scene_graph(from)?, timeline.scene_graph(to)?);
-    let full = state_centric_diff(&a, &b).map_err(&fault)?;
-    restrict_to_view(&a, &b, &full, view, &EVALUATION_SENSORS).map_err(fault)
+    visible_diff_indexed(
+        timeline,
+        from,
+        to,
+        &GraphIndex::new(&a),
+        &GraphIndex::new(&b),
+        view,
+    )
+}
+
+/// [`visible_diff`] over the two frames' graphs, already indexed (`a` is `from`'s).
+pub fn visible_diff_indexed(
+    timeline: &SceneGraphTimeline,
+    from: &str,
+    to: &str,
+    a: &GraphIndex<'_>,
+    b: &GraphIndex<'_>,
+    view: View,
+) -> Result<StateDiff, DiffError> {
+    let fault = pair_fault(timeline, from, to);
+    let full = state_centric_diff_indexed(a, b).map_err(&fault)?;
+    restrict_to_view_indexed(a, b, &full, view, &EVALUATION_SENSORS).map_err(fault)
 }
 
 /// Both views of the change from `from` to `to`. Fails if either view fails in ENACT.

@@ -151,8 +151,17 @@ fn render_with(
 /// diff or no text). The QA generator keeps transitions with 1 to 5. Templates contain no
 /// period, so the count does not depend on the random choice.
 pub fn sentence_count(diff: &StateDiff) -> Result<usize, NameError> {
-    let text = render_with(diff, &mut |_| 0)?;
-    Ok(text.map_or(0, |t| t.matches('.').count()))
+    if diff.is_empty() {
+        return Ok(NO_CHANGE_TEXT.matches('.').count());
+    }
+    // The periods of the rendered text, without rendering it: one after each sentence plus
+    // any inside one (capitalising adds or removes none). KFTS asks this of every key-frame pair.
+    let sentences = sentences_with(diff, &mut |_| 0)?;
+    Ok(sentences.len()
+        + sentences
+            .iter()
+            .map(|s| s.matches('.').count())
+            .sum::<usize>())
 }
 
 /// Why an action text could not be read back into signatures.

@@ -11,10 +11,13 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use std::io::Read;
+
 use serde::de::{self, DeserializeSeed, IgnoredAny, MapAccess, Visitor};
 
 use crate::core::scene_graph::record::{FrameRecord, SceneGraph};
 use crate::core::scene_graph::record::{SceneEdge, SceneNode, apply_delta_to};
+use crate::core::scene_graph::split::{RawRecord, RecordSplitter};
 use crate::core::scene_graph::transient::{Windows, for_each_filtered_graph};
 
 /// Scene-graph files larger than this are streamed when only some frames are wanted (smaller
@@ -176,23 +179,14 @@ impl SceneGraphTimeline {
     /// Every frame of the file through ENACT's transient filter, read as a stream; `None`
     /// when the frame ids are not in ascending order.
     fn stream_filtered(path: &Path) -> Result<Option<Self>, TimelineError> {
-        let file = std::fs::File::open(path).map_err(|source| TimelineError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let mut de =
-            serde_json::Deserializer::from_reader(std::io::BufReader::with_capacity(1 << 20, file));
         let mut state = FilterStream::default();
-        let parsed = de::Deserializer::deserialize_map(&mut de, FilterStreamVisitor(&mut state))
-            .and_then(|()| de.end());
-        match (parsed, state.stop) {
-            (_, Some(Stop::OutOfOrder)) => Ok(None),
-            (_, Some(Stop::NoFullRecordBefore(frame))) => Err(TimelineError::NoFullRecordBefore {
+        match each_record(open_file(path)?, path, |n, json| state.push(n, json))? {
+            Some(Stop::OutOfOrder) => Ok(None),
+            Some(Stop::NoFullRecordBefore(frame)) => Err(TimelineError::NoFullRecordBefore {
                 path: path.to_path_buf(),
                 frame: frame.to_string(),
             }),
-            (Err(e), None) => Err(json_error(path, &state.cursor, e)),
-            (Ok(()), None) => {
+            None => {
                 let FilterStream {
                     windows,
                     mut kept,
@@ -211,19 +205,10 @@ impl SceneGraphTimeline {
 
     /// Reads the selected frames of the file at `path` as a stream, in two passes.
     fn stream_selected(path: &Path, ids: &BTreeSet<String>) -> Result<Self, TimelineError> {
-        let open = || -> Result<_, TimelineError> {
-            let file = std::fs::File::open(path).map_err(|source| TimelineError::Io {
-                path: path.to_path_buf(),
-                source,
-            })?;
-            Ok(serde_json::Deserializer::from_reader(
-                std::io::BufReader::with_capacity(1 << 20, file),
-            ))
-        };
-        let kinds = scan_kinds_with(open()?, path)?;
+        let kinds = scan_record_kinds(open_file(path)?, path)?;
         let selected: BTreeSet<u64> = ids.iter().filter_map(|id| canonical_frame(id)).collect();
         let needed = records_needed(&kinds, &selected);
-        let (known, records) = parse_records_with(open()?, path, &KeepRecords::Only(&needed))?;
+        let (known, records) = parse_records(open_file(path)?, path, &KeepRecords::Only(&needed))?;
         let loaded = SceneGraphTimeline {
             source: path.to_path_buf(),
             known,
@@ -467,59 +452,47 @@ struct FilterStream {
     windows: Windows<std::sync::Arc<SceneNode>>,
     kept: KeptChanges,
     known: BTreeSet<u64>,
-    cursor: Cursor,
-    stop: Option<Stop>,
+    /// Whether the record before was a full record (or repeated one): a frame whose text
+    /// repeats such a record has the same graph, which is already built.
+    previous_full: bool,
 }
 
-struct FilterStreamVisitor<'a>(&'a mut FilterStream);
-
-impl<'de> Visitor<'de> for FilterStreamVisitor<'_> {
-    type Value = ();
-
-    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("an object keyed by frame id")
-    }
-
-    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
-        let state = self.0;
-        while let Some(key) = map.next_key::<Cow<'de, str>>()? {
-            let Some(n) = canonical_frame(&key) else {
-                state.cursor.bad_key = Some(key.into_owned());
-                return Err(de::Error::custom("frame key is not a decimal frame number"));
-            };
-            if state.known.last().is_some_and(|&last| n <= last) {
-                state.stop = Some(Stop::OutOfOrder);
-                return Err(de::Error::custom("frame ids out of order"));
-            }
-            state.cursor.inside = Some(key.into_owned());
-            let record: FrameRecord = map.next_value()?;
-            match record {
-                FrameRecord::Full(graph) => {
-                    state.current = Some((
-                        graph.nodes.into_iter().map(std::sync::Arc::new).collect(),
-                        graph.edges,
-                    ));
-                }
-                FrameRecord::Diff(delta) => {
-                    if let Some((nodes, edges)) = state.current.as_mut() {
-                        apply_delta_to(nodes, edges, &delta);
-                    }
-                }
-                FrameRecord::Empty => {}
-            }
-            let Some((nodes, edges)) = state.current.as_ref() else {
-                state.stop = Some(Stop::NoFullRecordBefore(n));
-                return Err(de::Error::custom("no full record before this frame"));
-            };
-            let kept = &mut state.kept;
-            state
-                .windows
-                .push(n, nodes.iter().cloned(), edges.iter(), &mut |id, graph| {
-                    kept.keep(id, graph)
-                });
-            state.known.insert(n);
-            state.cursor.last_done = state.cursor.inside.take();
+impl FilterStream {
+    /// Takes frame `n`'s record: rebuilds its graph and passes it through the filter.
+    fn push(&mut self, n: u64, record: &RawRecord<'_>) -> Result<(), RecordFailure> {
+        if self.known.last().is_some_and(|&last| n <= last) {
+            return Err(RecordFailure::Stop(Stop::OutOfOrder));
         }
+        let repeated = record.repeats_previous && self.previous_full;
+        let record = if repeated {
+            FrameRecord::Empty
+        } else {
+            serde_json::from_slice::<FrameRecord>(record.json)?
+        };
+        self.previous_full = repeated || matches!(record, FrameRecord::Full(_));
+        match record {
+            FrameRecord::Full(graph) => {
+                self.current = Some((
+                    graph.nodes.into_iter().map(std::sync::Arc::new).collect(),
+                    graph.edges,
+                ));
+            }
+            FrameRecord::Diff(delta) => {
+                if let Some((nodes, edges)) = self.current.as_mut() {
+                    apply_delta_to(nodes, edges, &delta);
+                }
+            }
+            FrameRecord::Empty => {}
+        }
+        let Some((nodes, edges)) = self.current.as_ref() else {
+            return Err(RecordFailure::Stop(Stop::NoFullRecordBefore(n)));
+        };
+        let kept = &mut self.kept;
+        self.windows
+            .push(n, nodes.iter().cloned(), edges.iter(), &mut |id, graph| {
+                kept.keep(id, graph)
+            });
+        self.known.insert(n);
         Ok(())
     }
 }
@@ -570,151 +543,131 @@ enum KeepRecords<'a> {
     Only(&'a BTreeSet<u64>),
 }
 
-/// Tracks where the streaming parser is, so errors can name the frame.
-#[derive(Default)]
-struct Cursor {
-    inside: Option<String>,
-    last_done: Option<String>,
-    bad_key: Option<String>,
+/// Why a record handler stopped a read.
+enum RecordFailure {
+    /// The record is not what it should be; the error's position is within the record.
+    Json(serde_json::Error),
+    Stop(Stop),
 }
 
-fn json_error(source: &Path, cursor: &Cursor, err: serde_json::Error) -> TimelineError {
-    if let Some(key) = &cursor.bad_key {
-        return TimelineError::FrameKey {
-            path: source.to_path_buf(),
-            key: key.clone(),
-        };
+impl From<serde_json::Error> for RecordFailure {
+    fn from(e: serde_json::Error) -> Self {
+        RecordFailure::Json(e)
     }
-    TimelineError::Json {
-        path: source.to_path_buf(),
-        place: JsonPlace {
-            frame: cursor.inside.clone(),
-            after_frame: if cursor.inside.is_none() {
-                cursor.last_done.clone()
-            } else {
-                None
-            },
-            line: err.line(),
-            column: err.column(),
-        },
-        message: err.to_string(),
+}
+
+fn open_file(path: &Path) -> Result<std::fs::File, TimelineError> {
+    std::fs::File::open(path).map_err(|source| TimelineError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// `serde_json`'s message without its " at line L column C" (positions within a record mean
+/// nothing to a reader of the file; [`JsonPlace`] gives the position in the file).
+fn message_of(err: &serde_json::Error) -> String {
+    let text = err.to_string();
+    let suffix = format!(" at line {} column {}", err.line(), err.column());
+    text.strip_suffix(&suffix).unwrap_or(&text).to_owned()
+}
+
+/// Calls `f(frame, record JSON)` for every record of the file, in file order. A JSON error
+/// names the frame (or the last frame read, between records) and its line and column in the
+/// file; `Some(stop)` when `f` stopped the read.
+fn each_record(
+    reader: impl Read,
+    source: &Path,
+    mut f: impl FnMut(u64, &RawRecord<'_>) -> Result<(), RecordFailure>,
+) -> Result<Option<Stop>, TimelineError> {
+    let mut splitter = RecordSplitter::new(reader);
+    let mut last_done: Option<String> = None;
+    loop {
+        let record = match splitter.next_record() {
+            Ok(Some(record)) => record,
+            Ok(None) => return Ok(None),
+            Err(e) => {
+                return Err(TimelineError::Json {
+                    path: source.to_path_buf(),
+                    place: JsonPlace {
+                        after_frame: if e.frame.is_none() { last_done } else { None },
+                        frame: e.frame,
+                        line: e.line,
+                        column: e.column,
+                    },
+                    message: e.message,
+                });
+            }
+        };
+        let Some(n) = canonical_frame(&record.key) else {
+            return Err(TimelineError::FrameKey {
+                path: source.to_path_buf(),
+                key: record.key,
+            });
+        };
+        match f(n, &record) {
+            Ok(()) => {}
+            Err(RecordFailure::Stop(stop)) => return Ok(Some(stop)),
+            Err(RecordFailure::Json(e)) => {
+                let at = record.at.of_error_in_record(&e);
+                return Err(TimelineError::Json {
+                    path: source.to_path_buf(),
+                    place: JsonPlace {
+                        frame: Some(record.key),
+                        after_frame: None,
+                        line: at.line,
+                        column: at.column,
+                    },
+                    message: message_of(&e),
+                });
+            }
+        }
+        last_done = Some(record.key);
     }
 }
 
 type ParsedRecords = (BTreeSet<u64>, BTreeMap<u64, FrameRecord>);
 
+/// Every frame id of the file and the records `keep` asks for. Records left out are not
+/// checked beyond their brackets: [`KeepRecords::Only`] follows [`scan_record_kinds`], which
+/// has read them all.
 fn parse_records(
-    bytes: &[u8],
+    reader: impl Read,
     source: &Path,
     keep: &KeepRecords<'_>,
 ) -> Result<ParsedRecords, TimelineError> {
-    parse_records_with(serde_json::Deserializer::from_slice(bytes), source, keep)
-}
-
-/// [`parse_records`] from any JSON source (a slice, or a file read as a stream).
-fn parse_records_with<'de, R: serde_json::de::Read<'de>>(
-    mut de: serde_json::Deserializer<R>,
-    source: &Path,
-    keep: &KeepRecords<'_>,
-) -> Result<ParsedRecords, TimelineError> {
-    let mut cursor = Cursor::default();
-    let visitor = RecordMapVisitor {
-        keep,
-        cursor: &mut cursor,
-    };
-    let parsed = de::Deserializer::deserialize_map(&mut de, visitor).and_then(|v| {
-        de.end()?;
-        Ok(v)
-    });
-    parsed.map_err(|e| json_error(source, &cursor, e))
-}
-
-struct RecordMapVisitor<'a, 'k> {
-    keep: &'a KeepRecords<'k>,
-    cursor: &'a mut Cursor,
-}
-
-impl<'de> Visitor<'de> for RecordMapVisitor<'_, '_> {
-    type Value = ParsedRecords;
-
-    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("an object keyed by frame id")
-    }
-
-    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
-        let mut known = BTreeSet::new();
-        let mut records = BTreeMap::new();
-        while let Some(key) = map.next_key::<Cow<'de, str>>()? {
-            let Some(n) = canonical_frame(&key) else {
-                self.cursor.bad_key = Some(key.into_owned());
-                return Err(de::Error::custom("frame key is not a decimal frame number"));
-            };
-            self.cursor.inside = Some(key.into_owned());
-            let wanted = match self.keep {
-                KeepRecords::All => true,
-                KeepRecords::Only(set) => set.contains(&n),
-            };
-            if wanted {
-                // A repeated key replaces the earlier record, as Python's json.load does.
-                records.insert(n, map.next_value::<FrameRecord>()?);
-            } else {
-                map.next_value::<IgnoredAny>()?;
-            }
-            known.insert(n);
-            self.cursor.last_done = self.cursor.inside.take();
+    let mut known = BTreeSet::new();
+    let mut records = BTreeMap::new();
+    each_record(reader, source, |n, record| {
+        let wanted = match keep {
+            KeepRecords::All => true,
+            KeepRecords::Only(set) => set.contains(&n),
+        };
+        if wanted {
+            // A repeated key replaces the earlier record, as Python's json.load does.
+            records.insert(n, serde_json::from_slice::<FrameRecord>(record.json)?);
         }
-        Ok((known, records))
-    }
+        known.insert(n);
+        Ok(())
+    })?;
+    Ok((known, records))
 }
 
+/// Each record's kind, reading only its `type` (the rest is checked for syntax and skipped).
 fn scan_record_kinds(
-    bytes: &[u8],
+    reader: impl Read,
     source: &Path,
 ) -> Result<BTreeMap<u64, RecordKind>, TimelineError> {
-    scan_kinds_with(serde_json::Deserializer::from_slice(bytes), source)
-}
-
-/// [`scan_record_kinds`] from any JSON source.
-fn scan_kinds_with<'de, R: serde_json::de::Read<'de>>(
-    mut de: serde_json::Deserializer<R>,
-    source: &Path,
-) -> Result<BTreeMap<u64, RecordKind>, TimelineError> {
-    let mut cursor = Cursor::default();
-    let visitor = KindMapVisitor {
-        cursor: &mut cursor,
-    };
-    let parsed = de::Deserializer::deserialize_map(&mut de, visitor).and_then(|v| {
-        de.end()?;
-        Ok(v)
-    });
-    parsed.map_err(|e| json_error(source, &cursor, e))
-}
-
-struct KindMapVisitor<'a> {
-    cursor: &'a mut Cursor,
-}
-
-impl<'de> Visitor<'de> for KindMapVisitor<'_> {
-    type Value = BTreeMap<u64, RecordKind>;
-
-    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("an object keyed by frame id")
-    }
-
-    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
-        let mut kinds = BTreeMap::new();
-        while let Some(key) = map.next_key::<Cow<'de, str>>()? {
-            let Some(n) = canonical_frame(&key) else {
-                self.cursor.bad_key = Some(key.into_owned());
-                return Err(de::Error::custom("frame key is not a decimal frame number"));
-            };
-            self.cursor.inside = Some(key.into_owned());
-            let kind = map.next_value_seed(KindSeed)?;
-            kinds.insert(n, kind);
-            self.cursor.last_done = self.cursor.inside.take();
+    let mut kinds = BTreeMap::new();
+    let mut previous = RecordKind::Other;
+    each_record(reader, source, |n, record| {
+        if !record.repeats_previous {
+            let mut de = serde_json::Deserializer::from_slice(record.json);
+            previous = KindSeed.deserialize(&mut de)?;
         }
-        Ok(kinds)
-    }
+        kinds.insert(n, previous);
+        Ok(())
+    })?;
+    Ok(kinds)
 }
 
 /// Reads one record, keeping only its `type` and skipping everything else unparsed.
