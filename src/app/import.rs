@@ -1,11 +1,15 @@
 //! Importing an ENACT release (`QA/enact_ordering.jsonl` + images) into the store.
 //!
-//! Three phases, so that a bad file never leaves anything half-written:
-//! 1. read and validate every line and every image it names (CPU work, on rayon threads);
+//! Three phases, a batch of lines at a time inside one transaction, so that a bad file never
+//! leaves anything half-written and memory holds one batch whatever the release's size:
+//! 1. read and validate the lines and every image they name (CPU work, on rayon threads);
 //! 2. decide per item: new, unchanged, or changed (an error unless `replace`);
-//! 3. write everything in one transaction, reading only the frames not stored yet.
+//! 3. write the batch, reading only the frames not stored yet.
+//!
+//! Kept across batches: each id's first line (duplicates) and each distinct frame's hash (the
+//! report's count), a few dozen bytes per item.
 
-use std::collections::{BTreeMap, HashMap, HashSet};
+use std::collections::{HashMap, HashSet};
 use std::fmt;
 use std::io::{BufRead, BufReader};
 use std::path::{Component, Path, PathBuf};
@@ -237,6 +241,8 @@ struct FrameFacts {
     sha256: String,
     width: u32,
     height: u32,
+    /// Size of the file.
+    bytes: u64,
 }
 
 struct ValidRow {
@@ -246,23 +252,27 @@ struct ValidRow {
     semantics: Option<ItemSemantics>,
 }
 
+/// One batch of the QA file, validated.
 struct Validated {
-    rows: usize,
     valid: Vec<ValidRow>,
     invalid: Vec<SkippedLine>,
 }
 
-fn progress_bar(enabled: bool, len: usize, what: &str) -> ProgressBar {
+/// How many lines are validated and written at a time: memory holds one batch, whatever the
+/// size of the file.
+const BATCH_LINES: usize = 512;
+
+/// A bar over the QA file's bytes; its message counts items and image bytes.
+fn progress_bar(enabled: bool, qa_bytes: u64) -> ProgressBar {
     if !enabled {
         return ProgressBar::hidden();
     }
-    let bar = ProgressBar::new(len as u64);
-    if let Ok(style) =
-        ProgressStyle::with_template("{msg:>16} [{bar:40}] {pos}/{len} ({per_sec}, eta {eta})")
-    {
+    let bar = ProgressBar::new(qa_bytes);
+    if let Ok(style) = ProgressStyle::with_template(
+        "{msg:>32} [{bar:40}] {bytes}/{total_bytes} of QA file ({bytes_per_sec}, eta {eta})",
+    ) {
         bar.set_style(style.progress_chars("=> "));
     }
-    bar.set_message(what.to_owned());
     bar
 }
 
@@ -297,131 +307,162 @@ fn inspect_image(path: &Path) -> Result<FrameFacts, String> {
         sha256: hex::encode(Sha256::digest(&bytes)),
         width: image.width(),
         height: image.height(),
+        bytes: bytes.len() as u64,
     })
 }
 
-/// Phase 1: every line, every image and the scene graphs, with every problem found.
-fn validate(
-    location: &ReleaseLocation,
-    scene_graphs: Option<&Path>,
-    progress: bool,
-) -> Result<Validated, ImportError> {
-    let io_error = |source| ImportError::Io {
-        path: location.qa_file.display().to_string(),
-        source,
-    };
-    let file = std::fs::File::open(&location.qa_file).map_err(io_error)?;
-    let mut rows = 0;
-    let mut parsed: Vec<(usize, Result<QaItem, Vec<FieldProblem>>)> = Vec::new();
-    for (index, line) in BufReader::new(file).lines().enumerate() {
-        let line = line.map_err(io_error)?;
-        if line.trim().is_empty() {
-            continue;
-        }
-        rows += 1;
-        parsed.push((index + 1, parse_release_line(&line)));
+/// Reads and validates the QA file a batch at a time: every line, every image it names and
+/// the scene graphs, with every problem found. Keeps across batches only what later lines are
+/// checked against (each id's first line).
+struct Validator {
+    location: ReleaseLocation,
+    scene_graphs: Option<PathBuf>,
+    lines: std::io::Lines<BufReader<std::fs::File>>,
+    /// Lines read so far (blank ones included), records among them, bytes of the file read.
+    lines_read: usize,
+    rows: usize,
+    bytes_read: u64,
+    /// Image bytes read so far.
+    image_bytes: u64,
+    first_line: HashMap<String, usize>,
+}
+
+impl Validator {
+    fn open(location: &ReleaseLocation, scene_graphs: Option<&Path>) -> Result<Self, ImportError> {
+        let file = std::fs::File::open(&location.qa_file).map_err(|source| ImportError::Io {
+            path: location.qa_file.display().to_string(),
+            source,
+        })?;
+        Ok(Validator {
+            location: location.clone(),
+            scene_graphs: scene_graphs.map(Path::to_path_buf),
+            lines: BufReader::new(file).lines(),
+            lines_read: 0,
+            rows: 0,
+            bytes_read: 0,
+            image_bytes: 0,
+            first_line: HashMap::new(),
+        })
     }
 
-    // Duplicate ids: the first occurrence stands, later ones are problems.
-    let mut first_line: HashMap<String, usize> = HashMap::new();
-    for (line, result) in &mut parsed {
-        if let Ok(item) = result {
-            if let Some(first) = first_line.get(&item.id) {
-                *result = Err(vec![FieldProblem::new(
-                    "id",
-                    format!("duplicate id {:?}, first seen on line {first}", item.id),
-                )]);
-            } else {
-                first_line.insert(item.id.clone(), *line);
+    /// The next batch of up to [`BATCH_LINES`] records, `None` at the end of the file.
+    fn next_batch(&mut self) -> Result<Option<Validated>, ImportError> {
+        let mut parsed: Vec<(usize, Result<QaItem, Vec<FieldProblem>>)> = Vec::new();
+        while parsed.len() < BATCH_LINES {
+            let Some(line) = self.lines.next() else { break };
+            let line = line.map_err(|source| ImportError::Io {
+                path: self.location.qa_file.display().to_string(),
+                source,
+            })?;
+            self.lines_read += 1;
+            self.bytes_read += line.len() as u64 + 1;
+            if line.trim().is_empty() {
+                continue;
+            }
+            self.rows += 1;
+            parsed.push((self.lines_read, parse_release_line(&line)));
+        }
+        if parsed.is_empty() {
+            return Ok(None);
+        }
+
+        // Duplicate ids: the first occurrence stands, later ones are problems.
+        for (line, result) in &mut parsed {
+            if let Ok(item) = result {
+                if let Some(first) = self.first_line.get(&item.id) {
+                    *result = Err(vec![FieldProblem::new(
+                        "id",
+                        format!("duplicate id {:?}, first seen on line {first}", item.id),
+                    )]);
+                } else {
+                    self.first_line.insert(item.id.clone(), *line);
+                }
             }
         }
-    }
 
-    let mut paths: Vec<String> = parsed
-        .iter()
-        .filter_map(|(_, r)| r.as_ref().ok())
-        .flat_map(|item| item.images.iter().cloned())
-        .collect::<HashSet<_>>()
-        .into_iter()
-        .collect();
-    paths.sort_unstable();
-    let bar = progress_bar(progress, paths.len(), "checking images");
-    let facts: HashMap<String, Result<FrameFacts, String>> = paths
-        .into_par_iter()
-        .map(|p| {
-            let result = image_path(&location.root, &p).and_then(|full| inspect_image(&full));
-            bar.inc(1);
-            (p, result)
-        })
-        .collect();
-    bar.finish_and_clear();
+        let paths: HashSet<&str> = parsed
+            .iter()
+            .filter_map(|(_, r)| r.as_ref().ok())
+            .flat_map(|item| item.images.iter().map(String::as_str))
+            .collect();
+        let root = &self.location.root;
+        let facts: HashMap<String, Result<FrameFacts, String>> = paths
+            .into_par_iter()
+            .map(|p| {
+                let result = image_path(root, p).and_then(|full| inspect_image(&full));
+                (p.to_owned(), result)
+            })
+            .collect();
+        self.image_bytes += facts
+            .values()
+            .filter_map(|f| f.as_ref().ok())
+            .map(|f| f.bytes)
+            .sum::<u64>();
 
-    let mut valid = Vec::new();
-    let mut invalid = Vec::new();
-    for (line, result) in parsed {
-        match result {
-            Err(problems) => invalid.push(SkippedLine {
-                line,
-                item_id: None,
-                problems,
-            }),
-            Ok(item) => {
-                let mut frames = Vec::with_capacity(item.images.len());
-                let mut problems = Vec::new();
-                for (i, path) in item.images.iter().enumerate() {
-                    match facts.get(path.as_str()) {
-                        Some(Ok(f)) => frames.push(f.clone()),
-                        Some(Err(message)) => {
-                            problems.push(FieldProblem::new(format!("images[{i}]"), message))
+        let mut valid = Vec::new();
+        let mut invalid = Vec::new();
+        for (line, result) in parsed {
+            match result {
+                Err(problems) => invalid.push(SkippedLine {
+                    line,
+                    item_id: None,
+                    problems,
+                }),
+                Ok(item) => {
+                    let mut frames = Vec::with_capacity(item.images.len());
+                    let mut problems = Vec::new();
+                    for (i, path) in item.images.iter().enumerate() {
+                        match facts.get(path.as_str()) {
+                            Some(Ok(f)) => frames.push(f.clone()),
+                            Some(Err(message)) => {
+                                problems.push(FieldProblem::new(format!("images[{i}]"), message))
+                            }
+                            None => problems.push(FieldProblem::new(
+                                format!("images[{i}]"),
+                                "image was not checked",
+                            )),
                         }
-                        None => problems.push(FieldProblem::new(
-                            format!("images[{i}]"),
-                            "image was not checked",
-                        )),
+                    }
+                    if problems.is_empty() {
+                        valid.push(ValidRow {
+                            line,
+                            item,
+                            frames,
+                            semantics: None,
+                        });
+                    } else {
+                        invalid.push(SkippedLine {
+                            line,
+                            item_id: Some(item.id),
+                            problems,
+                        });
                     }
                 }
-                if problems.is_empty() {
-                    valid.push(ValidRow {
-                        line,
-                        item,
-                        frames,
-                        semantics: None,
-                    });
-                } else {
-                    invalid.push(SkippedLine {
-                        line,
-                        item_id: Some(item.id),
-                        problems,
-                    });
+            }
+        }
+
+        let items: Vec<&QaItem> = valid.iter().map(|r| &r.item).collect();
+        let semantics = semantics::for_items(self.scene_graphs.as_deref(), &items);
+        let mut kept = Vec::with_capacity(valid.len());
+        for (mut row, result) in valid.into_iter().zip(semantics) {
+            match result {
+                Ok(s) => {
+                    row.semantics = s;
+                    kept.push(row);
                 }
+                Err(problems) => invalid.push(SkippedLine {
+                    line: row.line,
+                    item_id: Some(row.item.id),
+                    problems,
+                }),
             }
         }
+        invalid.sort_by_key(|s| s.line);
+        Ok(Some(Validated {
+            valid: kept,
+            invalid,
+        }))
     }
-
-    let items: Vec<&QaItem> = valid.iter().map(|r| &r.item).collect();
-    let semantics = semantics::for_items(scene_graphs, &items);
-    let mut kept = Vec::with_capacity(valid.len());
-    for (mut row, result) in valid.into_iter().zip(semantics) {
-        match result {
-            Ok(s) => {
-                row.semantics = s;
-                kept.push(row);
-            }
-            Err(problems) => invalid.push(SkippedLine {
-                line: row.line,
-                item_id: Some(row.item.id),
-                problems,
-            }),
-        }
-    }
-    let valid = kept;
-
-    invalid.sort_by_key(|s| s.line);
-    Ok(Validated {
-        rows,
-        valid,
-        invalid,
-    })
 }
 
 /// Identity of an item's content: its fields and the bytes of its images.
@@ -440,7 +481,11 @@ fn content_hash(row: &ValidRow) -> String {
     hex::encode(Sha256::digest(canonical.to_string().as_bytes()))
 }
 
-/// Imports a release into `options.dataset`. See the module documentation for the phases.
+/// Imports a release into `options.dataset`. See the module documentation for the phases;
+/// they run a batch of lines at a time inside the one transaction, so memory holds a batch
+/// whatever the size of the release. After the first invalid line (without `skip_invalid`) or
+/// conflicting item, nothing more is written but every line is still checked, so the error
+/// lists every problem; the transaction is then rolled back.
 pub async fn import_release(
     hub: &super::Hub,
     actor: &Actor,
@@ -449,22 +494,12 @@ pub async fn import_release(
 ) -> Result<ImportReport, ImportError> {
     let started = Instant::now();
     let location = ReleaseLocation::resolve(path)?;
-    let validated = {
-        let location = location.clone();
-        let progress = options.progress;
-        let scene_graphs = options.scene_graphs.clone();
-        tokio::task::spawn_blocking(move || validate(&location, scene_graphs.as_deref(), progress))
-            .await
-            .map_err(|e| ImportError::Location(format!("validation task failed: {e}")))??
-    };
     let file = location.qa_file.display().to_string();
-    if !validated.invalid.is_empty() && !options.skip_invalid {
-        return Err(ImportError::Invalid {
-            file,
-            rows: validated.rows,
-            lines: validated.invalid,
-        });
-    }
+    let qa_bytes = std::fs::metadata(&location.qa_file)
+        .map(|m| m.len())
+        .unwrap_or(0);
+    let mut validator = Validator::open(&location, options.scene_graphs.as_deref())?;
+    let bar = progress_bar(options.progress, qa_bytes);
 
     let mut tx = hub.pool.begin().await?;
     let existing_dataset = store::datasets::by_name(&mut tx, &options.dataset).await?;
@@ -472,25 +507,92 @@ pub async fn import_release(
         Some(d) => store::items::content_hashes(&mut tx, d.id).await?,
         None => HashMap::new(),
     };
+    let mut report = ImportReport {
+        dataset: options.dataset.clone(),
+        qa_file: file.clone(),
+        ..ImportReport::default()
+    };
+    let mut invalid: Vec<SkippedLine> = Vec::new();
+    let mut conflicts: Vec<LineProblem> = Vec::new();
+    let mut distinct_frames: HashSet<String> = HashSet::new();
+    let mut dataset_id: Option<i64> = None;
+    let mut wrote_items = false;
 
-    let mut to_write = Vec::new();
-    let mut conflicts = Vec::new();
-    let mut unchanged = 0;
-    for row in &validated.valid {
-        let hash = content_hash(row);
-        match stored_hashes.get(&row.item.id) {
-            Some(stored) if *stored == hash => unchanged += 1,
-            Some(_) if !options.replace => conflicts.push(LineProblem {
-                line: row.line,
-                item_id: Some(row.item.id.clone()),
-                problem: FieldProblem::new(
-                    "",
-                    "an item with this id is stored with different content",
-                ),
-            }),
-            Some(_) => to_write.push((row, hash, true)),
-            None => to_write.push((row, hash, false)),
+    loop {
+        let (returned, batch) = tokio::task::spawn_blocking(move || {
+            let batch = validator.next_batch();
+            (validator, batch)
+        })
+        .await
+        .map_err(|e| ImportError::Location(format!("validation task failed: {e}")))?;
+        validator = returned;
+        let Some(batch) = batch? else { break };
+        invalid.extend(batch.invalid);
+        let refused = !options.skip_invalid && !invalid.is_empty();
+
+        let mut to_write = Vec::new();
+        for row in &batch.valid {
+            distinct_frames.extend(row.frames.iter().map(|f| f.sha256.clone()));
+            match row.semantics.as_ref().map(|s| s.source) {
+                Some(SignatureSource::SceneGraph) => report.scene_graph_items += 1,
+                Some(SignatureSource::ActionText) => report.action_text_items += 1,
+                None => report.exact_only_items += 1,
+            }
+            let hash = content_hash(row);
+            match stored_hashes.get(&row.item.id) {
+                Some(stored) if *stored == hash => report.unchanged_items += 1,
+                Some(_) if !options.replace => conflicts.push(LineProblem {
+                    line: row.line,
+                    item_id: Some(row.item.id.clone()),
+                    problem: FieldProblem::new(
+                        "",
+                        "an item with this id is stored with different content",
+                    ),
+                }),
+                Some(_) => to_write.push((row, hash, true)),
+                None => to_write.push((row, hash, false)),
+            }
         }
+        // Once the import is bound to fail, the rest of the file is only checked.
+        if !refused && conflicts.is_empty() {
+            if !to_write.is_empty() {
+                let id = match dataset_id {
+                    Some(id) => id,
+                    None => {
+                        let id = store::datasets::ensure(
+                            &mut tx,
+                            &options.dataset,
+                            &location.root.display().to_string(),
+                        )
+                        .await?;
+                        dataset_id = Some(id);
+                        id
+                    }
+                };
+                write_items(&mut tx, id, &location.root, &to_write, &mut report).await?;
+                wrote_items = true;
+            }
+            if let Some(dataset) = &existing_dataset {
+                report.signatures_updated +=
+                    refresh_semantics(&mut tx, dataset.id, &batch.valid, &stored_hashes).await?;
+            }
+        }
+        bar.set_position(validator.bytes_read);
+        bar.set_message(format!(
+            "{} items, {} MB of images",
+            validator.rows,
+            validator.image_bytes / 1_000_000
+        ));
+    }
+    bar.finish_and_clear();
+    report.rows = validator.rows;
+    invalid.sort_by_key(|s| s.line);
+    if !invalid.is_empty() && !options.skip_invalid {
+        return Err(ImportError::Invalid {
+            file,
+            rows: report.rows,
+            lines: invalid,
+        });
     }
     if !conflicts.is_empty() {
         return Err(ImportError::Conflict {
@@ -499,84 +601,13 @@ pub async fn import_release(
             conflicts,
         });
     }
+    report.skipped = invalid;
+    report.frames = distinct_frames.len();
 
-    let mut report = ImportReport {
-        dataset: options.dataset.clone(),
-        qa_file: file,
-        rows: validated.rows,
-        unchanged_items: unchanged,
-        skipped: validated.invalid,
-        ..ImportReport::default()
-    };
-    for row in &validated.valid {
-        match row.semantics.as_ref().map(|s| s.source) {
-            Some(SignatureSource::SceneGraph) => report.scene_graph_items += 1,
-            Some(SignatureSource::ActionText) => report.action_text_items += 1,
-            None => report.exact_only_items += 1,
-        }
-    }
-    let distinct: BTreeMap<&str, &FrameFacts> = validated
-        .valid
-        .iter()
-        .flat_map(|r| r.frames.iter().map(|f| (f.sha256.as_str(), f)))
-        .collect();
-    report.frames = distinct.len();
-
-    if !to_write.is_empty() {
-        let dataset_id = store::datasets::ensure(
-            &mut tx,
-            &options.dataset,
-            &location.root.display().to_string(),
-        )
-        .await?;
-        let bar = progress_bar(options.progress, to_write.len(), "writing items");
-        let mut frame_ids: HashMap<String, i64> = HashMap::new();
-        for (row, hash, replacing) in &to_write {
-            let mut ids = Vec::with_capacity(row.frames.len());
-            for (facts, path) in row.frames.iter().zip(&row.item.images) {
-                if let Some(id) = frame_ids.get(&facts.sha256) {
-                    ids.push(*id);
-                    continue;
-                }
-                let id = match store::frames::id_by_hash(&mut tx, &facts.sha256).await? {
-                    Some(id) => id,
-                    None => {
-                        let bytes = read_frame(&location.root, path, facts).await?;
-                        report.new_frames += 1;
-                        store::frames::insert(
-                            &mut tx,
-                            &facts.sha256,
-                            facts.width,
-                            facts.height,
-                            &bytes,
-                        )
-                        .await?
-                    }
-                };
-                frame_ids.insert(facts.sha256.clone(), id);
-                ids.push(id);
-            }
-            if *replacing {
-                store::items::delete(&mut tx, dataset_id, &row.item.id).await?;
-                report.replaced_items += 1;
-            } else {
-                report.new_items += 1;
-            }
-            store::items::insert(&mut tx, dataset_id, &row.item, hash, row.line, &ids).await?;
-            if let Some(semantics) = &row.semantics {
-                store_semantics(&mut tx, dataset_id, &row.item.id, semantics).await?;
-            }
-            bar.inc(1);
-        }
-        bar.finish_and_clear();
+    if wrote_items || report.signatures_updated > 0 {
         store::bump_content_generation(&mut tx).await?;
     }
     if let Some(dataset) = &existing_dataset {
-        report.signatures_updated =
-            refresh_semantics(&mut tx, dataset.id, &validated.valid, &stored_hashes).await?;
-        if report.signatures_updated > 0 {
-            store::bump_content_generation(&mut tx).await?;
-        }
         // Stored error analyses were computed from the old items or signatures.
         if report.signatures_updated + report.replaced_items > 0 {
             store::submissions::clear_error_analyses(&mut tx, dataset.id).await?;
@@ -604,6 +635,50 @@ pub async fn import_release(
     tx.commit().await?;
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// Writes a batch's new and replaced items, storing each frame not stored yet (read again
+/// from disk and checked against what was validated). Frames are looked up by hash in the
+/// store (the transaction sees its own inserts), so nothing grows with the release here.
+async fn write_items(
+    tx: &mut sqlx::SqliteConnection,
+    dataset_id: i64,
+    root: &Path,
+    rows: &[(&ValidRow, String, bool)],
+    report: &mut ImportReport,
+) -> Result<(), ImportError> {
+    for (row, hash, replacing) in rows {
+        let mut ids = Vec::with_capacity(row.frames.len());
+        for (facts, path) in row.frames.iter().zip(&row.item.images) {
+            let id = match store::frames::id_by_hash(&mut *tx, &facts.sha256).await? {
+                Some(id) => id,
+                None => {
+                    let bytes = read_frame(root, path, facts).await?;
+                    report.new_frames += 1;
+                    store::frames::insert(
+                        &mut *tx,
+                        &facts.sha256,
+                        facts.width,
+                        facts.height,
+                        &bytes,
+                    )
+                    .await?
+                }
+            };
+            ids.push(id);
+        }
+        if *replacing {
+            store::items::delete(&mut *tx, dataset_id, &row.item.id).await?;
+            report.replaced_items += 1;
+        } else {
+            report.new_items += 1;
+        }
+        store::items::insert(&mut *tx, dataset_id, &row.item, hash, row.line, &ids).await?;
+        if let Some(semantics) = &row.semantics {
+            store_semantics(&mut *tx, dataset_id, &row.item.id, semantics).await?;
+        }
+    }
+    Ok(())
 }
 
 async fn store_semantics(

@@ -445,3 +445,53 @@ async fn scene_graph_import_stores_enacts_transition_signatures_and_upgrades_on_
     }
     assert_eq!(compared, 1056);
 }
+
+/// The importer works a batch of lines at a time; a file of several batches is still one
+/// all-or-nothing import whose error lists the problems of every batch.
+#[tokio::test]
+async fn a_release_of_several_batches_is_still_all_or_nothing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let records = write_balanced_release(&root, &[3], 300);
+    let mut lines: Vec<String> = records.iter().map(Value::to_string).collect();
+    lines.insert(1, "not json".to_owned());
+    lines.push(records[0].to_string());
+    write_qa_file(&root, &lines);
+    let pool = fresh_db(&dir).await;
+    let err = import_release(&pool.clone().into(), &tester(), &root, &options("big"))
+        .await
+        .expect_err("two bad lines, in the first and the second batch");
+    let ImportError::Invalid {
+        lines: bad, rows, ..
+    } = &err
+    else {
+        panic!("expected Invalid, got {err}");
+    };
+    assert_eq!(*rows, 602);
+    let at: Vec<usize> = bad.iter().map(|l| l.line).collect();
+    assert_eq!(at, vec![2, 602], "{:?}", err.details());
+    assert!(
+        err.details()[1].contains("first seen on line 1"),
+        "{:?}",
+        err.details()
+    );
+    assert_eq!(
+        item_count(&pool).await,
+        0,
+        "the first batch was rolled back"
+    );
+    assert_eq!(
+        frame_count(&pool).await,
+        0,
+        "the first batch was rolled back"
+    );
+
+    let lines: Vec<String> = records.iter().map(Value::to_string).collect();
+    write_qa_file(&root, &lines);
+    let report = import(&pool, &root, &options("big")).await;
+    assert_eq!((report.rows, report.new_items), (600, 600));
+    assert_eq!(report.frames as i64, frame_count(&pool).await);
+    assert_eq!(item_count(&pool).await, 600);
+    let again = import(&pool, &root, &options("big")).await;
+    assert_eq!((again.unchanged_items, again.new_items), (600, 0));
+}
