@@ -239,8 +239,10 @@ impl<R: Read> RecordSplitter<R> {
             self.buf.drain(..self.pos);
             self.pos = 0;
         }
+        // Growing by what is held already keeps a record of any size to a few reads (and
+        // rescans of it, see `complete`): the work stays linear in its size.
         let have = self.buf.len();
-        self.buf.resize(have + CHUNK, 0);
+        self.buf.resize(have + CHUNK.max(have), 0);
         let read = loop {
             match self.reader.read(&mut self.buf[have..]) {
                 Ok(n) => break n,
@@ -393,6 +395,13 @@ mod tests {
             vec![("0".into(), 33), ("1".into(), 17), ("2".into(), 1)]
         );
         assert_eq!(split("{}").unwrap(), vec![]);
+        // Records larger than a read, on both sides of one.
+        let big = format!("{{\"s\": \"{}\"}}", "x".repeat(3 * CHUNK));
+        let text = format!("{{\"0\": 1, \"1\": {big}, \"2\": {big}, \"3\": 2}}");
+        let got = split(&text).unwrap();
+        assert_eq!(got.len(), 4);
+        assert_eq!((got[1].1.len(), got[2].1.len()), (big.len(), big.len()));
+        assert_eq!(got[3].1, "2");
         assert_eq!(split(" { } ").unwrap(), vec![]);
     }
 
