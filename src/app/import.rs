@@ -498,10 +498,14 @@ pub async fn import_release(
     let qa_bytes = std::fs::metadata(&location.qa_file)
         .map(|m| m.len())
         .unwrap_or(0);
-    let mut validator = Validator::open(&location, options.scene_graphs.as_deref())?;
+    let validator = Validator::open(&location, options.scene_graphs.as_deref())?;
     let bar = progress_bar(options.progress, qa_bytes);
+    let (mut validator, mut next) = next_batch(validator).await?;
 
-    let mut tx = hub.pool.begin().await?;
+    // IMMEDIATE: the write lock is taken now and kept to the end (later batches are validated
+    // while it is held). A deferred transaction that read first and wrote a batch later would
+    // fail at once if a running server wrote in between, instead of waiting for the lock.
+    let mut tx = hub.pool.begin_with("BEGIN IMMEDIATE").await?;
     let existing_dataset = store::datasets::by_name(&mut tx, &options.dataset).await?;
     let stored_hashes = match &existing_dataset {
         Some(d) => store::items::content_hashes(&mut tx, d.id).await?,
@@ -518,15 +522,7 @@ pub async fn import_release(
     let mut dataset_id: Option<i64> = None;
     let mut wrote_items = false;
 
-    loop {
-        let (returned, batch) = tokio::task::spawn_blocking(move || {
-            let batch = validator.next_batch();
-            (validator, batch)
-        })
-        .await
-        .map_err(|e| ImportError::Location(format!("validation task failed: {e}")))?;
-        validator = returned;
-        let Some(batch) = batch? else { break };
+    while let Some(batch) = next {
         invalid.extend(batch.invalid);
         let refused = !options.skip_invalid && !invalid.is_empty();
 
@@ -583,6 +579,7 @@ pub async fn import_release(
             validator.rows,
             validator.image_bytes / 1_000_000
         ));
+        (validator, next) = next_batch(validator).await?;
     }
     bar.finish_and_clear();
     report.rows = validator.rows;
@@ -635,6 +632,19 @@ pub async fn import_release(
     tx.commit().await?;
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// The validator's next batch, validated on a blocking thread.
+async fn next_batch(
+    mut validator: Validator,
+) -> Result<(Validator, Option<Validated>), ImportError> {
+    let (validator, batch) = tokio::task::spawn_blocking(move || {
+        let batch = validator.next_batch();
+        (validator, batch)
+    })
+    .await
+    .map_err(|e| ImportError::Location(format!("validation task failed: {e}")))?;
+    Ok((validator, batch?))
 }
 
 /// Writes a batch's new and replaced items, storing each frame not stored yet (read again
