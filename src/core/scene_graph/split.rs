@@ -140,7 +140,9 @@ impl<R: Read> RecordSplitter<R> {
         if self.peek() != Some(b'"') {
             return Err(self.error("expected a frame key", None));
         }
-        let key_end = self.complete(|bytes| string_end(bytes, 0))?;
+        let Some(key_end) = self.complete(|bytes| string_end(bytes, 0))? else {
+            return Err(self.error("EOF while parsing a frame key", None));
+        };
         let key: String = serde_json::from_slice(&self.buf[self.pos..self.pos + key_end])
             .map_err(|e| self.error(&format!("bad frame key: {e}"), None))?;
         self.advance(key_end);
@@ -159,9 +161,9 @@ impl<R: Read> RecordSplitter<R> {
         let len = if repeats_previous {
             self.previous.len()
         } else {
-            let len = self
-                .complete(value_end)
-                .map_err(|_| self.error("EOF while parsing a record", Some(&key)))?;
+            let Some(len) = self.complete(value_end)? else {
+                return Err(self.error("EOF while parsing a record", Some(&key)));
+            };
             self.previous.clear();
             self.previous
                 .extend_from_slice(&self.buf[self.pos..self.pos + len]);
@@ -218,14 +220,17 @@ impl<R: Read> RecordSplitter<R> {
     }
 
     /// The length of the item at `pos` as `end` measures it in the buffered bytes, reading
-    /// more until it is complete.
-    fn complete(&mut self, end: impl Fn(&[u8]) -> Option<usize>) -> Result<usize, SplitError> {
+    /// more until it is complete; `None` if the file ends first.
+    fn complete(
+        &mut self,
+        end: impl Fn(&[u8]) -> Option<usize>,
+    ) -> Result<Option<usize>, SplitError> {
         loop {
             if let Some(len) = end(&self.buf[self.pos..]) {
-                return Ok(len);
+                return Ok(Some(len));
             }
             if !self.fill()? {
-                return Err(self.error("EOF", None));
+                return Ok(None);
             }
         }
     }
@@ -457,6 +462,28 @@ mod tests {
         assert!(e.message.contains("EOF"));
         let e = split("{7: {}}").unwrap_err();
         assert!(e.message.contains("frame key"));
+    }
+
+    /// A reader that fails after handing out its bytes.
+    struct Failing<'a>(&'a [u8]);
+
+    impl Read for Failing<'_> {
+        fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+            if self.0.is_empty() {
+                return Err(std::io::Error::other("disk gone"));
+            }
+            let n = self.0.len().min(out.len());
+            out[..n].copy_from_slice(&self.0[..n]);
+            self.0 = &self.0[n..];
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn a_read_failure_inside_a_record_is_not_called_the_end_of_the_file() {
+        let mut s = RecordSplitter::new(Failing(b"{\"0\": {\"nodes\": ["));
+        let e = s.next_record().err().expect("the read fails");
+        assert!(e.message.contains("disk gone"), "{e:?}");
     }
 
     #[test]
