@@ -147,6 +147,20 @@ impl Hub {
         self
     }
 
+    /// Folds the write-ahead log into the database and empties the log file, after work that
+    /// wrote much in one transaction (an import's log is as large as its new frames, and
+    /// pooled connections closing together may leave it on disk). Best effort: `false` when
+    /// another process kept part of the log in use.
+    pub async fn truncate_log(&self) -> bool {
+        match store::truncate_wal(&self.pool).await {
+            Ok(done) => done,
+            Err(e) => {
+                tracing::debug!(error = %e, "emptying the write-ahead log failed");
+                false
+            }
+        }
+    }
+
     /// Waits for the connections in use and closes the database.
     pub async fn close(&self) {
         self.pool.close().await;

@@ -752,6 +752,9 @@ async fn import(args: ImportArgs) -> anyhow::Result<ExitCode> {
         scene_graphs,
     };
     let result = import_release(&hub, &operator(), &args.data, &options).await;
+    if result.as_ref().is_ok_and(|r| r.new_frames > 0) {
+        hub.truncate_log().await;
+    }
     hub.close().await;
     match result {
         Ok(report) => {

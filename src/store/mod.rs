@@ -27,6 +27,9 @@ pub const MAX_CONNECTIONS: u32 = 8;
 /// in one transaction), in KiB.
 pub const COMMAND_PAGE_CACHE_KIB: u64 = 64 * 1024;
 
+/// How large the write-ahead log file is left after a checkpoint resets it.
+pub const JOURNAL_SIZE_LIMIT_BYTES: u64 = 64 * 1024 * 1024;
+
 /// Opens (creating if missing) the database at `path` and applies the embedded migrations,
 /// with the page cache of commands.
 pub async fn open(path: &Path) -> Result<SqlitePool, sqlx::Error> {
@@ -51,7 +54,11 @@ pub async fn open_with_page_cache(
         .foreign_keys(true)
         .busy_timeout(Duration::from_secs(10))
         .pragma("cache_size", cache_size)
-        .pragma("temp_store", "memory");
+        .pragma("temp_store", "memory")
+        // One import is one transaction, so the write-ahead log grows to the size of its new
+        // frames. SQLite reuses the log file from the start after a checkpoint but keeps its
+        // size; this limit makes it cut the file back once the log is reset.
+        .pragma("journal_size_limit", JOURNAL_SIZE_LIMIT_BYTES.to_string());
     let pool = SqlitePoolOptions::new()
         .max_connections(MAX_CONNECTIONS)
         .min_connections(1)
@@ -109,6 +116,16 @@ pub(crate) fn kind_from_row(
             .and_then(crate::core::dataset::StepLength::new)
             .ok_or_else(|| corrupt("step_length", format!("bad step length {step_length}")))?,
     ))
+}
+
+/// Copies the write-ahead log into the database and cuts the log file to nothing (waiting,
+/// under the busy timeout, for readers still using it). Returns whether it could.
+pub async fn truncate_wal(pool: &SqlitePool) -> Result<bool, sqlx::Error> {
+    // The row is (busy, pages in the log, pages checkpointed); busy = 1 when it could not.
+    let (busy, _, _): (i64, i64, i64) = sqlx::query_as("PRAGMA wal_checkpoint(TRUNCATE)")
+        .fetch_one(pool)
+        .await?;
+    Ok(busy == 0)
 }
 
 /// One round trip to the database.

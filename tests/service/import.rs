@@ -495,3 +495,27 @@ async fn a_release_of_several_batches_is_still_all_or_nothing() {
     let again = import(&pool, &root, &options("big")).await;
     assert_eq!((again.unchanged_items, again.new_items), (600, 0));
 }
+
+/// An import's write-ahead log is as large as its new frames; `enact-hub import` folds it into
+/// the database and empties it before closing, even while other connections are open.
+#[tokio::test]
+async fn the_log_of_an_import_can_be_emptied_while_connections_are_open() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    write_release(&root, &[3, 10]);
+    let pool = fresh_db(&dir).await;
+    let hub: enact_hub::app::Hub = pool.clone().into();
+    import(&pool, &root, &options("d")).await;
+    let wal = dir.path().join("test.db-wal");
+    let size = || {
+        std::fs::metadata(&wal)
+            .map(|m| m.len())
+            .expect("the log exists")
+    };
+    assert!(size() > 0, "the import wrote to the log");
+    // A second connection stays open, as a pool's do.
+    let _other = pool.acquire().await.expect("connection");
+    assert!(hub.truncate_log().await, "nothing else is reading");
+    assert_eq!(size(), 0);
+    assert_eq!(item_count(&pool).await, 4, "the items are in the database");
+}
