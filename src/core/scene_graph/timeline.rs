@@ -1028,11 +1028,16 @@ mod tests {
                 TimelineError::Json { path, place, .. } => {
                     assert_eq!(path, Path::new("bad.json"));
                     assert_eq!(place.frame.as_deref(), Some("1"));
-                    assert_eq!(place.line, 2);
+                    // The position in the file: where serde_json reading the whole text stops.
+                    let whole =
+                        serde_json::from_str::<BTreeMap<String, FrameRecord>>(text).unwrap_err();
+                    assert_eq!((place.line, place.column), (whole.line(), whole.column()));
                 }
                 other => panic!("unexpected {other:?}"),
             }
             assert!(err.to_string().contains("in frame 1 (line 2"), "{err}");
+            // Without the record-relative position serde_json would add.
+            assert!(!err.to_string().contains(" at line "), "{err}");
         }
         // A syntax error that the type-only scan already meets.
         let err = SceneGraphTimeline::from_json_slice(
