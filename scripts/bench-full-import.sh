@@ -16,7 +16,7 @@ SAMPLE=../shared/fixtures/enact-sample
 OUT=bench-out/full-import
 [ -d "$SAMPLE" ] || { echo "$SAMPLE is missing: this benchmark replicates ENACT's real sample" >&2; exit 1; }
 cargo build --release --locked --bin enact-hub >&2
-BIN=target/release/enact-hub
+BIN=${CARGO_TARGET_DIR:-target}/release/enact-hub
 rm -rf "$OUT"
 mkdir -p "$OUT"
 cleanup() { [ "${KEEP:-0}" = 1 ] || rm -rf "$OUT/release" "$OUT"/full.db*; }

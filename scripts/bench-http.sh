@@ -22,7 +22,7 @@ if ! command -v wrk >/dev/null 2>&1; then
 fi
 
 cargo build --release --locked --bin enact-hub >&2
-BIN=target/release/enact-hub
+BIN=${CARGO_TARGET_DIR:-target}/release/enact-hub
 DB="$OUT/bench.db"
 rm -f "$DB" "$DB-wal" "$DB-shm"
 

@@ -16,7 +16,7 @@ PORT=${PORT:-18090}
 OUT=bench-out/memory
 mkdir -p "$OUT"
 cargo build --release --locked --bin enact-hub >&2
-BIN=target/release/enact-hub
+BIN=${CARGO_TARGET_DIR:-target}/release/enact-hub
 
 release=${1:-../shared/fixtures/enact-parity}
 if [ ! -d "$release" ]; then

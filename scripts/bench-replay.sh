@@ -14,7 +14,7 @@ ACTIONS=${1:-220}
 ACTIVITY=${2:-all}
 OUT=bench-out/replay
 cargo build --release --locked --bin enact-hub >&2
-BIN=target/release/enact-hub
+BIN=${CARGO_TARGET_DIR:-target}/release/enact-hub
 rm -rf "$OUT"
 mkdir -p "$OUT"
 trap '[ "${KEEP:-0}" = 1 ] || rm -rf "$OUT/replay" "$OUT/data" "$OUT/mixed" "$OUT/mixed-data" "$OUT"/replay.db*' EXIT

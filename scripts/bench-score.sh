@@ -32,7 +32,7 @@ ENACT_SRC=$(realpath "$ENACT_SRC")
 OUT=bench-out/score
 VENV=bench-out/enact-venv
 cargo build --release --locked --bin enact-hub >&2
-BIN=$(realpath target/release/enact-hub)
+BIN=$(realpath "${CARGO_TARGET_DIR:-target}/release/enact-hub")
 if ! "$VENV/bin/python" -c 'import numpy, PIL, tqdm' 2>/dev/null; then
   python3 -m venv "$VENV"
   "$VENV/bin/pip" install --quiet numpy pillow tqdm

@@ -19,8 +19,8 @@ OUT=bench-out/mixed
 BASE="http://127.0.0.1:$PORT"
 mkdir -p "$OUT"
 cargo build --release --locked --bin enact-hub --example mixed_load >&2
-BIN=target/release/enact-hub
-LOAD=target/release/examples/mixed_load
+BIN=${CARGO_TARGET_DIR:-target}/release/enact-hub
+LOAD=${CARGO_TARGET_DIR:-target}/release/examples/mixed_load
 DB="$OUT/mixed.db"
 rm -f "$DB" "$DB-wal" "$DB-shm"
 

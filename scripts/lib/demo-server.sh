@@ -10,7 +10,7 @@ mkdir -p "$OUT"
 # BIN=path/to/enact-hub uses an existing binary instead of building the release one.
 if [ -z "${BIN:-}" ]; then
   cargo build --release --locked --bin enact-hub >&2
-  BIN=target/release/enact-hub
+  BIN=${CARGO_TARGET_DIR:-target}/release/enact-hub
 fi
 DB="$OUT/$DB_NAME"
 rm -f "$DB" "$DB-wal" "$DB-shm"
