@@ -33,6 +33,39 @@ if ! command -v python3 >/dev/null 2>&1 || ! python3 -c 'import requests' >/dev/
   fi
 fi
 
+# The frame tests run against a real S3-compatible server: moto (PyPI) in server mode on
+# loopback, for this run only.
+TOOLS="${CARGO_TARGET_DIR:-target}/test-tools"
+MOTO_VENV="$TOOLS/moto-venv"
+if [ ! -x "$MOTO_VENV/bin/moto_server" ]; then
+  echo "== installing moto[server] 5.2.5 (PyPI) into $MOTO_VENV"
+  mkdir -p "$TOOLS"
+  if ! python3 -m venv "$MOTO_VENV" >/dev/null 2>&1; then
+    apt-get update && apt-get install -y python3-venv
+    python3 -m venv "$MOTO_VENV"
+  fi
+  "$MOTO_VENV/bin/pip" install --quiet --disable-pip-version-check 'moto[server]==5.2.5'
+fi
+MOTO_LOG="$TOOLS/moto.log"
+"$MOTO_VENV/bin/moto_server" -H 127.0.0.1 -p 0 >"$MOTO_LOG" 2>&1 &
+MOTO_PID=$!
+trap 'kill "$MOTO_PID" 2>/dev/null || true' EXIT
+MOTO_URL=""
+for _ in $(seq 1 300); do
+  MOTO_URL=$(grep -o 'http://127\.0\.0\.1:[0-9]*' "$MOTO_LOG" | head -n 1 || true)
+  [ -n "$MOTO_URL" ] && break
+  sleep 0.1
+done
+if [ -z "$MOTO_URL" ]; then
+  echo "error: moto did not start:" >&2
+  cat "$MOTO_LOG" >&2
+  exit 1
+fi
+echo "== S3 (moto) on $MOTO_URL"
+export AWS_ENDPOINT="$MOTO_URL" AWS_ALLOW_HTTP=true AWS_REGION=us-east-1
+export AWS_ACCESS_KEY_ID=enact-hub-test AWS_SECRET_ACCESS_KEY=enact-hub-test
+export ENACT_HUB_REQUIRE_S3=1
+
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
 

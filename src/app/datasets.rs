@@ -144,11 +144,22 @@ async fn stream_frames(
                 return;
             }
         };
-        for (path, png) in images {
+        for (path, sha256, png) in images {
             // Two records naming one file hold the same bytes (the importer read one file).
             if !written.insert(path.clone()) {
                 continue;
             }
+            let png = match png {
+                Some(png) => Bytes::from(png),
+                None => match super::frames::object_bytes(&hub, &sha256).await {
+                    Ok(png) => png,
+                    Err(e) => {
+                        tracing::error!(error = %e, dataset, path, "archive: reading frame failed");
+                        let _ = tx.send(Err(std::io::Error::other(e.to_string()))).await;
+                        return;
+                    }
+                },
+            };
             let chunk = writer.file(&path, &png);
             let failed = chunk.is_err();
             if let Err(e) = &chunk {

@@ -37,6 +37,10 @@ pub enum AppError {
         message: String,
         retry_after: Option<u64>,
     },
+    /// Something the server depends on (frame storage) failed or is not configured; the
+    /// message names it.
+    #[error("{0}")]
+    Unavailable(String),
     #[error("internal error")]
     Internal(#[source] anyhow::Error),
 }

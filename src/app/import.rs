@@ -20,6 +20,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use sha2::{Digest, Sha256};
 
+use super::frames::{self, FrameStore};
 use crate::core::audit::{Actor, AuditAction, AuditRecord};
 use crate::core::dataset::{FieldProblem, QaItem, parse_release_line};
 use crate::core::semantics::{self, ItemSemantics, SignatureSource};
@@ -208,6 +209,9 @@ pub enum ImportError {
     Signatures { item_id: String, message: String },
     #[error("database error: {0}")]
     Database(#[from] sqlx::Error),
+    /// Writing frames to the object store failed; nothing was imported.
+    #[error("{0}; nothing was imported")]
+    FrameStorage(String),
 }
 
 impl ImportError {
@@ -565,7 +569,8 @@ pub async fn import_release(
                         id
                     }
                 };
-                write_items(&mut tx, id, &location.root, &to_write, &mut report).await?;
+                let frames = hub.frame_store();
+                write_items(&mut tx, frames, id, &location.root, &to_write, &mut report).await?;
                 wrote_items = true;
             }
             if let Some(dataset) = &existing_dataset {
@@ -650,20 +655,54 @@ async fn next_batch(
 /// Writes a batch's new and replaced items, storing each frame not stored yet (read again
 /// from disk and checked against what was validated). Frames are looked up by hash in the
 /// store (the transaction sees its own inserts), so nothing grows with the release here.
+/// With an object store, the batch's new frames are written there first, several at a time,
+/// and their rows hold no bytes; if the import then fails, the objects stay (they are named
+/// by their content, and a later import of them finds them in place).
 async fn write_items(
     tx: &mut sqlx::SqliteConnection,
+    frame_store: &FrameStore,
     dataset_id: i64,
     root: &Path,
     rows: &[(&ValidRow, String, bool)],
     report: &mut ImportReport,
 ) -> Result<(), ImportError> {
+    if let Some(objects) = frame_store.objects() {
+        let mut missing = Vec::new();
+        let mut seen = HashSet::new();
+        for (row, _, _) in rows {
+            for (facts, path) in row.frames.iter().zip(&row.item.images) {
+                if seen.insert(facts.sha256.as_str())
+                    && store::frames::id_by_hash(&mut *tx, &facts.sha256)
+                        .await?
+                        .is_none()
+                {
+                    missing.push((facts, path));
+                }
+            }
+        }
+        // A few frames in memory at a time, written concurrently.
+        for chunk in missing.chunks(frames::PUTS_IN_FLIGHT) {
+            let mut uploads = Vec::with_capacity(chunk.len());
+            for (facts, path) in chunk {
+                let bytes = read_frame(root, path, facts).await?;
+                uploads.push((facts.sha256.clone(), bytes::Bytes::from(bytes)));
+            }
+            frames::put_all(objects, uploads.into_iter())
+                .await
+                .map_err(|e| ImportError::FrameStorage(e.to_string()))?;
+        }
+    }
     for (row, hash, replacing) in rows {
         let mut ids = Vec::with_capacity(row.frames.len());
         for (facts, path) in row.frames.iter().zip(&row.item.images) {
             let id = match store::frames::id_by_hash(&mut *tx, &facts.sha256).await? {
                 Some(id) => id,
                 None => {
-                    let bytes = read_frame(root, path, facts).await?;
+                    // Held in the object store (written above), or here.
+                    let bytes = match frame_store {
+                        FrameStore::Objects(_) => Vec::new(),
+                        FrameStore::Database => read_frame(root, path, facts).await?,
+                    };
                     report.new_frames += 1;
                     store::frames::insert(
                         &mut *tx,

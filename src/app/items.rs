@@ -1,4 +1,4 @@
-//! Reading items and frames, from memory when they were read before (the item JSON and the
+//! Reading items, from memory when they were read before (the item JSON and the
 //! annotation item page are the hot paths).
 
 use std::sync::Arc;
@@ -34,12 +34,4 @@ pub async fn get(hub: &Hub, dataset: &str, item_id: &str) -> Result<Arc<StoredIt
     let found = Arc::new(item);
     hub.items.insert_stored(dataset, item_id, found.clone());
     Ok(found)
-}
-
-/// A frame's PNG bytes by content hash, or a 404 that names the hash.
-pub async fn frame_png(hub: &Hub, sha256: &str) -> Result<Vec<u8>, AppError> {
-    let mut conn = hub.conn().await?;
-    store::frames::png(&mut conn, sha256)
-        .await?
-        .ok_or_else(|| AppError::NotFound(format!("no frame with hash '{sha256}'")))
 }

@@ -32,6 +32,7 @@ pub mod datasets;
 pub mod demo;
 mod error;
 pub mod error_analysis;
+pub mod frames;
 pub mod import;
 pub mod items;
 pub mod leaderboard;
@@ -78,6 +79,11 @@ pub struct Hub {
     targets: Arc<submissions::TargetCache>,
     boards: Arc<leaderboard::BoardCache>,
     frames: Arc<cache::FrameCache>,
+    /// Where frame bytes are written, and read when the database does not hold them.
+    frame_store: frames::FrameStore,
+    /// Frames in an object store that signs URLs are answered with a redirect to a URL valid
+    /// this long, when set.
+    frame_redirect: Option<std::time::Duration>,
     quotas: Quotas,
 }
 
@@ -97,6 +103,8 @@ impl Hub {
             targets: caches.targets,
             boards: caches.boards,
             frames: caches.frames,
+            frame_store: frames::FrameStore::Database,
+            frame_redirect: None,
             quotas,
         }
     }
@@ -140,6 +148,29 @@ impl Hub {
             .await
             .map_err(|e| anyhow::anyhow!("cannot open database {}: {e}", path.display()))?;
         Ok(Hub::new(pool, Quotas::default()).with_cache_limits(limits))
+    }
+
+    /// The hub writing new frames to `store` and reading there the frames the database does
+    /// not hold; with `redirect`, frame requests for such frames are answered with a presigned
+    /// URL valid that long (when the store can sign one).
+    pub fn with_frame_store(
+        mut self,
+        store: frames::FrameStore,
+        redirect: Option<std::time::Duration>,
+    ) -> Hub {
+        self.frame_store = store;
+        self.frame_redirect = redirect;
+        self
+    }
+
+    /// Where new frames are written.
+    pub fn frame_store(&self) -> &frames::FrameStore {
+        &self.frame_store
+    }
+
+    /// How long a presigned frame URL is valid, when frame requests are redirected.
+    pub fn frame_redirect(&self) -> Option<std::time::Duration> {
+        self.frame_redirect
     }
 
     pub fn with_quotas(mut self, quotas: Quotas) -> Hub {

@@ -23,6 +23,7 @@ use crate::web::{Server, WebConfig, shutdown_signal};
 const MIB: u64 = 1024 * 1024;
 
 mod audit;
+mod frames;
 mod simulate;
 mod stored;
 mod study;
@@ -79,6 +80,9 @@ enum Command {
     /// Human annotator accounts.
     #[command(subcommand)]
     Annotator(AnnotatorCommand),
+    /// Where frame images are kept: status, and moving them to or from object storage.
+    #[command(subcommand)]
+    Frames(frames::FramesCommand),
 }
 
 #[derive(Args)]
@@ -329,6 +333,12 @@ struct ServeArgs {
     /// Address to listen on.
     #[arg(long, env = "ENACT_HUB_ADDR", default_value = "127.0.0.1:8080")]
     addr: SocketAddr,
+    #[command(flatten)]
+    frames: frames::FramesArg,
+    /// Answer requests for frames held in an object store that signs URLs (S3, GCS, Azure)
+    /// with a redirect to a URL valid this many seconds, instead of the bytes.
+    #[arg(long, value_name = "SECONDS")]
+    frame_redirect: Option<u64>,
     /// Generate the built-in demo dataset at start and serve it (as dataset "demo").
     #[arg(long)]
     demo: bool,
@@ -373,6 +383,8 @@ struct ImportArgs {
     data: PathBuf,
     #[command(flatten)]
     db: DbArg,
+    #[command(flatten)]
+    frames: frames::FramesArg,
     /// Dataset to import into (default: the release folder's name).
     #[arg(long)]
     dataset: Option<String>,
@@ -454,6 +466,7 @@ pub fn main() -> ExitCode {
             Command::Study(command) => study::study(command).await,
             Command::Token(command) => token(command).await,
             Command::Annotator(AnnotatorCommand::Create(args)) => create_annotator(args).await,
+            Command::Frames(command) => frames::frames(command).await,
         }
     });
     match result {
@@ -502,10 +515,14 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         frame_bytes: args.frame_cache_mib * MIB,
         db_page_cache_bytes: args.db_cache_mib * MIB,
     };
-    let hub = Hub::open_serving(&db, &limits).await?.with_quotas(Quotas {
-        daily: args.daily_quota,
-        total: args.total_quota,
-    });
+    let frame_store = args.frames.store()?;
+    let hub = Hub::open_serving(&db, &limits)
+        .await?
+        .with_quotas(Quotas {
+            daily: args.daily_quota,
+            total: args.total_quota,
+        })
+        .with_frame_store(frame_store, args.frame_redirect.map(Duration::from_secs));
     if args.demo {
         app::demo::load(&hub).await?;
     }
@@ -519,7 +536,12 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         .await
         .with_context(|| format!("cannot listen on {}", args.addr))?;
     let addr = server.local_addr()?;
-    tracing::info!(%addr, db = %db.display(), "enact-hub is listening on http://{addr}/");
+    tracing::info!(
+        %addr,
+        db = %db.display(),
+        frames = hub.frame_store().describe(),
+        "enact-hub is listening on http://{addr}/"
+    );
     if args.demo {
         let link = app::demo::annotator_link(&hub)
             .await
@@ -743,7 +765,9 @@ async fn import(args: ImportArgs) -> anyhow::Result<ExitCode> {
                 );
             }),
     };
-    let hub = open(&args.db.db).await?;
+    let hub = open(&args.db.db)
+        .await?
+        .with_frame_store(args.frames.store()?, None);
     let options = ImportOptions {
         dataset,
         skip_invalid: args.skip_invalid,

@@ -362,21 +362,20 @@ pub async fn release_items(
         .collect()
 }
 
-/// The image files of the items with these row ids: `(path, PNG bytes)`, item by item in
-/// row-id order, each item's images in position order.
+/// The image files of the items with these row ids: `(path, sha256, PNG bytes)`, item by item
+/// in row-id order, each item's images in position order. The bytes are `None` for a frame
+/// held in an object store.
 pub async fn release_images(
     conn: &mut SqliteConnection,
     item_rows: &[i64],
-) -> Result<Vec<(String, Vec<u8>)>, sqlx::Error> {
+) -> Result<Vec<(String, String, Option<Vec<u8>>)>, sqlx::Error> {
     let ids = serde_json::to_string(item_rows).map_err(|e| corrupt("item", e))?;
-    let rows = sqlx::query(
-        "SELECT ii.path, f.png FROM item_images ii JOIN frames f ON f.id = ii.frame \
+    sqlx::query_as(
+        "SELECT ii.path, f.sha256, CASE WHEN length(f.png) = 0 THEN NULL ELSE f.png END \
+         FROM item_images ii JOIN frames f ON f.id = ii.frame \
          WHERE ii.item IN (SELECT value FROM json_each(?)) ORDER BY ii.item, ii.position",
     )
     .bind(ids)
     .fetch_all(conn)
-    .await?;
-    rows.iter()
-        .map(|row| Ok((row.try_get("path")?, row.try_get("png")?)))
-        .collect()
+    .await
 }

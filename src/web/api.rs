@@ -14,6 +14,7 @@ use super::extract::{Json, Path, Query};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
 use crate::app::datasets::{self, DatasetOverview};
+use crate::app::frames;
 use crate::app::items::{self, ItemFilter, ItemSummary, StoredItem};
 use crate::core::dataset::{Direction, StepLength};
 
@@ -423,33 +424,48 @@ async fn get_frame(
     if !is_sha256_hex(&sha256) {
         return Err(not_found());
     }
-    let frames = state.hub.frames();
-    let png = match frames.get(&sha256) {
-        Some(png) => png,
-        None => {
-            let png = Bytes::from(items::frame_png(&state.hub, &sha256).await?);
-            frames.insert(&sha256, png.clone());
-            png
+    let etag = format!("\"{sha256}\"");
+    // The hash is the content: a client that has it needs nothing read.
+    if matches_etag(&headers, &etag) {
+        return Ok(frame_response(
+            StatusCode::NOT_MODIFIED.into_response(),
+            &etag,
+        ));
+    }
+    let png = match frames::png_or_redirect(&state.hub, &sha256, state.hub.frame_redirect()).await?
+    {
+        frames::FrameBytes::Png(png) => png,
+        frames::FrameBytes::Redirect(url) => {
+            // The presigned URL expires: the redirect is cached for less than its life.
+            let mut r = StatusCode::TEMPORARY_REDIRECT.into_response();
+            let h = r.headers_mut();
+            if let Ok(v) = HeaderValue::from_str(url.as_str()) {
+                h.insert(header::LOCATION, v);
+            }
+            let max_age = state.hub.frame_redirect().unwrap_or_default().as_secs() / 2;
+            if let Ok(v) = HeaderValue::from_str(&format!("private, max-age={max_age}")) {
+                h.insert(header::CACHE_CONTROL, v);
+            }
+            return Ok(r);
         }
     };
-    let etag = format!("\"{sha256}\"");
-    let mut response = if matches_etag(&headers, &etag) {
-        StatusCode::NOT_MODIFIED.into_response()
-    } else {
-        let mut r = Response::new(Body::from(png));
-        r.headers_mut()
-            .insert(header::CONTENT_TYPE, HeaderValue::from_static("image/png"));
-        r
-    };
+    let mut r = Response::new(Body::from(png));
+    r.headers_mut()
+        .insert(header::CONTENT_TYPE, HeaderValue::from_static("image/png"));
+    Ok(frame_response(r, &etag))
+}
+
+/// A frame's headers: a strong ETag (its hash) and caching for a year, never revalidated.
+fn frame_response(mut response: Response, etag: &str) -> Response {
     let h = response.headers_mut();
-    if let Ok(v) = HeaderValue::from_str(&etag) {
+    if let Ok(v) = HeaderValue::from_str(etag) {
         h.insert(header::ETAG, v);
     }
     h.insert(
         header::CACHE_CONTROL,
         HeaderValue::from_static("public, max-age=31536000, immutable"),
     );
-    Ok(response)
+    response
 }
 
 #[cfg(test)]

@@ -36,7 +36,7 @@ use std::time::Duration;
 
 use axum::Router;
 use axum::extract::{DefaultBodyLimit, MatchedPath, Request};
-use axum::http::StatusCode;
+use axum::http::{HeaderValue, StatusCode};
 use tokio::net::TcpListener;
 use tower_http::timeout::TimeoutLayer;
 use tower_http::trace::TraceLayer;
@@ -134,17 +134,31 @@ fn file_name_safe(text: &str) -> String {
 }
 
 /// The policy every response carries: scripts, styles and images from this origin only (no
-/// inline script or style anywhere), no framing, no plugins.
-const CONTENT_SECURITY_POLICY: &str = "default-src 'self'; img-src 'self' data:; \
-    style-src 'self'; script-src 'self'; object-src 'none'; base-uri 'none'; \
-    form-action 'self'; frame-ancestors 'none'";
+/// inline script or style anywhere), no framing, no plugins. Images may also come from
+/// `frame_origin`, where frame requests are redirected to presigned object-store URLs.
+fn content_security_policy(frame_origin: Option<&str>) -> HeaderValue {
+    let img_src = match frame_origin {
+        Some(origin) => format!("'self' data: {origin}"),
+        None => "'self' data:".to_owned(),
+    };
+    HeaderValue::from_str(&format!(
+        "default-src 'self'; img-src {img_src}; style-src 'self'; script-src 'self'; \
+         object-src 'none'; base-uri 'none'; form-action 'self'; frame-ancestors 'none'"
+    ))
+    .unwrap_or_else(|_| HeaderValue::from_static("default-src 'self'"))
+}
 
 /// Security headers on every response (a handler's own value wins).
-async fn security_headers(mut response: axum::response::Response) -> axum::response::Response {
-    use axum::http::{HeaderName, HeaderValue, header};
+async fn security_headers(
+    policy: HeaderValue,
+    mut response: axum::response::Response,
+) -> axum::response::Response {
+    use axum::http::{HeaderName, header};
     let headers = response.headers_mut();
-    let set: [(HeaderName, &'static str); 4] = [
-        (header::CONTENT_SECURITY_POLICY, CONTENT_SECURITY_POLICY),
+    headers
+        .entry(header::CONTENT_SECURITY_POLICY)
+        .or_insert(policy);
+    let set: [(HeaderName, &'static str); 3] = [
         (header::X_CONTENT_TYPE_OPTIONS, "nosniff"),
         (header::X_FRAME_OPTIONS, "DENY"),
         // Invite and login links carry their secret in the path: never send it on.
@@ -158,8 +172,10 @@ async fn security_headers(mut response: axum::response::Response) -> axum::respo
     response
 }
 
-/// The whole application with its middleware.
-pub fn router(state: AppState, config: &WebConfig) -> Router {
+/// The whole application with its middleware; `frame_origin` is where frame requests may be
+/// redirected ([`crate::app::frames::redirect_origin`]).
+pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -> Router {
+    let policy = content_security_policy(frame_origin);
     let trace = TraceLayer::new_for_http().make_span_with(|request: &Request| {
         let route = request
             .extensions()
@@ -184,7 +200,9 @@ pub fn router(state: AppState, config: &WebConfig) -> Router {
         .merge(openapi::page_router())
         .nest(openapi::API_PREFIX, openapi::api_router(api_routes()))
         .with_state(state)
-        .layer(axum::middleware::map_response(security_headers))
+        .layer(axum::middleware::map_response(move |response| {
+            security_headers(policy.clone(), response)
+        }))
         .layer(DefaultBodyLimit::max(config.body_limit))
         .layer(TimeoutLayer::with_status_code(
             StatusCode::REQUEST_TIMEOUT,
@@ -203,11 +221,12 @@ pub struct Server {
 
 impl Server {
     pub async fn bind(addr: SocketAddr, hub: Hub, config: &WebConfig) -> std::io::Result<Server> {
+        let frame_origin = crate::app::frames::redirect_origin(&hub).await;
         let state = AppState::new(hub, config);
         let listener = TcpListener::bind(addr).await?;
         Ok(Server {
             listener,
-            app: router(state.clone(), config),
+            app: router(state.clone(), config, frame_origin.as_deref()),
             state,
         })
     }

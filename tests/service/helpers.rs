@@ -214,13 +214,14 @@ where
     let dir = tempfile::tempdir().expect("tempdir");
     let pool = fresh_db(&dir).await;
     setup(pool.clone(), dir.path().to_path_buf()).await;
-    let server = Server::bind(
-        "127.0.0.1:0".parse().expect("addr"),
-        Hub::from(pool.clone()),
-        &config,
-    )
-    .await
-    .expect("bind");
+    serve_hub(Hub::from(pool.clone()), pool, dir, &config).await
+}
+
+/// A server on 127.0.0.1:0 running `hub` (over `pool`, a database in `dir`).
+pub async fn serve_hub(hub: Hub, pool: SqlitePool, dir: TempDir, config: &WebConfig) -> TestServer {
+    let server = Server::bind("127.0.0.1:0".parse().expect("addr"), hub, config)
+        .await
+        .expect("bind");
     let addr = server.local_addr().expect("local addr");
     let (tx, rx) = oneshot::channel();
     let handle = tokio::spawn(async move {

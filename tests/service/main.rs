@@ -18,6 +18,7 @@ mod errors;
 mod escaping;
 #[path = "../support/fixtures.rs"]
 mod fixtures;
+mod frames;
 mod helpers;
 mod hostile;
 mod import;
