@@ -66,6 +66,35 @@ export AWS_ENDPOINT="$MOTO_URL" AWS_ALLOW_HTTP=true AWS_REGION=us-east-1
 export AWS_ACCESS_KEY_ID=enact-hub-test AWS_SECRET_ACCESS_KEY=enact-hub-test
 export ENACT_HUB_REQUIRE_S3=1
 
+# The service suite runs a second time against PostgreSQL: Debian's server, a throwaway cluster
+# on loopback for this run only.
+PG_BIN=$(ls -d /usr/lib/postgresql/*/bin 2>/dev/null | sort -V | tail -n 1 || true)
+if [ -z "$PG_BIN" ]; then
+  echo "== installing postgresql (Debian package)"
+  apt-get update && apt-get install -y postgresql
+  PG_BIN=$(ls -d /usr/lib/postgresql/*/bin | sort -V | tail -n 1)
+fi
+PGDATA="$(realpath -m "$TOOLS/pgdata")"
+PG_PORT=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+rm -rf "$PGDATA" && mkdir -p "$PGDATA"
+# PostgreSQL refuses to run as root: the cluster belongs to the postgres user then.
+as_pg() {
+  if [ "$(id -u)" = 0 ]; then
+    chown -R postgres "$PGDATA"
+    su postgres -s /bin/sh -c "$*"
+  else
+    sh -c "$*"
+  fi
+}
+as_pg "'$PG_BIN/initdb' -D '$PGDATA' -A trust -U postgres" >"$TOOLS/initdb.log" 2>&1 || { cat "$TOOLS/initdb.log" >&2; exit 1; }
+as_pg "'$PG_BIN/pg_ctl' -D '$PGDATA' -l '$PGDATA/server.log' -w -o \"-p $PG_PORT -k /tmp -c listen_addresses=127.0.0.1 -c fsync=off -c max_connections=400\" start" >/dev/null
+cleanup() {
+  kill "$MOTO_PID" 2>/dev/null || true
+  as_pg "'$PG_BIN/pg_ctl' -D '$PGDATA' -m immediate stop" >/dev/null 2>&1 || true
+}
+trap cleanup EXIT
+echo "== PostgreSQL $("$PG_BIN/postgres" --version | awk '{print $3}') on 127.0.0.1:$PG_PORT"
+
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
 
@@ -74,3 +103,6 @@ cargo clippy --all-targets --locked -- -D warnings
 
 echo "== cargo test --all-targets"
 cargo test --all-targets --locked
+
+echo "== the service suite again, on PostgreSQL"
+ENACT_HUB_TEST_POSTGRES="postgres://postgres@127.0.0.1:$PG_PORT" cargo test --locked --test service

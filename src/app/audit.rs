@@ -1,15 +1,13 @@
 //! The audit log: each audited use case writes its entry with [`record`] inside its own
 //! transaction, so an action and its entry land together or not at all.
 
-use sqlx::SqliteConnection;
-
 use super::{AppError, Hub};
 use crate::core::audit::{Actor, AuditAction, AuditEntry, AuditFilter, AuditRecord};
 use crate::store;
 
 /// Writes the entry for `action` by `actor` on `target`.
 pub(crate) async fn record(
-    conn: &mut SqliteConnection,
+    conn: &mut store::Conn,
     actor: &Actor,
     action: AuditAction,
     target: impl Into<String>,

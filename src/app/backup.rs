@@ -61,7 +61,12 @@ pub async fn backup(hub: &Hub, actor: &Actor, out: &Path) -> Result<Snapshot, Ap
         )));
     }
     let mut conn = hub.conn().await?;
-    store::backup_into(&mut conn, out).await?;
+    let store::PooledConn::Sqlite(sqlite) = &mut conn else {
+        return Err(AppError::BadRequest(
+            "backup writes SQLite snapshots; back a PostgreSQL database up with pg_dump".into(),
+        ));
+    };
+    store::backup_into(sqlite, out).await?;
     let snapshot = inspect(out).await?;
     // Written after the snapshot, so the log says what was taken, not what was attempted.
     audit::record(

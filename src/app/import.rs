@@ -509,7 +509,7 @@ pub async fn import_release(
     // IMMEDIATE: the write lock is taken now and kept to the end (later batches are validated
     // while it is held). A deferred transaction that read first and wrote a batch later would
     // fail at once if a running server wrote in between, instead of waiting for the lock.
-    let mut tx = hub.pool.begin_with("BEGIN IMMEDIATE").await?;
+    let mut tx = hub.pool.begin().await?;
     let existing_dataset = store::datasets::by_name(&mut tx, &options.dataset).await?;
     let stored_hashes = match &existing_dataset {
         Some(d) => store::items::content_hashes(&mut tx, d.id).await?,
@@ -659,7 +659,7 @@ async fn next_batch(
 /// and their rows hold no bytes; if the import then fails, the objects stay (they are named
 /// by their content, and a later import of them finds them in place).
 async fn write_items(
-    tx: &mut sqlx::SqliteConnection,
+    tx: &mut store::Conn,
     frame_store: &FrameStore,
     dataset_id: i64,
     root: &Path,
@@ -731,7 +731,7 @@ async fn write_items(
 }
 
 async fn store_semantics(
-    conn: &mut sqlx::SqliteConnection,
+    conn: &mut store::Conn,
     dataset_id: i64,
     item_id: &str,
     semantics: &ItemSemantics,
@@ -750,7 +750,7 @@ async fn store_semantics(
 /// with `--scene-graphs` upgrades action-text or exact-only items; a re-import without it never
 /// downgrades scene-graph signatures. Returns how many items changed.
 async fn refresh_semantics(
-    conn: &mut sqlx::SqliteConnection,
+    conn: &mut store::Conn,
     dataset_id: i64,
     rows: &[ValidRow],
     stored_hashes: &HashMap<String, String>,

@@ -26,6 +26,13 @@ pub async fn get(hub: &Hub, dataset: &str, item_id: &str) -> Result<Arc<StoredIt
     if let Some(found) = hub.items.stored(dataset, item_id) {
         return Ok(found);
     }
+    // No stored id holds a NUL (PostgreSQL cannot even be asked about one).
+    if item_id.contains('\0') {
+        return Err(AppError::NotFound(format!(
+            "no item '{}' in dataset '{dataset}'",
+            item_id.escape_debug()
+        )));
+    }
     let stored = datasets::by_name(hub, dataset).await?;
     let mut conn = hub.conn().await?;
     let item = store::items::get(&mut conn, stored.id, item_id)

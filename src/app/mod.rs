@@ -48,6 +48,8 @@ use std::sync::Arc;
 
 use sqlx::SqlitePool;
 
+use crate::store::Pool;
+
 pub use error::AppError;
 
 use crate::store;
@@ -70,10 +72,15 @@ impl Default for Quotas {
     }
 }
 
+/// Where the database `location` names is (a SQLite file or a PostgreSQL server).
+pub fn store_location(location: &Path) -> store::Location {
+    store::Location::of(location)
+}
+
 /// What every use case works with: the store and the caches in front of it. Cheap to clone.
 #[derive(Clone)]
 pub struct Hub {
-    pool: SqlitePool,
+    pool: Pool,
     items: Arc<cache::ItemCache>,
     standings: Arc<standings::StandingCache>,
     targets: Arc<submissions::TargetCache>,
@@ -89,12 +96,18 @@ pub struct Hub {
 
 impl From<SqlitePool> for Hub {
     fn from(pool: SqlitePool) -> Hub {
+        Hub::new(Pool::Sqlite(pool), Quotas::default())
+    }
+}
+
+impl From<Pool> for Hub {
+    fn from(pool: Pool) -> Hub {
         Hub::new(pool, Quotas::default())
     }
 }
 
 impl Hub {
-    pub fn new(pool: SqlitePool, quotas: Quotas) -> Hub {
+    pub fn new(pool: Pool, quotas: Quotas) -> Hub {
         let caches = watch::Caches::new(&cache::CacheLimits::default());
         Hub {
             pool,
@@ -132,22 +145,48 @@ impl Hub {
         }
     }
 
-    /// Opens (creating if missing) the database at `path`, migrated to this version.
-    pub async fn open(path: &Path) -> anyhow::Result<Hub> {
-        let pool = store::open(path)
-            .await
-            .map_err(|e| anyhow::anyhow!("cannot open database {}: {e}", path.display()))?;
-        Ok(Hub::new(pool, Quotas::default()))
+    /// Opens (creating if missing) the database `location` names, migrated to this version:
+    /// a SQLite file (a path, or `sqlite://path`), or a PostgreSQL database
+    /// (`postgres://user:password@host/db`, which must exist).
+    pub async fn open(location: &Path) -> anyhow::Result<Hub> {
+        Hub::open_with(location, store::COMMAND_PAGE_CACHE_KIB).await
     }
 
     /// Opens the database for a server: every cache bounded by `limits`, SQLite's page cache
     /// (shared out over the pool's connections) included.
-    pub async fn open_serving(path: &Path, limits: &cache::CacheLimits) -> anyhow::Result<Hub> {
+    pub async fn open_serving(location: &Path, limits: &cache::CacheLimits) -> anyhow::Result<Hub> {
         let per_connection = limits.db_page_cache_bytes / 1024 / u64::from(store::MAX_CONNECTIONS);
-        let pool = store::open_with_page_cache(path, per_connection)
-            .await
-            .map_err(|e| anyhow::anyhow!("cannot open database {}: {e}", path.display()))?;
-        Ok(Hub::new(pool, Quotas::default()).with_cache_limits(limits))
+        Ok(Hub::open_with(location, per_connection)
+            .await?
+            .with_cache_limits(limits))
+    }
+
+    async fn open_with(location: &Path, page_cache_kib: u64) -> anyhow::Result<Hub> {
+        let pool = match store::Location::of(location) {
+            store::Location::Postgres(url) => {
+                let pool = store::db::open_postgres(&url, store::MAX_CONNECTIONS)
+                    .await
+                    .map_err(|e| {
+                        anyhow::anyhow!(
+                            "cannot open database {}: {e}",
+                            store::Location::redacted(&url)
+                        )
+                    })?;
+                Pool::Pg(pool)
+            }
+            store::Location::Sqlite(path) => {
+                let pool = store::open_with_page_cache(&path, page_cache_kib)
+                    .await
+                    .map_err(|e| anyhow::anyhow!("cannot open database {}: {e}", path.display()))?;
+                Pool::Sqlite(pool)
+            }
+        };
+        Ok(Hub::new(pool, Quotas::default()))
+    }
+
+    /// `sqlite` or `postgres`.
+    pub fn backend(&self) -> &'static str {
+        self.pool.backend()
     }
 
     /// The hub writing new frames to `store` and reading there the frames the database does
@@ -225,14 +264,13 @@ impl Hub {
         watch::watch_generation(self.pool, caches).await;
     }
 
-    async fn conn(&self) -> Result<sqlx::pool::PoolConnection<sqlx::Sqlite>, AppError> {
+    async fn conn(&self) -> Result<store::PooledConn, AppError> {
         Ok(self.pool.acquire().await?)
     }
 
-    /// A write transaction. IMMEDIATE takes SQLite's write lock at once, waiting for it under
-    /// the busy timeout; a deferred one that read first and wrote after another writer's commit
-    /// would fail at once with `database is locked` instead of queueing.
-    async fn begin(&self) -> Result<sqlx::Transaction<'static, sqlx::Sqlite>, AppError> {
-        Ok(self.pool.begin_with("BEGIN IMMEDIATE").await?)
+    /// A write transaction, serialised with every other writer of the database
+    /// ([`Pool::begin`]).
+    async fn begin(&self) -> Result<store::Tx, AppError> {
+        Ok(self.pool.begin().await?)
     }
 }

@@ -80,7 +80,7 @@ pub struct CreatedToken {
 /// The account named `name` with `role`, created if missing, inside `tx`. An existing account
 /// keeps its role: asking for another is a conflict.
 pub(super) async fn ensure_account(
-    conn: &mut sqlx::SqliteConnection,
+    conn: &mut store::Conn,
     name: &str,
     role: Role,
 ) -> Result<i64, AppError> {

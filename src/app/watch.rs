@@ -6,7 +6,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use sqlx::SqlitePool;
+use crate::store::Pool;
 
 use super::cache::{CacheLimits, CacheStats, FrameCache, ItemCache};
 use super::leaderboard::BoardCache;
@@ -76,7 +76,7 @@ fn log_stats(stats: &[CacheStats], last_lookups: u64) -> u64 {
 
 /// Clears the item-dependent caches whenever the store's content generation changes, and logs
 /// cache statistics once a minute. Runs until the pool closes.
-pub async fn watch_generation(pool: SqlitePool, caches: Caches) {
+pub async fn watch_generation(pool: Pool, caches: Caches) {
     let Caches {
         items: cache,
         standings,

@@ -5,14 +5,15 @@ use std::process::ExitCode;
 
 use clap::Args;
 
-use super::{in_database, open};
+use super::{DEFAULT_DB, in_database, is_missing_file, open};
 use crate::app;
 use crate::core::audit::{AuditEntry, AuditFilter};
 
 #[derive(Args)]
 pub struct AuditArgs {
-    /// SQLite database file.
-    #[arg(long, env = "ENACT_HUB_DB", default_value = "enact-hub.db")]
+    /// SQLite database file, or a PostgreSQL URL
+    /// (postgres://user:password@host/db; also ENACT_HUB_DATABASE_URL).
+    #[arg(long, visible_alias = "database-url", env = "ENACT_HUB_DB", default_value = DEFAULT_DB)]
     db: PathBuf,
     /// Only this action (`token.issue`), or every action of a noun (`token`).
     #[arg(long)]
@@ -35,7 +36,7 @@ pub struct AuditArgs {
 }
 
 pub async fn audit(args: AuditArgs) -> anyhow::Result<ExitCode> {
-    if !args.db.exists() {
+    if is_missing_file(&args.db) {
         anyhow::bail!("{} does not exist: no audit log to read", args.db.display());
     }
     let hub = open(&args.db).await?;

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::{open, refused};
+use super::{DEFAULT_DB, is_missing_file, open, refused};
 use crate::app::frames::{self, FrameStore};
 
 /// Where frame bytes are kept, for commands that write or read them.
@@ -40,15 +40,17 @@ pub enum FramesCommand {
 
 #[derive(Args)]
 pub struct StatusArgs {
-    /// SQLite database file.
-    #[arg(long, env = "ENACT_HUB_DB", default_value = "enact-hub.db")]
+    /// SQLite database file, or a PostgreSQL URL
+    /// (postgres://user:password@host/db; also ENACT_HUB_DATABASE_URL).
+    #[arg(long, visible_alias = "database-url", env = "ENACT_HUB_DB", default_value = DEFAULT_DB)]
     db: PathBuf,
 }
 
 #[derive(Args)]
 pub struct MigrateArgs {
-    /// SQLite database file.
-    #[arg(long, env = "ENACT_HUB_DB", default_value = "enact-hub.db")]
+    /// SQLite database file, or a PostgreSQL URL
+    /// (postgres://user:password@host/db; also ENACT_HUB_DATABASE_URL).
+    #[arg(long, visible_alias = "database-url", env = "ENACT_HUB_DB", default_value = DEFAULT_DB)]
     db: PathBuf,
     /// Where the bytes go: an object store URL, or `database`.
     #[arg(long, value_name = "URL")]
@@ -70,7 +72,7 @@ pub async fn frames(command: FramesCommand) -> anyhow::Result<ExitCode> {
 }
 
 async fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
-    if !args.db.exists() {
+    if is_missing_file(&args.db) {
         anyhow::bail!("{} does not exist", args.db.display());
     }
     let hub = open(&args.db).await?;
@@ -86,7 +88,7 @@ async fn status(args: StatusArgs) -> anyhow::Result<ExitCode> {
 }
 
 async fn migrate(args: MigrateArgs) -> anyhow::Result<ExitCode> {
-    if !args.db.exists() {
+    if is_missing_file(&args.db) {
         anyhow::bail!("{} does not exist", args.db.display());
     }
     let to = match FrameStore::parse(&args.to) {

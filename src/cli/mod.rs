@@ -319,16 +319,18 @@ struct RestoreArgs {
 
 #[derive(Args)]
 struct DbArg {
-    /// SQLite database file (created if missing).
-    #[arg(long, env = "ENACT_HUB_DB", default_value = "enact-hub.db")]
+    /// SQLite database file (created if missing), or a PostgreSQL URL
+    /// (postgres://user:password@host/db; also ENACT_HUB_DATABASE_URL).
+    #[arg(long, visible_alias = "database-url", env = "ENACT_HUB_DB", default_value = DEFAULT_DB)]
     db: PathBuf,
 }
 
 #[derive(Args)]
 struct ServeArgs {
-    /// SQLite database file (created if missing). With --demo and no --db, a temporary
-    /// database is used and removed at exit.
-    #[arg(long, env = "ENACT_HUB_DB")]
+    /// SQLite database file (created if missing), or a PostgreSQL URL
+    /// (postgres://user:password@host/db; also ENACT_HUB_DATABASE_URL). With --demo and no
+    /// --db, a temporary SQLite database is used and removed at exit.
+    #[arg(long, visible_alias = "database-url", env = "ENACT_HUB_DB")]
     db: Option<PathBuf>,
     /// Address to listen on.
     #[arg(long, env = "ENACT_HUB_ADDR", default_value = "127.0.0.1:8080")]
@@ -478,9 +480,38 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// The database file commands use when none is named.
+pub(crate) const DEFAULT_DB: &str = "enact-hub.db";
+
+/// The database a command names: `--db` (or `--database-url`), else `ENACT_HUB_DB`, else
+/// `ENACT_HUB_DATABASE_URL`, else [`DEFAULT_DB`].
+fn resolve(db: &Path) -> PathBuf {
+    if db == Path::new(DEFAULT_DB) && std::env::var_os("ENACT_HUB_DB").is_none() {
+        if let Some(url) = std::env::var_os("ENACT_HUB_DATABASE_URL") {
+            return PathBuf::from(url);
+        }
+    }
+    db.to_path_buf()
+}
+
+/// Whether `db` names a SQLite file that is not there (a command that only reads refuses it
+/// rather than create an empty database).
+fn is_missing_file(db: &Path) -> bool {
+    let db = resolve(db);
+    app::store_location(&db).is_file() && !db.exists()
+}
+
+/// The database for messages and logs (a URL's password hidden).
+fn describe_db(db: &Path) -> String {
+    match app::store_location(db) {
+        crate::store::Location::Postgres(url) => crate::store::Location::redacted(&url),
+        crate::store::Location::Sqlite(path) => path.display().to_string(),
+    }
+}
+
 /// Opens the database a command works on.
 async fn open(db: &Path) -> anyhow::Result<Hub> {
-    Hub::open(db).await
+    Hub::open(&resolve(db)).await
 }
 
 /// Prints a use case's refusal as the command's error and fails.
@@ -505,7 +536,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
             _temporary = Some(dir);
             db
         }
-        (None, false) => PathBuf::from("enact-hub.db"),
+        (None, false) => resolve(Path::new(DEFAULT_DB)),
     };
     let limits = CacheLimits {
         item_bytes: args.item_cache_mib * MIB,
@@ -538,7 +569,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     let addr = server.local_addr()?;
     tracing::info!(
         %addr,
-        db = %db.display(),
+        db = %describe_db(&db),
         frames = hub.frame_store().describe(),
         "enact-hub is listening on http://{addr}/"
     );
@@ -592,7 +623,7 @@ fn print_snapshot(what: &str, s: &app::backup::Snapshot) {
 }
 
 async fn backup(args: BackupArgs) -> anyhow::Result<ExitCode> {
-    if !args.db.db.exists() {
+    if is_missing_file(&args.db.db) {
         anyhow::bail!(
             "{} does not exist: nothing to back up",
             args.db.db.display()
@@ -972,7 +1003,7 @@ async fn errors(args: ErrorsArgs) -> anyhow::Result<ExitCode> {
 fn in_database<T>(result: Result<T, AppError>, db: &Path) -> anyhow::Result<T> {
     result.map_err(|e| match e {
         AppError::Internal(e) => e,
-        AppError::NotFound(what) => anyhow::anyhow!("{what} in {}", db.display()),
+        AppError::NotFound(what) => anyhow::anyhow!("{what} in {}", describe_db(db)),
         other => anyhow::anyhow!("{other}"),
     })
 }

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 use serde_json::json;
 
-use super::{in_database, open};
+use super::{DEFAULT_DB, in_database, open};
 use crate::app;
 use crate::app::agreement::{AgreementOptions, ReportSettings};
 use crate::core::agreement::report::{AgreementSection, REPORT_METRIC_VERSION};
@@ -76,8 +76,9 @@ pub async fn agreement(
 
 #[derive(clap::Args)]
 pub struct ProtocolArgs {
-    /// SQLite database file.
-    #[arg(long, env = "ENACT_HUB_DB", default_value = "enact-hub.db")]
+    /// SQLite database file, or a PostgreSQL URL
+    /// (postgres://user:password@host/db; also ENACT_HUB_DATABASE_URL).
+    #[arg(long, visible_alias = "database-url", env = "ENACT_HUB_DB", default_value = DEFAULT_DB)]
     db: std::path::PathBuf,
     /// The stored dataset.
     #[arg(long)]
@@ -121,8 +122,9 @@ pub async fn agreement_protocol(args: &ProtocolArgs) -> anyhow::Result<ExitCode>
 
 #[derive(clap::Args)]
 pub struct ReportArgs {
-    /// SQLite database file.
-    #[arg(long, env = "ENACT_HUB_DB", default_value = "enact-hub.db")]
+    /// SQLite database file, or a PostgreSQL URL
+    /// (postgres://user:password@host/db; also ENACT_HUB_DATABASE_URL).
+    #[arg(long, visible_alias = "database-url", env = "ENACT_HUB_DB", default_value = DEFAULT_DB)]
     db: std::path::PathBuf,
     /// The stored dataset.
     #[arg(long)]

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 use clap::{Args, Subcommand};
 
-use super::{in_database, open, operator};
+use super::{DEFAULT_DB, in_database, open, operator};
 use crate::app;
 use crate::app::studies::{StudyRowChoice, StudyView};
 use crate::core::study::VariantSpec;
@@ -15,8 +15,9 @@ use crate::core::study::report::StudyReport;
 
 #[derive(Args)]
 pub struct DbArg {
-    /// SQLite database file.
-    #[arg(long, env = "ENACT_HUB_DB", default_value = "enact-hub.db")]
+    /// SQLite database file, or a PostgreSQL URL
+    /// (postgres://user:password@host/db; also ENACT_HUB_DATABASE_URL).
+    #[arg(long, visible_alias = "database-url", env = "ENACT_HUB_DB", default_value = DEFAULT_DB)]
     db: PathBuf,
 }
 

@@ -1,8 +1,8 @@
 //! Accounts and API tokens (hashed), and the submission attempts quotas count.
 
+use super::db::{Conn, Dialect, Fields, on};
 use schemars::JsonSchema;
 use serde::Serialize;
-use sqlx::{Row, SqliteConnection};
 
 use crate::core::credentials::{NewToken, Role, Scope, scopes_from_text, scopes_to_text};
 
@@ -24,43 +24,41 @@ pub struct TokenListing {
 
 /// The id and role of the account named `name`.
 pub async fn account_by_name(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     name: &str,
 ) -> Result<Option<(i64, Role)>, sqlx::Error> {
-    sqlx::query_as("SELECT id, role FROM accounts WHERE name = ?")
-        .bind(name)
-        .fetch_optional(conn)
-        .await
+    on!(conn, |c| {
+        sqlx::query_as("SELECT id, role FROM accounts WHERE name = $1")
+            .bind(name)
+            .fetch_optional(&mut *c)
+            .await
+    })
 }
 
 #[tracing::instrument(skip_all)]
-pub async fn insert_account(
-    conn: &mut SqliteConnection,
-    name: &str,
-    role: Role,
-) -> Result<i64, sqlx::Error> {
-    Ok(
-        sqlx::query("INSERT INTO accounts (name, role) VALUES (?, ?)")
+pub async fn insert_account(conn: &mut Conn, name: &str, role: Role) -> Result<i64, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_scalar("INSERT INTO accounts (name, role) VALUES ($1, $2) RETURNING id")
             .bind(name)
             .bind(role)
-            .execute(conn)
-            .await?
-            .last_insert_rowid(),
-    )
+            .fetch_one(&mut *c)
+            .await
+    })
 }
 
 #[tracing::instrument(skip_all)]
 pub async fn insert_token(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     account: i64,
     role: Role,
     token: &NewToken,
     daily_quota: Option<i64>,
     total_quota: Option<i64>,
 ) -> Result<i64, sqlx::Error> {
-    Ok(sqlx::query(
+    on!(conn, |c| {
+        sqlx::query_scalar(
         "INSERT INTO api_tokens (account, prefix, token_hash, scopes, daily_quota, total_quota) \
-         VALUES (?, ?, ?, ?, ?, ?)",
+         VALUES ($1, $2, $3, $4, $5, $6) RETURNING id",
     )
     .bind(account)
     .bind(&token.prefix)
@@ -68,9 +66,9 @@ pub async fn insert_token(
     .bind(scopes_to_text(role.scopes()))
     .bind(daily_quota)
     .bind(total_quota)
-    .execute(conn)
-    .await?
-    .last_insert_rowid())
+    .fetch_one(&mut *c)
+    .await
+    })
 }
 
 /// A stored token with its account, as found by its public prefix.
@@ -87,97 +85,105 @@ pub struct TokenRow {
 }
 
 pub async fn token_by_prefix(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     prefix: &str,
 ) -> Result<Option<TokenRow>, sqlx::Error> {
-    let row = sqlx::query(
-        "SELECT t.id, t.account, t.token_hash, t.scopes, t.daily_quota, t.total_quota, \
+    on!(conn, |c| {
+        let row = sqlx::query(
+            "SELECT t.id, t.account, t.token_hash, t.scopes, t.daily_quota, t.total_quota, \
          t.revoked_at, a.name FROM api_tokens t JOIN accounts a ON a.id = t.account \
-         WHERE t.prefix = ?",
-    )
-    .bind(prefix)
-    .fetch_optional(conn)
-    .await?;
-    row.map(|row| {
-        let scopes: String = row.try_get("scopes")?;
-        Ok(TokenRow {
-            id: row.try_get("id")?,
-            account_id: row.try_get("account")?,
-            account_name: row.try_get("name")?,
-            token_hash: row.try_get("token_hash")?,
-            scopes: scopes_from_text(&scopes),
-            daily_quota: row.try_get("daily_quota")?,
-            total_quota: row.try_get("total_quota")?,
-            revoked: row.try_get::<Option<String>, _>("revoked_at")?.is_some(),
-        })
-    })
-    .transpose()
-}
-
-pub async fn list_tokens(conn: &mut SqliteConnection) -> Result<Vec<TokenListing>, sqlx::Error> {
-    let rows = sqlx::query(
-        "SELECT t.id, t.prefix, a.name, a.role, t.scopes, t.daily_quota, t.total_quota, \
-         t.created_at, t.revoked_at, \
-         (SELECT max(c) FROM (SELECT created_at AS c FROM submission_attempts WHERE token = t.id \
-          UNION ALL SELECT created_at FROM submissions WHERE token = t.id)) AS last_used_at \
-         FROM api_tokens t JOIN accounts a ON a.id = t.account ORDER BY t.id",
-    )
-    .fetch_all(conn)
-    .await?;
-    rows.iter()
-        .map(|row| {
-            Ok(TokenListing {
+         WHERE t.prefix = $1",
+        )
+        .bind(prefix)
+        .fetch_optional(&mut *c)
+        .await?;
+        row.map(|row| {
+            let scopes: String = row.try_get("scopes")?;
+            Ok(TokenRow {
                 id: row.try_get("id")?,
-                prefix: row.try_get("prefix")?,
-                account: row.try_get("name")?,
-                role: row.try_get("role")?,
-                scopes: row.try_get("scopes")?,
+                account_id: row.try_get("account")?,
+                account_name: row.try_get("name")?,
+                token_hash: row.try_get("token_hash")?,
+                scopes: scopes_from_text(&scopes),
                 daily_quota: row.try_get("daily_quota")?,
                 total_quota: row.try_get("total_quota")?,
-                created_at: row.try_get("created_at")?,
-                last_used_at: row.try_get("last_used_at")?,
-                revoked_at: row.try_get("revoked_at")?,
+                revoked: row.try_get::<Option<String>>("revoked_at")?.is_some(),
             })
         })
-        .collect()
+        .transpose()
+    })
+}
+
+pub async fn list_tokens(conn: &mut Conn) -> Result<Vec<TokenListing>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT t.id, t.prefix, a.name, a.role, t.scopes, t.daily_quota, t.total_quota, \
+         t.created_at, t.revoked_at, \
+         (SELECT max(c) FROM (SELECT created_at AS c FROM submission_attempts WHERE token = t.id \
+          UNION ALL SELECT created_at FROM submissions WHERE token = t.id) AS uses) AS last_used_at \
+         FROM api_tokens t JOIN accounts a ON a.id = t.account ORDER BY t.id",
+        )
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter()
+            .map(|row| {
+                Ok(TokenListing {
+                    id: row.try_get("id")?,
+                    prefix: row.try_get("prefix")?,
+                    account: row.try_get("name")?,
+                    role: row.try_get("role")?,
+                    scopes: row.try_get("scopes")?,
+                    daily_quota: row.try_get("daily_quota")?,
+                    total_quota: row.try_get("total_quota")?,
+                    created_at: row.try_get("created_at")?,
+                    last_used_at: row.try_get("last_used_at")?,
+                    revoked_at: row.try_get("revoked_at")?,
+                })
+            })
+            .collect()
+    })
 }
 
 /// Revokes the token with this id or prefix. Returns whether a live token was revoked.
 #[tracing::instrument(skip_all)]
-pub async fn revoke_token(conn: &mut SqliteConnection, which: &str) -> Result<bool, sqlx::Error> {
-    let id: Option<i64> = which.parse().ok();
-    let done = sqlx::query(
-        "UPDATE api_tokens SET revoked_at = strftime('%Y-%m-%dT%H:%M:%SZ', 'now') \
-         WHERE (id = ? OR prefix = ?) AND revoked_at IS NULL",
-    )
-    .bind(id)
-    .bind(which)
-    .execute(conn)
-    .await?;
-    Ok(done.rows_affected() > 0)
+pub async fn revoke_token(conn: &mut Conn, which: &str) -> Result<bool, sqlx::Error> {
+    on!(conn, |c| {
+        let id: Option<i64> = which.parse().ok();
+        let done = sqlx::query(&format!(
+            "UPDATE api_tokens SET revoked_at = {} \
+         WHERE (id = $1 OR prefix = $2) AND revoked_at IS NULL",
+            c.utc_now()
+        ))
+        .bind(id)
+        .bind(which)
+        .execute(&mut *c)
+        .await?;
+        Ok(done.rows_affected() > 0)
+    })
 }
 
 /// Whether any live admin token exists.
-pub async fn has_admin_token(conn: &mut SqliteConnection) -> Result<bool, sqlx::Error> {
-    let n: i64 = sqlx::query_scalar(
-        "SELECT count(*) FROM api_tokens t JOIN accounts a ON a.id = t.account \
+pub async fn has_admin_token(conn: &mut Conn) -> Result<bool, sqlx::Error> {
+    on!(conn, |c| {
+        let n: i64 = sqlx::query_scalar(
+            "SELECT count(*) FROM api_tokens t JOIN accounts a ON a.id = t.account \
          WHERE a.role = 'admin' AND t.revoked_at IS NULL",
-    )
-    .fetch_one(conn)
-    .await?;
-    Ok(n > 0)
+        )
+        .fetch_one(&mut *c)
+        .await?;
+        Ok(n > 0)
+    })
 }
 
 /// Whether a token with this hash is stored (revoked or not).
-pub async fn token_hash_exists(
-    conn: &mut SqliteConnection,
-    hash: &str,
-) -> Result<bool, sqlx::Error> {
-    let n: i64 = sqlx::query_scalar("SELECT count(*) FROM api_tokens WHERE token_hash = ?")
-        .bind(hash)
-        .fetch_one(conn)
-        .await?;
-    Ok(n > 0)
+pub async fn token_hash_exists(conn: &mut Conn, hash: &str) -> Result<bool, sqlx::Error> {
+    on!(conn, |c| {
+        let n: i64 = sqlx::query_scalar("SELECT count(*) FROM api_tokens WHERE token_hash = $1")
+            .bind(hash)
+            .fetch_one(&mut *c)
+            .await?;
+        Ok(n > 0)
+    })
 }
 
 /// The outcome of asking for one more submission attempt.
@@ -198,32 +204,35 @@ pub enum AttemptQuota {
 /// so concurrent requests cannot both take the last slot.
 #[tracing::instrument(skip_all)]
 pub async fn record_attempt(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     token: i64,
     daily: i64,
     total: i64,
 ) -> Result<AttemptQuota, sqlx::Error> {
-    const TODAY: &str = "strftime('%Y-%m-%dT00:00:00Z', 'now')";
-    let inserted = sqlx::query(&format!(
-        "INSERT INTO submission_attempts (token) SELECT ?1 \
-         WHERE (SELECT count(*) FROM submission_attempts WHERE token = ?1 AND created_at >= {TODAY}) < ?2 \
-         AND (SELECT count(*) FROM submission_attempts WHERE token = ?1) < ?3"
+    on!(conn, |c| {
+        let today = c.utc_today();
+        let inserted = sqlx::query(&format!(
+        "INSERT INTO submission_attempts (token) SELECT $1 \
+         WHERE (SELECT count(*) FROM submission_attempts WHERE token = $1 AND created_at >= {today}) < $2 \
+         AND (SELECT count(*) FROM submission_attempts WHERE token = $1) < $3"
     ))
     .bind(token)
     .bind(daily)
     .bind(total)
-    .execute(&mut *conn)
+    .execute(&mut *c)
     .await?;
-    if inserted.rows_affected() > 0 {
-        return Ok(AttemptQuota::Granted);
-    }
-    let used: i64 = sqlx::query_scalar("SELECT count(*) FROM submission_attempts WHERE token = ?")
-        .bind(token)
-        .fetch_one(conn)
-        .await?;
-    Ok(if used >= total {
-        AttemptQuota::TotalExhausted { used, limit: total }
-    } else {
-        AttemptQuota::DailyExhausted { limit: daily }
+        if inserted.rows_affected() > 0 {
+            return Ok(AttemptQuota::Granted);
+        }
+        let used: i64 =
+            sqlx::query_scalar("SELECT count(*) FROM submission_attempts WHERE token = $1")
+                .bind(token)
+                .fetch_one(&mut *c)
+                .await?;
+        Ok(if used >= total {
+            AttemptQuota::TotalExhausted { used, limit: total }
+        } else {
+            AttemptQuota::DailyExhausted { limit: daily }
+        })
     })
 }

@@ -2,7 +2,7 @@
 //! annotator's submitted answers with the kind of assignment behind them, completed primary
 //! answers, and the protocol round with its cross-assignments.
 
-use sqlx::{Row, SqliteConnection};
+use super::db::{Conn, Fields, on};
 
 use super::annotations::human_answer_from_row;
 use super::{corrupt, kind_from_row};
@@ -13,77 +13,80 @@ use crate::core::agreement::report::AnnotatorAnswer;
 /// Every answered item of a dataset, per annotator, with the item's ground truth and
 /// signatures and the kind of assignment it was answered under; by item, then annotator.
 pub async fn annotator_answers(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset_id: i64,
 ) -> Result<Vec<AnnotatorAnswer>, sqlx::Error> {
-    let rows = sqlx::query(
-        "SELECT n.annotator, a.name, i.item_id, i.direction, i.step_length, i.gt_answer, \
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT n.annotator, a.name, i.item_id, i.direction, i.step_length, i.gt_answer, \
          n.answer, s.signatures, coalesce(g.kind, 'primary') AS kind \
          FROM annotations n JOIN items i ON i.id = n.item \
          JOIN annotators a ON a.id = n.annotator \
          LEFT JOIN assignments g ON g.annotator = n.annotator AND g.item = n.item \
          LEFT JOIN item_signatures s ON s.item = i.id \
-         WHERE i.dataset_id = ? AND n.outcome = 'answered' \
+         WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
          ORDER BY i.item_id, n.annotator",
-    )
-    .bind(dataset_id)
-    .fetch_all(conn)
-    .await?;
-    rows.iter()
-        .map(|r| {
-            let kind: String = r.try_get("kind")?;
-            Ok(AnnotatorAnswer {
-                annotator_id: r.try_get("annotator")?,
-                annotator: r.try_get("name")?,
-                item_id: r.try_get("item_id")?,
-                kind: AssignmentKind::parse(&kind)
-                    .ok_or_else(|| corrupt("kind", format!("unknown kind {kind:?}")))?,
-                human: human_answer_from_row(r)?,
+        )
+        .bind(dataset_id)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter()
+            .map(|r| {
+                let kind: String = r.try_get("kind")?;
+                Ok(AnnotatorAnswer {
+                    annotator_id: r.try_get("annotator")?,
+                    annotator: r.try_get("name")?,
+                    item_id: r.try_get("item_id")?,
+                    kind: AssignmentKind::parse(&kind)
+                        .ok_or_else(|| corrupt("kind", format!("unknown kind {kind:?}")))?,
+                    human: human_answer_from_row(r)?,
+                })
             })
-        })
-        .collect()
+            .collect()
+    })
 }
 
 /// Completed (answered) primary items of a dataset: what the protocol draws from.
 pub async fn primary_answers(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset_id: i64,
 ) -> Result<Vec<PrimaryAnswer>, sqlx::Error> {
-    let rows = sqlx::query(
-        "SELECT n.item, n.annotator, i.direction, i.step_length FROM annotations n \
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT n.item, n.annotator, i.direction, i.step_length FROM annotations n \
          JOIN items i ON i.id = n.item \
          LEFT JOIN assignments g ON g.annotator = n.annotator AND g.item = n.item \
-         WHERE i.dataset_id = ? AND n.outcome = 'answered' \
+         WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
          AND coalesce(g.kind, 'primary') = 'primary' ORDER BY n.item, n.annotator",
-    )
-    .bind(dataset_id)
-    .fetch_all(conn)
-    .await?;
-    rows.iter()
-        .map(|r| {
-            let (direction, step_length) = kind_from_row(r)?;
-            Ok(PrimaryAnswer {
-                item: r.try_get("item")?,
-                annotator: r.try_get("annotator")?,
-                direction,
-                step_length,
+        )
+        .bind(dataset_id)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter()
+            .map(|r| {
+                let (direction, step_length) = kind_from_row(r)?;
+                Ok(PrimaryAnswer {
+                    item: r.try_get("item")?,
+                    annotator: r.try_get("annotator")?,
+                    direction,
+                    step_length,
+                })
             })
-        })
-        .collect()
+            .collect()
+    })
 }
 
 /// Annotators holding primary assignments in a dataset: the protocol's participants.
-pub async fn primary_annotators(
-    conn: &mut SqliteConnection,
-    dataset_id: i64,
-) -> Result<Vec<i64>, sqlx::Error> {
-    sqlx::query_scalar(
-        "SELECT DISTINCT g.annotator FROM assignments g JOIN items i ON i.id = g.item \
-         WHERE i.dataset_id = ? AND g.kind = 'primary' ORDER BY g.annotator",
-    )
-    .bind(dataset_id)
-    .fetch_all(conn)
-    .await
+pub async fn primary_annotators(conn: &mut Conn, dataset_id: i64) -> Result<Vec<i64>, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_scalar(
+            "SELECT DISTINCT g.annotator FROM assignments g JOIN items i ON i.id = g.item \
+         WHERE i.dataset_id = $1 AND g.kind = 'primary' ORDER BY g.annotator",
+        )
+        .bind(dataset_id)
+        .fetch_all(&mut *c)
+        .await
+    })
 }
 
 /// A dataset's protocol round as recorded.
@@ -101,11 +104,12 @@ pub struct AgreementRound {
 }
 
 pub async fn round(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset_id: i64,
 ) -> Result<Option<AgreementRound>, sqlx::Error> {
-    let row = sqlx::query(
-        "SELECT r.items_per_cell, r.seed, a.name, r.created_at, \
+    on!(conn, |c| {
+        let row = sqlx::query(
+            "SELECT r.items_per_cell, r.seed, a.name, r.created_at, \
          (SELECT count(*) FROM agreement_samples s WHERE s.dataset = r.dataset) AS samples, \
          (SELECT count(*) FROM assignments g JOIN items i ON i.id = g.item \
           WHERE i.dataset_id = r.dataset AND g.kind = 'agreement') AS assignments, \
@@ -114,24 +118,25 @@ pub async fn round(
           WHERE i.dataset_id = r.dataset AND g.kind = 'agreement' \
           AND n.outcome = 'answered') AS answered \
          FROM agreement_rounds r LEFT JOIN annotators a ON a.id = r.started_by \
-         WHERE r.dataset = ?",
-    )
-    .bind(dataset_id)
-    .fetch_optional(conn)
-    .await?;
-    row.map(|r| {
-        Ok(AgreementRound {
-            items_per_cell: r.try_get("items_per_cell")?,
-            // Stored bit for bit in SQLite's signed integer.
-            seed: r.try_get::<i64, _>("seed")? as u64,
-            started_by: r.try_get("name")?,
-            created_at: r.try_get("created_at")?,
-            samples: r.try_get("samples")?,
-            assignments: r.try_get("assignments")?,
-            answered: r.try_get("answered")?,
+         WHERE r.dataset = $1",
+        )
+        .bind(dataset_id)
+        .fetch_optional(&mut *c)
+        .await?;
+        row.map(|r| {
+            Ok(AgreementRound {
+                items_per_cell: r.try_get("items_per_cell")?,
+                // Stored bit for bit in SQLite's signed integer.
+                seed: r.try_get::<i64>("seed")? as u64,
+                started_by: r.try_get("name")?,
+                created_at: r.try_get("created_at")?,
+                samples: r.try_get("samples")?,
+                assignments: r.try_get("assignments")?,
+                answered: r.try_get("answered")?,
+            })
         })
+        .transpose()
     })
-    .transpose()
 }
 
 /// Records a protocol round and its cross-assignments, appended to each annotator's queue
@@ -139,57 +144,59 @@ pub async fn round(
 /// already has a round: nothing is written then. Otherwise returns the assignments added (a
 /// pair already assigned, under either kind, is left as it was).
 pub async fn record_round(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset_id: i64,
     plan: &ProtocolPlan,
     started_by: Option<i64>,
 ) -> Result<Result<u64, AgreementRound>, sqlx::Error> {
-    if let Some(existing) = round(&mut *conn, dataset_id).await? {
-        return Ok(Err(existing));
-    }
-    let inserted = sqlx::query(
-        "INSERT INTO agreement_rounds (dataset, items_per_cell, seed, started_by) \
-         VALUES (?, ?, ?, ?)",
-    )
-    .bind(dataset_id)
-    .bind(i64::try_from(plan.items_per_cell).unwrap_or(i64::MAX))
-    .bind(plan.seed as i64)
-    .bind(started_by)
-    .execute(&mut *conn)
-    .await;
-    match inserted {
-        Ok(_) => {}
-        // A concurrent run got there first.
-        Err(sqlx::Error::Database(e)) if e.is_unique_violation() => {
-            if let Some(existing) = round(&mut *conn, dataset_id).await? {
-                return Ok(Err(existing));
-            }
-            return Err(sqlx::Error::Database(e));
+    on!(conn, |c| {
+        if let Some(existing) = round(&mut *c, dataset_id).await? {
+            return Ok(Err(existing));
         }
-        Err(e) => return Err(e),
-    }
-    for sample in &plan.samples {
-        sqlx::query(
-            "INSERT INTO agreement_samples (dataset, item, source_annotator) VALUES (?, ?, ?)",
+        let inserted = sqlx::query(
+            "INSERT INTO agreement_rounds (dataset, items_per_cell, seed, started_by) \
+         VALUES ($1, $2, $3, $4)",
+        )
+        .bind(dataset_id)
+        .bind(i64::try_from(plan.items_per_cell).unwrap_or(i64::MAX))
+        .bind(plan.seed as i64)
+        .bind(started_by)
+        .execute(&mut *c)
+        .await;
+        match inserted {
+            Ok(_) => {}
+            // A concurrent run got there first.
+            Err(sqlx::Error::Database(e)) if e.is_unique_violation() => {
+                if let Some(existing) = round(&mut *c, dataset_id).await? {
+                    return Ok(Err(existing));
+                }
+                return Err(sqlx::Error::Database(e));
+            }
+            Err(e) => return Err(e),
+        }
+        for sample in &plan.samples {
+            sqlx::query(
+            "INSERT INTO agreement_samples (dataset, item, source_annotator) VALUES ($1, $2, $3)",
         )
         .bind(dataset_id)
         .bind(sample.item)
         .bind(sample.source_annotator)
-        .execute(&mut *conn)
+        .execute(&mut *c)
         .await?;
-    }
-    let mut added = 0;
-    for &(annotator, item) in &plan.assignments {
-        let done = sqlx::query(
-            "INSERT INTO assignments (annotator, item, position, kind) \
-             SELECT ?1, ?2, coalesce(max(position), 0) + 1, 'agreement' FROM assignments \
-             WHERE annotator = ?1 ON CONFLICT (annotator, item) DO NOTHING",
-        )
-        .bind(annotator)
-        .bind(item)
-        .execute(&mut *conn)
-        .await?;
-        added += done.rows_affected();
-    }
-    Ok(Ok(added))
+        }
+        let mut added = 0;
+        for &(annotator, item) in &plan.assignments {
+            let done = sqlx::query(
+                "INSERT INTO assignments (annotator, item, position, kind) \
+             SELECT $1, $2, coalesce(max(position), 0) + 1, 'agreement' FROM assignments \
+             WHERE annotator = $1 ON CONFLICT (annotator, item) DO NOTHING",
+            )
+            .bind(annotator)
+            .bind(item)
+            .execute(&mut *c)
+            .await?;
+            added += done.rows_affected();
+        }
+        Ok(Ok(added))
+    })
 }

@@ -1,7 +1,7 @@
 //! Annotators, their sessions, assignments, drafts and finished annotations; and the human
 //! performance report built from the answers.
 
-use sqlx::{Row, SqliteConnection};
+use super::db::{Conn, Fields, on};
 
 use super::{corrupt, kind_from_row};
 
@@ -21,12 +21,12 @@ pub struct Annotator {
     pub created_at: String,
 }
 
-fn annotator_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<Annotator, sqlx::Error> {
+fn annotator_from_row(row: &impl Fields) -> Result<Annotator, sqlx::Error> {
     Ok(Annotator {
         id: row.try_get("id")?,
         name: row.try_get("name")?,
         is_admin: row.try_get("is_admin")?,
-        active: row.try_get::<Option<String>, _>("password_hash")?.is_some(),
+        active: row.try_get::<Option<String>>("password_hash")?.is_some(),
         created_at: row.try_get("created_at")?,
     })
 }
@@ -36,170 +36,190 @@ const ANNOTATOR_COLUMNS: &str = "id, name, is_admin, password_hash, created_at";
 /// Creates an annotator with a pending invite (`invite_hash` = sha256 of the invite token).
 /// `Ok(None)` when the name is taken.
 pub async fn create_annotator(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     name: &str,
     is_admin: bool,
     invite_hash: &str,
 ) -> Result<Option<i64>, sqlx::Error> {
-    let result = sqlx::query_scalar(
-        "INSERT INTO annotators (name, is_admin, invite_hash) VALUES (?, ?, ?) RETURNING id",
-    )
-    .bind(name)
-    .bind(is_admin)
-    .bind(invite_hash)
-    .fetch_one(conn)
-    .await;
-    match result {
-        Ok(id) => Ok(Some(id)),
-        Err(sqlx::Error::Database(e)) if e.is_unique_violation() => Ok(None),
-        Err(e) => Err(e),
-    }
+    on!(conn, |c| {
+        let result = sqlx::query_scalar(
+            "INSERT INTO annotators (name, is_admin, invite_hash) VALUES ($1, $2, $3) RETURNING id",
+        )
+        .bind(name)
+        .bind(is_admin)
+        .bind(invite_hash)
+        .fetch_one(&mut *c)
+        .await;
+        match result {
+            Ok(id) => Ok(Some(id)),
+            Err(sqlx::Error::Database(e)) if e.is_unique_violation() => Ok(None),
+            Err(e) => Err(e),
+        }
+    })
 }
 
 /// Replaces an annotator's invite (the old link stops working).
 pub async fn renew_invite(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     annotator: i64,
     invite_hash: &str,
 ) -> Result<bool, sqlx::Error> {
-    let done = sqlx::query("UPDATE annotators SET invite_hash = ? WHERE id = ?")
-        .bind(invite_hash)
-        .bind(annotator)
-        .execute(conn)
-        .await?;
-    Ok(done.rows_affected() == 1)
+    on!(conn, |c| {
+        let done = sqlx::query("UPDATE annotators SET invite_hash = $1 WHERE id = $2")
+            .bind(invite_hash)
+            .bind(annotator)
+            .execute(&mut *c)
+            .await?;
+        Ok(done.rows_affected() == 1)
+    })
 }
 
-pub async fn annotators(conn: &mut SqliteConnection) -> Result<Vec<Annotator>, sqlx::Error> {
-    let rows = sqlx::query(&format!(
-        "SELECT {ANNOTATOR_COLUMNS} FROM annotators ORDER BY name"
-    ))
-    .fetch_all(conn)
-    .await?;
-    rows.iter().map(annotator_from_row).collect()
+pub async fn annotators(conn: &mut Conn) -> Result<Vec<Annotator>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(&format!(
+            "SELECT {ANNOTATOR_COLUMNS} FROM annotators ORDER BY name"
+        ))
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(annotator_from_row).collect()
+    })
 }
 
 pub async fn annotator_by_invite(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     invite_hash: &str,
 ) -> Result<Option<Annotator>, sqlx::Error> {
-    let row = sqlx::query(&format!(
-        "SELECT {ANNOTATOR_COLUMNS} FROM annotators WHERE invite_hash = ?"
-    ))
-    .bind(invite_hash)
-    .fetch_optional(conn)
-    .await?;
-    row.as_ref().map(annotator_from_row).transpose()
+    on!(conn, |c| {
+        let row = sqlx::query(&format!(
+            "SELECT {ANNOTATOR_COLUMNS} FROM annotators WHERE invite_hash = $1"
+        ))
+        .bind(invite_hash)
+        .fetch_optional(&mut *c)
+        .await?;
+        row.as_ref().map(annotator_from_row).transpose()
+    })
 }
 
 /// Sets the password and consumes the invite, if the invite is still valid.
 pub async fn accept_invite(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     invite_hash: &str,
     password_hash: &str,
 ) -> Result<Option<i64>, sqlx::Error> {
-    sqlx::query_scalar(
-        "UPDATE annotators SET password_hash = ?, invite_hash = NULL WHERE invite_hash = ? \
+    on!(conn, |c| {
+        sqlx::query_scalar(
+            "UPDATE annotators SET password_hash = $1, invite_hash = NULL WHERE invite_hash = $2 \
          RETURNING id",
-    )
-    .bind(password_hash)
-    .bind(invite_hash)
-    .fetch_optional(conn)
-    .await
+        )
+        .bind(password_hash)
+        .bind(invite_hash)
+        .fetch_optional(&mut *c)
+        .await
+    })
 }
 
 /// `(annotator, password hash)` of an account that has set its password.
 pub async fn credentials(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     name: &str,
 ) -> Result<Option<(i64, String)>, sqlx::Error> {
-    let row = sqlx::query(
-        "SELECT id, password_hash FROM annotators WHERE name = ? AND password_hash IS NOT NULL",
+    on!(conn, |c| {
+        let row = sqlx::query(
+        "SELECT id, password_hash FROM annotators WHERE name = $1 AND password_hash IS NOT NULL",
     )
     .bind(name)
-    .fetch_optional(conn)
+    .fetch_optional(&mut *c)
     .await?;
-    row.map(|r| Ok((r.try_get("id")?, r.try_get("password_hash")?)))
-        .transpose()
+        row.map(|r| Ok((r.try_get("id")?, r.try_get("password_hash")?)))
+            .transpose()
+    })
 }
 
 pub async fn create_session(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     token_hash: &str,
     annotator: i64,
     csrf_token: &str,
     expires_at_ms: i64,
 ) -> Result<(), sqlx::Error> {
-    sqlx::query(
-        "INSERT INTO sessions (token_hash, annotator, csrf_token, expires_at_ms) VALUES (?, ?, ?, ?)",
+    on!(conn, |c| {
+        sqlx::query(
+        "INSERT INTO sessions (token_hash, annotator, csrf_token, expires_at_ms) VALUES ($1, $2, $3, $4)",
     )
     .bind(token_hash)
     .bind(annotator)
     .bind(csrf_token)
     .bind(expires_at_ms)
-    .execute(conn)
+    .execute(&mut *c)
     .await?;
-    Ok(())
+        Ok(())
+    })
 }
 
 /// The unexpired session with this token hash, and when it expires.
 pub async fn session(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     token_hash: &str,
     now_ms: i64,
 ) -> Result<Option<(Session, i64)>, sqlx::Error> {
-    let row = sqlx::query(
-        "SELECT s.annotator, s.csrf_token, s.expires_at_ms, a.name, a.is_admin FROM sessions s \
-         JOIN annotators a ON a.id = s.annotator WHERE s.token_hash = ? AND s.expires_at_ms > ?",
-    )
-    .bind(token_hash)
-    .bind(now_ms)
-    .fetch_optional(conn)
-    .await?;
-    row.map(|r| {
-        Ok((
-            Session {
-                annotator: r.try_get("annotator")?,
-                name: r.try_get("name")?,
-                is_admin: r.try_get("is_admin")?,
-                csrf_token: r.try_get("csrf_token")?,
-            },
-            r.try_get("expires_at_ms")?,
-        ))
+    on!(conn, |c| {
+        let row = sqlx::query(
+            "SELECT s.annotator, s.csrf_token, s.expires_at_ms, a.name, a.is_admin FROM sessions s \
+         JOIN annotators a ON a.id = s.annotator WHERE s.token_hash = $1 AND s.expires_at_ms > $2",
+        )
+        .bind(token_hash)
+        .bind(now_ms)
+        .fetch_optional(&mut *c)
+        .await?;
+        row.map(|r| {
+            Ok((
+                Session {
+                    annotator: r.try_get("annotator")?,
+                    name: r.try_get("name")?,
+                    is_admin: r.try_get("is_admin")?,
+                    csrf_token: r.try_get("csrf_token")?,
+                },
+                r.try_get("expires_at_ms")?,
+            ))
+        })
+        .transpose()
     })
-    .transpose()
 }
 
 /// Ends a session, and any expired ones while at it.
 pub async fn delete_session(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     token_hash: &str,
     now_ms: i64,
 ) -> Result<(), sqlx::Error> {
-    sqlx::query("DELETE FROM sessions WHERE token_hash = ? OR expires_at_ms <= ?")
-        .bind(token_hash)
-        .bind(now_ms)
-        .execute(conn)
-        .await?;
-    Ok(())
+    on!(conn, |c| {
+        sqlx::query("DELETE FROM sessions WHERE token_hash = $1 OR expires_at_ms <= $2")
+            .bind(token_hash)
+            .bind(now_ms)
+            .execute(&mut *c)
+            .await?;
+        Ok(())
+    })
 }
 
 /// Store ids and kinds of a dataset's items that no annotator has yet, in import order.
 /// Every item of a dataset with its kind, in id order.
 pub async fn dataset_items(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset_id: i64,
 ) -> Result<Vec<SplitItem>, sqlx::Error> {
-    let rows = sqlx::query(
-        "SELECT i.id, i.direction, i.step_length FROM items i WHERE i.dataset_id = ? ORDER BY i.id",
+    on!(conn, |c| {
+        let rows = sqlx::query(
+        "SELECT i.id, i.direction, i.step_length FROM items i WHERE i.dataset_id = $1 ORDER BY i.id",
     )
     .bind(dataset_id)
-    .fetch_all(conn)
+    .fetch_all(&mut *c)
     .await?;
-    rows.iter().map(split_item_from_row).collect()
+        rows.iter().map(split_item_from_row).collect()
+    })
 }
 
-fn split_item_from_row(r: &sqlx::sqlite::SqliteRow) -> Result<SplitItem, sqlx::Error> {
+fn split_item_from_row(r: &impl Fields) -> Result<SplitItem, sqlx::Error> {
     let (direction, step_length) = kind_from_row(r)?;
     Ok(SplitItem {
         item: r.try_get("id")?,
@@ -209,184 +229,195 @@ fn split_item_from_row(r: &sqlx::sqlite::SqliteRow) -> Result<SplitItem, sqlx::E
 }
 
 pub async fn unassigned_items(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset_id: i64,
 ) -> Result<Vec<SplitItem>, sqlx::Error> {
-    let rows = sqlx::query(
-        "SELECT i.id, i.direction, i.step_length FROM items i WHERE i.dataset_id = ? \
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT i.id, i.direction, i.step_length FROM items i WHERE i.dataset_id = $1 \
          AND NOT EXISTS (SELECT 1 FROM assignments a WHERE a.item = i.id) ORDER BY i.id",
-    )
-    .bind(dataset_id)
-    .fetch_all(conn)
-    .await?;
-    rows.iter().map(split_item_from_row).collect()
+        )
+        .bind(dataset_id)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(split_item_from_row).collect()
+    })
 }
 
 /// Store ids of the given item ids of a dataset; ids not in the dataset come back in `Err`.
 pub async fn item_rowids(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset_id: i64,
     item_ids: &[String],
 ) -> Result<Result<Vec<i64>, Vec<String>>, sqlx::Error> {
-    let mut found = Vec::with_capacity(item_ids.len());
-    let mut missing = Vec::new();
-    for id in item_ids {
-        let rowid: Option<i64> =
-            sqlx::query_scalar("SELECT id FROM items WHERE dataset_id = ? AND item_id = ?")
-                .bind(dataset_id)
-                .bind(id)
-                .fetch_optional(&mut *conn)
-                .await?;
-        match rowid {
-            Some(r) => found.push(r),
-            None => missing.push(id.clone()),
+    on!(conn, |c| {
+        let mut found = Vec::with_capacity(item_ids.len());
+        let mut missing = Vec::new();
+        for id in item_ids {
+            let rowid: Option<i64> =
+                sqlx::query_scalar("SELECT id FROM items WHERE dataset_id = $1 AND item_id = $2")
+                    .bind(dataset_id)
+                    .bind(id)
+                    .fetch_optional(&mut *c)
+                    .await?;
+            match rowid {
+                Some(r) => found.push(r),
+                None => missing.push(id.clone()),
+            }
         }
-    }
-    Ok(if missing.is_empty() {
-        Ok(found)
-    } else {
-        Err(missing)
+        Ok(if missing.is_empty() {
+            Ok(found)
+        } else {
+            Err(missing)
+        })
     })
 }
 
 /// Appends `(annotator, item)` pairs to the annotators' queues; pairs already assigned are
 /// left as they are. Returns how many were new. Call inside a transaction.
-pub async fn assign(conn: &mut SqliteConnection, pairs: &[(i64, i64)]) -> Result<u64, sqlx::Error> {
-    let mut added = 0;
-    for &(annotator, item) in pairs {
-        let done = sqlx::query(
-            "INSERT INTO assignments (annotator, item, position) \
-             SELECT ?1, ?2, coalesce(max(position), 0) + 1 FROM assignments WHERE annotator = ?1 \
+pub async fn assign(conn: &mut Conn, pairs: &[(i64, i64)]) -> Result<u64, sqlx::Error> {
+    on!(conn, |c| {
+        let mut added = 0;
+        for &(annotator, item) in pairs {
+            let done = sqlx::query(
+                "INSERT INTO assignments (annotator, item, position) \
+             SELECT $1, $2, coalesce(max(position), 0) + 1 FROM assignments WHERE annotator = $1 \
              ON CONFLICT (annotator, item) DO NOTHING",
-        )
-        .bind(annotator)
-        .bind(item)
-        .execute(&mut *conn)
-        .await?;
-        added += done.rows_affected();
-    }
-    Ok(added)
+            )
+            .bind(annotator)
+            .bind(item)
+            .execute(&mut *c)
+            .await?;
+            added += done.rows_affected();
+        }
+        Ok(added)
+    })
 }
 
 /// An annotator's assigned items in queue order, with where each stands.
-pub async fn queue(
-    conn: &mut SqliteConnection,
-    annotator: i64,
-) -> Result<Vec<QueueEntry>, sqlx::Error> {
-    let rows = sqlx::query(
-        "SELECT d.name AS dataset, i.item_id, i.direction, i.step_length, n.outcome, \
+pub async fn queue(conn: &mut Conn, annotator: i64) -> Result<Vec<QueueEntry>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT d.name AS dataset, i.item_id, i.direction, i.step_length, n.outcome, \
          (dr.item IS NOT NULL) AS started \
          FROM assignments a JOIN items i ON i.id = a.item JOIN datasets d ON d.id = i.dataset_id \
          LEFT JOIN annotations n ON n.annotator = a.annotator AND n.item = a.item \
          LEFT JOIN drafts dr ON dr.annotator = a.annotator AND dr.item = a.item \
-         WHERE a.annotator = ? ORDER BY a.position",
-    )
-    .bind(annotator)
-    .fetch_all(conn)
-    .await?;
-    rows.iter()
-        .map(|r| {
-            let (direction, step_length) = kind_from_row(r)?;
-            let outcome: Option<String> = r.try_get("outcome")?;
-            let started: bool = r.try_get("started")?;
-            let status = match outcome.as_deref() {
-                Some("answered") => QueueStatus::Answered,
-                Some("skipped") => QueueStatus::Skipped,
-                Some("flagged") => QueueStatus::Flagged,
-                Some(other) => return Err(corrupt("outcome", format!("unknown {other:?}"))),
-                None if started => QueueStatus::Started,
-                None => QueueStatus::Todo,
-            };
-            Ok(QueueEntry {
-                dataset: r.try_get("dataset")?,
-                item_id: r.try_get("item_id")?,
-                direction,
-                step_length,
-                status,
+         WHERE a.annotator = $1 ORDER BY a.position",
+        )
+        .bind(annotator)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter()
+            .map(|r| {
+                let (direction, step_length) = kind_from_row(r)?;
+                let outcome: Option<String> = r.try_get("outcome")?;
+                let started: bool = r.try_get("started")?;
+                let status = match outcome.as_deref() {
+                    Some("answered") => QueueStatus::Answered,
+                    Some("skipped") => QueueStatus::Skipped,
+                    Some("flagged") => QueueStatus::Flagged,
+                    Some(other) => return Err(corrupt("outcome", format!("unknown {other:?}"))),
+                    None if started => QueueStatus::Started,
+                    None => QueueStatus::Todo,
+                };
+                Ok(QueueEntry {
+                    dataset: r.try_get("dataset")?,
+                    item_id: r.try_get("item_id")?,
+                    direction,
+                    step_length,
+                    status,
+                })
             })
-        })
-        .collect()
+            .collect()
+    })
 }
 
 /// The annotator's standing on `item` in one query (the item page's hot path), or `None` when
 /// the item is not assigned to them.
 pub async fn assignment_state(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     annotator: i64,
     item: i64,
 ) -> Result<Option<AssignmentState>, sqlx::Error> {
-    let row = sqlx::query(
-        "SELECT (n.item IS NOT NULL) AS finished, d.state, d.started_at_ms, \
+    on!(conn, |c| {
+        let row = sqlx::query(
+            "SELECT (n.item IS NOT NULL) AS finished, d.state, d.started_at_ms, \
          d.first_placement_at_ms FROM assignments a \
          LEFT JOIN annotations n ON n.annotator = a.annotator AND n.item = a.item \
          LEFT JOIN drafts d ON d.annotator = a.annotator AND d.item = a.item \
-         WHERE a.annotator = ?1 AND a.item = ?2",
-    )
-    .bind(annotator)
-    .bind(item)
-    .fetch_optional(conn)
-    .await?;
-    row.map(|r| {
-        let has_draft = r.try_get::<Option<String>, _>("state")?.is_some();
-        Ok(AssignmentState {
-            finished: r.try_get("finished")?,
-            draft: if has_draft {
-                Some(stored_draft(&r)?)
-            } else {
-                None
-            },
+         WHERE a.annotator = $1 AND a.item = $2",
+        )
+        .bind(annotator)
+        .bind(item)
+        .fetch_optional(&mut *c)
+        .await?;
+        row.map(|r| {
+            let has_draft = r.try_get::<Option<String>>("state")?.is_some();
+            Ok(AssignmentState {
+                finished: r.try_get("finished")?,
+                draft: if has_draft {
+                    Some(stored_draft(&r)?)
+                } else {
+                    None
+                },
+            })
         })
+        .transpose()
     })
-    .transpose()
 }
 
 /// The annotator's draft of an item, creating an empty one (which starts the item's clock);
 /// `None` when the item is finished, which leaves no draft behind.
 pub async fn open_draft(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     annotator: i64,
     item: i64,
     empty: &Draft,
     now_ms: i64,
 ) -> Result<Option<StoredDraft>, sqlx::Error> {
-    // Read first: page views are many, and a write would take SQLite's one write lock.
-    if let Some(found) = draft(&mut *conn, annotator, item).await? {
-        return Ok(Some(found));
-    }
-    let json = serde_json::to_string(empty).map_err(|e| corrupt("state", e))?;
-    sqlx::query(
-        "INSERT INTO drafts (annotator, item, slots, state, started_at_ms, updated_at_ms) \
-         SELECT ?1, ?2, '[]', ?3, ?4, ?4 WHERE NOT EXISTS \
-         (SELECT 1 FROM annotations WHERE annotator = ?1 AND item = ?2) \
+    on!(conn, |c| {
+        // Read first: page views are many, and a write would take SQLite's one write lock.
+        if let Some(found) = draft(&mut *c, annotator, item).await? {
+            return Ok(Some(found));
+        }
+        let json = serde_json::to_string(empty).map_err(|e| corrupt("state", e))?;
+        sqlx::query(
+            "INSERT INTO drafts (annotator, item, slots, state, started_at_ms, updated_at_ms) \
+         SELECT $1, $2, '[]', $3, $4, $4 WHERE NOT EXISTS \
+         (SELECT 1 FROM annotations WHERE annotator = $1 AND item = $2) \
          ON CONFLICT (annotator, item) DO NOTHING",
-    )
-    .bind(annotator)
-    .bind(item)
-    .bind(json)
-    .bind(now_ms)
-    .execute(&mut *conn)
-    .await?;
-    draft(conn, annotator, item).await
+        )
+        .bind(annotator)
+        .bind(item)
+        .bind(json)
+        .bind(now_ms)
+        .execute(&mut *c)
+        .await?;
+        draft(&mut *c, annotator, item).await
+    })
 }
 
 pub async fn draft(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     annotator: i64,
     item: i64,
 ) -> Result<Option<StoredDraft>, sqlx::Error> {
-    let row = sqlx::query(
-        "SELECT state, started_at_ms, first_placement_at_ms FROM drafts \
-         WHERE annotator = ? AND item = ?",
-    )
-    .bind(annotator)
-    .bind(item)
-    .fetch_optional(conn)
-    .await?;
-    row.as_ref().map(stored_draft).transpose()
+    on!(conn, |c| {
+        let row = sqlx::query(
+            "SELECT state, started_at_ms, first_placement_at_ms FROM drafts \
+         WHERE annotator = $1 AND item = $2",
+        )
+        .bind(annotator)
+        .bind(item)
+        .fetch_optional(&mut *c)
+        .await?;
+        row.as_ref().map(stored_draft).transpose()
+    })
 }
 
 /// Reads a draft from a row holding `state`, `started_at_ms` and `first_placement_at_ms`.
-fn stored_draft(r: &sqlx::sqlite::SqliteRow) -> Result<StoredDraft, sqlx::Error> {
+fn stored_draft(r: &impl Fields) -> Result<StoredDraft, sqlx::Error> {
     let state: String = r.try_get("state")?;
     Ok(StoredDraft {
         draft: serde_json::from_str(&state).map_err(|e| corrupt("state", e))?,
@@ -399,18 +430,19 @@ fn stored_draft(r: &sqlx::sqlite::SqliteRow) -> Result<StoredDraft, sqlx::Error>
 /// `Ok(false)` when the item is finished: the check and the write are one statement, so a
 /// draft can never outlive the answer that finished its item.
 pub async fn save_draft(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     annotator: i64,
     item: i64,
     draft: &Draft,
     now_ms: i64,
 ) -> Result<bool, sqlx::Error> {
-    let state = serde_json::to_string(draft).map_err(|e| corrupt("state", e))?;
-    let slots = serde_json::to_string(&draft.slots).map_err(|e| corrupt("slots", e))?;
-    let done = sqlx::query(
+    on!(conn, |c| {
+        let state = serde_json::to_string(draft).map_err(|e| corrupt("state", e))?;
+        let slots = serde_json::to_string(&draft.slots).map_err(|e| corrupt("slots", e))?;
+        let done = sqlx::query(
         "INSERT INTO drafts (annotator, item, slots, state, started_at_ms, first_placement_at_ms, \
-         updated_at_ms) SELECT ?1, ?2, ?3, ?4, ?5, CASE WHEN ?6 THEN ?5 END, ?5 \
-         WHERE NOT EXISTS (SELECT 1 FROM annotations WHERE annotator = ?1 AND item = ?2) \
+         updated_at_ms) SELECT $1, $2, $3, $4, $5, CASE WHEN $6 THEN $5 END, $5 \
+         WHERE NOT EXISTS (SELECT 1 FROM annotations WHERE annotator = $1 AND item = $2) \
          ON CONFLICT (annotator, item) DO UPDATE SET slots = excluded.slots, \
          state = excluded.state, updated_at_ms = excluded.updated_at_ms, \
          first_placement_at_ms = coalesce(drafts.first_placement_at_ms, \
@@ -422,32 +454,34 @@ pub async fn save_draft(
     .bind(state)
     .bind(now_ms)
     .bind(draft.has_placement())
-    .execute(conn)
+    .execute(&mut *c)
     .await?;
-    Ok(done.rows_affected() > 0)
+        Ok(done.rows_affected() > 0)
+    })
 }
 
 /// Records a finished item and drops its draft. `Ok(false)` if it was already finished.
 pub async fn finish(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     annotator: i64,
     item: i64,
     outcome: &Outcome,
     telemetry: &Telemetry,
 ) -> Result<bool, sqlx::Error> {
-    let (kind, answer, reason) = match outcome {
-        Outcome::Answered(p) => (
-            "answered",
-            Some(serde_json::to_string(p).map_err(|e| corrupt("answer", e))?),
-            "",
-        ),
-        Outcome::Skipped(r) => ("skipped", None, r.as_str()),
-        Outcome::Flagged(r) => ("flagged", None, r.as_str()),
-    };
-    let done = sqlx::query(
+    on!(conn, |c| {
+        let (kind, answer, reason) = match outcome {
+            Outcome::Answered(p) => (
+                "answered",
+                Some(serde_json::to_string(p).map_err(|e| corrupt("answer", e))?),
+                "",
+            ),
+            Outcome::Skipped(r) => ("skipped", None, r.as_str()),
+            Outcome::Flagged(r) => ("flagged", None, r.as_str()),
+        };
+        let done = sqlx::query(
         "INSERT INTO annotations (annotator, item, outcome, answer, reason, time_on_item_ms, \
          time_to_first_placement_ms, placements, swaps, clears, undos) \
-         VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (annotator, item) DO NOTHING",
+         VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11) ON CONFLICT (annotator, item) DO NOTHING",
     )
     .bind(annotator)
     .bind(item)
@@ -456,18 +490,19 @@ pub async fn finish(
     .bind(reason)
     .bind(telemetry.time_on_item_ms)
     .bind(telemetry.time_to_first_placement_ms)
-    .bind(telemetry.placements)
-    .bind(telemetry.swaps)
-    .bind(telemetry.clears)
-    .bind(telemetry.undos)
-    .execute(&mut *conn)
+    .bind(i64::from(telemetry.placements))
+    .bind(i64::from(telemetry.swaps))
+    .bind(i64::from(telemetry.clears))
+    .bind(i64::from(telemetry.undos))
+    .execute(&mut *c)
     .await?;
-    sqlx::query("DELETE FROM drafts WHERE annotator = ? AND item = ?")
-        .bind(annotator)
-        .bind(item)
-        .execute(conn)
-        .await?;
-    Ok(done.rows_affected() == 1)
+        sqlx::query("DELETE FROM drafts WHERE annotator = $1 AND item = $2")
+            .bind(annotator)
+            .bind(item)
+            .execute(&mut *c)
+            .await?;
+        Ok(done.rows_affected() == 1)
+    })
 }
 
 /// One finished item as stored (for the annotator's own view and for admins).
@@ -489,7 +524,13 @@ const ANNOTATION_SELECT: &str = "SELECT a.name AS annotator, d.name AS dataset, 
      JOIN annotators a ON a.id = n.annotator JOIN items i ON i.id = n.item \
      JOIN datasets d ON d.id = i.dataset_id";
 
-fn annotation_from_row(r: &sqlx::sqlite::SqliteRow) -> Result<StoredAnnotation, sqlx::Error> {
+/// A counter column (stored as a 64-bit integer) as the `u32` telemetry keeps.
+fn count_column(r: &impl Fields, column: &str) -> Result<u32, sqlx::Error> {
+    let n: i64 = r.try_get(column)?;
+    u32::try_from(n).map_err(|e| corrupt(column, e))
+}
+
+fn annotation_from_row(r: &impl Fields) -> Result<StoredAnnotation, sqlx::Error> {
     let answer: Option<String> = r.try_get("answer")?;
     Ok(StoredAnnotation {
         annotator: r.try_get("annotator")?,
@@ -503,10 +544,10 @@ fn annotation_from_row(r: &sqlx::sqlite::SqliteRow) -> Result<StoredAnnotation, 
         telemetry: Telemetry {
             time_on_item_ms: r.try_get("time_on_item_ms")?,
             time_to_first_placement_ms: r.try_get("time_to_first_placement_ms")?,
-            placements: r.try_get("placements")?,
-            swaps: r.try_get("swaps")?,
-            clears: r.try_get("clears")?,
-            undos: r.try_get("undos")?,
+            placements: count_column(r, "placements")?,
+            swaps: count_column(r, "swaps")?,
+            clears: count_column(r, "clears")?,
+            undos: count_column(r, "undos")?,
         },
         finished_at: r.try_get("finished_at")?,
     })
@@ -514,66 +555,72 @@ fn annotation_from_row(r: &sqlx::sqlite::SqliteRow) -> Result<StoredAnnotation, 
 
 /// An annotator's own finished item.
 pub async fn annotation(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     annotator: i64,
     item: i64,
 ) -> Result<Option<StoredAnnotation>, sqlx::Error> {
-    let row = sqlx::query(&format!(
-        "{ANNOTATION_SELECT} WHERE n.annotator = ? AND n.item = ?"
-    ))
-    .bind(annotator)
-    .bind(item)
-    .fetch_optional(conn)
-    .await?;
-    row.as_ref().map(annotation_from_row).transpose()
+    on!(conn, |c| {
+        let row = sqlx::query(&format!(
+            "{ANNOTATION_SELECT} WHERE n.annotator = $1 AND n.item = $2"
+        ))
+        .bind(annotator)
+        .bind(item)
+        .fetch_optional(&mut *c)
+        .await?;
+        row.as_ref().map(annotation_from_row).transpose()
+    })
 }
 
 /// Skipped and flagged items with their reasons, newest first.
-pub async fn flags(conn: &mut SqliteConnection) -> Result<Vec<StoredAnnotation>, sqlx::Error> {
-    let rows = sqlx::query(&format!(
-        "{ANNOTATION_SELECT} WHERE n.outcome IN ('skipped', 'flagged') \
+pub async fn flags(conn: &mut Conn) -> Result<Vec<StoredAnnotation>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(&format!(
+            "{ANNOTATION_SELECT} WHERE n.outcome IN ('skipped', 'flagged') \
          ORDER BY n.finished_at DESC, i.item_id"
-    ))
-    .fetch_all(conn)
-    .await?;
-    rows.iter().map(annotation_from_row).collect()
+        ))
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(annotation_from_row).collect()
+    })
 }
 
 /// Answered items of a dataset with what scoring needs, in the order they were finished.
 pub async fn human_answers(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset_id: i64,
 ) -> Result<Vec<HumanAnswer>, sqlx::Error> {
-    human_answers_of(conn, dataset_id, None).await
+    on!(conn, |c| {
+        human_answers_of(&mut *c, dataset_id, None).await
+    })
 }
 
 /// The submitted answers on a dataset, of one annotator when `annotator` names one.
 pub async fn human_answers_of(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset_id: i64,
     annotator: Option<i64>,
 ) -> Result<Vec<HumanAnswer>, sqlx::Error> {
-    let rows = sqlx::query(
-        "SELECT i.item_id, i.direction, i.step_length, i.gt_answer, n.answer, s.signatures \
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT i.item_id, i.direction, i.step_length, i.gt_answer, n.answer, s.signatures \
          FROM annotations n JOIN items i ON i.id = n.item \
          LEFT JOIN item_signatures s ON s.item = i.id \
-         WHERE i.dataset_id = ? AND n.outcome = 'answered' \
-         AND (? IS NULL OR n.annotator = ?) \
+         WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
+         AND ($2 IS NULL OR n.annotator = $3) \
          ORDER BY n.finished_at, i.id, n.annotator",
-    )
-    .bind(dataset_id)
-    .bind(annotator)
-    .bind(annotator)
-    .fetch_all(conn)
-    .await?;
-    rows.iter().map(human_answer_from_row).collect()
+        )
+        .bind(dataset_id)
+        .bind(annotator)
+        .bind(annotator)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(human_answer_from_row).collect()
+    })
 }
 
 /// A human answer from a row holding the item's `direction`, `step_length`, `gt_answer` and
 /// `signatures`, and the annotation's `answer`.
-pub(crate) fn human_answer_from_row(
-    r: &sqlx::sqlite::SqliteRow,
-) -> Result<HumanAnswer, sqlx::Error> {
+pub(crate) fn human_answer_from_row(r: &impl Fields) -> Result<HumanAnswer, sqlx::Error> {
     let (direction, step_length) = kind_from_row(r)?;
     let permutation = |column: &str| -> Result<Permutation, sqlx::Error> {
         let text: String = r.try_get(column)?;
@@ -594,64 +641,69 @@ pub(crate) fn human_answer_from_row(
 
 /// Per annotator: assigned, finished and answered items.
 pub async fn progress_by_annotator(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
 ) -> Result<Vec<(i64, i64, i64, i64)>, sqlx::Error> {
-    let rows = sqlx::query(
-        "SELECT a.annotator, count(*) AS assigned, count(n.item) AS finished, \
-         sum(n.outcome = 'answered') AS answered FROM assignments a \
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT a.annotator, count(*) AS assigned, count(n.item) AS finished, \
+         CAST(sum(CASE WHEN n.outcome = 'answered' THEN 1 ELSE 0 END) AS BIGINT) AS answered FROM assignments a \
          LEFT JOIN annotations n ON n.annotator = a.annotator AND n.item = a.item \
          GROUP BY a.annotator",
-    )
-    .fetch_all(conn)
-    .await?;
-    rows.iter()
-        .map(|r| {
-            Ok((
-                r.try_get("annotator")?,
-                r.try_get("assigned")?,
-                r.try_get("finished")?,
-                r.try_get::<Option<i64>, _>("answered")?.unwrap_or(0),
-            ))
-        })
-        .collect()
+        )
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter()
+            .map(|r| {
+                Ok((
+                    r.try_get("annotator")?,
+                    r.try_get("assigned")?,
+                    r.try_get("finished")?,
+                    r.try_get::<Option<i64>>("answered")?.unwrap_or(0),
+                ))
+            })
+            .collect()
+    })
 }
 
 /// Stores a single-use login link for `annotator`.
 pub async fn insert_login_link(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     hash: &str,
     annotator: i64,
 ) -> Result<(), sqlx::Error> {
-    sqlx::query("INSERT INTO login_links (hash, annotator) VALUES (?, ?)")
-        .bind(hash)
-        .bind(annotator)
-        .execute(conn)
-        .await
-        .map(|_| ())
+    on!(conn, |c| {
+        sqlx::query("INSERT INTO login_links (hash, annotator) VALUES ($1, $2)")
+            .bind(hash)
+            .bind(annotator)
+            .execute(&mut *c)
+            .await
+            .map(|_| ())
+    })
 }
 
 /// Uses a login link up: the annotator it was for, if it existed.
-pub async fn take_login_link(
-    conn: &mut SqliteConnection,
-    hash: &str,
-) -> Result<Option<i64>, sqlx::Error> {
-    sqlx::query_scalar("DELETE FROM login_links WHERE hash = ? RETURNING annotator")
-        .bind(hash)
-        .fetch_optional(conn)
-        .await
+pub async fn take_login_link(conn: &mut Conn, hash: &str) -> Result<Option<i64>, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_scalar("DELETE FROM login_links WHERE hash = $1 RETURNING annotator")
+            .bind(hash)
+            .fetch_optional(&mut *c)
+            .await
+    })
 }
 
 /// `(answers, distinct items, distinct annotators)` of the submitted answers on a dataset.
 pub async fn human_coverage(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset_id: i64,
 ) -> Result<(i64, i64, i64), sqlx::Error> {
-    sqlx::query_as(
-        "SELECT count(*), count(DISTINCT n.item), count(DISTINCT n.annotator) \
+    on!(conn, |c| {
+        sqlx::query_as(
+            "SELECT count(*), count(DISTINCT n.item), count(DISTINCT n.annotator) \
          FROM annotations n JOIN items i ON i.id = n.item \
-         WHERE i.dataset_id = ? AND n.outcome = 'answered'",
-    )
-    .bind(dataset_id)
-    .fetch_one(conn)
-    .await
+         WHERE i.dataset_id = $1 AND n.outcome = 'answered'",
+        )
+        .bind(dataset_id)
+        .fetch_one(&mut *c)
+        .await
+    })
 }

@@ -2,8 +2,8 @@
 
 use std::collections::BTreeMap;
 
+use super::db::{Conn, Fields, on};
 use serde::Serialize;
-use sqlx::{Row, SqliteConnection};
 
 use crate::core::dataset::{Direction, StepLength};
 
@@ -43,7 +43,7 @@ pub struct DatasetOverview {
     pub tasks: i64,
 }
 
-fn dataset_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<Dataset, sqlx::Error> {
+fn dataset_from_row(row: &impl Fields) -> Result<Dataset, sqlx::Error> {
     Ok(Dataset {
         id: row.try_get("id")?,
         name: row.try_get("name")?,
@@ -52,93 +52,92 @@ fn dataset_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<Dataset, sqlx::Erro
     })
 }
 
-pub async fn by_name(
-    conn: &mut SqliteConnection,
-    name: &str,
-) -> Result<Option<Dataset>, sqlx::Error> {
-    let row = sqlx::query("SELECT id, name, created_at, source FROM datasets WHERE name = ?")
-        .bind(name)
-        .fetch_optional(conn)
-        .await?;
-    row.as_ref().map(dataset_from_row).transpose()
+pub async fn by_name(conn: &mut Conn, name: &str) -> Result<Option<Dataset>, sqlx::Error> {
+    on!(conn, |c| {
+        let row = sqlx::query("SELECT id, name, created_at, source FROM datasets WHERE name = $1")
+            .bind(name)
+            .fetch_optional(&mut *c)
+            .await?;
+        row.as_ref().map(dataset_from_row).transpose()
+    })
 }
 
 /// Returns the dataset's id, creating it if needed, and records where it was imported from.
-pub async fn ensure(
-    conn: &mut SqliteConnection,
-    name: &str,
-    source: &str,
-) -> Result<i64, sqlx::Error> {
-    sqlx::query(
-        "INSERT INTO datasets (name, source) VALUES (?, ?) \
+pub async fn ensure(conn: &mut Conn, name: &str, source: &str) -> Result<i64, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query(
+            "INSERT INTO datasets (name, source) VALUES ($1, $2) \
          ON CONFLICT (name) DO UPDATE SET source = excluded.source",
-    )
-    .bind(name)
-    .bind(source)
-    .execute(&mut *conn)
-    .await?;
-    sqlx::query_scalar("SELECT id FROM datasets WHERE name = ?")
+        )
         .bind(name)
-        .fetch_one(conn)
-        .await
+        .bind(source)
+        .execute(&mut *c)
+        .await?;
+        sqlx::query_scalar("SELECT id FROM datasets WHERE name = $1")
+            .bind(name)
+            .fetch_one(&mut *c)
+            .await
+    })
 }
 
 /// Every dataset with its item counts, by name.
-pub async fn overview(conn: &mut SqliteConnection) -> Result<Vec<DatasetOverview>, sqlx::Error> {
-    let rows = sqlx::query("SELECT id, name, created_at, source FROM datasets ORDER BY name")
-        .fetch_all(&mut *conn)
-        .await?;
-    let mut out = Vec::with_capacity(rows.len());
-    for row in &rows {
-        let dataset = dataset_from_row(row)?;
-        let items = counts(conn, dataset.id).await?;
-        let tasks: i64 =
-            sqlx::query_scalar("SELECT count(DISTINCT task_name) FROM items WHERE dataset_id = ?")
-                .bind(dataset.id)
-                .fetch_one(&mut *conn)
-                .await?;
-        out.push(DatasetOverview {
-            dataset,
-            items,
-            tasks,
-        });
-    }
-    Ok(out)
+pub async fn overview(conn: &mut Conn) -> Result<Vec<DatasetOverview>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query("SELECT id, name, created_at, source FROM datasets ORDER BY name")
+            .fetch_all(&mut *c)
+            .await?;
+        let mut out = Vec::with_capacity(rows.len());
+        for row in &rows {
+            let dataset = dataset_from_row(row)?;
+            let items = counts(&mut *c, dataset.id).await?;
+            let tasks: i64 = sqlx::query_scalar(
+                "SELECT count(DISTINCT task_name) FROM items WHERE dataset_id = $1",
+            )
+            .bind(dataset.id)
+            .fetch_one(&mut *c)
+            .await?;
+            out.push(DatasetOverview {
+                dataset,
+                items,
+                tasks,
+            });
+        }
+        Ok(out)
+    })
 }
 
-pub async fn counts(
-    conn: &mut SqliteConnection,
-    dataset_id: i64,
-) -> Result<ItemCounts, sqlx::Error> {
-    let rows = sqlx::query(
-        "SELECT direction, step_length, count(*) AS n FROM items WHERE dataset_id = ? \
+pub async fn counts(conn: &mut Conn, dataset_id: i64) -> Result<ItemCounts, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT direction, step_length, count(*) AS n FROM items WHERE dataset_id = $1 \
          GROUP BY direction, step_length",
-    )
-    .bind(dataset_id)
-    .fetch_all(conn)
-    .await?;
-    let mut counts = ItemCounts::default();
-    for row in rows {
-        let direction: String = row.try_get("direction")?;
-        let step_length: i64 = row.try_get("step_length")?;
-        let n: i64 = row.try_get("n")?;
-        let (Some(direction), Some(step_length)) = (
-            Direction::parse(&direction),
-            usize::try_from(step_length).ok().and_then(StepLength::new),
-        ) else {
-            // The CHECK constraints make this unreachable for rows written by this program.
-            continue;
-        };
-        counts.total += n;
-        match direction {
-            Direction::Forward => counts.forward += n,
-            Direction::Inverse => counts.inverse += n,
+        )
+        .bind(dataset_id)
+        .fetch_all(&mut *c)
+        .await?;
+        let mut counts = ItemCounts::default();
+        for row in rows {
+            let direction: String = row.try_get("direction")?;
+            let step_length: i64 = row.try_get("step_length")?;
+            let n: i64 = row.try_get("n")?;
+            let (Some(direction), Some(step_length)) = (
+                Direction::parse(&direction),
+                usize::try_from(step_length).ok().and_then(StepLength::new),
+            ) else {
+                // The CHECK constraints make this unreachable for rows written by this program.
+                continue;
+            };
+            counts.total += n;
+            match direction {
+                Direction::Forward => counts.forward += n,
+                Direction::Inverse => counts.inverse += n,
+            }
+            counts
+                .by_kind
+                .entry(direction)
+                .or_default()
+                .insert(step_length, n);
         }
-        counts
-            .by_kind
-            .entry(direction)
-            .or_default()
-            .insert(step_length, n);
-    }
-    Ok(counts)
+        Ok(counts)
+    })
 }

@@ -1,22 +1,27 @@
-//! SQLite storage: connection setup, migrations, and the queries the rest of the app runs.
+//! Storage in SQLite or PostgreSQL: connection setup, migrations, and the queries the rest of
+//! the app runs.
 //!
-//! Functions take a `&mut SqliteConnection` (a pooled connection or an open transaction), so a
-//! caller that writes several rows decides where the transaction begins and ends.
+//! Functions take a [`Conn`] (a pooled connection or an open transaction of either database),
+//! so a caller that writes several rows decides where the transaction begins and ends. Each
+//! query is written once, with `$1` placeholders, for both databases ([`db`]).
 
 pub mod accounts;
 pub mod agreement;
 pub mod annotations;
 pub mod audit;
 pub mod datasets;
+pub mod db;
 pub mod frames;
 pub mod items;
 pub mod studies;
 pub mod submissions;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::Duration;
 
+pub use db::{Conn, Pool, PooledConn, Tx};
+use db::{Fields, on};
 use sqlx::SqlitePool;
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
 
@@ -68,23 +73,65 @@ pub async fn open_with_page_cache(
         .test_before_acquire(false)
         .connect_with(options)
         .await?;
-    sqlx::migrate!("./migrations").run(&pool).await?;
+    sqlx::migrate!("./migrations/sqlite").run(&pool).await?;
     Ok(pool)
 }
 
+/// Where a database is, as a command line or the environment names it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Location {
+    /// A SQLite file: a plain path, or `sqlite://path`.
+    Sqlite(PathBuf),
+    /// A PostgreSQL URL: `postgres://` or `postgresql://`.
+    Postgres(String),
+}
+
+impl Location {
+    pub fn of(location: &Path) -> Location {
+        let text = location.to_string_lossy();
+        if text.starts_with("postgres://") || text.starts_with("postgresql://") {
+            Location::Postgres(text.into_owned())
+        } else if let Some(path) = text.strip_prefix("sqlite://") {
+            Location::Sqlite(PathBuf::from(path))
+        } else {
+            Location::Sqlite(location.to_path_buf())
+        }
+    }
+
+    /// A PostgreSQL URL with its password replaced by `***`, for messages and logs.
+    pub fn redacted(url: &str) -> String {
+        match url::Url::parse(url) {
+            Ok(mut parsed) if parsed.password().is_some() => {
+                let _ = parsed.set_password(Some("***"));
+                parsed.to_string()
+            }
+            _ => url.to_owned(),
+        }
+    }
+
+    /// Whether the database is a file that can be looked for on disk.
+    pub fn is_file(&self) -> bool {
+        matches!(self, Location::Sqlite(_))
+    }
+}
+
 /// The content generation: changes whenever stored items change.
-pub async fn content_generation(conn: &mut sqlx::SqliteConnection) -> Result<i64, sqlx::Error> {
-    sqlx::query_scalar("SELECT value FROM content_generation WHERE id = 1")
-        .fetch_one(conn)
-        .await
+pub async fn content_generation(conn: &mut Conn) -> Result<i64, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_scalar("SELECT value FROM content_generation WHERE id = 1")
+            .fetch_one(&mut *c)
+            .await
+    })
 }
 
 /// Marks stored items as changed; call inside the transaction that changes them.
-pub async fn bump_content_generation(conn: &mut sqlx::SqliteConnection) -> Result<(), sqlx::Error> {
-    sqlx::query("UPDATE content_generation SET value = value + 1 WHERE id = 1")
-        .execute(conn)
-        .await?;
-    Ok(())
+pub async fn bump_content_generation(conn: &mut Conn) -> Result<(), sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query("UPDATE content_generation SET value = value + 1 WHERE id = 1")
+            .execute(&mut *c)
+            .await?;
+        Ok(())
+    })
 }
 
 /// A column that holds something this version cannot read, as a decode error naming it.
@@ -97,7 +144,7 @@ pub(crate) fn corrupt(column: &str, detail: impl std::fmt::Display) -> sqlx::Err
 
 /// The `direction` and `step_length` columns of an item row.
 pub(crate) fn kind_from_row(
-    row: &sqlx::sqlite::SqliteRow,
+    row: &impl Fields,
 ) -> Result<
     (
         crate::core::dataset::Direction,
@@ -105,7 +152,6 @@ pub(crate) fn kind_from_row(
     ),
     sqlx::Error,
 > {
-    use sqlx::Row;
     let direction: String = row.try_get("direction")?;
     let step_length: i64 = row.try_get("step_length")?;
     Ok((
@@ -119,8 +165,12 @@ pub(crate) fn kind_from_row(
 }
 
 /// Copies the write-ahead log into the database and cuts the log file to nothing (waiting,
-/// under the busy timeout, for readers still using it). Returns whether it could.
-pub async fn truncate_wal(pool: &SqlitePool) -> Result<bool, sqlx::Error> {
+/// under the busy timeout, for readers still using it). Returns whether it could; PostgreSQL
+/// has no such file and always can.
+pub async fn truncate_wal(pool: &Pool) -> Result<bool, sqlx::Error> {
+    let Some(pool) = pool.sqlite() else {
+        return Ok(true);
+    };
     // The row is (busy, pages in the log, pages checkpointed); busy = 1 when it could not.
     let (busy, _, _): (i64, i64, i64) = sqlx::query_as("PRAGMA wal_checkpoint(TRUNCATE)")
         .fetch_one(pool)
@@ -129,8 +179,11 @@ pub async fn truncate_wal(pool: &SqlitePool) -> Result<bool, sqlx::Error> {
 }
 
 /// One round trip to the database.
-pub async fn ping(pool: &SqlitePool) -> Result<(), sqlx::Error> {
-    sqlx::query("SELECT 1").execute(pool).await?;
+pub async fn ping(pool: &Pool) -> Result<(), sqlx::Error> {
+    let mut conn = pool.acquire().await?;
+    on!(&mut conn, |c| {
+        sqlx::query("SELECT 1").execute(&mut *c).await?;
+    });
     Ok(())
 }
 
@@ -138,37 +191,41 @@ pub async fn ping(pool: &SqlitePool) -> Result<(), sqlx::Error> {
 /// carry the enum and the column's CHECK constraint stays the one list of spellings on disk.
 macro_rules! text_column {
     ($($ty:ty),* $(,)?) => {$(
-        impl sqlx::Type<sqlx::Sqlite> for $ty {
-            fn type_info() -> sqlx::sqlite::SqliteTypeInfo {
-                <str as sqlx::Type<sqlx::Sqlite>>::type_info()
+        text_column!(@in sqlx::Sqlite, $ty);
+        text_column!(@in sqlx::Postgres, $ty);
+    )*};
+    (@in $db:ty, $ty:ty) => {
+        impl sqlx::Type<$db> for $ty {
+            fn type_info() -> <$db as sqlx::Database>::TypeInfo {
+                <str as sqlx::Type<$db>>::type_info()
             }
 
-            fn compatible(ty: &sqlx::sqlite::SqliteTypeInfo) -> bool {
-                <str as sqlx::Type<sqlx::Sqlite>>::compatible(ty)
+            fn compatible(ty: &<$db as sqlx::Database>::TypeInfo) -> bool {
+                <str as sqlx::Type<$db>>::compatible(ty)
             }
         }
 
-        impl<'q> sqlx::Encode<'q, sqlx::Sqlite> for $ty {
+        impl<'q> sqlx::Encode<'q, $db> for $ty {
             fn encode_by_ref(
                 &self,
-                buf: &mut Vec<sqlx::sqlite::SqliteArgumentValue<'q>>,
+                buf: &mut <$db as sqlx::Database>::ArgumentBuffer<'q>,
             ) -> Result<sqlx::encode::IsNull, sqlx::error::BoxDynError> {
-                let text: &'q str = self.as_str();
-                <&str as sqlx::Encode<'q, sqlx::Sqlite>>::encode(text, buf)
+                let text: &'static str = self.as_str();
+                <&str as sqlx::Encode<'q, $db>>::encode(text, buf)
             }
         }
 
-        impl<'r> sqlx::Decode<'r, sqlx::Sqlite> for $ty {
+        impl<'r> sqlx::Decode<'r, $db> for $ty {
             fn decode(
-                value: sqlx::sqlite::SqliteValueRef<'r>,
+                value: <$db as sqlx::Database>::ValueRef<'r>,
             ) -> Result<Self, sqlx::error::BoxDynError> {
-                let text = <&str as sqlx::Decode<'r, sqlx::Sqlite>>::decode(value)?;
+                let text = <&str as sqlx::Decode<'r, $db>>::decode(value)?;
                 <$ty>::parse(text).ok_or_else(|| {
                     format!("unknown {} {text:?}", stringify!($ty)).into()
                 })
             }
         }
-    )*};
+    };
 }
 
 text_column!(
@@ -179,14 +236,14 @@ text_column!(
     crate::core::verifier::ScoringPolicy,
 );
 
-/// Writes a consistent copy of the whole database to `out` (`VACUUM INTO`): one read
+/// Writes a consistent copy of the whole SQLite database to `out` (`VACUUM INTO`): one read
 /// transaction, so writers carry on and the copy holds exactly what was committed when it
 /// began. `out` must not exist.
 pub async fn backup_into(conn: &mut sqlx::SqliteConnection, out: &Path) -> Result<(), sqlx::Error> {
     let target = out
         .to_str()
         .ok_or_else(|| sqlx::Error::Protocol(format!("{} is not a UTF-8 path", out.display())))?;
-    sqlx::query("VACUUM INTO ?")
+    sqlx::query("VACUUM INTO $1")
         .bind(target)
         .execute(conn)
         .await

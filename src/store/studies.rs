@@ -1,6 +1,6 @@
 //! Rows of studies and their variants.
 
-use sqlx::{Row, SqliteConnection};
+use super::db::{Conn, Fields, on};
 
 use crate::core::study::VariantSpec;
 
@@ -18,114 +18,119 @@ pub struct StudyRow {
 
 /// Writes a study and its variants (`dataset id` beside each); `None` when the name is taken.
 pub async fn insert(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     name: &str,
     baseline: i64,
     created_by: &str,
     variants: &[(VariantSpec, i64)],
 ) -> Result<Option<i64>, sqlx::Error> {
-    let inserted = sqlx::query("INSERT INTO studies (name, baseline, created_by) VALUES (?, ?, ?)")
+    on!(conn, |c| {
+        let inserted = sqlx::query_scalar(
+            "INSERT INTO studies (name, baseline, created_by) VALUES ($1, $2, $3) RETURNING id",
+        )
         .bind(name)
         .bind(baseline)
         .bind(created_by)
-        .execute(&mut *conn)
+        .fetch_one(&mut *c)
         .await;
-    let id = match inserted {
-        Ok(done) => done.last_insert_rowid(),
-        Err(sqlx::Error::Database(e)) if e.is_unique_violation() => return Ok(None),
-        Err(e) => return Err(e),
-    };
-    for (position, (spec, dataset)) in variants.iter().enumerate() {
-        sqlx::query(
-            "INSERT INTO study_variants (study, position, family, label, dataset) \
-             VALUES (?, ?, ?, ?, ?)",
-        )
-        .bind(id)
-        .bind(position as i64)
-        .bind(&spec.family)
-        .bind(&spec.label)
-        .bind(dataset)
-        .execute(&mut *conn)
-        .await?;
-    }
-    Ok(Some(id))
+        let id: i64 = match inserted {
+            Ok(id) => id,
+            Err(sqlx::Error::Database(e)) if e.is_unique_violation() => return Ok(None),
+            Err(e) => return Err(e),
+        };
+        for (position, (spec, dataset)) in variants.iter().enumerate() {
+            sqlx::query(
+                "INSERT INTO study_variants (study, position, family, label, dataset) \
+             VALUES ($1, $2, $3, $4, $5)",
+            )
+            .bind(id)
+            .bind(position as i64)
+            .bind(&spec.family)
+            .bind(&spec.label)
+            .bind(dataset)
+            .execute(&mut *c)
+            .await?;
+        }
+        Ok(Some(id))
+    })
 }
 
-async fn variants_of(
-    conn: &mut SqliteConnection,
-    study: i64,
-) -> Result<Vec<(VariantSpec, i64)>, sqlx::Error> {
-    let rows = sqlx::query(
-        "SELECT v.family, v.label, d.name, d.id FROM study_variants v \
-         JOIN datasets d ON d.id = v.dataset WHERE v.study = ? ORDER BY v.position",
-    )
-    .bind(study)
-    .fetch_all(conn)
-    .await?;
-    rows.iter()
-        .map(|row| {
-            Ok((
-                VariantSpec {
-                    family: row.try_get(0)?,
-                    label: row.try_get(1)?,
-                    dataset: row.try_get(2)?,
-                },
-                row.try_get(3)?,
-            ))
-        })
-        .collect()
+async fn variants_of(conn: &mut Conn, study: i64) -> Result<Vec<(VariantSpec, i64)>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT v.family, v.label, d.name, d.id FROM study_variants v \
+         JOIN datasets d ON d.id = v.dataset WHERE v.study = $1 ORDER BY v.position",
+        )
+        .bind(study)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter()
+            .map(|row| {
+                Ok((
+                    VariantSpec {
+                        family: row.try_get("family")?,
+                        label: row.try_get("label")?,
+                        dataset: row.try_get("name")?,
+                    },
+                    row.try_get("id")?,
+                ))
+            })
+            .collect()
+    })
 }
 
 const STUDY_COLUMNS: &str = "s.id, s.name, d.name AS baseline_name, d.id AS baseline_id, \
     s.created_at, s.created_by FROM studies s JOIN datasets d ON d.id = s.baseline";
 
-async fn from_row(
-    conn: &mut SqliteConnection,
-    row: &sqlx::sqlite::SqliteRow,
-) -> Result<StudyRow, sqlx::Error> {
-    let id: i64 = row.try_get("id")?;
-    Ok(StudyRow {
-        id,
-        name: row.try_get("name")?,
-        baseline: row.try_get("baseline_name")?,
-        baseline_id: row.try_get("baseline_id")?,
-        created_at: row.try_get("created_at")?,
-        created_by: row.try_get("created_by")?,
-        variants: variants_of(conn, id).await?,
+async fn from_row(conn: &mut Conn, row: &impl Fields) -> Result<StudyRow, sqlx::Error> {
+    on!(conn, |c| {
+        let id: i64 = row.try_get("id")?;
+        Ok(StudyRow {
+            id,
+            name: row.try_get("name")?,
+            baseline: row.try_get("baseline_name")?,
+            baseline_id: row.try_get("baseline_id")?,
+            created_at: row.try_get("created_at")?,
+            created_by: row.try_get("created_by")?,
+            variants: variants_of(&mut *c, id).await?,
+        })
     })
 }
 
-pub async fn by_name(
-    conn: &mut SqliteConnection,
-    name: &str,
-) -> Result<Option<StudyRow>, sqlx::Error> {
-    let row = sqlx::query(&format!("SELECT {STUDY_COLUMNS} WHERE s.name = ?"))
-        .bind(name)
-        .fetch_optional(&mut *conn)
-        .await?;
-    match row {
-        Some(row) => Ok(Some(from_row(conn, &row).await?)),
-        None => Ok(None),
-    }
+pub async fn by_name(conn: &mut Conn, name: &str) -> Result<Option<StudyRow>, sqlx::Error> {
+    on!(conn, |c| {
+        let row = sqlx::query(&format!("SELECT {STUDY_COLUMNS} WHERE s.name = $1"))
+            .bind(name)
+            .fetch_optional(&mut *c)
+            .await?;
+        match row {
+            Some(row) => Ok(Some(from_row(&mut *c, &row).await?)),
+            None => Ok(None),
+        }
+    })
 }
 
 /// Every study, by name.
-pub async fn list(conn: &mut SqliteConnection) -> Result<Vec<StudyRow>, sqlx::Error> {
-    let rows = sqlx::query(&format!("SELECT {STUDY_COLUMNS} ORDER BY s.name"))
-        .fetch_all(&mut *conn)
-        .await?;
-    let mut studies = Vec::with_capacity(rows.len());
-    for row in &rows {
-        studies.push(from_row(conn, row).await?);
-    }
-    Ok(studies)
+pub async fn list(conn: &mut Conn) -> Result<Vec<StudyRow>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(&format!("SELECT {STUDY_COLUMNS} ORDER BY s.name"))
+            .fetch_all(&mut *c)
+            .await?;
+        let mut studies = Vec::with_capacity(rows.len());
+        for row in &rows {
+            studies.push(from_row(&mut *c, row).await?);
+        }
+        Ok(studies)
+    })
 }
 
 /// Deletes a study (its variants go with it); whether it existed.
-pub async fn delete(conn: &mut SqliteConnection, name: &str) -> Result<bool, sqlx::Error> {
-    let done = sqlx::query("DELETE FROM studies WHERE name = ?")
-        .bind(name)
-        .execute(conn)
-        .await?;
-    Ok(done.rows_affected() > 0)
+pub async fn delete(conn: &mut Conn, name: &str) -> Result<bool, sqlx::Error> {
+    on!(conn, |c| {
+        let done = sqlx::query("DELETE FROM studies WHERE name = $1")
+            .bind(name)
+            .execute(&mut *c)
+            .await?;
+        Ok(done.rows_affected() > 0)
+    })
 }

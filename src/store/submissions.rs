@@ -1,6 +1,8 @@
 //! Submissions, their per-item verdicts, and the per-dataset answer visibility.
 
-use sqlx::{QueryBuilder, Row, Sqlite, SqliteConnection};
+use sqlx::QueryBuilder;
+
+use super::db::{Conn, Fields, on};
 
 use super::{corrupt, kind_from_row};
 use crate::core::dataset::{AnswerVisibility, Direction, StepLength};
@@ -10,32 +12,36 @@ use crate::core::submission::{
 use crate::core::verifier::{ScoringPolicy, StrictOutcome};
 
 pub async fn answer_visibility(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset: i64,
 ) -> Result<AnswerVisibility, sqlx::Error> {
-    let answers: Option<AnswerVisibility> =
-        sqlx::query_scalar("SELECT answers FROM dataset_settings WHERE dataset = ?")
-            .bind(dataset)
-            .fetch_optional(conn)
-            .await?;
-    // A dataset without a setting keeps its answers hidden.
-    Ok(answers.unwrap_or(AnswerVisibility::Hidden))
+    on!(conn, |c| {
+        let answers: Option<AnswerVisibility> =
+            sqlx::query_scalar("SELECT answers FROM dataset_settings WHERE dataset = $1")
+                .bind(dataset)
+                .fetch_optional(&mut *c)
+                .await?;
+        // A dataset without a setting keeps its answers hidden.
+        Ok(answers.unwrap_or(AnswerVisibility::Hidden))
+    })
 }
 
 pub async fn set_answer_visibility(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset: i64,
     answers: AnswerVisibility,
 ) -> Result<(), sqlx::Error> {
-    sqlx::query(
-        "INSERT INTO dataset_settings (dataset, answers) VALUES (?, ?) \
+    on!(conn, |c| {
+        sqlx::query(
+            "INSERT INTO dataset_settings (dataset, answers) VALUES ($1, $2) \
          ON CONFLICT (dataset) DO UPDATE SET answers = excluded.answers",
-    )
-    .bind(dataset)
-    .bind(answers)
-    .execute(conn)
-    .await?;
-    Ok(())
+        )
+        .bind(dataset)
+        .bind(answers)
+        .execute(&mut *c)
+        .await?;
+        Ok(())
+    })
 }
 
 /// A stored submission.
@@ -65,7 +71,7 @@ const SUBMISSION_COLUMNS: &str = "s.id, s.dataset, d.name AS dataset_name, s.acc
     s.status, s.visibility, s.baseline, s.scores, s.created_at, s.body_sha256 \
     FROM submissions s JOIN datasets d ON d.id = s.dataset JOIN accounts a ON a.id = s.account";
 
-fn submission_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<SubmissionRow, sqlx::Error> {
+fn submission_from_row(row: &impl Fields) -> Result<SubmissionRow, sqlx::Error> {
     let id: i64 = row.try_get("id")?;
     let scores: String = row.try_get("scores")?;
     let scores = serde_json::from_str(&scores).map_err(|e| {
@@ -88,52 +94,52 @@ fn submission_from_row(row: &sqlx::sqlite::SqliteRow) -> Result<SubmissionRow, s
         policy: row.try_get("policy")?,
         status: row.try_get("status")?,
         visibility: row.try_get("visibility")?,
-        baseline: row.try_get::<i64, _>("baseline")? != 0,
+        baseline: row.try_get("baseline")?,
         scores,
         created_at: row.try_get("created_at")?,
         body_sha256: row.try_get("body_sha256")?,
     })
 }
 
-pub async fn by_id(
-    conn: &mut SqliteConnection,
-    id: i64,
-) -> Result<Option<SubmissionRow>, sqlx::Error> {
-    let row = sqlx::query(&format!("SELECT {SUBMISSION_COLUMNS} WHERE s.id = ?"))
-        .bind(id)
-        .fetch_optional(conn)
-        .await?;
-    row.as_ref().map(submission_from_row).transpose()
+pub async fn by_id(conn: &mut Conn, id: i64) -> Result<Option<SubmissionRow>, sqlx::Error> {
+    on!(conn, |c| {
+        let row = sqlx::query(&format!("SELECT {SUBMISSION_COLUMNS} WHERE s.id = $1"))
+            .bind(id)
+            .fetch_optional(&mut *c)
+            .await?;
+        row.as_ref().map(submission_from_row).transpose()
+    })
 }
 
 pub async fn by_idempotency_key(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     token: i64,
     key: &str,
 ) -> Result<Option<SubmissionRow>, sqlx::Error> {
-    let row = sqlx::query(&format!(
-        "SELECT {SUBMISSION_COLUMNS} WHERE s.token = ? AND s.idempotency_key = ?"
-    ))
-    .bind(token)
-    .bind(key)
-    .fetch_optional(conn)
-    .await?;
-    row.as_ref().map(submission_from_row).transpose()
+    on!(conn, |c| {
+        let row = sqlx::query(&format!(
+            "SELECT {SUBMISSION_COLUMNS} WHERE s.token = $1 AND s.idempotency_key = $2"
+        ))
+        .bind(token)
+        .bind(key)
+        .fetch_optional(&mut *c)
+        .await?;
+        row.as_ref().map(submission_from_row).transpose()
+    })
 }
 
 /// Published submissions of a dataset, oldest first.
-pub async fn published(
-    conn: &mut SqliteConnection,
-    dataset: i64,
-) -> Result<Vec<SubmissionRow>, sqlx::Error> {
-    let rows = sqlx::query(&format!(
-        "SELECT {SUBMISSION_COLUMNS} WHERE s.dataset = ? AND s.visibility = 'published' \
+pub async fn published(conn: &mut Conn, dataset: i64) -> Result<Vec<SubmissionRow>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(&format!(
+            "SELECT {SUBMISSION_COLUMNS} WHERE s.dataset = $1 AND s.visibility = 'published' \
          ORDER BY s.id"
-    ))
-    .bind(dataset)
-    .fetch_all(conn)
-    .await?;
-    rows.iter().map(submission_from_row).collect()
+        ))
+        .bind(dataset)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(submission_from_row).collect()
+    })
 }
 
 /// Everything a new submission row needs.
@@ -150,14 +156,13 @@ pub struct NewSubmission<'a> {
 /// Inserts the submission; call inside the transaction that also stores its items. A reused
 /// Idempotency-Key (a concurrent twin request) comes back as `Ok(None)`.
 #[tracing::instrument(skip_all)]
-pub async fn insert(
-    conn: &mut SqliteConnection,
-    new: &NewSubmission<'_>,
-) -> Result<Option<i64>, sqlx::Error> {
-    let scores = serde_json::to_string(new.scores).map_err(|e| corrupt("scores", e))?;
-    let result = sqlx::query(
+pub async fn insert(conn: &mut Conn, new: &NewSubmission<'_>) -> Result<Option<i64>, sqlx::Error> {
+    on!(conn, |c| {
+        let scores = serde_json::to_string(new.scores).map_err(|e| corrupt("scores", e))?;
+        let result = sqlx::query_scalar(
         "INSERT INTO submissions (dataset, account, token, idempotency_key, body_sha256, model, \
-         description, url, prompt_version, notes, scores) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+         description, url, prompt_version, notes, scores) \
+         VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11) RETURNING id",
     )
     .bind(new.dataset)
     .bind(new.account)
@@ -170,17 +175,18 @@ pub async fn insert(
     .bind(&new.metadata.prompt_version)
     .bind(&new.metadata.notes)
     .bind(scores)
-    .execute(conn)
+    .fetch_one(&mut *c)
     .await;
-    match result {
-        Ok(done) => Ok(Some(done.last_insert_rowid())),
-        Err(sqlx::Error::Database(e))
-            if e.is_unique_violation() && e.message().contains("idempotency_key") =>
-        {
-            Ok(None)
+        match result {
+            Ok(id) => Ok(Some(id)),
+            Err(sqlx::Error::Database(e))
+                if e.is_unique_violation() && e.message().contains("idempotency_key") =>
+            {
+                Ok(None)
+            }
+            Err(e) => Err(e),
         }
-        Err(e) => Err(e),
-    }
+    })
 }
 
 /// Rows per INSERT: 11 bound values each, under SQLite's 32766-variable limit.
@@ -189,45 +195,47 @@ const ITEM_ROWS_PER_STATEMENT: usize = 2500;
 /// Stores every item verdict; `item_rows[v.target]` is the `items` row id of verdict `v`.
 #[tracing::instrument(skip_all)]
 pub async fn insert_items(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     submission: i64,
     item_rows: &[i64],
     verdicts: &[ItemVerdict],
 ) -> Result<(), sqlx::Error> {
-    for chunk in verdicts.chunks(ITEM_ROWS_PER_STATEMENT) {
-        let mut builder: QueryBuilder<'_, Sqlite> = QueryBuilder::new(
-            "INSERT INTO submission_items (submission, item, line, raw_answer, permutation, \
+    on!(conn, |c| {
+        for chunk in verdicts.chunks(ITEM_ROWS_PER_STATEMENT) {
+            let mut builder = QueryBuilder::new(
+                "INSERT INTO submission_items (submission, item, line, raw_answer, permutation, \
              outcome, failure, exact_match, semantic_match, task_accuracy, pairwise_accuracy) ",
-        );
-        builder.push_values(chunk, |mut b, v| {
-            let (outcome, permutation, failure, exact, semantic) = match &v.outcome {
-                StrictOutcome::Scored { answer, verdict } => (
-                    "scored",
-                    serde_json::to_string(answer).ok(),
-                    None,
-                    verdict.exact_match,
-                    verdict.semantic_match,
-                ),
-                StrictOutcome::Unparseable { reason } => {
-                    ("unparseable", None, Some(reason.to_string()), false, false)
-                }
-                StrictOutcome::Missing => ("missing", None, None, false, false),
-            };
-            b.push_bind(submission)
-                .push_bind(item_rows.get(v.target).copied())
-                .push_bind(v.line.map(|l| l as i64))
-                .push_bind(v.raw_answer.clone())
-                .push_bind(permutation)
-                .push_bind(outcome)
-                .push_bind(failure)
-                .push_bind(exact)
-                .push_bind(semantic)
-                .push_bind(v.task_accuracy)
-                .push_bind(v.pairwise_accuracy);
-        });
-        builder.build().execute(&mut *conn).await?;
-    }
-    Ok(())
+            );
+            builder.push_values(chunk, |mut b, v| {
+                let (outcome, permutation, failure, exact, semantic) = match &v.outcome {
+                    StrictOutcome::Scored { answer, verdict } => (
+                        "scored",
+                        serde_json::to_string(answer).ok(),
+                        None,
+                        verdict.exact_match,
+                        verdict.semantic_match,
+                    ),
+                    StrictOutcome::Unparseable { reason } => {
+                        ("unparseable", None, Some(reason.to_string()), false, false)
+                    }
+                    StrictOutcome::Missing => ("missing", None, None, false, false),
+                };
+                b.push_bind(submission)
+                    .push_bind(item_rows.get(v.target).copied())
+                    .push_bind(v.line.map(|l| l as i64))
+                    .push_bind(v.raw_answer.clone())
+                    .push_bind(permutation)
+                    .push_bind(outcome)
+                    .push_bind(failure)
+                    .push_bind(exact)
+                    .push_bind(semantic)
+                    .push_bind(v.task_accuracy)
+                    .push_bind(v.pairwise_accuracy);
+            });
+            builder.build().execute(&mut *c).await?;
+        }
+        Ok(())
+    })
 }
 
 /// One stored verdict, with the item it is about.
@@ -248,126 +256,134 @@ pub struct StoredVerdict {
     pub gt_answer: String,
 }
 
-pub async fn verdicts(
-    conn: &mut SqliteConnection,
-    submission: i64,
-) -> Result<Vec<StoredVerdict>, sqlx::Error> {
-    let rows = sqlx::query(
-        "SELECT i.item_id, i.direction, i.step_length, i.gt_answer, v.line, v.raw_answer, \
+pub async fn verdicts(conn: &mut Conn, submission: i64) -> Result<Vec<StoredVerdict>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT i.item_id, i.direction, i.step_length, i.gt_answer, v.line, v.raw_answer, \
          v.permutation, v.outcome, v.failure, v.exact_match, v.semantic_match, v.task_accuracy, \
          v.pairwise_accuracy FROM submission_items v JOIN items i ON i.id = v.item \
-         WHERE v.submission = ? ORDER BY i.id",
-    )
-    .bind(submission)
-    .fetch_all(conn)
-    .await?;
-    rows.iter()
-        .map(|row| {
-            let (direction, step_length) = kind_from_row(row)?;
-            Ok(StoredVerdict {
-                id: row.try_get("item_id")?,
-                direction,
-                step_length,
-                line: row.try_get("line")?,
-                raw_answer: row.try_get("raw_answer")?,
-                permutation: row.try_get("permutation")?,
-                outcome: row.try_get("outcome")?,
-                failure: row.try_get("failure")?,
-                exact_match: row.try_get("exact_match")?,
-                semantic_match: row.try_get("semantic_match")?,
-                task_accuracy: row.try_get("task_accuracy")?,
-                pairwise_accuracy: row.try_get("pairwise_accuracy")?,
-                gt_answer: row.try_get("gt_answer")?,
+         WHERE v.submission = $1 ORDER BY i.id",
+        )
+        .bind(submission)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter()
+            .map(|row| {
+                let (direction, step_length) = kind_from_row(row)?;
+                Ok(StoredVerdict {
+                    id: row.try_get("item_id")?,
+                    direction,
+                    step_length,
+                    line: row.try_get("line")?,
+                    raw_answer: row.try_get("raw_answer")?,
+                    permutation: row.try_get("permutation")?,
+                    outcome: row.try_get("outcome")?,
+                    failure: row.try_get("failure")?,
+                    exact_match: row.try_get("exact_match")?,
+                    semantic_match: row.try_get("semantic_match")?,
+                    task_accuracy: row.try_get("task_accuracy")?,
+                    pairwise_accuracy: row.try_get("pairwise_accuracy")?,
+                    gt_answer: row.try_get("gt_answer")?,
+                })
             })
-        })
-        .collect()
+            .collect()
+    })
 }
 
 /// Admin changes to a leaderboard row. Returns whether the submission exists.
 #[tracing::instrument(skip_all)]
 pub async fn update_listing(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     id: i64,
     baseline: Option<bool>,
     visibility: Option<Visibility>,
 ) -> Result<bool, sqlx::Error> {
-    let done = sqlx::query(
-        "UPDATE submissions SET baseline = coalesce(?, baseline), \
-         visibility = coalesce(?, visibility) WHERE id = ?",
-    )
-    .bind(baseline)
-    .bind(visibility)
-    .bind(id)
-    .execute(conn)
-    .await?;
-    Ok(done.rows_affected() > 0)
+    on!(conn, |c| {
+        let done = sqlx::query(
+            "UPDATE submissions SET baseline = coalesce($1, baseline), \
+         visibility = coalesce($2, visibility) WHERE id = $3",
+        )
+        .bind(baseline)
+        .bind(visibility)
+        .bind(id)
+        .execute(&mut *c)
+        .await?;
+        Ok(done.rows_affected() > 0)
+    })
 }
 
 /// Whether `account` has ever submitted `model` to the dataset, listed or not.
 pub async fn has_submitted(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     dataset: i64,
     account: &str,
     model: &str,
 ) -> Result<bool, sqlx::Error> {
-    let found: Option<i64> = sqlx::query_scalar(
-        "SELECT s.id FROM submissions s JOIN accounts a ON a.id = s.account \
-         WHERE s.dataset = ? AND a.name = ? AND s.model = ? LIMIT 1",
-    )
-    .bind(dataset)
-    .bind(account)
-    .bind(model)
-    .fetch_optional(conn)
-    .await?;
-    Ok(found.is_some())
+    on!(conn, |c| {
+        let found: Option<i64> = sqlx::query_scalar(
+            "SELECT s.id FROM submissions s JOIN accounts a ON a.id = s.account \
+         WHERE s.dataset = $1 AND a.name = $2 AND s.model = $3 LIMIT 1",
+        )
+        .bind(dataset)
+        .bind(account)
+        .bind(model)
+        .fetch_optional(&mut *c)
+        .await?;
+        Ok(found.is_some())
+    })
 }
 
 /// Counts used by tests and reports: submissions and verdict rows stored.
-pub async fn counts(conn: &mut SqliteConnection) -> Result<(i64, i64), sqlx::Error> {
-    let submissions: i64 = sqlx::query_scalar("SELECT count(*) FROM submissions")
-        .fetch_one(&mut *conn)
-        .await?;
-    let items: i64 = sqlx::query_scalar("SELECT count(*) FROM submission_items")
-        .fetch_one(conn)
-        .await?;
-    Ok((submissions, items))
+pub async fn counts(conn: &mut Conn) -> Result<(i64, i64), sqlx::Error> {
+    on!(conn, |c| {
+        let submissions: i64 = sqlx::query_scalar("SELECT count(*) FROM submissions")
+            .fetch_one(&mut *c)
+            .await?;
+        let items: i64 = sqlx::query_scalar("SELECT count(*) FROM submission_items")
+            .fetch_one(&mut *c)
+            .await?;
+        Ok((submissions, items))
+    })
 }
 
 /// The stored error analysis of a submission (JSON), if one was computed.
 pub async fn error_analysis(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     submission: i64,
 ) -> Result<Option<String>, sqlx::Error> {
-    sqlx::query_scalar("SELECT error_analysis FROM submissions WHERE id = ?")
-        .bind(submission)
-        .fetch_optional(conn)
-        .await
-        .map(Option::flatten)
+    on!(conn, |c| {
+        sqlx::query_scalar("SELECT error_analysis FROM submissions WHERE id = $1")
+            .bind(submission)
+            .fetch_optional(&mut *c)
+            .await
+            .map(Option::flatten)
+    })
 }
 
 /// Keeps a submission's error analysis (JSON).
 pub async fn set_error_analysis(
-    conn: &mut SqliteConnection,
+    conn: &mut Conn,
     submission: i64,
     json: &str,
 ) -> Result<(), sqlx::Error> {
-    sqlx::query("UPDATE submissions SET error_analysis = ? WHERE id = ?")
-        .bind(json)
-        .bind(submission)
-        .execute(conn)
-        .await
-        .map(|_| ())
+    on!(conn, |c| {
+        sqlx::query("UPDATE submissions SET error_analysis = $1 WHERE id = $2")
+            .bind(json)
+            .bind(submission)
+            .execute(&mut *c)
+            .await
+            .map(|_| ())
+    })
 }
 
 /// Forgets the stored error analyses of a dataset's submissions (its items or signatures
 /// changed); they are computed again on the next request.
-pub async fn clear_error_analyses(
-    conn: &mut SqliteConnection,
-    dataset: i64,
-) -> Result<(), sqlx::Error> {
-    sqlx::query("UPDATE submissions SET error_analysis = NULL WHERE dataset = ?")
-        .bind(dataset)
-        .execute(conn)
-        .await
-        .map(|_| ())
+pub async fn clear_error_analyses(conn: &mut Conn, dataset: i64) -> Result<(), sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query("UPDATE submissions SET error_analysis = NULL WHERE dataset = $1")
+            .bind(dataset)
+            .execute(&mut *c)
+            .await
+            .map(|_| ())
+    })
 }

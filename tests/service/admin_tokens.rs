@@ -65,12 +65,11 @@ async fn admins_create_tokens_that_work_and_revoke_them_at_once() {
     let (_, listing) = admin.text("/admin/tokens").await;
     assert!(!listing.contains("never"), "last use is shown: {listing}");
 
-    let id: i64 = sqlx::query_scalar(
+    let id: i64 = count(
+        &server.pool,
         "SELECT id FROM api_tokens WHERE account = (SELECT id FROM accounts WHERE name = 'team-a')",
     )
-    .fetch_one(&server.pool)
-    .await
-    .expect("token row");
+    .await;
     let r = admin
         .post_form(
             "/admin/tokens/revoke",
@@ -114,12 +113,7 @@ async fn only_admins_with_the_page_csrf_token_manage_tokens() {
     let (server, _) = spawn_app_with_release().await;
     annotator(&server, "root", true).await;
     annotator(&server, "alice", false).await;
-    let count = || async {
-        sqlx::query_scalar::<_, i64>("SELECT count(*) FROM api_tokens")
-            .fetch_one(&server.pool)
-            .await
-            .expect("count")
-    };
+    let tokens = || async { count(&server.pool, "SELECT count(*) FROM api_tokens").await };
 
     // Not logged in: redirected to the login form, and posts are refused.
     let mut anonymous = Browser::new(&server);
@@ -158,6 +152,6 @@ async fn only_admins_with_the_page_csrf_token_manage_tokens() {
             .await;
         assert_eq!(r.status(), StatusCode::FORBIDDEN);
     }
-    assert_eq!(count().await, 0, "no token was created");
+    assert_eq!(tokens().await, 0, "no token was created");
     server.stop().await;
 }

@@ -28,7 +28,7 @@ async fn stored_answers(
     dir: &tempfile::TempDir,
     answers: &[Vec<Option<Vec<u8>>>],
 ) -> (std::path::PathBuf, Vec<String>) {
-    let pool = fresh_db(dir).await;
+    let (pool, db) = fresh_db_located(dir).await;
     let root = dir.path().join("release");
     let records = write_release(&root, &[3, 4, 5]);
     import(&pool, &root, &options("mini")).await;
@@ -65,7 +65,7 @@ async fn stored_answers(
     }
     drop(conn);
     pool.close().await;
-    (dir.path().join("test.db"), ids)
+    (db, ids)
 }
 
 fn run_json(args: &[&str]) -> (bool, Value, String) {
@@ -247,12 +247,14 @@ async fn logged_in(server: &TestServer, name: &str) -> (Browser, String) {
 }
 
 async fn kinds(server: &TestServer) -> Vec<(i64, String, String)> {
-    sqlx::query_as(
-        "SELECT g.annotator, i.item_id, g.kind FROM assignments g JOIN items i ON i.id = g.item \
-         ORDER BY g.annotator, i.item_id",
+    db!(
+        server.pool,
+        fetch_all,
+        sqlx::query_as(
+            "SELECT g.annotator, i.item_id, g.kind FROM assignments g \
+             JOIN items i ON i.id = g.item ORDER BY g.annotator, i.item_id",
+        )
     )
-    .fetch_all(&server.pool)
-    .await
     .expect("assignments")
 }
 

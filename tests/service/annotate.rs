@@ -171,12 +171,15 @@ pub async fn annotator(server: &TestServer, name: &str, admin: bool) -> i64 {
             .await
             .expect("insert")
             .expect("new name");
-    sqlx::query("UPDATE annotators SET password_hash = ?, invite_hash = NULL WHERE id = ?")
-        .bind(hash_password(PASSWORD).expect("hash"))
-        .bind(id)
-        .execute(&mut *conn)
-        .await
-        .expect("set password");
+    let hash = hash_password(PASSWORD).expect("hash");
+    db!(
+        server.pool,
+        execute,
+        sqlx::query("UPDATE annotators SET password_hash = $1, invite_hash = NULL WHERE id = $2")
+            .bind(&hash)
+            .bind(id)
+    )
+    .expect("set password");
     id
 }
 
@@ -516,24 +519,20 @@ async fn state_changing_requests_without_the_csrf_token_are_rejected() {
         );
     }
     // Nothing happened: no draft with a placement, no flag, no account, still logged in.
-    let mut conn = server.pool.acquire().await.expect("conn");
-    let placed: i64 = sqlx::query_scalar(
+    let placed = count(
+        &server.pool,
         "SELECT count(*) FROM drafts WHERE slots != '[]' AND slots != '[null,null]'",
     )
-    .fetch_one(&mut *conn)
-    .await
-    .expect("count");
+    .await;
     assert_eq!(placed, 0);
-    let finished: i64 = sqlx::query_scalar("SELECT count(*) FROM annotations")
-        .fetch_one(&mut *conn)
-        .await
-        .expect("count");
-    assert_eq!(finished, 0);
-    let accounts: i64 = sqlx::query_scalar("SELECT count(*) FROM annotators")
-        .fetch_one(&mut *conn)
-        .await
-        .expect("count");
-    assert_eq!(accounts, 1);
+    assert_eq!(
+        count(&server.pool, "SELECT count(*) FROM annotations").await,
+        0
+    );
+    assert_eq!(
+        count(&server.pool, "SELECT count(*) FROM annotators").await,
+        1
+    );
     assert_eq!(alice.get("/annotate").await.status(), StatusCode::OK);
     // The login form has its own double-submit token.
     let mut fresh = Browser::new(&server);
@@ -856,12 +855,8 @@ async fn flags_queue_behind_concurrent_submissions_instead_of_failing() {
     })
     .await;
     let records: Vec<Value> = {
-        let text = std::fs::read_to_string(
-            server
-                .db_path()
-                .with_file_name("release/QA/enact_ordering.jsonl"),
-        )
-        .expect("release");
+        let text = std::fs::read_to_string(server.dir().join("release/QA/enact_ordering.jsonl"))
+            .expect("release");
         text.lines()
             .map(|l| serde_json::from_str(l).expect("json"))
             .collect()

@@ -39,11 +39,12 @@ async fn stored_scores_come_back_typed_and_an_unreadable_one_names_its_submissio
     assert_eq!(rows[0].overall.count, records.len());
 
     // A score this version cannot read is an error about that submission, not a row of zeros.
-    sqlx::query("UPDATE submissions SET scores = '{\"report\": {}}' WHERE id = ?")
-        .bind(id)
-        .execute(&server.pool)
-        .await
-        .expect("corrupt the stored scores");
+    db!(
+        server.pool,
+        execute,
+        sqlx::query("UPDATE submissions SET scores = '{\"report\": {}}' WHERE id = $1").bind(id)
+    )
+    .expect("corrupt the stored scores");
     let Err(AppError::Internal(e)) = app::leaderboard::of(&hub, "mini").await else {
         panic!("an unreadable score must fail the leaderboard");
     };
@@ -182,11 +183,12 @@ async fn a_draft_never_outlives_the_answer_that_finished_its_item() {
         panic!("a save after the answer must be refused");
     };
     assert!(message.contains("already finished"), "{message}");
-    let drafts: i64 = sqlx::query_scalar("SELECT count(*) FROM drafts WHERE item = ?")
-        .bind(rowid)
-        .fetch_one(&mut *conn)
-        .await
-        .expect("count");
+    let drafts: i64 = db!(
+        server.pool,
+        fetch_one,
+        sqlx::query_scalar("SELECT count(*) FROM drafts WHERE item = $1").bind(rowid)
+    )
+    .expect("count");
     assert_eq!(drafts, 0);
     server.stop().await;
 }

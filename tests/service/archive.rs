@@ -20,7 +20,7 @@ async fn set_answers(server: &TestServer, answers: AnswerVisibility) {
         .expect("set answers");
 }
 
-async fn content_hashes(pool: &sqlx::SqlitePool, dataset: &str) -> HashMap<String, String> {
+async fn content_hashes(pool: &enact_hub::store::Pool, dataset: &str) -> HashMap<String, String> {
     let mut conn = pool.acquire().await.expect("conn");
     let dataset = store::datasets::by_name(&mut conn, dataset)
         .await
@@ -170,7 +170,7 @@ async fn assert_reimports_identically(server: &TestServer, dir: &std::path::Path
         "{}",
         String::from_utf8_lossy(&import.stderr)
     );
-    let copy = store::open(&db).await.expect("open copy");
+    let copy = store::Pool::Sqlite(store::open(&db).await.expect("open copy"));
     assert_eq!(
         content_hashes(&copy, "mini").await,
         content_hashes(&server.pool, "mini").await

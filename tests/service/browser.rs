@@ -63,10 +63,15 @@ async fn a_board_of_a_thousand_submissions_reads_at_1280_px() {
     let (server, records) = spawn_app_with_release().await;
     crate::leaderboard::crowded_board(&server, &records, 1000, 50).await;
     // A baseline too: shown on every page, within the page's rows.
-    sqlx::query("UPDATE submissions SET baseline = 1 WHERE id = (SELECT min(id) FROM submissions)")
-        .execute(&server.pool)
-        .await
-        .expect("mark a baseline");
+    db!(
+        server.pool,
+        execute,
+        sqlx::query(
+            "UPDATE submissions SET baseline = $1 WHERE id = (SELECT min(id) FROM submissions)"
+        )
+        .bind(true)
+    )
+    .expect("mark a baseline");
     let found = run_node(
         "leaderboard.mjs",
         json!({
@@ -177,11 +182,18 @@ async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
     assert_eq!(found["console_errors"], 0);
 
     let mut conn = server.pool.acquire().await.expect("conn");
-    let rowid = |item: String| {
-        sqlx::query_scalar::<_, i64>("SELECT id FROM items WHERE item_id = ?").bind(item)
-    };
-    let f = rowid(forward).fetch_one(&mut *conn).await.expect("forward");
-    let i = rowid(inverse).fetch_one(&mut *conn).await.expect("inverse");
+    let f: i64 = db!(
+        server.pool,
+        fetch_one,
+        sqlx::query_scalar("SELECT id FROM items WHERE item_id = $1").bind(&forward)
+    )
+    .expect("forward");
+    let i: i64 = db!(
+        server.pool,
+        fetch_one,
+        sqlx::query_scalar("SELECT id FROM items WHERE item_id = $1").bind(&inverse)
+    )
+    .expect("inverse");
     let fwd = store::annotations::annotation(&mut conn, annotator, f)
         .await
         .expect("query")

@@ -23,19 +23,22 @@ async fn the_demo_link_logs_in_once_to_a_balanced_queue() {
     let queue = browser.get("/annotate").await;
     assert_eq!(queue.status(), StatusCode::OK);
 
-    let kinds: Vec<(String, i64)> = sqlx::query_as(
-        "SELECT DISTINCT i.direction, i.step_length FROM assignments g \
-         JOIN items i ON i.id = g.item JOIN annotators n ON n.id = g.annotator \
-         WHERE n.name = 'demo-admin'",
+    let kinds: Vec<(String, i64)> = db!(
+        server.pool,
+        fetch_all,
+        sqlx::query_as(
+            "SELECT DISTINCT i.direction, i.step_length FROM assignments g \
+             JOIN items i ON i.id = g.item JOIN annotators n ON n.id = g.annotator \
+             WHERE n.name = 'demo-admin'",
+        )
     )
-    .fetch_all(&server.pool)
-    .await
     .unwrap();
-    let all: Vec<(String, i64)> =
+    let all: Vec<(String, i64)> = db!(
+        server.pool,
+        fetch_all,
         sqlx::query_as("SELECT DISTINCT direction, step_length FROM items")
-            .fetch_all(&server.pool)
-            .await
-            .unwrap();
+    )
+    .unwrap();
     assert!(kinds.len() >= 4, "{kinds:?}");
     assert_eq!(
         kinds.len(),
@@ -49,16 +52,11 @@ async fn the_demo_link_logs_in_once_to_a_balanced_queue() {
         again.get(&format!("/login/link/{link}")).await.status(),
         StatusCode::NOT_FOUND
     );
-    let count = || async {
-        sqlx::query_scalar::<_, i64>("SELECT count(*) FROM assignments")
-            .fetch_one(&server.pool)
-            .await
-            .unwrap()
-    };
-    let before = count().await;
+    let assigned = || async { count(&server.pool, "SELECT count(*) FROM assignments").await };
+    let before = assigned().await;
     let second = enact_hub::app::demo::annotator_link(&hub).await.unwrap();
     assert_ne!(second, link);
-    assert_eq!(count().await, before);
+    assert_eq!(assigned().await, before);
     assert_eq!(
         again.get(&format!("/login/link/{second}")).await.status(),
         StatusCode::SEE_OTHER

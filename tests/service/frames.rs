@@ -12,6 +12,7 @@ use std::time::Duration;
 use enact_hub::app::Hub;
 use enact_hub::app::frames::{self, FrameStore};
 use enact_hub::app::import::import_release;
+use enact_hub::store::Pool;
 use enact_hub::web::WebConfig;
 use reqwest::StatusCode;
 use reqwest::header::{CACHE_CONTROL, CONTENT_SECURITY_POLICY, ETAG, IF_NONE_MATCH, LOCATION};
@@ -195,7 +196,7 @@ async fn every_backend_imports_serves_and_archives_the_same_frames() {
 }
 
 /// Imports a release of 108 frames with the bytes in the database.
-async fn database_with_release(dir: &TempDir) -> (sqlx::SqlitePool, Vec<(String, Vec<u8>)>) {
+async fn database_with_release(dir: &TempDir) -> (Pool, Vec<(String, Vec<u8>)>) {
     let pool = fresh_db(dir).await;
     let root = dir.path().join("release");
     let records = write_balanced_release(&root, &[3, 4, 5, 6], 3);
@@ -368,14 +369,8 @@ async fn an_import_whose_frames_cannot_be_written_stores_nothing() {
         "{message}"
     );
     assert!(message.contains("nothing was imported"), "{message}");
-    let items: i64 = sqlx::query_scalar("SELECT count(*) FROM items")
-        .fetch_one(&pool)
-        .await
-        .expect("count");
-    let frames: i64 = sqlx::query_scalar("SELECT count(*) FROM frames")
-        .fetch_one(&pool)
-        .await
-        .expect("count");
+    let items = count(&pool, "SELECT count(*) FROM items").await;
+    let frames = count(&pool, "SELECT count(*) FROM frames").await;
     assert_eq!((items, frames), (0, 0));
 }
 

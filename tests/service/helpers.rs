@@ -10,18 +10,88 @@ use enact_hub::app::import::{ImportOptions, ImportReport, import_release};
 use enact_hub::core::audit::Actor;
 use enact_hub::core::credentials::Role;
 use enact_hub::store;
+use enact_hub::store::Pool;
 use enact_hub::web::{Server, WebConfig};
 use serde_json::{Value, json};
-use sqlx::SqlitePool;
 use tempfile::TempDir;
 use tokio::sync::oneshot;
 
 pub use crate::fixtures::shared_fixtures;
 
-pub async fn fresh_db(dir: &TempDir) -> SqlitePool {
-    store::open(&dir.path().join("test.db"))
+/// Runs a sqlx query (`$1` placeholders) on the test database, SQLite or PostgreSQL:
+/// `db!(pool, fetch_one, sqlx::query_scalar::<_, i64>("SELECT …"))`.
+macro_rules! db {
+    // Each database has its own result type for a statement: only success is kept.
+    ($pool:expr, execute, $query:expr) => {{
+        let mut conn = $pool.acquire().await.expect("a database connection");
+        enact_hub::on_db!(&mut conn, |c| $query.execute(&mut *c).await.map(|_| ()))
+    }};
+    ($pool:expr, $method:ident, $query:expr) => {{
+        let mut conn = $pool.acquire().await.expect("a database connection");
+        enact_hub::on_db!(&mut conn, |c| $query.$method(&mut *c).await)
+    }};
+}
+pub(crate) use db;
+
+/// A fresh, migrated database: a SQLite file in `dir`, or, when `ENACT_HUB_TEST_POSTGRES`
+/// names a PostgreSQL server (`postgres://user@host:port`), a new database on it. The whole
+/// suite runs once each way (`scripts/test.sh`).
+pub async fn fresh_db(dir: &TempDir) -> Pool {
+    fresh_db_located(dir).await.0
+}
+
+/// [`fresh_db`], and where it is as the command line's `--db` takes it (a file or a URL).
+pub async fn fresh_db_located(dir: &TempDir) -> (Pool, PathBuf) {
+    match postgres_server() {
+        Some(server) => {
+            let url = new_postgres_database(&server).await;
+            let pool = store::db::open_postgres(&url, 4)
+                .await
+                .expect("open a fresh PostgreSQL database");
+            (Pool::Pg(pool), PathBuf::from(url))
+        }
+        None => {
+            let path = dir.path().join("test.db");
+            let pool = store::open(&path).await.expect("open a fresh database");
+            (Pool::Sqlite(pool), path)
+        }
+    }
+}
+
+/// The PostgreSQL server the suite runs against, if it does.
+pub fn postgres_server() -> Option<String> {
+    std::env::var("ENACT_HUB_TEST_POSTGRES")
+        .ok()
+        .filter(|url| !url.is_empty())
+}
+
+/// Creates an empty database on `server` and returns its URL.
+pub async fn new_postgres_database(server: &str) -> String {
+    use sqlx::Connection;
+    static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    let name = format!(
+        "enact_test_{}_{}_{}",
+        std::process::id(),
+        NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.subsec_nanos())
+    );
+    let server = server.trim_end_matches('/');
+    let mut admin = sqlx::PgConnection::connect(&format!("{server}/postgres"))
         .await
-        .expect("open a fresh database")
+        .expect("connect to the test PostgreSQL server");
+    sqlx::query(&format!("CREATE DATABASE {name}"))
+        .execute(&mut admin)
+        .await
+        .expect("create a test database");
+    admin.close().await.ok();
+    format!("{server}/{name}")
+}
+
+/// The database is SQLite (some tests check what only SQLite has: its file, `VACUUM INTO`).
+pub fn on_sqlite() -> bool {
+    postgres_server().is_none()
 }
 
 pub fn options(dataset: &str) -> ImportOptions {
@@ -39,7 +109,7 @@ pub fn tester() -> Actor {
     Actor::Operator("tests".to_owned())
 }
 
-pub async fn import(pool: &SqlitePool, path: &Path, options: &ImportOptions) -> ImportReport {
+pub async fn import(pool: &Pool, path: &Path, options: &ImportOptions) -> ImportReport {
     import_release(&Hub::from(pool.clone()), &tester(), path, options)
         .await
         .unwrap_or_else(|e| {
@@ -151,7 +221,8 @@ pub fn write_balanced_release(root: &Path, lengths: &[usize], per_cell: u32) -> 
 
 pub struct TestServer {
     pub addr: SocketAddr,
-    pub pool: SqlitePool,
+    pub pool: Pool,
+    db: PathBuf,
     pub client: reqwest::Client,
     shutdown: Option<oneshot::Sender<()>>,
     handle: Option<tokio::task::JoinHandle<()>>,
@@ -159,9 +230,14 @@ pub struct TestServer {
 }
 
 impl TestServer {
-    /// The database file the server runs on (for the command line).
+    /// The server's temporary folder (releases written by `setup` are here).
+    pub fn dir(&self) -> &Path {
+        self._dir.path()
+    }
+
+    /// The database the server runs on, as the command line's `--db` takes it.
     pub fn db_path(&self) -> PathBuf {
-        self._dir.path().join("test.db")
+        self.db.clone()
     }
 
     pub fn url(&self, path: &str) -> String {
@@ -199,7 +275,7 @@ impl TestServer {
 /// A server on 127.0.0.1:0 over a fresh database, with `setup` run on the database first.
 pub async fn spawn_app_with<F, Fut>(setup: F) -> TestServer
 where
-    F: FnOnce(SqlitePool, PathBuf) -> Fut,
+    F: FnOnce(Pool, PathBuf) -> Fut,
     Fut: std::future::Future<Output = ()>,
 {
     spawn_app_configured(WebConfig::default(), setup).await
@@ -208,17 +284,19 @@ where
 /// [`spawn_app_with`] with a server configuration of the test's choosing.
 pub async fn spawn_app_configured<F, Fut>(config: WebConfig, setup: F) -> TestServer
 where
-    F: FnOnce(SqlitePool, PathBuf) -> Fut,
+    F: FnOnce(Pool, PathBuf) -> Fut,
     Fut: std::future::Future<Output = ()>,
 {
     let dir = tempfile::tempdir().expect("tempdir");
-    let pool = fresh_db(&dir).await;
+    let (pool, db) = fresh_db_located(&dir).await;
     setup(pool.clone(), dir.path().to_path_buf()).await;
-    serve_hub(Hub::from(pool.clone()), pool, dir, &config).await
+    let mut server = serve_hub(Hub::from(pool.clone()), pool, dir, &config).await;
+    server.db = db;
+    server
 }
 
 /// A server on 127.0.0.1:0 running `hub` (over `pool`, a database in `dir`).
-pub async fn serve_hub(hub: Hub, pool: SqlitePool, dir: TempDir, config: &WebConfig) -> TestServer {
+pub async fn serve_hub(hub: Hub, pool: Pool, dir: TempDir, config: &WebConfig) -> TestServer {
     let server = Server::bind("127.0.0.1:0".parse().expect("addr"), hub, config)
         .await
         .expect("bind");
@@ -235,6 +313,7 @@ pub async fn serve_hub(hub: Hub, pool: SqlitePool, dir: TempDir, config: &WebCon
     TestServer {
         addr,
         pool,
+        db: dir.path().join("test.db"),
         client: reqwest::Client::new(),
         shutdown: Some(tx),
         handle: Some(handle),
@@ -402,7 +481,7 @@ pub fn ground_truth_answers(records: &[Value]) -> String {
 /// A new API token for the account `name` (created with `role` if new), as the admin
 /// endpoints issue them: its id and secret.
 pub async fn api_token(
-    pool: &SqlitePool,
+    pool: &Pool,
     name: &str,
     role: Role,
     daily_quota: Option<i64>,
@@ -434,11 +513,7 @@ pub async fn mini_study(server: &TestServer, name: &str) {
         .await
         .is_err()
     {
-        let root = server
-            .db_path()
-            .parent()
-            .expect("db folder")
-            .join("release");
+        let root = server.dir().join("release");
         import(&server.pool, &root, &options("mini-copy")).await;
     }
     let copy =
@@ -446,4 +521,9 @@ pub async fn mini_study(server: &TestServer, name: &str) {
     enact_hub::app::studies::create(&hub, &tester(), name, "mini", &[copy])
         .await
         .expect("study created");
+}
+
+/// `SELECT count(*) …` (or any one integer) on the test database.
+pub async fn count(pool: &Pool, sql: &str) -> i64 {
+    db!(pool, fetch_one, sqlx::query_scalar::<_, i64>(sql)).unwrap_or_else(|e| panic!("{sql}: {e}"))
 }

@@ -371,16 +371,18 @@ pub async fn crowded_board(server: &TestServer, records: &[Value], total: usize,
     let mut tx = server.pool.begin().await.expect("begin");
     for i in templates.len()..total {
         let (token, _) = &tokens[i % accounts];
-        sqlx::query(
+        let model = format!("model-{i:03}");
+        enact_hub::on_db!(&mut tx, |c| sqlx::query(
             "INSERT INTO submissions (dataset, account, token, body_sha256, model, scores) \
-             SELECT s.dataset, t.account, t.id, s.body_sha256, ?, s.scores \
-             FROM submissions s, api_tokens t WHERE s.id = ? AND t.id = ?",
+             SELECT s.dataset, t.account, t.id, s.body_sha256, $1, s.scores \
+             FROM submissions s, api_tokens t WHERE s.id = $2 AND t.id = $3",
         )
-        .bind(format!("model-{i:03}"))
+        .bind(&model)
         .bind(templates[i % templates.len()])
         .bind(token)
-        .execute(&mut *tx)
+        .execute(&mut *c)
         .await
+        .map(|_| ()))
         .expect("copy a submission");
     }
     tx.commit().await.expect("commit");

@@ -435,7 +435,7 @@ async fn studies_refuse_what_cannot_be_compared_and_are_audited() {
 
     // The variant imported with its own replay's scene graphs: a 30° camera sees less, so some
     // items are judged by other signatures, and the study says so.
-    let dir = server.db_path().parent().expect("folder").to_path_buf();
+    let dir = server.dir().to_path_buf();
     let mut own = options("world-own");
     own.scene_graphs = Some(dir.join("world-fov30-replay"));
     import(&server.pool, &dir.join("world-fov30"), &own).await;

@@ -6,14 +6,14 @@ use std::collections::HashMap;
 use enact_hub::core::credentials::Role;
 use enact_hub::core::submission::Visibility;
 use enact_hub::store;
+use enact_hub::store::Pool;
 use enact_hub::web::WebConfig;
 use serde_json::{Value, json};
-use sqlx::SqlitePool;
 
 use crate::helpers::*;
 
 /// A token for a fresh (or existing) account.
-async fn make_token(pool: &SqlitePool, name: &str, role: Role, daily: Option<i64>) -> String {
+async fn make_token(pool: &Pool, name: &str, role: Role, daily: Option<i64>) -> String {
     api_token(pool, name, role, daily, None).await.1
 }
 
@@ -84,7 +84,7 @@ async fn make_answers_public(server: &TestServer, dataset: &str, admin: &str) {
         .await;
 }
 
-async fn stored_counts(pool: &SqlitePool) -> (i64, i64) {
+async fn stored_counts(pool: &Pool) -> (i64, i64) {
     let mut conn = pool.acquire().await.expect("conn");
     store::submissions::counts(&mut conn).await.expect("counts")
 }

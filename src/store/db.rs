@@ -1,0 +1,280 @@
+//! The two databases behind one type: SQLite (one file, the default) and PostgreSQL (shared by
+//! many server instances). A pool, a pooled connection and a transaction are each an enum of
+//! the two; store functions take [`Conn`] (either, pooled or in a transaction) and write each
+//! query once, with `$1`-style placeholders that both understand, through [`on!`].
+
+use std::time::Duration;
+
+use sqlx::pool::PoolConnection;
+use sqlx::postgres::{PgConnectOptions, PgPoolOptions, PgRow};
+use sqlx::sqlite::SqliteRow;
+use sqlx::{PgConnection, PgPool, Postgres, Sqlite, SqliteConnection, SqlitePool, Transaction};
+
+/// A connection of either database, borrowed for one store call.
+pub enum Handle<'c> {
+    Sqlite(&'c mut SqliteConnection),
+    Pg(&'c mut PgConnection),
+}
+
+/// Something a store function can run queries on: a pooled connection or a transaction.
+pub trait Connection {
+    fn handle(&mut self) -> Handle<'_>;
+}
+
+/// What store functions take.
+pub type Conn = dyn Connection + Send;
+
+impl Connection for SqliteConnection {
+    fn handle(&mut self) -> Handle<'_> {
+        Handle::Sqlite(self)
+    }
+}
+
+impl Connection for PgConnection {
+    fn handle(&mut self) -> Handle<'_> {
+        Handle::Pg(self)
+    }
+}
+
+impl Connection for PoolConnection<Sqlite> {
+    fn handle(&mut self) -> Handle<'_> {
+        Handle::Sqlite(self)
+    }
+}
+
+impl Connection for PoolConnection<Postgres> {
+    fn handle(&mut self) -> Handle<'_> {
+        Handle::Pg(self)
+    }
+}
+
+/// `on_db!(conn, |c| body)` (`on!` inside the store) runs `body` with `c` bound to the connection of whichever database
+/// `conn` is on: the body is compiled once per database, so it is written once. (It reads as
+/// a closure so rustfmt formats it; it is not one: `?` and `return` act on the caller.)
+#[macro_export]
+macro_rules! on_db {
+    ($conn:expr, |$c:ident| $body:expr) => {
+        match $crate::store::db::Connection::handle($conn) {
+            $crate::store::db::Handle::Sqlite($c) => $body,
+            $crate::store::db::Handle::Pg($c) => $body,
+        }
+    };
+}
+pub(crate) use crate::on_db as on;
+
+/// A pool of connections to one database.
+#[derive(Clone, Debug)]
+pub enum Pool {
+    Sqlite(SqlitePool),
+    Pg(PgPool),
+}
+
+impl From<SqlitePool> for Pool {
+    fn from(pool: SqlitePool) -> Pool {
+        Pool::Sqlite(pool)
+    }
+}
+
+impl From<PgPool> for Pool {
+    fn from(pool: PgPool) -> Pool {
+        Pool::Pg(pool)
+    }
+}
+
+/// A connection taken from a [`Pool`].
+pub enum PooledConn {
+    Sqlite(PoolConnection<Sqlite>),
+    Pg(PoolConnection<Postgres>),
+}
+
+impl Connection for PooledConn {
+    fn handle(&mut self) -> Handle<'_> {
+        match self {
+            PooledConn::Sqlite(c) => Handle::Sqlite(c),
+            PooledConn::Pg(c) => Handle::Pg(c),
+        }
+    }
+}
+
+/// A write transaction; rolled back when dropped without [`Tx::commit`].
+pub enum Tx {
+    Sqlite(Transaction<'static, Sqlite>),
+    Pg(Transaction<'static, Postgres>),
+}
+
+impl Connection for Tx {
+    fn handle(&mut self) -> Handle<'_> {
+        match self {
+            Tx::Sqlite(t) => Handle::Sqlite(t),
+            Tx::Pg(t) => Handle::Pg(t),
+        }
+    }
+}
+
+impl Tx {
+    pub async fn commit(self) -> Result<(), sqlx::Error> {
+        match self {
+            Tx::Sqlite(t) => t.commit().await,
+            Tx::Pg(t) => t.commit().await,
+        }
+    }
+
+    pub async fn rollback(self) -> Result<(), sqlx::Error> {
+        match self {
+            Tx::Sqlite(t) => t.rollback().await,
+            Tx::Pg(t) => t.rollback().await,
+        }
+    }
+}
+
+/// The key of the advisory lock every PostgreSQL write transaction takes (see [`Pool::begin`]).
+const WRITE_LOCK: i64 = 0x454e_4143_5448_5542; // "ENACTHUB"
+
+impl Pool {
+    pub async fn acquire(&self) -> Result<PooledConn, sqlx::Error> {
+        Ok(match self {
+            Pool::Sqlite(p) => PooledConn::Sqlite(p.acquire().await?),
+            Pool::Pg(p) => PooledConn::Pg(p.acquire().await?),
+        })
+    }
+
+    /// A write transaction, serialised with every other one on the database. SQLite:
+    /// `BEGIN IMMEDIATE` takes the write lock at once (a deferred transaction that read first
+    /// and wrote after another writer's commit would fail with `database is locked` instead
+    /// of queueing). PostgreSQL: a transaction-scoped advisory lock taken first, so the checks
+    /// the use cases make before they write (quotas, idempotency keys, run-once rules,
+    /// assignment) hold across every server instance exactly as they do in one SQLite process.
+    pub async fn begin(&self) -> Result<Tx, sqlx::Error> {
+        match self {
+            Pool::Sqlite(p) => Ok(Tx::Sqlite(p.begin_with("BEGIN IMMEDIATE").await?)),
+            Pool::Pg(p) => {
+                let mut tx = p.begin().await?;
+                sqlx::query("SELECT pg_advisory_xact_lock($1)")
+                    .bind(WRITE_LOCK)
+                    .execute(&mut *tx)
+                    .await?;
+                Ok(Tx::Pg(tx))
+            }
+        }
+    }
+
+    pub async fn close(&self) {
+        match self {
+            Pool::Sqlite(p) => p.close().await,
+            Pool::Pg(p) => p.close().await,
+        }
+    }
+
+    pub fn is_closed(&self) -> bool {
+        match self {
+            Pool::Sqlite(p) => p.is_closed(),
+            Pool::Pg(p) => p.is_closed(),
+        }
+    }
+
+    /// Which database: `sqlite` or `postgres`.
+    pub fn backend(&self) -> &'static str {
+        match self {
+            Pool::Sqlite(_) => "sqlite",
+            Pool::Pg(_) => "postgres",
+        }
+    }
+
+    /// The SQLite pool, for what only SQLite has (its file, backups with `VACUUM INTO`).
+    pub fn sqlite(&self) -> Option<&SqlitePool> {
+        match self {
+            Pool::Sqlite(p) => Some(p),
+            Pool::Pg(_) => None,
+        }
+    }
+}
+
+/// Connects to the PostgreSQL database at `url` and applies its migrations.
+pub async fn open_postgres(url: &str, max_connections: u32) -> Result<PgPool, sqlx::Error> {
+    let options: PgConnectOptions = url.parse()?;
+    let pool = PgPoolOptions::new()
+        .max_connections(max_connections)
+        .min_connections(1)
+        .acquire_timeout(Duration::from_secs(15))
+        .connect_with(options)
+        .await?;
+    sqlx::migrate!("./migrations/postgres").run(&pool).await?;
+    Ok(pool)
+}
+
+/// A value a row column decodes to in both databases.
+pub trait Field: Sized {
+    fn from_sqlite(row: &SqliteRow, column: &str) -> Result<Self, sqlx::Error>;
+    fn from_pg(row: &PgRow, column: &str) -> Result<Self, sqlx::Error>;
+}
+
+impl<T> Field for T
+where
+    T: for<'r> sqlx::Decode<'r, Sqlite>
+        + sqlx::Type<Sqlite>
+        + for<'r> sqlx::Decode<'r, Postgres>
+        + sqlx::Type<Postgres>,
+{
+    fn from_sqlite(row: &SqliteRow, column: &str) -> Result<Self, sqlx::Error> {
+        sqlx::Row::try_get(row, column)
+    }
+
+    fn from_pg(row: &PgRow, column: &str) -> Result<Self, sqlx::Error> {
+        sqlx::Row::try_get(row, column)
+    }
+}
+
+/// A row of either database, read by column name: what row-mapping helpers take.
+pub trait Fields {
+    fn try_get<T: Field>(&self, column: &str) -> Result<T, sqlx::Error>;
+}
+
+impl Fields for SqliteRow {
+    fn try_get<T: Field>(&self, column: &str) -> Result<T, sqlx::Error> {
+        T::from_sqlite(self, column)
+    }
+}
+
+impl Fields for PgRow {
+    fn try_get<T: Field>(&self, column: &str) -> Result<T, sqlx::Error> {
+        T::from_pg(self, column)
+    }
+}
+
+/// SQL that differs between the two databases, chosen by the connection a query runs on.
+pub trait Dialect {
+    /// The current UTC time as `2026-11-25T10:00:00Z` (how every timestamp column is written).
+    fn utc_now(&self) -> &'static str;
+    /// Midnight UTC today, in the same format.
+    fn utc_today(&self) -> &'static str;
+    /// A subquery of the integers in the JSON array bound as `$1`.
+    fn json_ids(&self) -> &'static str;
+}
+
+impl Dialect for SqliteConnection {
+    fn utc_now(&self) -> &'static str {
+        "strftime('%Y-%m-%dT%H:%M:%SZ', 'now')"
+    }
+
+    fn utc_today(&self) -> &'static str {
+        "strftime('%Y-%m-%dT00:00:00Z', 'now')"
+    }
+
+    fn json_ids(&self) -> &'static str {
+        "SELECT value FROM json_each($1)"
+    }
+}
+
+impl Dialect for PgConnection {
+    fn utc_now(&self) -> &'static str {
+        "to_char(now() AT TIME ZONE 'UTC', 'YYYY-MM-DD\"T\"HH24:MI:SS\"Z\"')"
+    }
+
+    fn utc_today(&self) -> &'static str {
+        "to_char(now() AT TIME ZONE 'UTC', 'YYYY-MM-DD\"T00:00:00Z\"')"
+    }
+
+    fn json_ids(&self) -> &'static str {
+        "SELECT value::bigint FROM json_array_elements_text($1::json)"
+    }
+}
