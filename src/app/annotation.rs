@@ -8,6 +8,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use super::annotators::now_ms;
+use super::watch::Change;
 use super::{AppError, Hub, audit, datasets};
 use crate::core::annotation::{
     AssignmentState, Draft, Outcome, QueueEntry, Session, Telemetry, balanced_split, next_in_queue,
@@ -162,6 +163,14 @@ async fn assigned(
     Ok((item, read))
 }
 
+/// The announcement that `session`'s standing on `item` changed.
+fn standing_changed(session: &Session, item: &StoredItem) -> Change {
+    Change::Standing {
+        annotator: session.annotator,
+        item: item.rowid,
+    }
+}
+
 /// Opens an assigned item: its first opening creates an empty draft, which starts the item's
 /// clock.
 pub async fn open(
@@ -185,6 +194,8 @@ pub async fn open(
             )
             .await?;
             hub.standings.forget(session.annotator, item.rowid);
+            hub.publish(&mut conn, &standing_changed(session, &item))
+                .await?;
             // None: finished meanwhile (the standing read was older than the answer).
             opened.map(|o| o.draft)
         }
@@ -237,6 +248,8 @@ pub async fn save_draft(
         store::annotations::save_draft(&mut conn, session.annotator, item.rowid, draft, now_ms())
             .await?;
     hub.standings.forget(session.annotator, item.rowid);
+    hub.publish(&mut conn, &standing_changed(session, &item))
+        .await?;
     if !saved {
         return Err(finished_already(item_id));
     }
@@ -323,6 +336,11 @@ async fn finish(
         detail,
     )
     .await?;
+    hub.publish(&mut tx, &standing_changed(session, item))
+        .await?;
+    if answered {
+        hub.publish(&mut tx, &Change::Boards).await?;
+    }
     tx.commit().await?;
     hub.standings.forget(session.annotator, item.rowid);
     if answered {

@@ -3,6 +3,7 @@
 
 use std::time::Duration;
 
+use super::watch::Change;
 use super::{AppError, Hub, audit};
 use crate::core::annotation::Session;
 use crate::core::audit::{Actor, AuditAction};
@@ -192,7 +193,9 @@ pub async fn session(hub: &Hub, token_hash: &str) -> Result<Option<(Session, i64
 /// Ends the session whose token hashes to `token_hash` (and any expired ones).
 pub async fn end_session(hub: &Hub, token_hash: &str) -> Result<(), AppError> {
     let mut conn = hub.conn().await?;
-    Ok(store::annotations::delete_session(&mut conn, token_hash, now_ms()).await?)
+    store::annotations::delete_session(&mut conn, token_hash, now_ms()).await?;
+    hub.publish(&mut conn, &Change::SessionEnded(token_hash.to_owned()))
+        .await
 }
 
 /// An annotator with their progress, as the admin page lists them.

@@ -91,6 +91,8 @@ pub struct Hub {
     /// Frames in an object store that signs URLs are answered with a redirect to a URL valid
     /// this long, when set.
     frame_redirect: Option<std::time::Duration>,
+    /// Changes other instances announced, for caches outside the app layer.
+    changes: tokio::sync::broadcast::Sender<watch::Change>,
     quotas: Quotas,
 }
 
@@ -118,6 +120,7 @@ impl Hub {
             frames: caches.frames,
             frame_store: frames::FrameStore::Database,
             frame_redirect: None,
+            changes: tokio::sync::broadcast::channel(1024).0,
             quotas,
         }
     }
@@ -258,10 +261,30 @@ impl Hub {
     }
 
     /// Clears the caches whenever stored items change, also through another process's
-    /// import. Runs until the database is closed.
+    /// import, and (on PostgreSQL) whatever other instances announce. Runs until the database
+    /// is closed.
     pub async fn watch_content(self) {
         let caches = self.caches();
-        watch::watch_generation(self.pool, caches).await;
+        tokio::join!(
+            watch::watch_generation(self.pool.clone(), caches.clone()),
+            watch::listen(self.pool.clone(), caches, self.changes.clone()),
+        );
+    }
+
+    /// Changes other instances announce (their sessions ending, or everything after missed
+    /// announcements), for caches kept outside the app layer.
+    pub fn subscribe(&self) -> tokio::sync::broadcast::Receiver<watch::Change> {
+        self.changes.subscribe()
+    }
+
+    /// Announces `change` to the other instances on the database, when `conn`'s transaction
+    /// commits (PostgreSQL; nothing on SQLite).
+    async fn publish(
+        &self,
+        conn: &mut store::Conn,
+        change: &watch::Change,
+    ) -> Result<(), AppError> {
+        Ok(store::notify(conn, watch::CHANNEL, &change.payload()).await?)
     }
 
     async fn conn(&self) -> Result<store::PooledConn, AppError> {

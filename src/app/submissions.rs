@@ -8,6 +8,7 @@ use sha2::{Digest, Sha256};
 
 use super::cache::{BoundedCache, CacheLimits};
 use super::tokens::Caller;
+use super::watch::Change;
 use super::{AppError, Hub, audit, datasets};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{NewToken, Role, Scope};
@@ -107,8 +108,11 @@ async fn take_attempt(hub: &Hub, caller: &Caller) -> Result<(), AppError> {
     }
     let daily = caller.daily_quota.unwrap_or(hub.quotas.daily);
     let total = caller.total_quota.unwrap_or(hub.quotas.total);
-    let mut conn = hub.conn().await?;
-    match store::accounts::record_attempt(&mut conn, caller.token_id, daily, total).await? {
+    // In a write transaction: the count and the insert hold across every server instance.
+    let mut tx = hub.begin().await?;
+    let quota = store::accounts::record_attempt(&mut tx, caller.token_id, daily, total).await?;
+    tx.commit().await?;
+    match quota {
         AttemptQuota::Granted => Ok(()),
         AttemptQuota::DailyExhausted { limit } => {
             let retry_after = seconds_until_utc_midnight();
@@ -255,6 +259,7 @@ where
         format!("model {}", metadata.model),
     )
     .await?;
+    hub.publish(&mut tx, &Change::Boards).await?;
     tx.commit().await?;
     hub.boards.changed();
     tracing::info!(
@@ -365,6 +370,7 @@ pub async fn update_listing(
         changes.join(", "),
     )
     .await?;
+    hub.publish(&mut tx, &Change::Boards).await?;
     tx.commit().await?;
     hub.boards.changed();
     Ok(row)
@@ -424,6 +430,7 @@ pub async fn file_baseline(
         format!("account {account_name}, model {}", metadata.model),
     )
     .await?;
+    hub.publish(&mut tx, &Change::Boards).await?;
     tx.commit().await?;
     hub.boards.changed();
     Ok(true)

@@ -2,6 +2,13 @@
 //! generation moves (imports may run in another process, so a replaced item is served stale
 //! for at most one poll interval), and logs every cache's figures once a minute while they are
 //! used.
+//!
+//! On PostgreSQL, several server instances share one database, and each keeps caches of what
+//! the others change: an annotator's standing on an item, a leaderboard, a login session. Every
+//! such change is [`published`](super::Hub::publish) on the database's `NOTIFY` channel inside
+//! the transaction that makes it (so it is announced exactly when it commits), and every
+//! instance [listens](listen) and drops what it cached. Item changes keep the generation poll,
+//! which also catches imports by a command-line process.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -16,6 +23,50 @@ use crate::store;
 
 /// How often running servers look for imports made by other processes.
 pub const POLL_INTERVAL: Duration = Duration::from_millis(500);
+
+/// The `LISTEN`/`NOTIFY` channel instances announce changes on.
+pub const CHANNEL: &str = "enact_hub_changes";
+
+/// A change other instances must drop from their caches.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Change {
+    /// An annotator's draft, answer, skip or flag of an item.
+    Standing { annotator: i64, item: i64 },
+    /// A submission or an answer changed what a leaderboard shows.
+    Boards,
+    /// A login session ended (its token's hash).
+    SessionEnded(String),
+    /// Anything may have changed (sent to local subscribers after missed notifications; never
+    /// announced).
+    Everything,
+}
+
+impl Change {
+    /// The `NOTIFY` payload: `standing 3 17`, `boards`, `session <hash>`.
+    pub fn payload(&self) -> String {
+        match self {
+            Change::Standing { annotator, item } => format!("standing {annotator} {item}"),
+            Change::Boards => "boards".to_owned(),
+            Change::SessionEnded(hash) => format!("session {hash}"),
+            Change::Everything => "everything".to_owned(),
+        }
+    }
+
+    pub fn parse(payload: &str) -> Option<Change> {
+        let mut words = payload.split(' ');
+        let change = match (words.next()?, words.next(), words.next()) {
+            ("standing", Some(a), Some(i)) => Change::Standing {
+                annotator: a.parse().ok()?,
+                item: i.parse().ok()?,
+            },
+            ("boards", None, None) => Change::Boards,
+            ("session", Some(hash), None) => Change::SessionEnded(hash.to_owned()),
+            ("everything", None, None) => Change::Everything,
+            _ => return None,
+        };
+        words.next().is_none().then_some(change)
+    }
+}
 
 /// How often cache statistics are logged (when a cache was used since the last time).
 const STATS_INTERVAL: Duration = Duration::from_secs(60);
@@ -117,6 +168,68 @@ pub async fn watch_generation(pool: Pool, caches: Caches) {
                 cache.clear();
                 standings.clear();
                 boards.changed();
+            }
+        }
+    }
+}
+
+/// Applies the changes other instances announce, until the pool closes (PostgreSQL only; a
+/// SQLite database has one server). Changes are also sent on `changes` for caches outside the
+/// app layer (the web's sessions). When the connection drops, notifications may have been
+/// missed meanwhile: every cache is cleared.
+pub async fn listen(pool: Pool, caches: Caches, changes: tokio::sync::broadcast::Sender<Change>) {
+    let Pool::Pg(pg) = &pool else {
+        return;
+    };
+    let clear_all = |why: &str| {
+        tracing::warn!(
+            why,
+            "cross-instance changes may have been missed: caches cleared"
+        );
+        caches.items.clear();
+        caches.standings.clear();
+        caches.boards.changed();
+        let _ = changes.send(Change::Everything);
+    };
+    let mut listener = loop {
+        match sqlx::postgres::PgListener::connect_with(pg).await {
+            Ok(mut listener) => match listener.listen(CHANNEL).await {
+                Ok(()) => break listener,
+                Err(e) => tracing::warn!(error = %e, "cannot listen for other instances' changes"),
+            },
+            Err(e) => tracing::warn!(error = %e, "cannot listen for other instances' changes"),
+        }
+        if pool.is_closed() {
+            return;
+        }
+        tokio::time::sleep(POLL_INTERVAL).await;
+    };
+    loop {
+        match listener.try_recv().await {
+            Ok(Some(notification)) => match Change::parse(notification.payload()) {
+                Some(change) => {
+                    match &change {
+                        Change::Standing { annotator, item } => {
+                            caches.standings.forget(*annotator, *item);
+                        }
+                        Change::Boards => caches.boards.changed(),
+                        Change::SessionEnded(_) | Change::Everything => {}
+                    }
+                    let _ = changes.send(change);
+                }
+                None => tracing::warn!(
+                    payload = notification.payload(),
+                    "unknown change announced on {CHANNEL}"
+                ),
+            },
+            // The connection was lost and is back.
+            Ok(None) => clear_all("the listening connection was re-established"),
+            Err(e) => {
+                if pool.is_closed() {
+                    return;
+                }
+                clear_all(&e.to_string());
+                tokio::time::sleep(POLL_INTERVAL).await;
             }
         }
     }

@@ -124,6 +124,22 @@ pub async fn content_generation(conn: &mut Conn) -> Result<i64, sqlx::Error> {
     })
 }
 
+/// Announces `payload` on the PostgreSQL channel `channel`, delivered when the transaction
+/// `conn` is in commits (at once outside one). Nothing on SQLite: one database, one server.
+pub async fn notify(conn: &mut Conn, channel: &str, payload: &str) -> Result<(), sqlx::Error> {
+    match db::Connection::handle(conn) {
+        db::Handle::Sqlite(_) => Ok(()),
+        db::Handle::Pg(c) => {
+            sqlx::query("SELECT pg_notify($1, $2)")
+                .bind(channel)
+                .bind(payload)
+                .execute(c)
+                .await?;
+            Ok(())
+        }
+    }
+}
+
 /// Marks stored items as changed; call inside the transaction that changes them.
 pub async fn bump_content_generation(conn: &mut Conn) -> Result<(), sqlx::Error> {
     on!(conn, |c| {

@@ -241,6 +241,9 @@ impl Server {
         shutdown: impl Future<Output = ()> + Send + 'static,
     ) -> std::io::Result<()> {
         let watcher = tokio::spawn(self.state.hub.clone().watch_content());
+        let sessions = self.state.sessions.clone();
+        let changes = self.state.hub.subscribe();
+        let follower = tokio::spawn(async move { sessions.follow(changes).await });
         // Connection info gives the login rate limit the client's address.
         let result = axum::serve(
             self.listener,
@@ -249,6 +252,7 @@ impl Server {
         .with_graceful_shutdown(shutdown)
         .await;
         watcher.abort();
+        follower.abort();
         result
     }
 }

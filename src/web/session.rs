@@ -28,6 +28,7 @@ use super::error::PageError;
 use super::{AppError, AppState};
 use crate::app::annotators::{self, SESSION_LIFETIME, now_ms};
 use crate::app::cache::BoundedCache;
+use crate::app::watch::Change;
 use crate::core::annotation::Session;
 use crate::core::credentials::{MIN_PASSWORD_CHARS, constant_time_eq, random_token, token_hash};
 
@@ -157,6 +158,24 @@ impl SessionCache {
 
     fn remove(&self, token_hash: &str) {
         self.entries.remove(&token_hash.to_owned());
+    }
+
+    fn clear(&self) {
+        self.entries.clear();
+    }
+
+    /// Drops the sessions other server instances ended, until the hub's announcements stop.
+    pub(super) async fn follow(&self, mut changes: tokio::sync::broadcast::Receiver<Change>) {
+        use tokio::sync::broadcast::error::RecvError;
+        loop {
+            match changes.recv().await {
+                Ok(Change::SessionEnded(hash)) => self.remove(&hash),
+                // Missed announcements: any session may have ended.
+                Ok(Change::Everything) | Err(RecvError::Lagged(_)) => self.clear(),
+                Ok(_) => {}
+                Err(RecvError::Closed) => return,
+            }
+        }
     }
 }
 

@@ -7,6 +7,8 @@ use reqwest::StatusCode;
 use reqwest::header::{COOKIE, SET_COOKIE};
 use serde_json::{Value, json};
 
+use enact_hub::store::Pool;
+
 use crate::helpers::*;
 
 /// A client that keeps its cookies by hand and does not follow redirects, so tests see the
@@ -21,15 +23,25 @@ pub struct Browser {
 
 impl Browser {
     pub fn new(server: &TestServer) -> Browser {
+        Browser::at(&server.url(""))
+    }
+
+    /// A browser for the server at `base` (`http://host:port`).
+    pub fn at(base: &str) -> Browser {
         Browser {
             client: reqwest::Client::builder()
                 .redirect(reqwest::redirect::Policy::none())
                 .build()
                 .expect("client"),
-            base: server.url(""),
+            base: base.to_owned(),
             cookies: Vec::new(),
             authorization: None,
         }
+    }
+
+    /// Sends this browser's next requests, its cookies included, to the server at `base`.
+    pub fn switch_to(&mut self, base: &str) {
+        base.clone_into(&mut self.base);
     }
 
     /// Sends `Authorization: Bearer token` with every request, as an API client would.
@@ -165,7 +177,12 @@ pub const PASSWORD: &str = "a long enough password";
 
 /// Creates an account with a password already set; returns its id.
 pub async fn annotator(server: &TestServer, name: &str, admin: bool) -> i64 {
-    let mut conn = server.pool.acquire().await.expect("conn");
+    annotator_on(&server.pool, name, admin).await
+}
+
+/// [`annotator`] in the database `pool`.
+pub async fn annotator_on(pool: &Pool, name: &str, admin: bool) -> i64 {
+    let mut conn = pool.acquire().await.expect("conn");
     let id =
         store::annotations::create_annotator(&mut conn, name, admin, &token_hash(&new_token()))
             .await
@@ -173,7 +190,7 @@ pub async fn annotator(server: &TestServer, name: &str, admin: bool) -> i64 {
             .expect("new name");
     let hash = hash_password(PASSWORD).expect("hash");
     db!(
-        server.pool,
+        pool,
         execute,
         sqlx::query("UPDATE annotators SET password_hash = $1, invite_hash = NULL WHERE id = $2")
             .bind(&hash)
@@ -190,7 +207,12 @@ pub async fn assign(server: &TestServer, annotator: i64, item_ids: &[&str]) {
 
 /// Appends items of `dataset` to an annotator's queue.
 pub async fn assign_in(server: &TestServer, dataset: &str, annotator: i64, item_ids: &[&str]) {
-    let mut conn = server.pool.acquire().await.expect("conn");
+    assign_on(&server.pool, dataset, annotator, item_ids).await;
+}
+
+/// [`assign_in`] in the database `pool`.
+pub async fn assign_on(pool: &Pool, dataset: &str, annotator: i64, item_ids: &[&str]) {
+    let mut conn = pool.acquire().await.expect("conn");
     let dataset = store::datasets::by_name(&mut conn, dataset)
         .await
         .expect("query")

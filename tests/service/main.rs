@@ -22,6 +22,7 @@ mod frames;
 mod helpers;
 mod hostile;
 mod import;
+mod instances;
 mod leaderboard;
 mod openapi;
 mod pages;
