@@ -36,6 +36,7 @@ pub mod frames;
 pub mod import;
 pub mod items;
 pub mod leaderboard;
+pub mod migrate_db;
 pub mod scoring;
 pub mod standings;
 pub mod studies;

@@ -83,6 +83,23 @@ enum Command {
     /// Where frame images are kept: status, and moving them to or from object storage.
     #[command(subcommand)]
     Frames(frames::FramesCommand),
+    /// Copy a whole database into a new, empty one on the other backend: a SQLite file into
+    /// PostgreSQL (or back). Stop the servers first; the source is left as it was.
+    MigrateDb(MigrateDbArgs),
+}
+
+#[derive(Args)]
+struct MigrateDbArgs {
+    /// The database to copy: a SQLite file or a PostgreSQL URL.
+    #[arg(long, value_name = "DB")]
+    from: PathBuf,
+    /// The database to copy into (created and migrated if it is a SQLite file; a PostgreSQL
+    /// database must exist): it must hold nothing yet.
+    #[arg(long, value_name = "DB")]
+    to: PathBuf,
+    /// Print the report as JSON on standard output.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Args)]
@@ -469,6 +486,7 @@ pub fn main() -> ExitCode {
             Command::Token(command) => token(command).await,
             Command::Annotator(AnnotatorCommand::Create(args)) => create_annotator(args).await,
             Command::Frames(command) => frames::frames(command).await,
+            Command::MigrateDb(args) => migrate_db(args).await,
         }
     });
     match result {
@@ -587,6 +605,41 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     server.run(shutdown_signal()).await?;
     hub.close().await;
     Ok(ExitCode::SUCCESS)
+}
+
+async fn migrate_db(args: MigrateDbArgs) -> anyhow::Result<ExitCode> {
+    if is_missing_file(&args.from) {
+        anyhow::bail!("{} does not exist: nothing to copy", args.from.display());
+    }
+    if resolve(&args.from) == resolve(&args.to) {
+        anyhow::bail!("--from and --to name the same database");
+    }
+    let from = open(&args.from).await?;
+    let to = open(&args.to).await?;
+    let result = app::migrate_db::migrate_db(&from, &to, |table, rows| {
+        eprintln!("{table}: {rows} rows");
+    })
+    .await;
+    from.close().await;
+    to.truncate_log().await;
+    to.close().await;
+    match result {
+        Ok(report) => {
+            if args.json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            }
+            let rows: u64 = report.tables.iter().map(|(_, n)| n).sum();
+            eprintln!(
+                "copied {rows} rows of {} tables from {} to {} in {:.1} s",
+                report.tables.len(),
+                describe_db(&resolve(&args.from)),
+                describe_db(&resolve(&args.to)),
+                report.seconds
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(e) => refused(e),
+    }
 }
 
 /// The admin token: ENACT_HUB_ADMIN_TOKEN if set (stored hashed on first sight), otherwise one

@@ -9,6 +9,7 @@ pub mod accounts;
 pub mod agreement;
 pub mod annotations;
 pub mod audit;
+pub mod copy;
 pub mod datasets;
 pub mod db;
 pub mod frames;

@@ -24,6 +24,7 @@ mod hostile;
 mod import;
 mod instances;
 mod leaderboard;
+mod migrate_db;
 mod openapi;
 mod pages;
 mod score;
