@@ -8,7 +8,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use super::annotators::now_ms;
-use super::watch::Change;
+use super::changes::Change;
 use super::{AppError, Hub, audit, datasets};
 use crate::core::annotation::{
     AssignmentState, Draft, Outcome, QueueEntry, Session, Telemetry, balanced_split, next_in_queue,

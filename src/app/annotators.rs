@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use super::watch::Change;
+use super::changes::Change;
 use super::{AppError, Hub, audit};
 use crate::core::annotation::Session;
 use crate::core::audit::{Actor, AuditAction};

@@ -28,6 +28,7 @@ pub mod annotators;
 pub mod audit;
 pub mod backup;
 pub mod cache;
+pub mod changes;
 pub mod datasets;
 pub mod demo;
 mod error;
@@ -78,6 +79,15 @@ pub fn store_location(location: &Path) -> store::Location {
     store::Location::of(location)
 }
 
+/// The database `location` names, for messages and logs: a path, or a URL with its password
+/// hidden.
+pub fn describe_location(location: &Path) -> String {
+    match store::Location::of(location) {
+        store::Location::Postgres(url) => store::Location::redacted(&url),
+        store::Location::Sqlite(path) => path.display().to_string(),
+    }
+}
+
 /// What every use case works with: the store and the caches in front of it. Cheap to clone.
 #[derive(Clone)]
 pub struct Hub {
@@ -93,7 +103,7 @@ pub struct Hub {
     /// this long, when set.
     frame_redirect: Option<std::time::Duration>,
     /// Changes other instances announced, for caches outside the app layer.
-    changes: tokio::sync::broadcast::Sender<watch::Change>,
+    changes: tokio::sync::broadcast::Sender<changes::Change>,
     quotas: Quotas,
 }
 
@@ -274,7 +284,7 @@ impl Hub {
 
     /// Changes other instances announce (their sessions ending, or everything after missed
     /// announcements), for caches kept outside the app layer.
-    pub fn subscribe(&self) -> tokio::sync::broadcast::Receiver<watch::Change> {
+    pub fn subscribe(&self) -> tokio::sync::broadcast::Receiver<changes::Change> {
         self.changes.subscribe()
     }
 
@@ -283,9 +293,9 @@ impl Hub {
     async fn publish(
         &self,
         conn: &mut store::Conn,
-        change: &watch::Change,
+        change: &changes::Change,
     ) -> Result<(), AppError> {
-        Ok(store::notify(conn, watch::CHANNEL, &change.payload()).await?)
+        Ok(store::notify(conn, changes::CHANNEL, &change.payload()).await?)
     }
 
     async fn conn(&self) -> Result<store::PooledConn, AppError> {

@@ -7,8 +7,8 @@ use std::sync::Arc;
 use sha2::{Digest, Sha256};
 
 use super::cache::{BoundedCache, CacheLimits};
+use super::changes::Change;
 use super::tokens::Caller;
-use super::watch::Change;
 use super::{AppError, Hub, audit, datasets};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{NewToken, Role, Scope};

@@ -15,6 +15,8 @@ use std::time::Duration;
 
 use crate::store::Pool;
 
+use super::changes::{CHANNEL, Change};
+
 use super::cache::{CacheLimits, CacheStats, FrameCache, ItemCache};
 use super::leaderboard::BoardCache;
 use super::standings::StandingCache;
@@ -23,50 +25,6 @@ use crate::store;
 
 /// How often running servers look for imports made by other processes.
 pub const POLL_INTERVAL: Duration = Duration::from_millis(500);
-
-/// The `LISTEN`/`NOTIFY` channel instances announce changes on.
-pub const CHANNEL: &str = "enact_hub_changes";
-
-/// A change other instances must drop from their caches.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Change {
-    /// An annotator's draft, answer, skip or flag of an item.
-    Standing { annotator: i64, item: i64 },
-    /// A submission or an answer changed what a leaderboard shows.
-    Boards,
-    /// A login session ended (its token's hash).
-    SessionEnded(String),
-    /// Anything may have changed (sent to local subscribers after missed notifications; never
-    /// announced).
-    Everything,
-}
-
-impl Change {
-    /// The `NOTIFY` payload: `standing 3 17`, `boards`, `session <hash>`.
-    pub fn payload(&self) -> String {
-        match self {
-            Change::Standing { annotator, item } => format!("standing {annotator} {item}"),
-            Change::Boards => "boards".to_owned(),
-            Change::SessionEnded(hash) => format!("session {hash}"),
-            Change::Everything => "everything".to_owned(),
-        }
-    }
-
-    pub fn parse(payload: &str) -> Option<Change> {
-        let mut words = payload.split(' ');
-        let change = match (words.next()?, words.next(), words.next()) {
-            ("standing", Some(a), Some(i)) => Change::Standing {
-                annotator: a.parse().ok()?,
-                item: i.parse().ok()?,
-            },
-            ("boards", None, None) => Change::Boards,
-            ("session", Some(hash), None) => Change::SessionEnded(hash.to_owned()),
-            ("everything", None, None) => Change::Everything,
-            _ => return None,
-        };
-        words.next().is_none().then_some(change)
-    }
-}
 
 /// How often cache statistics are logged (when a cache was used since the last time).
 const STATS_INTERVAL: Duration = Duration::from_secs(60);

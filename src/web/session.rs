@@ -28,7 +28,7 @@ use super::error::PageError;
 use super::{AppError, AppState};
 use crate::app::annotators::{self, SESSION_LIFETIME, now_ms};
 use crate::app::cache::BoundedCache;
-use crate::app::watch::Change;
+use crate::app::changes::Change;
 use crate::core::annotation::Session;
 use crate::core::credentials::{MIN_PASSWORD_CHARS, constant_time_eq, random_token, token_hash};
 
