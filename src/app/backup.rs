@@ -1,10 +1,13 @@
-//! Online backup and restore of the database file.
+//! Online backup and restore.
 //!
-//! A backup is a consistent snapshot taken while the server runs (SQLite's `VACUUM INTO` in
-//! one read transaction): every write committed before it began is in it, none after. It is
-//! checked with `PRAGMA integrity_check` before it is reported done. A restore checks the
-//! snapshot the same way, then puts it in place with a rename, so the target is never half
-//! written; it refuses a database that exists unless told to move it aside.
+//! A backup is a consistent snapshot in one SQLite file, taken while the server runs: every
+//! write committed before it began is in it, none after. From SQLite it is `VACUUM INTO` in one
+//! read transaction; from PostgreSQL it is the database copied table by table into a new SQLite
+//! file (the copy holds the write lock, so writers wait for it). It is checked with
+//! `PRAGMA integrity_check` before it is reported done. A restore checks the snapshot the same
+//! way, then puts it in place with a rename, so the target is never half written; it refuses a
+//! database that exists unless told to move it aside. Into PostgreSQL, a restore copies the
+//! snapshot into an empty database in one transaction.
 
 use std::path::{Path, PathBuf};
 
@@ -12,7 +15,7 @@ use anyhow::Context;
 use sqlx::Connection;
 use sqlx::sqlite::SqliteConnectOptions;
 
-use super::{AppError, Hub, audit};
+use super::{AppError, Hub, audit, migrate_db};
 use crate::core::audit::{Actor, AuditAction};
 use crate::store;
 
@@ -61,12 +64,10 @@ pub async fn backup(hub: &Hub, actor: &Actor, out: &Path) -> Result<Snapshot, Ap
         )));
     }
     let mut conn = hub.conn().await?;
-    let store::PooledConn::Sqlite(sqlite) = &mut conn else {
-        return Err(AppError::BadRequest(
-            "backup writes SQLite snapshots; back a PostgreSQL database up with pg_dump".into(),
-        ));
-    };
-    store::backup_into(sqlite, out).await?;
+    match &mut conn {
+        store::PooledConn::Sqlite(sqlite) => store::backup_into(sqlite, out).await?,
+        store::PooledConn::Pg(_) => copy_into_file(hub, out).await?,
+    }
     let snapshot = inspect(out).await?;
     // Written after the snapshot, so the log says what was taken, not what was attempted.
     audit::record(
@@ -84,12 +85,55 @@ pub async fn backup(hub: &Hub, actor: &Actor, out: &Path) -> Result<Snapshot, Ap
     Ok(snapshot)
 }
 
+/// A side file of `path`: `path` with `suffix` appended.
+fn beside(path: &Path, suffix: &str) -> PathBuf {
+    PathBuf::from(format!("{}{suffix}", path.display()))
+}
+
+/// Removes the SQLite file `path` and its log files, if there.
+fn remove_database_file(path: &Path) {
+    for suffix in ["", "-wal", "-shm"] {
+        let _ = std::fs::remove_file(beside(path, suffix));
+    }
+}
+
+/// Copies the hub's whole database into a new SQLite file `out` (written beside it, then
+/// renamed, so `out` is whole or absent).
+async fn copy_into_file(hub: &Hub, out: &Path) -> Result<(), AppError> {
+    let partial = beside(out, ".partial");
+    if partial.exists() {
+        return Err(AppError::Conflict(format!(
+            "{} exists from an interrupted backup: remove it first",
+            partial.display()
+        )));
+    }
+    let file = Hub::open(&partial).await?;
+    let copied = migrate_db::migrate_db(hub, &file, |_, _| {}).await;
+    file.truncate_log().await;
+    file.close().await;
+    match copied {
+        Ok(_) => {
+            std::fs::rename(&partial, out)
+                .with_context(|| format!("cannot create {}", out.display()))?;
+            remove_database_file(&partial);
+            Ok(())
+        }
+        Err(e) => {
+            remove_database_file(&partial);
+            Err(e)
+        }
+    }
+}
+
 /// Puts the snapshot `from` in place as the database `db`. An existing `db` is refused unless
 /// `replace`, which moves it (and its `-wal`/`-shm` files) aside to `{db}.before-restore`.
 /// The server must not be running on `db`.
 pub async fn restore(from: &Path, db: &Path, replace: bool) -> Result<Snapshot, AppError> {
     let snapshot = inspect(from).await?;
-    let side = |suffix: &str| PathBuf::from(format!("{}{suffix}", db.display()));
+    if !store::Location::of(db).is_file() {
+        return restore_into_database(from, db, replace, snapshot).await;
+    }
+    let side = |suffix: &str| beside(db, suffix);
     if db.exists() {
         if !replace {
             return Err(AppError::Conflict(format!(
@@ -121,6 +165,51 @@ pub async fn restore(from: &Path, db: &Path, replace: bool) -> Result<Snapshot, 
     std::fs::rename(&partial, db).with_context(|| format!("cannot create {}", db.display()))?;
     Ok(Snapshot {
         path: db.to_path_buf(),
+        ..snapshot
+    })
+}
+
+/// Copies the snapshot `from` into the empty database server database `db` (PostgreSQL).
+async fn restore_into_database(
+    from: &Path,
+    db: &Path,
+    replace: bool,
+    snapshot: Snapshot,
+) -> Result<Snapshot, AppError> {
+    if replace {
+        return Err(AppError::BadRequest(
+            "--replace moves a SQLite file aside; a PostgreSQL restore goes into an empty \
+             database: create one (createdb) and restore into it"
+                .into(),
+        ));
+    }
+    // Opening a database brings its schema up to date: done on a scratch copy, so the
+    // snapshot itself is never changed.
+    let scratch = tempfile::Builder::new()
+        .prefix("enact-hub-restore-")
+        .suffix(".db")
+        .tempfile()
+        .context("cannot create a scratch file for the restore")?
+        .into_temp_path();
+    std::fs::copy(from, &scratch)
+        .with_context(|| format!("cannot copy {} to {}", from.display(), scratch.display()))?;
+    let copied: Result<_, AppError> = async {
+        let source = Hub::open(&scratch).await?;
+        let copied = async {
+            let target = Hub::open(db).await?;
+            let copied = migrate_db::migrate_db(&source, &target, |_, _| {}).await;
+            target.close().await;
+            copied
+        }
+        .await;
+        source.close().await;
+        copied
+    }
+    .await;
+    remove_database_file(&scratch);
+    copied?;
+    Ok(Snapshot {
+        path: PathBuf::from(super::describe_location(db)),
         ..snapshot
     })
 }

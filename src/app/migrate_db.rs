@@ -28,8 +28,8 @@ pub async fn migrate_db(
         let rows = table.count(&mut target).await?;
         if rows > 0 {
             return Err(AppError::Conflict(format!(
-                "the target database already holds {rows} rows of {}: migrate-db copies into an \
-                 empty database",
+                "the target database already holds {rows} rows of {}: a whole database is only \
+                 copied into an empty one",
                 table.name
             )));
         }

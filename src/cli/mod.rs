@@ -63,9 +63,11 @@ enum Command {
     /// Simulate household activities in the built-in synthetic world and write them as
     /// BEHAVIOR-format replays that `generate` reads.
     Simulate(simulate::SimulateArgs),
-    /// Write a consistent snapshot of the database while the server runs.
+    /// Write a consistent snapshot of the database (SQLite or PostgreSQL) into a SQLite file
+    /// while the server runs.
     Backup(BackupArgs),
-    /// Put a snapshot in place as the database (the server must be stopped).
+    /// Put a snapshot in place as the database (the server must be stopped), or copy it into
+    /// an empty PostgreSQL database.
     Restore(RestoreArgs),
     /// The audit log: who issued and revoked tokens, submitted, changed visibility, imported,
     /// assigned, ran the protocol or finished annotations, and when.
@@ -521,10 +523,7 @@ fn is_missing_file(db: &Path) -> bool {
 
 /// The database for messages and logs (a URL's password hidden).
 fn describe_db(db: &Path) -> String {
-    match app::store_location(db) {
-        crate::store::Location::Postgres(url) => crate::store::Location::redacted(&url),
-        crate::store::Location::Sqlite(path) => path.display().to_string(),
-    }
+    app::describe_location(db)
 }
 
 /// Opens the database a command works on.
@@ -695,7 +694,8 @@ async fn backup(args: BackupArgs) -> anyhow::Result<ExitCode> {
 }
 
 async fn restore(args: RestoreArgs) -> anyhow::Result<ExitCode> {
-    match app::backup::restore(&args.from, &args.db.db, args.replace).await {
+    let target = resolve(&args.db.db);
+    match app::backup::restore(&args.from, &target, args.replace).await {
         Ok(snapshot) => {
             print_snapshot("restored", &snapshot);
             Ok(ExitCode::SUCCESS)

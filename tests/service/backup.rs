@@ -1,6 +1,7 @@
 //! `enact-hub backup` while submissions keep arriving, then `enact-hub restore`: the snapshot
 //! passes SQLite's integrity check and holds every submission acknowledged before the backup
-//! began; neither command overwrites a file.
+//! began; neither command overwrites a file. On PostgreSQL the snapshot is still a SQLite file,
+//! and a restore copies it into an empty database.
 
 use std::path::Path;
 use std::process::Output;
@@ -39,10 +40,6 @@ fn restore(snapshot: &Path, db: &Path, replace: bool) -> Output {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_backup_under_write_load_restores_every_acknowledged_write() {
-    if !on_sqlite() {
-        eprintln!("backups are SQLite snapshots (PostgreSQL has pg_dump): skipped");
-        return;
-    }
     let (server, records) = spawn_app_with_release().await;
     let (_, token) = api_token(&server.pool, "team", Role::Admin, None, None).await;
     let server = std::sync::Arc::new(server);
@@ -104,23 +101,38 @@ async fn a_backup_under_write_load_restores_every_acknowledged_write() {
     assert!(String::from_utf8_lossy(&again.stderr).contains("already exists"));
 
     // Restore into a new place, and check what it holds.
-    let restored = dir.path().join("restored.db");
+    let restored = match postgres_server() {
+        Some(server) => std::path::PathBuf::from(new_postgres_database(&server).await),
+        None => dir.path().join("restored.db"),
+    };
     let out = restore(&snapshot, &restored, false);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let pool = enact_hub::store::open(&restored).await.unwrap();
-    let mut conn = pool.acquire().await.unwrap();
-    assert_eq!(
-        enact_hub::store::integrity_check(&mut conn).await.unwrap(),
-        "ok"
-    );
-    let ids: Vec<i64> = sqlx::query_scalar("SELECT id FROM submissions")
-        .fetch_all(&mut *conn)
-        .await
-        .unwrap();
+    let pool = match postgres_server() {
+        Some(_) => enact_hub::store::Pool::Pg(
+            enact_hub::store::db::open_postgres(restored.to_str().unwrap(), 2)
+                .await
+                .unwrap(),
+        ),
+        None => {
+            let pool = enact_hub::store::open(&restored).await.unwrap();
+            let mut conn = pool.acquire().await.unwrap();
+            assert_eq!(
+                enact_hub::store::integrity_check(&mut conn).await.unwrap(),
+                "ok"
+            );
+            enact_hub::store::Pool::Sqlite(pool)
+        }
+    };
+    let ids: Vec<i64> = db!(
+        pool,
+        fetch_all,
+        sqlx::query_scalar("SELECT id FROM submissions")
+    )
+    .unwrap();
     for id in &before {
         assert!(
             ids.contains(id),
@@ -129,27 +141,39 @@ async fn a_backup_under_write_load_restores_every_acknowledged_write() {
     }
     // Each restored submission is whole: all its item verdicts came along.
     let items = records.len() as i64;
-    let partial: i64 = sqlx::query_scalar(
-        "SELECT count(*) FROM (SELECT submission, count(*) AS n FROM submission_items \
-         GROUP BY submission) WHERE n != ?",
+    let partial: i64 = db!(
+        pool,
+        fetch_one,
+        sqlx::query_scalar(
+            "SELECT count(*) FROM (SELECT submission, count(*) AS n FROM submission_items \
+             GROUP BY submission) AS per_submission WHERE n != $1",
+        )
+        .bind(items)
     )
-    .bind(items)
-    .fetch_one(&mut *conn)
-    .await
     .unwrap();
     assert_eq!(partial, 0);
-    drop(conn);
     pool.close().await;
 
-    // An existing database is refused, or moved aside when asked.
+    // An existing database is refused, or moved aside when asked (a PostgreSQL one is only
+    // ever restored into when empty).
     let refused = restore(&snapshot, &restored, false);
     assert!(!refused.status.success());
-    assert!(String::from_utf8_lossy(&refused.stderr).contains("--replace"));
     let replaced = restore(&snapshot, &restored, true);
-    assert!(
-        replaced.status.success(),
-        "{}",
-        String::from_utf8_lossy(&replaced.stderr)
-    );
-    assert!(dir.path().join("restored.db.before-restore").exists());
+    if on_sqlite() {
+        assert!(String::from_utf8_lossy(&refused.stderr).contains("--replace"));
+        assert!(
+            replaced.status.success(),
+            "{}",
+            String::from_utf8_lossy(&replaced.stderr)
+        );
+        assert!(dir.path().join("restored.db.before-restore").exists());
+    } else {
+        assert!(
+            String::from_utf8_lossy(&refused.stderr).contains("only copied into an empty one"),
+            "{}",
+            String::from_utf8_lossy(&refused.stderr)
+        );
+        assert!(!replaced.status.success());
+        assert!(String::from_utf8_lossy(&replaced.stderr).contains("createdb"));
+    }
 }

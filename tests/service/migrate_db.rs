@@ -126,7 +126,8 @@ async fn a_sqlite_database_in_use_moves_to_postgres_and_back_unchanged() {
         .expect("run");
     assert!(!out.status.success());
     assert!(
-        String::from_utf8_lossy(&out.stderr).contains("rows of datasets: migrate-db copies"),
+        String::from_utf8_lossy(&out.stderr)
+            .contains("rows of datasets: a whole database is only copied into an empty one"),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
