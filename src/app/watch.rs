@@ -13,15 +13,13 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::store::Pool;
-
-use super::changes::{CHANNEL, Change};
-
 use super::cache::{CacheLimits, CacheStats, FrameCache, ItemCache};
+use super::changes::{CHANNEL, Change};
 use super::leaderboard::BoardCache;
 use super::standings::StandingCache;
 use super::submissions::TargetCache;
 use crate::store;
+use crate::store::Pool;
 
 /// How often running servers look for imports made by other processes.
 pub const POLL_INTERVAL: Duration = Duration::from_millis(500);

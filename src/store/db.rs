@@ -48,9 +48,10 @@ impl Connection for PoolConnection<Postgres> {
     }
 }
 
-/// `on_db!(conn, |c| body)` (`on!` inside the store) runs `body` with `c` bound to the connection of whichever database
-/// `conn` is on: the body is compiled once per database, so it is written once. (It reads as
-/// a closure so rustfmt formats it; it is not one: `?` and `return` act on the caller.)
+/// `on_db!(conn, |c| body)` (`on!` inside the store) runs `body` with `c` bound to the
+/// connection of whichever database `conn` is on: the body is compiled once per database, so
+/// it is written once. (It reads as a closure so rustfmt formats it; it is not one: `?` and
+/// `return` act on the caller.)
 #[macro_export]
 macro_rules! on_db {
     ($conn:expr, |$c:ident| $body:expr) => {
