@@ -184,18 +184,20 @@ pub async fn open(
         (true, _) => None,
         (false, Some(stored)) => Some(stored.draft),
         (false, None) => {
-            let mut conn = hub.conn().await?;
+            // Ordered with a finish made on another instance, as `save_draft` is.
+            let mut tx = hub.begin().await?;
             let opened = store::annotations::open_draft(
-                &mut conn,
+                &mut tx,
                 session.annotator,
                 item.rowid,
                 &Draft::empty(item.summary.step_length),
                 now_ms(),
             )
             .await?;
-            hub.standings.forget(session.annotator, item.rowid);
-            hub.publish(&mut conn, &standing_changed(session, &item))
+            hub.publish(&mut tx, &standing_changed(session, &item))
                 .await?;
+            tx.commit().await?;
+            hub.standings.forget(session.annotator, item.rowid);
             // None: finished meanwhile (the standing read was older than the answer).
             opened.map(|o| o.draft)
         }
@@ -243,13 +245,16 @@ pub async fn save_draft(
 ) -> Result<(), AppError> {
     let item = unfinished(hub, session, dataset, item_id).await?;
     checked(&item, draft)?;
-    let mut conn = hub.conn().await?;
+    // A write transaction, so a save is ordered with a finish of the same item made on another
+    // instance: it lands before the finish (which drops it) or sees the answer and is refused.
+    let mut tx = hub.begin().await?;
     let saved =
-        store::annotations::save_draft(&mut conn, session.annotator, item.rowid, draft, now_ms())
+        store::annotations::save_draft(&mut tx, session.annotator, item.rowid, draft, now_ms())
             .await?;
-    hub.standings.forget(session.annotator, item.rowid);
-    hub.publish(&mut conn, &standing_changed(session, &item))
+    hub.publish(&mut tx, &standing_changed(session, &item))
         .await?;
+    tx.commit().await?;
+    hub.standings.forget(session.annotator, item.rowid);
     if !saved {
         return Err(finished_already(item_id));
     }
