@@ -360,6 +360,16 @@ struct ServeArgs {
     /// with a redirect to a URL valid this many seconds, instead of the bytes.
     #[arg(long, value_name = "SECONDS")]
     frame_redirect: Option<u64>,
+    /// Reverse proxies (addresses or networks, e.g. 10.0.0.0/8) whose X-Forwarded-For header
+    /// names the client, for the login rate limit; repeat or separate with commas. Without
+    /// one, every client behind a proxy counts as the proxy.
+    #[arg(
+        long = "trusted-proxy",
+        env = "ENACT_HUB_TRUSTED_PROXIES",
+        value_delimiter = ',',
+        value_name = "ADDRESS[/BITS]"
+    )]
+    trusted_proxies: Vec<crate::web::forwarded::TrustedProxy>,
     /// Generate the built-in demo dataset at start and serve it (as dataset "demo").
     #[arg(long)]
     demo: bool,
@@ -579,6 +589,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         body_limit: args.body_limit,
         request_timeout: Duration::from_secs(args.request_timeout),
         submission_body_limit: args.submission_body_limit,
+        trusted_proxies: args.trusted_proxies.clone(),
     };
     let server = Server::bind(args.addr, hub.clone(), &config)
         .await

@@ -22,6 +22,7 @@ mod auth;
 pub mod error;
 mod error_analysis;
 mod extract;
+pub mod forwarded;
 mod leaderboard;
 pub mod openapi;
 mod pages;
@@ -54,6 +55,8 @@ pub struct WebConfig {
     pub request_timeout: Duration,
     /// Largest submission body accepted, in bytes (other routes use `body_limit`).
     pub submission_body_limit: usize,
+    /// Reverse proxies whose `X-Forwarded-For` names the client (none by default).
+    pub trusted_proxies: Vec<forwarded::TrustedProxy>,
 }
 
 impl Default for WebConfig {
@@ -63,6 +66,7 @@ impl Default for WebConfig {
             request_timeout: Duration::from_secs(30),
             // A full ENACT-format file (8,972 QA records with answers) is about 27 MB.
             submission_body_limit: 64 * 1024 * 1024,
+            trusted_proxies: Vec::new(),
         }
     }
 }
@@ -74,6 +78,7 @@ pub struct AppState {
     submission_body_limit: usize,
     logins: Arc<session::LoginLimiter>,
     sessions: Arc<session::SessionCache>,
+    trusted_proxies: Arc<[forwarded::TrustedProxy]>,
 }
 
 impl AppState {
@@ -83,6 +88,7 @@ impl AppState {
             submission_body_limit: config.submission_body_limit,
             logins: Arc::new(session::LoginLimiter::default()),
             sessions: Arc::new(session::SessionCache::default()),
+            trusted_proxies: config.trusted_proxies.clone().into(),
         }
     }
 }

@@ -209,18 +209,25 @@ fn set_cookie(headers: &HeaderMap, name: &str, value: &str, max_age: Duration) -
     HeaderValue::from_str(&cookie).unwrap_or_else(|_| HeaderValue::from_static(""))
 }
 
-/// The client's address, when the server was started with connection info.
+/// The client's address, when the server was started with connection info: the connecting
+/// address, or the one a trusted proxy forwarded ([`super::forwarded`]).
 pub struct ClientAddress(pub Option<IpAddr>);
 
-impl<S: Send + Sync> FromRequestParts<S> for ClientAddress {
+impl FromRequestParts<AppState> for ClientAddress {
     type Rejection = std::convert::Infallible;
-    async fn from_request_parts(parts: &mut Parts, _: &S) -> Result<Self, Self::Rejection> {
-        Ok(ClientAddress(
-            parts
-                .extensions
-                .get::<ConnectInfo<SocketAddr>>()
-                .map(|c| c.0.ip()),
-        ))
+    async fn from_request_parts(
+        parts: &mut Parts,
+        state: &AppState,
+    ) -> Result<Self, Self::Rejection> {
+        let peer = parts
+            .extensions
+            .get::<ConnectInfo<SocketAddr>>()
+            .map(|c| c.0.ip());
+        Ok(ClientAddress(super::forwarded::client_address(
+            &state.trusted_proxies,
+            peer,
+            &parts.headers,
+        )))
     }
 }
 

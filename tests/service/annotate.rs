@@ -8,6 +8,7 @@ use reqwest::header::{COOKIE, SET_COOKIE};
 use serde_json::{Value, json};
 
 use enact_hub::store::Pool;
+use enact_hub::web::WebConfig;
 
 use crate::helpers::*;
 
@@ -19,6 +20,8 @@ pub struct Browser {
     cookies: Vec<(String, String)>,
     /// An `Authorization` header sent with every request (an API token on a page).
     authorization: Option<String>,
+    /// An `X-Forwarded-For` header sent with every request (as a proxy would add).
+    forwarded_for: Option<String>,
 }
 
 impl Browser {
@@ -36,6 +39,7 @@ impl Browser {
             base: base.to_owned(),
             cookies: Vec::new(),
             authorization: None,
+            forwarded_for: None,
         }
     }
 
@@ -50,15 +54,24 @@ impl Browser {
         self
     }
 
+    /// Sends `X-Forwarded-For: client` with every request, as a reverse proxy would.
+    pub fn forwarded_for(mut self, client: &str) -> Browser {
+        self.forwarded_for = Some(client.to_owned());
+        self
+    }
+
     fn request(&self, method: reqwest::Method, path: &str) -> reqwest::RequestBuilder {
-        let request = self
+        let mut request = self
             .client
             .request(method, format!("{}{path}", self.base))
             .header(COOKIE, self.cookie_header());
-        match &self.authorization {
-            Some(value) => request.header("authorization", value),
-            None => request,
+        if let Some(value) = &self.authorization {
+            request = request.header("authorization", value);
         }
+        if let Some(client) = &self.forwarded_for {
+            request = request.header("x-forwarded-for", client);
+        }
+        request
     }
 
     /// The `Cookie` header this browser sends.
@@ -367,6 +380,62 @@ async fn logins_are_rate_limited_per_account_with_a_clear_message() {
         .post_json("/annotate/mini/x/draft", Some("t"), &json!({}))
         .await;
     assert_eq!(r.status(), StatusCode::UNAUTHORIZED);
+    server.stop().await;
+}
+
+/// Twenty failed logins from `client` (as `X-Forwarded-For`), each on its own unknown name so
+/// that no account's limit is reached.
+async fn fail_logins_from(server: &TestServer, client: impl Fn(usize) -> String) {
+    for k in 0..20 {
+        let r = Browser::new(server)
+            .forwarded_for(&client(k))
+            .login(&format!("nobody{k}"), "wrong password!")
+            .await;
+        assert_eq!(r.status(), StatusCode::UNAUTHORIZED, "attempt {k}");
+    }
+}
+
+#[tokio::test]
+async fn behind_a_trusted_proxy_the_address_limit_counts_each_client() {
+    // The test's requests come from 127.0.0.1, which this server trusts as its proxy.
+    let config = WebConfig {
+        trusted_proxies: vec!["127.0.0.1".parse().expect("address")],
+        ..WebConfig::default()
+    };
+    let server = spawn_app_configured(config, |_, _| async {}).await;
+    annotator(&server, "bob", false).await;
+    fail_logins_from(&server, |_| "203.0.113.5".to_owned()).await;
+    // That client is blocked, with the reason ...
+    let r = Browser::new(&server)
+        .forwarded_for("203.0.113.5")
+        .login("bob", PASSWORD)
+        .await;
+    assert_eq!(r.status(), StatusCode::TOO_MANY_REQUESTS);
+    let html = r.text().await.expect("body");
+    assert!(
+        html.contains("too many failed logins for your address"),
+        "{html}"
+    );
+    // ... and no one else behind the same proxy is.
+    let r = Browser::new(&server)
+        .forwarded_for("198.51.100.7")
+        .login("bob", PASSWORD)
+        .await;
+    assert_eq!(r.status(), StatusCode::SEE_OTHER);
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn an_untrusted_client_cannot_dodge_the_address_limit_with_a_header() {
+    // No trusted proxy: X-Forwarded-For is the client's own claim, and ignored.
+    let server = spawn_app_with(|_, _| async {}).await;
+    annotator(&server, "bob", false).await;
+    fail_logins_from(&server, |k| format!("203.0.113.{k}")).await;
+    let r = Browser::new(&server)
+        .forwarded_for("198.51.100.7")
+        .login("bob", PASSWORD)
+        .await;
+    assert_eq!(r.status(), StatusCode::TOO_MANY_REQUESTS);
     server.stop().await;
 }
 
