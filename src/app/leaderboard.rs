@@ -3,8 +3,9 @@
 //! them (one row per account and model, ranks, sorts, filters).
 //!
 //! Boards are served from memory ([`board`]): built once, then shared until something that
-//! changes them happens in this process (a submission stored, a listing changed, an annotator's
-//! answer) or the stored items change (an import, seen by the content watcher).
+//! changes them happens (a submission stored, a listing changed, an annotator's answer, here
+//! or announced by another instance) or the stored items change (an import, seen by the
+//! content watcher). Readers that miss at once share one build.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -132,6 +133,17 @@ pub struct BoardCache {
     /// Held while storing and while dropping, so a check and its insert are one step.
     changes: Mutex<u64>,
     builds: AtomicU64,
+    /// The build under way per dataset: readers that miss together wait for one build instead
+    /// of each reading every submission again (after each answer, under load, many do).
+    flights: Mutex<HashMap<String, Arc<Flight>>>,
+}
+
+/// One build of a board, shared by the readers that asked for it before any change since it
+/// began.
+struct Flight {
+    /// The change count when it began: it reads everything committed before.
+    ticket: u64,
+    board: tokio::sync::OnceCell<Arc<Board>>,
 }
 
 impl Default for BoardCache {
@@ -147,7 +159,39 @@ impl BoardCache {
             boards: BoundedCache::by_entries("boards", datasets),
             changes: Mutex::new(0),
             builds: AtomicU64::new(0),
+            flights: Mutex::default(),
         }
+    }
+
+    /// The build of `dataset` to wait for: the one under way if no change came since it
+    /// began, else a new one.
+    fn flight(&self, dataset: &str) -> Arc<Flight> {
+        let ticket = *self.changes();
+        let mut flights = self.flights.lock().unwrap_or_else(|p| p.into_inner());
+        match flights.get(dataset) {
+            Some(flight) if flight.ticket == ticket => flight.clone(),
+            _ => {
+                let flight = Arc::new(Flight {
+                    ticket,
+                    board: tokio::sync::OnceCell::new(),
+                });
+                flights.insert(dataset.to_owned(), flight.clone());
+                flight
+            }
+        }
+    }
+
+    /// Forgets `flight` once it is done (a newer one may have replaced it).
+    fn landed(&self, dataset: &str, flight: &Arc<Flight>) {
+        let mut flights = self.flights.lock().unwrap_or_else(|p| p.into_inner());
+        if flights.get(dataset).is_some_and(|f| Arc::ptr_eq(f, flight)) {
+            flights.remove(dataset);
+        }
+    }
+
+    /// Boards built so far (each build's version is the count at its end).
+    pub fn builds(&self) -> u64 {
+        self.builds.load(Ordering::SeqCst)
     }
 
     fn changes(&self) -> std::sync::MutexGuard<'_, u64> {
@@ -171,12 +215,44 @@ impl BoardCache {
 }
 
 /// The board of the dataset named `name`, from memory when nothing changed since it was built.
+/// Readers that miss at once share one build (see [`BoardCache`]).
 pub async fn board(hub: &Hub, name: &str) -> Result<Arc<Board>, AppError> {
     let cache = &hub.boards;
     if let Some(board) = cache.get(name) {
         return Ok(board);
     }
-    let ticket = *cache.changes();
+    let flight = Landing {
+        cache,
+        dataset: name,
+        flight: cache.flight(name),
+    };
+    // One reader builds; the others wait for it. A failed build is tried again by the next
+    // waiter (each then gets its own error), as is one whose reader went away.
+    flight
+        .flight
+        .board
+        .get_or_try_init(|| build(hub, name, flight.flight.ticket))
+        .await
+        .cloned()
+}
+
+/// Forgets its flight when dropped, even when the request waiting on it is cancelled, so no
+/// flight outlives its readers.
+struct Landing<'a> {
+    cache: &'a BoardCache,
+    dataset: &'a str,
+    flight: Arc<Flight>,
+}
+
+impl Drop for Landing<'_> {
+    fn drop(&mut self) {
+        self.cache.landed(self.dataset, &self.flight);
+    }
+}
+
+/// Reads and ranks the board of `name`; keeps it when no change came since `ticket`.
+async fn build(hub: &Hub, name: &str, ticket: u64) -> Result<Arc<Board>, AppError> {
+    let cache = &hub.boards;
     let (dataset, rows) = of(hub, name).await?;
     let board = Arc::new(Board {
         dataset,

@@ -255,6 +255,11 @@ impl Hub {
         &self.items
     }
 
+    /// How many leaderboards this hub has built (each cache miss that read the store).
+    pub fn board_builds(&self) -> u64 {
+        self.boards.builds()
+    }
+
     /// The frame cache.
     pub fn frames(&self) -> &cache::FrameCache {
         &self.frames

@@ -414,3 +414,51 @@ async fn a_thousand_submissions_make_a_board_of_pages() {
     );
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn readers_that_miss_together_share_one_build_and_a_change_starts_another() {
+    use enact_hub::app::{Hub, leaderboard};
+    let (server, records) = spawn_app_with_release().await;
+    let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let id = submit(&server, &token, "m1", answers(&records, &[0])).await;
+    let hub = Hub::from(server.pool.clone());
+    let read_together = |n: usize| {
+        let hub = hub.clone();
+        async move {
+            let reads = (0..n).map(|_| {
+                let hub = hub.clone();
+                tokio::spawn(async move { leaderboard::board(&hub, "mini").await })
+            });
+            let mut boards = Vec::new();
+            for read in reads.collect::<Vec<_>>() {
+                boards.push(read.await.expect("task").expect("board"));
+            }
+            boards
+        }
+    };
+    // Sixteen readers on an empty cache: one build, one board for all.
+    let boards = read_together(16).await;
+    assert_eq!(hub.board_builds(), 1);
+    assert!(boards.iter().all(|b| std::sync::Arc::ptr_eq(b, &boards[0])));
+    assert_eq!(boards[0].rows.len(), 1);
+    // Kept: later readers build nothing.
+    read_together(4).await;
+    assert_eq!(hub.board_builds(), 1);
+    assert!(!boards[0].rows[0].baseline);
+    // A change (the submission marked a baseline) starts one new build, which the next
+    // readers share, and which shows what changed.
+    enact_hub::app::submissions::update_listing(&hub, &tester(), &id.to_string(), Some(true), None)
+        .await
+        .expect("listing");
+    let boards = read_together(16).await;
+    assert_eq!(hub.board_builds(), 2);
+    assert!(boards.iter().all(|b| std::sync::Arc::ptr_eq(b, &boards[0])));
+    assert!(boards[0].rows[0].baseline);
+    // A dataset that does not exist is refused to every reader, and nothing is kept.
+    let missing = leaderboard::board(&hub, "nope").await;
+    assert!(matches!(
+        missing,
+        Err(enact_hub::app::AppError::NotFound(_))
+    ));
+    server.stop().await;
+}
