@@ -9,12 +9,15 @@
 # issues 50 submitter tokens over the API, posts four real submissions (right, and wrong on a
 # quarter, a half and all of the items), copies them in SQL to 1,000 submissions of 50
 # accounts with distinct models (before the board is first read), then loads
-# GET /api/v1/datasets/demo/leaderboard and GET /leaderboard/demo with wrk. Installs Debian's
-# `wrk` if missing. Only loopback traffic.
+# GET /api/v1/datasets/demo/leaderboard and GET /leaderboard/demo with wrk, then the JSON again
+# while an admin changes a listing every CHANGE_EVERY seconds (each change drops the board, so
+# the readers in flight need it rebuilt). Installs Debian's `wrk` if missing. Only loopback
+# traffic.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 DURATION=${DURATION:-10s}
+CHANGE_EVERY=${CHANGE_EVERY:-0.5}
 CONNECTIONS=${CONNECTIONS:-64}
 WRK_THREADS=${WRK_THREADS:-1}
 PORT=${PORT:-18082}
@@ -115,3 +118,21 @@ for run in 1 2 3; do
   cached=$(curl -fsS -o /dev/null -w '%{time_total}' "$JSON_URL")
   echo "after a new submission: first read ${rebuilt}s, next read ${cached}s"
 done
+
+# Reads while the board keeps changing: a listing flipped (baseline on, off) every
+# CHANGE_EVERY seconds during the wrk run.
+target=${templates[1]}
+(
+  flag=true
+  while :; do
+    api -X PATCH -H 'Content-Type: application/json' -d "{\"baseline\": $flag}" \
+      "$BASE/api/v1/admin/submissions/$target" >/dev/null
+    if [ "$flag" = true ]; then flag=false; else flag=true; fi
+    sleep "$CHANGE_EVERY"
+  done
+) &
+CHANGER=$!
+echo "## leaderboard json under changes: GET ${JSON_URL#"$BASE"}, a listing change every ${CHANGE_EVERY}s, ${CONNECTIONS} connections, ${WRK_THREADS} wrk thread(s), $DURATION"
+wrk -t"$WRK_THREADS" -c"$CONNECTIONS" -d"$DURATION" --latency "$JSON_URL" | tee "$OUT/wrk-changing.txt"
+kill "$CHANGER" 2>/dev/null || true
+wait "$CHANGER" 2>/dev/null || true
