@@ -107,10 +107,14 @@ async fn copy_into_file(hub: &Hub, out: &Path) -> Result<(), AppError> {
             partial.display()
         )));
     }
-    let file = Hub::open(&partial).await?;
-    let copied = migrate_db::migrate_db(hub, &file, |_, _| {}).await;
-    file.truncate_log().await;
-    file.close().await;
+    let copied = async {
+        let file = Hub::open(&partial).await?;
+        let copied = migrate_db::migrate_db(hub, &file, |_, _| {}).await;
+        file.truncate_log().await;
+        file.close().await;
+        copied
+    }
+    .await;
     match copied {
         Ok(_) => {
             std::fs::rename(&partial, out)
@@ -169,7 +173,7 @@ pub async fn restore(from: &Path, db: &Path, replace: bool) -> Result<Snapshot, 
     })
 }
 
-/// Copies the snapshot `from` into the empty database server database `db` (PostgreSQL).
+/// Copies the snapshot `from` into `db`, an empty PostgreSQL database.
 async fn restore_into_database(
     from: &Path,
     db: &Path,

@@ -253,6 +253,10 @@ impl Drop for Landing<'_> {
 /// Reads and ranks the board of `name`; keeps it when no change came since `ticket`.
 async fn build(hub: &Hub, name: &str, ticket: u64) -> Result<Arc<Board>, AppError> {
     let cache = &hub.boards;
+    // Kept by a build that landed between this reader's miss and its flight.
+    if let Some(board) = cache.get(name) {
+        return Ok(board);
+    }
     let (dataset, rows) = of(hub, name).await?;
     let board = Arc::new(Board {
         dataset,
