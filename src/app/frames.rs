@@ -34,6 +34,9 @@ pub struct ObjectFrames {
     keeps_attributes: bool,
 }
 
+/// An opened object store, and what signs its URLs when it can.
+type Opened = (Arc<dyn ObjectStore>, Option<Arc<dyn Signer>>);
+
 /// Where frame bytes are written, and read when a row does not hold them.
 #[derive(Clone, Default)]
 pub enum FrameStore {
@@ -71,48 +74,52 @@ impl FrameStore {
         };
         let url = url::Url::parse(spec).map_err(|e| bad(e.to_string()))?;
         let build = |e: object_store::Error| bad(e.to_string());
-        let (store, signer, prefix): (Arc<dyn ObjectStore>, Option<Arc<dyn Signer>>, &str) =
-            match url.scheme() {
-                "s3" | "s3a" => {
-                    let s3 = Arc::new(
-                        object_store::aws::AmazonS3Builder::from_env()
-                            .with_url(spec)
-                            .build()
-                            .map_err(build)?,
-                    );
-                    (s3.clone(), Some(s3), url.path())
-                }
-                "gs" => {
-                    let gcs = Arc::new(
-                        object_store::gcp::GoogleCloudStorageBuilder::from_env()
-                            .with_url(spec)
-                            .build()
-                            .map_err(build)?,
-                    );
-                    (gcs.clone(), Some(gcs), url.path())
-                }
-                "az" | "azure" | "abfs" | "abfss" => {
-                    let azure = Arc::new(
-                        object_store::azure::MicrosoftAzureBuilder::from_env()
-                            .with_url(spec)
-                            .build()
-                            .map_err(build)?,
-                    );
-                    (azure.clone(), Some(azure), url.path())
-                }
-                "file" => {
-                    let dir = url
-                        .to_file_path()
-                        .map_err(|()| bad("not an absolute local path".into()))?;
-                    std::fs::create_dir_all(&dir)
-                        .map_err(|e| bad(format!("cannot create {}: {e}", dir.display())))?;
-                    let local = object_store::local::LocalFileSystem::new_with_prefix(&dir)
-                        .map_err(build)?
-                        .with_automatic_cleanup(true);
-                    (Arc::new(local), None, "")
-                }
-                other => return Err(bad(format!("unknown scheme {other:?}"))),
-            };
+        // A cloud store both stores and signs URLs.
+        fn signing<S: ObjectStore + Signer>(store: S) -> Opened {
+            let store = Arc::new(store);
+            (store.clone(), Some(store))
+        }
+        let ((store, signer), prefix): (Opened, &str) = match url.scheme() {
+            "s3" | "s3a" => (
+                signing(
+                    object_store::aws::AmazonS3Builder::from_env()
+                        .with_url(spec)
+                        .build()
+                        .map_err(build)?,
+                ),
+                url.path(),
+            ),
+            "gs" => (
+                signing(
+                    object_store::gcp::GoogleCloudStorageBuilder::from_env()
+                        .with_url(spec)
+                        .build()
+                        .map_err(build)?,
+                ),
+                url.path(),
+            ),
+            "az" | "azure" | "abfs" | "abfss" => (
+                signing(
+                    object_store::azure::MicrosoftAzureBuilder::from_env()
+                        .with_url(spec)
+                        .build()
+                        .map_err(build)?,
+                ),
+                url.path(),
+            ),
+            "file" => {
+                let dir = url
+                    .to_file_path()
+                    .map_err(|()| bad("not an absolute local path".into()))?;
+                std::fs::create_dir_all(&dir)
+                    .map_err(|e| bad(format!("cannot create {}: {e}", dir.display())))?;
+                let local = object_store::local::LocalFileSystem::new_with_prefix(&dir)
+                    .map_err(build)?
+                    .with_automatic_cleanup(true);
+                ((Arc::new(local), None), "")
+            }
+            other => return Err(bad(format!("unknown scheme {other:?}"))),
+        };
         let prefix = ObjectPath::parse(prefix.trim_matches('/'))
             .map_err(|e| bad(format!("bad prefix: {e}")))?;
         Ok(FrameStore::Objects(Arc::new(ObjectFrames {
@@ -245,8 +252,22 @@ pub enum FrameBytes {
 /// A frame's PNG bytes by content hash, from the database or the object store its row
 /// points to, or a 404 that names the hash.
 pub async fn png(hub: &Hub, sha256: &str) -> Result<Bytes, AppError> {
+    match png_or_redirect(hub, sha256, None).await? {
+        FrameBytes::Png(png) => Ok(png),
+        // Only asked for with a redirect.
+        FrameBytes::Redirect(_) => Err(AppError::internal("a frame redirect nobody asked for")),
+    }
+}
+
+/// [`png`], or for a frame held in an object store that signs URLs and with `redirect` set,
+/// a URL valid for `redirect` instead of the bytes (which are then not read).
+pub async fn png_or_redirect(
+    hub: &Hub,
+    sha256: &str,
+    redirect: Option<Duration>,
+) -> Result<FrameBytes, AppError> {
     if let Some(png) = hub.frames.get(sha256) {
-        return Ok(png);
+        return Ok(FrameBytes::Png(png));
     }
     let held = {
         let mut conn = hub.conn().await?;
@@ -255,39 +276,19 @@ pub async fn png(hub: &Hub, sha256: &str) -> Result<Bytes, AppError> {
     let png = match held {
         None => return Err(AppError::NotFound(format!("no frame with hash '{sha256}'"))),
         Some(Some(png)) => Bytes::from(png),
-        Some(None) => object_bytes(hub, sha256).await?,
+        Some(None) => {
+            let signed = match (redirect, hub.frame_store.objects()) {
+                (Some(expires), Some(objects)) => objects.signed_url(sha256, expires).await,
+                _ => None,
+            };
+            if let Some(url) = signed {
+                return Ok(FrameBytes::Redirect(url?));
+            }
+            object_bytes(hub, sha256).await?
+        }
     };
     hub.frames.insert(sha256, png.clone());
-    Ok(png)
-}
-
-/// [`png`], or for a frame held in an object store that signs URLs and with `redirect` set,
-/// a URL valid for `redirect` instead of the bytes.
-pub async fn png_or_redirect(
-    hub: &Hub,
-    sha256: &str,
-    redirect: Option<Duration>,
-) -> Result<FrameBytes, AppError> {
-    if let (Some(expires), Some(objects)) = (redirect, hub.frame_store.objects()) {
-        if hub.frames.get(sha256).is_none() {
-            let held = {
-                let mut conn = hub.conn().await?;
-                store::frames::png(&mut conn, sha256).await?
-            };
-            match held {
-                None => {
-                    return Err(AppError::NotFound(format!("no frame with hash '{sha256}'")));
-                }
-                Some(None) => {
-                    if let Some(url) = objects.signed_url(sha256, expires).await {
-                        return Ok(FrameBytes::Redirect(url?));
-                    }
-                }
-                Some(Some(_)) => {}
-            }
-        }
-    }
-    png(hub, sha256).await.map(FrameBytes::Png)
+    Ok(FrameBytes::Png(png))
 }
 
 /// The origin (`https://host:port`) of the presigned URLs frame requests are redirected to,
@@ -374,9 +375,9 @@ pub async fn migrate(
     progress(done, total);
 
     if let Some(target) = to.objects() {
-        // First the frames held outside the database: copied from `source` when the target lacks them
-        // (rows do not change); without a source, they must already be in the target (a
-        // migration run again).
+        // First the frames held outside the database: copied from `source` when the target
+        // lacks them (rows do not change); without a source, they must already be in the
+        // target (a migration run again).
         let mut after = 0;
         loop {
             let batch = {
