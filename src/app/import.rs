@@ -506,9 +506,10 @@ pub async fn import_release(
     let bar = progress_bar(options.progress, qa_bytes);
     let (mut validator, mut next) = next_batch(validator).await?;
 
-    // IMMEDIATE: the write lock is taken now and kept to the end (later batches are validated
-    // while it is held). A deferred transaction that read first and wrote a batch later would
-    // fail at once if a running server wrote in between, instead of waiting for the lock.
+    // The write lock is taken now and kept to the end (later batches are validated while it is
+    // held): SQLite's IMMEDIATE (a deferred transaction that read first and wrote a batch later
+    // would fail at once if a running server wrote in between, instead of waiting), or
+    // PostgreSQL's advisory write lock (`Pool::begin`).
     let mut tx = hub.pool.begin().await?;
     let existing_dataset = store::datasets::by_name(&mut tx, &options.dataset).await?;
     let stored_hashes = match &existing_dataset {

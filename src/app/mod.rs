@@ -198,11 +198,6 @@ impl Hub {
         Ok(Hub::new(pool, Quotas::default()))
     }
 
-    /// `sqlite` or `postgres`.
-    pub fn backend(&self) -> &'static str {
-        self.pool.backend()
-    }
-
     /// The hub writing new frames to `store` and reading there the frames the database does
     /// not hold; with `redirect`, frame requests for such frames are answered with a presigned
     /// URL valid that long (when the store can sign one).

@@ -173,14 +173,6 @@ impl Pool {
         }
     }
 
-    /// Which database: `sqlite` or `postgres`.
-    pub fn backend(&self) -> &'static str {
-        match self {
-            Pool::Sqlite(_) => "sqlite",
-            Pool::Pg(_) => "postgres",
-        }
-    }
-
     /// The SQLite pool, for what only SQLite has (its file, backups with `VACUUM INTO`).
     pub fn sqlite(&self) -> Option<&SqlitePool> {
         match self {

@@ -52,12 +52,13 @@ pub async fn png(conn: &mut Conn, sha256: &str) -> Result<Option<Option<Vec<u8>>
 pub async fn count_by_place(conn: &mut Conn) -> Result<(u64, u64), sqlx::Error> {
     on!(conn, |c| {
         let row = sqlx::query(
-        "SELECT CAST(COALESCE(SUM(CASE WHEN length(png) > 0 THEN 1 ELSE 0 END), 0) AS BIGINT) AS here, \
-         CAST(COALESCE(SUM(CASE WHEN length(png) = 0 THEN 1 ELSE 0 END), 0) AS BIGINT) AS elsewhere \
-         FROM frames",
-    )
-    .fetch_one(&mut *c)
-    .await?;
+            "SELECT \
+             CAST(COALESCE(SUM(CASE WHEN length(png) > 0 THEN 1 ELSE 0 END), 0) AS BIGINT) AS here, \
+             CAST(COALESCE(SUM(CASE WHEN length(png) = 0 THEN 1 ELSE 0 END), 0) AS BIGINT) \
+             AS elsewhere FROM frames",
+        )
+        .fetch_one(&mut *c)
+        .await?;
         let count = |column: &str| -> Result<u64, sqlx::Error> {
             let n: i64 = row.try_get(column)?;
             u64::try_from(n).map_err(|e| super::corrupt(column, e))
