@@ -64,19 +64,7 @@ done
 BASE="http://127.0.0.1:$PORT"
 ITEM_URL=$(curl -fsS "$BASE/api/v1/datasets/$DATASET/items?per_page=1" | python3 -c 'import json,sys; print(json.load(sys.stdin)["items"][0]["url"])')
 # Every frame URL of the dataset's first 50 items, requested round-robin.
-curl -fsS "$BASE/api/v1/datasets/$DATASET/items?per_page=50" \
-  | python3 -c '
-import json, sys, urllib.request
-base = sys.argv[1]
-urls = []
-for it in json.load(sys.stdin)["items"]:
-    item = json.load(urllib.request.urlopen(base + it["url"]))
-    urls += [img["url"] for img in item["images"]]
-urls = sorted(set(urls))
-print("paths = {" + ", ".join(repr(u).replace("\x27", "\"") for u in urls) + "}")
-print("i = 0")
-print("request = function() i = i % #paths + 1; return wrk.format(\"GET\", paths[i]) end")
-' "$BASE" >"$OUT/frames.lua"
+python3 scripts/lib/frame_paths.py "$BASE" "$DATASET" >"$OUT/frames.lua"
 FRAME_BYTES=$(curl -fsS "$BASE$(sed -n 's/^paths = {"\([^"]*\)".*/\1/p' "$OUT/frames.lua")" | wc -c)
 
 # Warm the frame cache once.
