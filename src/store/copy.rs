@@ -329,12 +329,13 @@ const BATCH_ROWS: usize = 500;
 const BATCH_BYTES: usize = 32 * 1024 * 1024;
 
 impl Table {
+    /// Its columns' names, as the copy reads and writes them.
+    pub fn columns(&self) -> impl Iterator<Item = &'static str> {
+        self.columns.iter().map(|(name, _)| *name)
+    }
+
     fn column_list(&self) -> String {
-        self.columns
-            .iter()
-            .map(|(name, _)| *name)
-            .collect::<Vec<_>>()
-            .join(", ")
+        self.columns().collect::<Vec<_>>().join(", ")
     }
 
     /// Its rows.

@@ -52,6 +52,53 @@ async fn counts(pool: &Pool) -> Vec<(String, i64)> {
     all
 }
 
+/// Every table of the schema with its columns, as the database itself lists them.
+async fn schema(pool: &Pool) -> std::collections::BTreeMap<String, Vec<String>> {
+    let rows: Vec<(String, String)> = match pool {
+        Pool::Sqlite(p) => sqlx::query_as(
+            "SELECT t.name, c.name FROM sqlite_master t, pragma_table_info(t.name) c \
+             WHERE t.type = 'table' AND t.name NOT LIKE 'sqlite_%'",
+        )
+        .fetch_all(p)
+        .await
+        .expect("sqlite schema"),
+        Pool::Pg(p) => sqlx::query_as(
+            "SELECT table_name::text, column_name::text FROM information_schema.columns \
+             WHERE table_schema = current_schema()",
+        )
+        .fetch_all(p)
+        .await
+        .expect("postgres schema"),
+    };
+    let mut tables = std::collections::BTreeMap::<String, Vec<String>>::new();
+    for (table, column) in rows {
+        if table != "_sqlx_migrations" {
+            tables.entry(table).or_default().push(column);
+        }
+    }
+    for columns in tables.values_mut() {
+        columns.sort();
+    }
+    tables
+}
+
+#[tokio::test]
+async fn the_copy_knows_every_table_and_column_of_the_schema() {
+    // A table or column a migration adds and the copy does not list would be silently left
+    // behind by migrate-db and by backups of PostgreSQL.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pool = fresh_db(&dir).await;
+    let copied: std::collections::BTreeMap<String, Vec<String>> = store::copy::TABLES
+        .iter()
+        .map(|t| {
+            let mut columns: Vec<String> = t.columns().map(str::to_owned).collect();
+            columns.sort();
+            (t.name.to_owned(), columns)
+        })
+        .collect();
+    assert_eq!(schema(&pool).await, copied);
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_sqlite_database_in_use_moves_to_postgres_and_back_unchanged() {
     let Some(postgres) = postgres_server() else {
