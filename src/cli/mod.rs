@@ -86,7 +86,7 @@ enum Command {
     #[command(subcommand)]
     Frames(frames::FramesCommand),
     /// Copy a whole database into a new, empty one on the other backend: a SQLite file into
-    /// PostgreSQL (or back). Stop the servers first; the source is left as it was.
+    /// PostgreSQL (or back). Stop the servers first; the source's rows are left as they were.
     MigrateDb(MigrateDbArgs),
 }
 
