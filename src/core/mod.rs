@@ -12,6 +12,8 @@
 //!   accepted-but-incomplete answers, per step of every analysed answer.
 //! - [`submission`]: reading, refusing and scoring a leaderboard submission.
 //! - [`leaderboard`]: leaderboard rows (Table 1 layout) and the TA-vs-L chart geometry.
+//! - [`model_run`]: asking a model an item: the versioned prompt, reading replies, retry
+//!   delays and the in-flight window of a model run.
 //! - [`pipeline`]: ENACT's data pipeline: key-frame segmentation, the transition graph, path
 //!   sampling and QA items in the release layout.
 //! - [`agreement`]: Krippendorff's alpha, bootstrap, ordering encodings, Welch; the paper's
@@ -35,6 +37,7 @@ pub mod dataset;
 pub mod demo;
 pub mod error_analysis;
 pub mod leaderboard;
+pub mod model_run;
 pub mod pipeline;
 pub mod release;
 pub mod scene_graph;
