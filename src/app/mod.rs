@@ -19,6 +19,8 @@
 //! - [`audit`]: the audit log every audited use case writes in its own transaction.
 //! - [`demo`]: the built-in demo dataset, its chance baseline and its login link.
 //! - [`backup`]: online snapshots of the database, and restoring one.
+//! - [`runs`]: model runs: the hub asks an OpenAI-compatible endpoint every item, keeps each
+//!   reply as it arrives, resumes where it stopped, and submits the answers.
 //!
 //! Errors are [`AppError`]: each kind says what was wrong, in words a person can act on.
 
@@ -38,6 +40,7 @@ pub mod import;
 pub mod items;
 pub mod leaderboard;
 pub mod migrate_db;
+pub mod runs;
 pub mod scoring;
 pub mod standings;
 pub mod studies;

@@ -293,6 +293,42 @@ pub const TABLES: &[Table] = &[
         ],
         false,
     ),
+    table(
+        "model_runs",
+        &[
+            ("id", Int),
+            ("name", Text),
+            ("dataset", Int),
+            ("endpoint", Text),
+            ("model", Text),
+            ("params", Text),
+            ("prompt_version", Text),
+            ("prompt_hash", Text),
+            ("token", Int),
+            ("submission", Int),
+            ("stamp", Text),
+            ("created_by", Text),
+            ("created_at", Text),
+        ],
+        true,
+    ),
+    table(
+        "model_run_items",
+        &[
+            ("run", Int),
+            ("item", Int),
+            ("state", Text),
+            ("response", Text),
+            ("finish_reason", Text),
+            ("prompt_tokens", Int),
+            ("completion_tokens", Int),
+            ("latency_ms", Int),
+            ("attempts", Int),
+            ("error", Text),
+            ("done_at", Text),
+        ],
+        false,
+    ),
 ];
 
 /// One column's value.

@@ -14,6 +14,7 @@ pub mod datasets;
 pub mod db;
 pub mod frames;
 pub mod items;
+pub mod runs;
 pub mod studies;
 pub mod submissions;
 

@@ -27,7 +27,10 @@ mod leaderboard;
 mod migrate_db;
 mod openapi;
 mod pages;
+mod runs;
 mod score;
+#[path = "../support/standin.rs"]
+mod standin;
 mod studies;
 mod submissions;
 mod world;

@@ -1,0 +1,527 @@
+//! Model runs against the stand-in OpenAI-compatible server (tests/support/standin.rs): every
+//! reply kept, failures stored as failures, rate limits, usage and cost, resuming, and the
+//! submission the run makes.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::time::Duration;
+
+use enact_hub::app::Hub;
+use enact_hub::app::runs::{self, ApiKey, CallSettings, RunSpec};
+use enact_hub::core::model_run::{GenerationParams, Prices};
+use serde_json::Value;
+use tempfile::TempDir;
+
+use crate::helpers::*;
+use crate::standin::{StandIn, StandInConfig, Step, item_key};
+
+pub const SECRET_KEY: &str = "sk-standin-7f3a9c51e2d84b60a1c0";
+
+/// A fresh database with `mini` imported: `per_cell` items per direction × L in 3, 4, 5.
+pub async fn run_fixture(per_cell: u32) -> (TempDir, enact_hub::store::Pool, Vec<Value>) {
+    let (dir, pool, records, _) = run_fixture_located(per_cell).await;
+    (dir, pool, records)
+}
+
+/// [`run_fixture`], and the database as `--db` takes it.
+pub async fn run_fixture_located(
+    per_cell: u32,
+) -> (
+    TempDir,
+    enact_hub::store::Pool,
+    Vec<Value>,
+    std::path::PathBuf,
+) {
+    let dir = TempDir::new().expect("tempdir");
+    let root = dir.path().join("release");
+    let records = write_balanced_release(&root, &[3, 4, 5], per_cell);
+    let (pool, location) = fresh_db_located(&dir).await;
+    import(&pool, &root, &options("mini")).await;
+    (dir, pool, records, location)
+}
+
+/// The ground truth of a record as a model writes it, or reversed (wrong).
+pub fn answer_text(record: &Value, right: bool) -> String {
+    let mut gt: Vec<u64> = record["gt_answer"]
+        .as_array()
+        .expect("gt")
+        .iter()
+        .map(|v| v.as_u64().expect("label"))
+        .collect();
+    if !right {
+        gt.reverse();
+    }
+    format!("The order is {gt:?}")
+}
+
+/// Scripts keyed as the stand-in recognises items, from a step list per record.
+pub fn scripts(
+    root: &Path,
+    records: &[Value],
+    script: impl Fn(usize, &Value) -> Vec<Step>,
+) -> HashMap<String, (String, Vec<Step>)> {
+    records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let first = root.join(r["images"][0].as_str().expect("image path"));
+            let png = std::fs::read(&first).expect("the first image");
+            (
+                item_key(&png),
+                (r["id"].as_str().expect("id").to_owned(), script(i, r)),
+            )
+        })
+        .collect()
+}
+
+fn spec(standin: &StandIn, name: &str) -> RunSpec {
+    RunSpec {
+        dataset: "mini".to_owned(),
+        endpoint: standin.endpoint(),
+        model: "standin-vl".to_owned(),
+        name: Some(name.to_owned()),
+        params: GenerationParams {
+            temperature: Some(0.0),
+            max_tokens: Some(256),
+        },
+        limit: None,
+        retry_failed: false,
+        submit_as: Some("Stand-in VL".to_owned()),
+        prices: Prices {
+            input_usd_per_mtok: 2.5,
+            output_usd_per_mtok: 10.0,
+        },
+    }
+}
+
+fn settings(concurrency: usize) -> CallSettings {
+    CallSettings {
+        concurrency,
+        max_retries: 3,
+        timeout: Duration::from_millis(500),
+        backoff_base: Duration::from_millis(10),
+        api_key: ApiKey::new(SECRET_KEY),
+    }
+}
+
+async fn execute(hub: &Hub, spec: &RunSpec, settings: &CallSettings) -> runs::RunReport {
+    runs::execute(hub, &tester(), spec, settings, &|_| {}, &|| false)
+        .await
+        .unwrap_or_else(|e| panic!("the run failed: {e}"))
+}
+
+#[tokio::test]
+async fn a_run_keeps_every_reply_stores_failures_as_failures_and_submits_its_scores() {
+    let (dir, pool, records) = run_fixture(3).await;
+    let root = dir.path().join("release");
+    // 18 items: by index, a plan per item; the rest answer right or wrong.
+    let plan = |i: usize, r: &Value| -> Vec<Step> {
+        let right = Step::Answer(answer_text(r, true));
+        match i {
+            0 => vec![Step::Status(500, "boom".into()), right],
+            1 => vec![Step::RetryAfterSeconds(1), right],
+            2 => vec![Step::RetryAfterDate(1), right],
+            3 => vec![Step::Slow(Duration::from_secs(3), "[1, 2]".into()), right],
+            4 => vec![Step::Cut(answer_text(r, true))],
+            5 => vec![Step::Empty],
+            6 => vec![Step::Status(400, "image too large for this model".into())],
+            7 => vec![Step::Status(503, "overloaded".into())],
+            8..=10 => vec![Step::Answer(answer_text(r, false))],
+            _ => vec![right],
+        }
+    };
+    let standin = StandIn::start(StandInConfig {
+        scripts: scripts(&root, &records, plan),
+        tokens_per_image: 85,
+        ..StandInConfig::default()
+    })
+    .await;
+    let hub = Hub::from(pool.clone());
+    let spec = spec(&standin, "first");
+    let report = execute(&hub, &spec, &settings(4)).await;
+    assert!(standin.problems().is_empty(), "{:?}", standin.problems());
+    assert_eq!(report.progress.total, 18);
+    assert_eq!(report.progress.answered, 14, "{report:?}");
+    assert_eq!(report.progress.failed, 4, "{report:?}");
+    assert!(!report.stopped);
+
+    // Each item's row says what happened.
+    let run = runs::by_name(&hub, "first").await.expect("the run");
+    let rows: HashMap<String, runs::RunItemRow> = runs::item_rows(&hub, &run)
+        .await
+        .expect("rows")
+        .into_iter()
+        .map(|r| (r.item_id.clone(), r))
+        .collect();
+    let row = |i: usize| &rows[records[i]["id"].as_str().expect("id")];
+    assert!(row(0).answered && row(0).attempts == 2);
+    assert!(row(0).error.as_deref().is_some_and(|e| e.contains("500")));
+    assert!(row(1).answered && row(1).attempts == 2);
+    assert!(row(2).answered && row(2).attempts == 2);
+    assert!(row(3).answered, "{:?}", row(3));
+    assert!(
+        row(3)
+            .error
+            .as_deref()
+            .is_some_and(|e| e.contains("timed out"))
+    );
+    assert!(!row(4).answered);
+    assert_eq!(row(4).finish_reason.as_deref(), Some("length"));
+    assert!(
+        row(4)
+            .error
+            .as_deref()
+            .is_some_and(|e| e.contains("cut off"))
+    );
+    assert_eq!(
+        row(4).response.as_deref(),
+        Some(answer_text(&records[4], true).as_str())
+    );
+    assert!(!row(5).answered && row(5).error.as_deref() == Some("empty response"));
+    assert!(
+        !row(6).answered && row(6).attempts == 1,
+        "a 400 is not retried"
+    );
+    assert!(
+        row(6)
+            .error
+            .as_deref()
+            .is_some_and(|e| e.contains("image too large"))
+    );
+    assert!(!row(7).answered && row(7).attempts == 4, "{:?}", row(7));
+    assert!(
+        row(7)
+            .error
+            .as_deref()
+            .is_some_and(|e| e.contains("gave up after 4"))
+    );
+    assert!(row(8).answered && row(8).attempts == 1);
+
+    // Every answered item was asked successfully exactly once.
+    let calls = standin.calls();
+    for (i, r) in records.iter().enumerate() {
+        let id = r["id"].as_str().expect("id");
+        let expected = usize::from(![4, 5, 6, 7].contains(&i));
+        assert_eq!(calls[id].answered, expected, "item {i}");
+    }
+
+    // The submission: scored from the stand-in's answers, failed items unanswered.
+    let submission = report.submission.expect("submitted");
+    let mut conn = pool.acquire().await.expect("conn");
+    let stored = enact_hub::store::submissions::by_id(&mut conn, submission)
+        .await
+        .expect("read")
+        .expect("stored");
+    drop(conn);
+    assert_eq!(stored.model, "Stand-in VL");
+    assert_eq!(stored.account, runs::RUNS_ACCOUNT);
+    let coverage = &stored.scores.coverage;
+    assert_eq!((coverage.answered, coverage.missing), (14, 4));
+    let overall = &stored
+        .scores
+        .report
+        .overall
+        .as_ref()
+        .expect("overall")
+        .totals;
+    // 14 answered, of which 3 wrong: 11 right of 18.
+    assert!(
+        (overall.task_accuracy - 11.0 / 18.0).abs() < 1e-9,
+        "{overall:?}"
+    );
+    let run = runs::by_name(&hub, "first").await.expect("the run");
+    assert_eq!(run.submission, Some(submission));
+    let stamp: Value = serde_json::from_str(run.stamp.as_deref().expect("a stamp")).expect("json");
+    assert_eq!(
+        stamp["endpoint_host"],
+        format!("127.0.0.1:{}", standin.addr.port())
+    );
+    assert_eq!(stamp["model"], "standin-vl");
+    assert_eq!(stamp["params"]["max_tokens"], 256);
+    assert_eq!(
+        stamp["prompt_version"],
+        enact_hub::core::model_run::PROMPT_VERSION
+    );
+    assert_eq!(
+        stamp["prompt_hash"],
+        enact_hub::core::model_run::prompt_template_hash()
+    );
+
+    // Usage and cost are the stand-in's tokens times the prices.
+    let (prompt, completion) = standin.tokens();
+    assert!(prompt > 0 && completion > 0);
+    assert_eq!(stamp["usage"]["prompt_tokens"], prompt);
+    assert_eq!(stamp["usage"]["completion_tokens"], completion);
+    let cost = (prompt as f64 * 2.5 + completion as f64 * 10.0) / 1e6;
+    assert!((stamp["cost_usd"].as_f64().expect("cost") - cost).abs() < 1e-12);
+    assert!((report.progress.cost_usd - cost).abs() < 1e-12);
+
+    // The key went to the endpoint and nowhere else.
+    assert!(
+        standin
+            .authorizations()
+            .iter()
+            .all(|a| a == &format!("Bearer {SECRET_KEY}"))
+    );
+    assert_key_stored_nowhere(&hub, dir.path()).await;
+
+    // Again: nothing is asked, the same submission is found.
+    let before = standin.total_requests();
+    let again = execute(&hub, &spec, &settings(4)).await;
+    assert_eq!(standin.total_requests(), before);
+    assert_eq!(again.progress.asked_now, 0);
+    assert_eq!(again.submission, Some(submission));
+
+    // --retry-failed asks only the failed ones.
+    let retry = RunSpec {
+        retry_failed: true,
+        ..spec.clone()
+    };
+    let retried = execute(&hub, &retry, &settings(4)).await;
+    assert_eq!(retried.progress.asked_now, 4);
+    assert_eq!(standin.total_requests(), before + 1 + 1 + 1 + 4);
+    assert_eq!(retried.progress.failed, 4);
+    assert_ne!(retried.submission, None);
+
+    // Another identity under the same name is refused.
+    let other = RunSpec {
+        model: "other".to_owned(),
+        ..spec.clone()
+    };
+    let refused = runs::execute(&hub, &tester(), &other, &settings(4), &|_| {}, &|| false)
+        .await
+        .expect_err("a name is one identity");
+    assert!(
+        refused.to_string().contains("exists with model"),
+        "{refused}"
+    );
+}
+
+/// The key's value in no table and no file of the database (backups are copies of it).
+pub async fn assert_key_stored_nowhere(hub: &Hub, dir: &Path) {
+    let snapshot = dir.join("snapshot.db");
+    enact_hub::app::backup::backup(hub, &tester(), &snapshot)
+        .await
+        .expect("a backup");
+    for entry in std::fs::read_dir(dir).expect("the test folder") {
+        let path = entry.expect("an entry").path();
+        if path.is_file() {
+            let bytes = std::fs::read(&path).expect("read");
+            assert!(
+                !bytes
+                    .windows(SECRET_KEY.len())
+                    .any(|w| w == SECRET_KEY.as_bytes()),
+                "the key is in {}",
+                path.display()
+            );
+        }
+    }
+}
+
+#[tokio::test]
+async fn a_run_at_concurrency_32_against_a_server_taking_4_is_rarely_refused() {
+    let (dir, pool, records) = run_fixture(40).await;
+    let root = dir.path().join("release");
+    let standin = StandIn::start(StandInConfig {
+        scripts: scripts(&root, &records, |_, r| {
+            vec![Step::Answer(answer_text(r, true))]
+        }),
+        latency: Duration::from_millis(20),
+        max_in_flight: Some(4),
+        tokens_per_image: 10,
+    })
+    .await;
+    let hub = Hub::from(pool);
+    let mut settings = settings(32);
+    settings.max_retries = 10;
+    let report = execute(&hub, &spec(&standin, "throttled"), &settings).await;
+    assert_eq!(report.progress.answered, records.len(), "{report:?}");
+    let (total, refused) = (standin.total_requests(), standin.total_refused());
+    assert_eq!(report.progress.requests as usize, total);
+    assert!(
+        (refused as f64) < 0.10 * total as f64,
+        "{refused} of {total} requests refused"
+    );
+}
+
+#[tokio::test]
+async fn a_limited_run_submits_the_rest_as_unanswered_and_a_stop_leaves_it_resumable() {
+    let (dir, pool, records) = run_fixture(2).await;
+    let root = dir.path().join("release");
+    let standin = StandIn::start(StandInConfig {
+        scripts: scripts(&root, &records, |_, r| {
+            vec![Step::Answer(answer_text(r, true))]
+        }),
+        ..StandInConfig::default()
+    })
+    .await;
+    let hub = Hub::from(pool.clone());
+    let stop_after = std::sync::atomic::AtomicUsize::new(0);
+    let stopping = runs::RunSpec {
+        submit_as: Some("m".into()),
+        ..spec(&standin, "stopped")
+    };
+    // Stops once 5 items have been handed out.
+    let report = runs::execute(&hub, &tester(), &stopping, &settings(1), &|_| {}, &|| {
+        stop_after.fetch_add(1, std::sync::atomic::Ordering::SeqCst) >= 5
+    })
+    .await
+    .expect("stopped run");
+    assert!(report.stopped);
+    assert_eq!(report.submission, None, "a stopped run does not submit");
+    assert_eq!(report.progress.done, 5);
+    let report = execute(&hub, &stopping, &settings(2)).await;
+    assert_eq!(report.progress.asked_now, records.len() - 5);
+    assert!(standin.calls().values().all(|c| c.requests == 1));
+    assert!(report.submission.is_some());
+
+    let limited = RunSpec {
+        limit: Some(4),
+        ..spec(&standin, "limited")
+    };
+    let report = execute(&hub, &limited, &settings(2)).await;
+    assert_eq!(report.progress.total, 4);
+    let mut conn = pool.acquire().await.expect("conn");
+    let stored = enact_hub::store::submissions::by_id(&mut conn, report.submission.expect("sub"))
+        .await
+        .expect("read")
+        .expect("stored");
+    assert_eq!(stored.scores.coverage.answered, 4);
+    assert_eq!(stored.scores.coverage.missing, records.len() - 4);
+}
+
+/// `enact-hub run` killed with SIGKILL part-way, then run again: no item with a stored reply
+/// is asked again, every item ends up answered, and the submission scores what the stand-in
+/// answered. The key is in no output and no file.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_run_killed_part_way_goes_on_where_it_stopped() {
+    let (dir, pool, records, db) = run_fixture_located(5).await;
+    let root = dir.path().join("release");
+    let wrong = [1usize, 4, 7, 12, 20, 25];
+    let standin = StandIn::start(StandInConfig {
+        scripts: scripts(&root, &records, |i, r| {
+            vec![Step::Answer(answer_text(r, !wrong.contains(&i)))]
+        }),
+        latency: Duration::from_millis(150),
+        tokens_per_image: 85,
+        ..StandInConfig::default()
+    })
+    .await;
+    let command = || {
+        let mut c = enact_hub();
+        c.args(["run", "mini", "--endpoint"])
+            .arg(standin.endpoint())
+            .args([
+                "--model",
+                "standin-vl",
+                "--concurrency",
+                "2",
+                "--retry-delay",
+                "0.01",
+            ])
+            .args([
+                "--api-key-env",
+                "STANDIN_API_KEY",
+                "--price-input",
+                "1",
+                "--json",
+            ])
+            .arg("--db")
+            .arg(&db)
+            .env("STANDIN_API_KEY", SECRET_KEY)
+            .env("RUST_LOG", "debug")
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped());
+        c
+    };
+    let mut first = command().spawn().expect("start enact-hub run");
+    let rows = || async { count(&pool, "SELECT count(*) FROM model_run_items").await };
+    let deadline = std::time::Instant::now() + Duration::from_secs(60);
+    while rows().await < 8 {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the run made no progress"
+        );
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    first.kill().expect("SIGKILL");
+    let killed = tokio::task::spawn_blocking(move || first.wait_with_output())
+        .await
+        .expect("joined")
+        .expect("the killed run");
+    let done_at_kill = rows().await as usize;
+    assert!(
+        done_at_kill < records.len(),
+        "killed too late to test resuming"
+    );
+    let calls_at_kill = standin.calls();
+    let stored_at_kill: Vec<String> = db!(
+        pool,
+        fetch_all,
+        sqlx::query_scalar::<_, String>(
+            "SELECT i.item_id FROM model_run_items r JOIN items i ON i.id = r.item"
+        )
+    )
+    .expect("stored items");
+
+    // Waited for off the runtime's thread: the stand-in answers on it.
+    let mut again = command();
+    let second = tokio::task::spawn_blocking(move || again.output())
+        .await
+        .expect("joined")
+        .expect("run again");
+    assert!(
+        second.status.success(),
+        "{}",
+        String::from_utf8_lossy(&second.stderr)
+    );
+    let report: Value = serde_json::from_slice(&second.stdout).expect("a JSON summary");
+    assert_eq!(report["progress"]["answered"], records.len());
+    assert_eq!(
+        report["progress"]["asked_now"],
+        records.len() - done_at_kill
+    );
+
+    // An item stored before the kill was never asked again; every item was answered, and
+    // at most the requests in flight at the kill (2) were answered twice.
+    let calls = standin.calls();
+    for id in &stored_at_kill {
+        assert_eq!(
+            calls[id].requests, calls_at_kill[id].requests,
+            "{id} asked again"
+        );
+    }
+    let twice = calls.values().filter(|c| c.answered > 1).count();
+    assert!(twice <= 2, "{twice} items answered twice");
+    assert!(
+        records
+            .iter()
+            .all(|r| calls[r["id"].as_str().expect("id")].answered >= 1)
+    );
+
+    // The scores are the stand-in's answers': 6 wrong of 30.
+    let submission = report["submission"].as_i64().expect("submitted");
+    let mut conn = pool.acquire().await.expect("conn");
+    let stored = enact_hub::store::submissions::by_id(&mut conn, submission)
+        .await
+        .expect("read")
+        .expect("stored");
+    drop(conn);
+    let expected = (records.len() - wrong.len()) as f64 / records.len() as f64;
+    let overall = stored.scores.report.overall.as_ref().expect("overall");
+    assert!((overall.totals.task_accuracy - expected).abs() < 1e-9);
+    assert_eq!(stored.scores.coverage.missing, 0);
+
+    for output in [
+        &killed.stdout,
+        &killed.stderr,
+        &second.stdout,
+        &second.stderr,
+    ] {
+        assert!(
+            !String::from_utf8_lossy(output).contains(SECRET_KEY),
+            "the key was printed"
+        );
+    }
+    assert_key_stored_nowhere(&Hub::from(pool.clone()), dir.path()).await;
+}
