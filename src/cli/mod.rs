@@ -24,6 +24,7 @@ const MIB: u64 = 1024 * 1024;
 
 mod audit;
 mod frames;
+mod run;
 mod simulate;
 mod stored;
 mod study;
@@ -76,6 +77,9 @@ enum Command {
     /// other images; create, list, show, delete, and report a model's Δ and p per variant.
     #[command(subcommand)]
     Study(study::StudyCommand),
+    /// Ask an OpenAI-compatible model every item of a dataset (resumable: each reply is kept
+    /// as it arrives) and submit its answers.
+    Run(Box<run::RunArgs>),
     /// Manage API tokens: create, list, revoke.
     #[command(subcommand)]
     Token(TokenCommand),
@@ -495,6 +499,7 @@ pub fn main() -> ExitCode {
             Command::Restore(args) => restore(args).await,
             Command::Audit(args) => audit::audit(args).await,
             Command::Study(command) => study::study(command).await,
+            Command::Run(args) => run::run(*args).await,
             Command::Token(command) => token(command).await,
             Command::Annotator(AnnotatorCommand::Create(args)) => create_annotator(args).await,
             Command::Frames(command) => frames::frames(command).await,
