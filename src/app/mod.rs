@@ -19,6 +19,7 @@
 //! - [`audit`]: the audit log every audited use case writes in its own transaction.
 //! - [`demo`]: the built-in demo dataset, its chance baseline and its login link.
 //! - [`backup`]: online snapshots of the database, and restoring one.
+//! - [`pipeline`]: new items from replays, and simulated replays.
 //!
 //! Errors are [`AppError`]: each kind says what was wrong, in words a person can act on.
 
@@ -38,6 +39,7 @@ pub mod import;
 pub mod items;
 pub mod leaderboard;
 pub mod migrate_db;
+pub mod pipeline;
 pub mod scoring;
 pub mod standings;
 pub mod studies;
