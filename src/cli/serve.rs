@@ -137,7 +137,16 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
             eprintln!("(the demo database is temporary; give --db FILE to keep it)");
         }
     }
-    server.run(shutdown_signal()).await?;
+    let worker = app::jobs::Worker::spawn(
+        hub.clone(),
+        app::jobs::JobHandlers::serving(),
+        app::jobs::JobSettings::default(),
+    );
+    let served = server.run(shutdown_signal()).await;
+    // Jobs in progress let go of their leases, to be resumed at the next start (or at once by
+    // another instance).
+    worker.stop().await;
+    served?;
     hub.close().await;
     Ok(ExitCode::SUCCESS)
 }
