@@ -171,3 +171,33 @@ pub(super) async fn generate(args: GenerateArgs) -> anyhow::Result<ExitCode> {
     eprintln!("import it with: enact-hub import {}", args.out.display());
     Ok(ExitCode::SUCCESS)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::parse_steps;
+
+    #[test]
+    fn step_lengths_are_read_as_ranges_or_lists_within_3_to_10() {
+        assert_eq!(parse_steps("3..10").unwrap(), (3..=10).collect::<Vec<_>>());
+        assert_eq!(parse_steps("4..=6").unwrap(), [4, 5, 6]);
+        assert_eq!(parse_steps("3,5, 7").unwrap(), [3, 5, 7]);
+        assert!(
+            parse_steps("2..5")
+                .unwrap_err()
+                .to_string()
+                .contains("outside 3..10")
+        );
+        assert!(
+            parse_steps("6..4")
+                .unwrap_err()
+                .to_string()
+                .contains("empty range")
+        );
+        assert!(
+            parse_steps("x")
+                .unwrap_err()
+                .to_string()
+                .contains("not a whole number")
+        );
+    }
+}

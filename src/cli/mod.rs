@@ -229,3 +229,26 @@ fn refusal_in(e: AppError, db: Option<&Path>) -> anyhow::Error {
         (other, _) => anyhow::anyhow!("{other}"),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_command_line_definition_is_consistent() {
+        // clap's own checks: no clashing flags, every `requires`/`conflicts_with` names an
+        // argument that exists, defaults parse.
+        <Cli as clap::CommandFactory>::command().debug_assert();
+    }
+
+    #[test]
+    fn a_use_case_refusal_names_the_database_it_looked_in() {
+        let e = refusal_in(
+            AppError::NotFound("dataset 'x' does not exist".into()),
+            Some(Path::new("hub.db")),
+        );
+        assert_eq!(e.to_string(), "dataset 'x' does not exist in hub.db");
+        let e = refusal_in(AppError::NotFound("no such thing".into()), None);
+        assert_eq!(e.to_string(), "no such thing");
+    }
+}
