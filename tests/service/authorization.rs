@@ -96,32 +96,73 @@ fn method(verb: Verb) -> Method {
     verb.method()
 }
 
+/// A token or session for each kind of caller, the revoked token revoked.
+struct Callers {
+    admin: String,
+    owner: String,
+    stranger: String,
+    revoked: String,
+    /// The `Cookie` header of an admin annotator's session (no API credential).
+    session: String,
+}
+
+impl Callers {
+    async fn new(server: &TestServer) -> Callers {
+        let (_, admin) = api_token(&server.pool, "root", Role::Admin, None, None).await;
+        let (_, owner) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+        let (_, stranger) = api_token(&server.pool, "other", Role::Submitter, None, None).await;
+        let (revoked_id, revoked) =
+            api_token(&server.pool, "gone", Role::Submitter, None, None).await;
+        server
+            .call(
+                Method::DELETE,
+                &format!("/api/v1/admin/tokens/{revoked_id}"),
+            )
+            .bearer(&admin)
+            .expect(204)
+            .await;
+        crate::annotate::annotator(server, "ann", true).await;
+        let (browser, _) = crate::annotate::logged_in_on(server, "ann", "/annotate").await;
+        Callers {
+            admin,
+            owner,
+            stranger,
+            revoked,
+            session: browser.cookie_header(),
+        }
+    }
+
+    /// `call` with `caller`'s credential.
+    fn credential(&self, call: Call, caller: Caller) -> Call {
+        match caller {
+            Caller::Anonymous => call,
+            Caller::Malformed => call.header("Authorization", "Bearer not-a-token"),
+            Caller::Revoked => call.bearer(&self.revoked),
+            Caller::Owner => call.bearer(&self.owner),
+            Caller::Stranger => call.bearer(&self.stranger),
+            Caller::Admin => call.bearer(&self.admin),
+            Caller::Annotator => call.header("Cookie", &self.session),
+        }
+    }
+}
+
 #[tokio::test]
 async fn every_api_route_answers_every_caller_as_the_matrix_says() {
     let (server, records) = spawn_app_with_release().await;
-    let (_, admin) = api_token(&server.pool, "root", Role::Admin, None, None).await;
-    let (_, owner) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
-    let (_, stranger) = api_token(&server.pool, "other", Role::Submitter, None, None).await;
-    let (revoked_id, revoked) = api_token(&server.pool, "gone", Role::Submitter, None, None).await;
-    server
-        .call(
-            Method::DELETE,
-            &format!("/api/v1/admin/tokens/{revoked_id}"),
-        )
-        .bearer(&admin)
-        .expect(204)
-        .await;
+    let callers = Callers::new(&server).await;
     let submission = {
-        let reply = submit_to(&server, "mini", "model=m", &owner, answers(&records, &[])).await;
+        let reply = submit_to(
+            &server,
+            "mini",
+            "model=m",
+            &callers.owner,
+            answers(&records, &[]),
+        )
+        .await;
         assert_eq!(reply.status, 201, "{}", reply.text);
         reply.id()
     };
     mini_study(&server, "matrix").await;
-    let session = {
-        crate::annotate::annotator(&server, "ann", true).await;
-        let (browser, _) = crate::annotate::logged_in_on(&server, "ann", "/annotate").await;
-        browser.cookie_header()
-    };
     let item = records[0]["id"].as_str().expect("id").to_owned();
     let (_, item_json) = server
         .get_json(&format!("/api/v1/datasets/mini/items/{item}"))
@@ -172,16 +213,10 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
             if route.path == "/studies/{study}/report" {
                 path.push_str("?model=m");
             }
-            let mut call = server.call(method(route.verb), &format!("/api/v1{path}"));
-            call = match caller {
-                Caller::Anonymous => call,
-                Caller::Malformed => call.header("Authorization", "Bearer not-a-token"),
-                Caller::Revoked => call.bearer(&revoked),
-                Caller::Owner => call.bearer(&owner),
-                Caller::Stranger => call.bearer(&stranger),
-                Caller::Admin => call.bearer(&admin),
-                Caller::Annotator => call.header("Cookie", &session),
-            };
+            let mut call = callers.credential(
+                server.call(method(route.verb), &format!("/api/v1{path}")),
+                caller,
+            );
             if let Some((body, content_type)) = body_of(route.verb, route.path, &records, n) {
                 call = call.header("Content-Type", content_type).body(body);
             }
@@ -242,20 +277,7 @@ fn malformed_bodies() -> Vec<(&'static str, String, &'static str)> {
 #[tokio::test]
 async fn callers_without_the_right_are_refused_before_any_body_is_read() {
     let server = spawn_app_with(|_, _| async {}).await;
-    let (_, admin) = api_token(&server.pool, "root", Role::Admin, None, None).await;
-    let (_, submitter) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
-    let (revoked_id, revoked) = api_token(&server.pool, "gone", Role::Submitter, None, None).await;
-    server
-        .call(
-            Method::DELETE,
-            &format!("/api/v1/admin/tokens/{revoked_id}"),
-        )
-        .bearer(&admin)
-        .expect(204)
-        .await;
-    crate::annotate::annotator(&server, "ann", false).await;
-    let (browser, _) = crate::annotate::logged_in_on(&server, "ann", "/annotate").await;
-    let session = browser.cookie_header();
+    let callers = Callers::new(&server).await;
 
     let mut cells = 0;
     for route in api_routes() {
@@ -268,33 +290,25 @@ async fn callers_without_the_right_are_refused_before_any_body_is_read() {
         for param in route.path_params() {
             path = path.replace(&format!("{{{param}}}"), "%ZZnot-stored");
         }
-        let mut callers = vec![
+        let mut refused = vec![
             Caller::Anonymous,
             Caller::Malformed,
             Caller::Revoked,
             Caller::Annotator,
         ];
         if scope == Scope::Admin {
-            callers.push(Caller::Owner);
+            refused.push(Caller::Owner);
         }
-        for caller in callers {
+        for caller in refused {
             let Expected::Status(want) = expected(route.access, route.path, caller) else {
                 panic!("{caller:?} may call {:?} {}", route.verb, route.path);
             };
             for (content_type, body, what) in malformed_bodies() {
-                let mut call = server
+                let call = server
                     .call(route.verb.method(), &format!("/api/v1{path}"))
                     .header("Content-Type", content_type)
                     .header("Idempotency-Key", "");
-                call = match caller {
-                    Caller::Anonymous => call,
-                    Caller::Malformed => call.header("Authorization", "Bearer not-a-token"),
-                    Caller::Revoked => call.bearer(&revoked),
-                    Caller::Owner => call.bearer(&submitter),
-                    Caller::Annotator => call.header("Cookie", &session),
-                    Caller::Stranger | Caller::Admin => unreachable!("allowed callers"),
-                };
-                let reply = call.body(body).send().await;
+                let reply = callers.credential(call, caller).body(body).send().await;
                 assert_eq!(
                     reply.status.as_u16(),
                     want,
