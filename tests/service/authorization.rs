@@ -586,3 +586,46 @@ async fn page_callers_without_the_right_are_refused_before_any_form_is_read() {
     assert!(cells >= 20 * malformed_bodies().len(), "{cells} cells");
     server.stop().await;
 }
+
+/// Every `.rs` file under `dir`, with its text.
+fn sources_under(dir: &std::path::Path, out: &mut Vec<(std::path::PathBuf, String)>) {
+    for entry in std::fs::read_dir(dir).expect("source folder") {
+        let path = entry.expect("entry").path();
+        if path.is_dir() {
+            sources_under(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            let text = std::fs::read_to_string(&path).expect("source");
+            out.push((path, text));
+        }
+    }
+}
+
+/// The route table decides who may call a route, in one place: no handler or use case checks
+/// a token's scope or a session's role by hand (where it would run after the body is read).
+#[test]
+fn scopes_and_roles_are_checked_only_where_the_route_tables_say() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut sources = Vec::new();
+    sources_under(&root.join("src"), &mut sources);
+    let mut by_hand = Vec::new();
+    for (path, text) in &sources {
+        let file = path
+            .strip_prefix(root)
+            .expect("under the crate")
+            .to_string_lossy();
+        for (n, line) in text.lines().enumerate() {
+            let checks_scope = line.contains(".require(Scope::");
+            let checks_role = line.contains("require_admin(");
+            // `tokens::authorize` is the one scope check, run by the table's layer.
+            if (checks_scope && file != "src/app/tokens.rs") || checks_role {
+                by_hand.push(format!("{file}:{}: {}", n + 1, line.trim()));
+            }
+        }
+    }
+    assert!(
+        by_hand.is_empty(),
+        "authorization checked by hand:\n{}",
+        by_hand.join("\n")
+    );
+    assert!(sources.len() > 50, "{} source files", sources.len());
+}
