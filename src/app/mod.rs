@@ -19,6 +19,8 @@
 //! - [`audit`]: the audit log every audited use case writes in its own transaction.
 //! - [`demo`]: the built-in demo dataset, its chance baseline and its login link.
 //! - [`backup`]: online snapshots of the database, and restoring one.
+//! - [`jobs`]: long work that survives restarts, worked by one instance at a time (model runs,
+//!   rescoring); [`pipeline`]: new items from replays, and simulated replays.
 //! - [`runs`]: model runs: the hub asks an OpenAI-compatible endpoint every item, keeps each
 //!   reply as it arrives, resumes where it stopped, and submits the answers.
 //!
@@ -38,8 +40,10 @@ pub mod error_analysis;
 pub mod frames;
 pub mod import;
 pub mod items;
+pub mod jobs;
 pub mod leaderboard;
 pub mod migrate_db;
+pub mod pipeline;
 pub mod runs;
 pub mod scoring;
 pub mod standings;
