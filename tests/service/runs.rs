@@ -74,6 +74,25 @@ pub fn scripts(
         .collect()
 }
 
+/// Scripts answering every record right at once.
+fn all_right(root: &Path, records: &[Value]) -> HashMap<String, (String, Vec<Step>)> {
+    scripts(root, records, |_, r| {
+        vec![Step::Answer(answer_text(r, true))]
+    })
+}
+
+/// A stored submission, read from the database.
+async fn stored_submission(
+    pool: &enact_hub::store::Pool,
+    id: i64,
+) -> enact_hub::store::submissions::SubmissionRow {
+    let mut conn = pool.acquire().await.expect("conn");
+    enact_hub::store::submissions::by_id(&mut conn, id)
+        .await
+        .expect("read")
+        .expect("stored")
+}
+
 fn spec(standin: &StandIn, name: &str) -> RunSpec {
     RunSpec {
         dataset: "mini".to_owned(),
@@ -207,12 +226,7 @@ async fn a_run_keeps_every_reply_stores_failures_as_failures_and_submits_its_sco
 
     // The submission: scored from the stand-in's answers, failed items unanswered.
     let submission = report.submission.expect("submitted");
-    let mut conn = pool.acquire().await.expect("conn");
-    let stored = enact_hub::store::submissions::by_id(&mut conn, submission)
-        .await
-        .expect("read")
-        .expect("stored");
-    drop(conn);
+    let stored = stored_submission(&pool, submission).await;
     assert_eq!(stored.model, "Stand-in VL");
     assert_eq!(stored.account, runs::RUNS_ACCOUNT);
     let coverage = &stored.scores.coverage;
@@ -323,9 +337,7 @@ async fn a_run_at_concurrency_32_against_a_server_taking_4_is_rarely_refused() {
     let (dir, pool, records) = run_fixture(40).await;
     let root = dir.path().join("release");
     let standin = StandIn::start(StandInConfig {
-        scripts: scripts(&root, &records, |_, r| {
-            vec![Step::Answer(answer_text(r, true))]
-        }),
+        scripts: all_right(&root, &records),
         latency: Duration::from_millis(20),
         max_in_flight: Some(4),
         tokens_per_image: 10,
@@ -349,9 +361,7 @@ async fn a_limited_run_submits_the_rest_as_unanswered_and_a_stop_leaves_it_resum
     let (dir, pool, records) = run_fixture(2).await;
     let root = dir.path().join("release");
     let standin = StandIn::start(StandInConfig {
-        scripts: scripts(&root, &records, |_, r| {
-            vec![Step::Answer(answer_text(r, true))]
-        }),
+        scripts: all_right(&root, &records),
         ..StandInConfig::default()
     })
     .await;
@@ -381,11 +391,7 @@ async fn a_limited_run_submits_the_rest_as_unanswered_and_a_stop_leaves_it_resum
     };
     let report = execute(&hub, &limited, &settings(2)).await;
     assert_eq!(report.progress.total, 4);
-    let mut conn = pool.acquire().await.expect("conn");
-    let stored = enact_hub::store::submissions::by_id(&mut conn, report.submission.expect("sub"))
-        .await
-        .expect("read")
-        .expect("stored");
+    let stored = stored_submission(&pool, report.submission.expect("submitted")).await;
     assert_eq!(stored.scores.coverage.answered, 4);
     assert_eq!(stored.scores.coverage.missing, records.len() - 4);
 }
@@ -501,12 +507,7 @@ async fn a_run_killed_part_way_goes_on_where_it_stopped() {
 
     // The scores are the stand-in's answers': 6 wrong of 30.
     let submission = report["submission"].as_i64().expect("submitted");
-    let mut conn = pool.acquire().await.expect("conn");
-    let stored = enact_hub::store::submissions::by_id(&mut conn, submission)
-        .await
-        .expect("read")
-        .expect("stored");
-    drop(conn);
+    let stored = stored_submission(&pool, submission).await;
     let expected = (records.len() - wrong.len()) as f64 / records.len() as f64;
     let overall = stored.scores.report.overall.as_ref().expect("overall");
     assert!((overall.totals.task_accuracy - expected).abs() < 1e-9);
