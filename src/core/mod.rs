@@ -11,6 +11,7 @@
 //! - [`error_analysis`]: the paper's structural and semantic error taxonomy, handedness and
 //!   accepted-but-incomplete answers, per step of every analysed answer.
 //! - [`submission`]: reading, refusing and scoring a leaderboard submission.
+//! - [`heatmap`]: the significance heatmap both reports draw (the paper's ablation figures).
 //! - [`leaderboard`]: leaderboard rows (Table 1 layout) and the TA-vs-L chart geometry.
 //! - [`pipeline`]: ENACT's data pipeline: key-frame segmentation, the transition graph, path
 //!   sampling and QA items in the release layout.
@@ -19,6 +20,7 @@
 //! - [`annotation`]: human annotation without I/O: the balanced split, drafts, queue
 //!   standing, telemetry, and human answers scored like model answers.
 //! - [`audit`]: the audit log's actors, actions, entries and filters.
+//! - [`bundle`]: the files a report downloads as: stamps, CSV, LaTeX escaping, tar archives.
 //! - [`credentials`]: API tokens, session and invite tokens, passwords, roles, scopes and the
 //!   naming rules of accounts.
 //! - [`release`]: a stored dataset written back out as an ENACT release archive.
@@ -30,10 +32,12 @@
 pub mod agreement;
 pub mod annotation;
 pub mod audit;
+pub mod bundle;
 pub mod credentials;
 pub mod dataset;
 pub mod demo;
 pub mod error_analysis;
+pub mod heatmap;
 pub mod leaderboard;
 pub mod pipeline;
 pub mod release;
