@@ -139,6 +139,8 @@ pub struct LegendEntry {
 /// The whole figure in SVG user units.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Heatmap {
+    /// The SVG's class, for the page's styles and tests.
+    pub class: &'static str,
     /// What the figure shows, for screen readers.
     pub description: String,
     pub title: Option<String>,
@@ -240,6 +242,7 @@ impl Heatmap {
             .fold(0.0, f64::max)
             + MARGIN;
         Heatmap {
+            class: "heatmap",
             description,
             title,
             width,

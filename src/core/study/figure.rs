@@ -71,7 +71,7 @@ pub fn study_heatmap(report: &StudyReport) -> Heatmap {
             name
         })
         .collect();
-    Heatmap::layout(
+    let heatmap = Heatmap::layout(
         format!(
             "{title}: one panel per family, one column per variant, forward and inverse rows; \
              colour shows the band of the p-value"
@@ -81,7 +81,11 @@ pub fn study_heatmap(report: &StudyReport) -> Heatmap {
         panels,
         SIZES,
         None,
-    )
+    );
+    Heatmap {
+        class: "study-heatmap",
+        ..heatmap
+    }
 }
 
 fn cell_figures(cell: Option<&StudyCell>, variant: &str, direction: Direction) -> CellFigures {
