@@ -4,7 +4,6 @@
 //! encodings of the permutation example.
 
 use std::collections::HashMap;
-use std::path::PathBuf;
 
 use enact_hub::core::agreement::{
     AlphaUndefined, AnnotatedOrdering, BootstrapConfig, MeasurementLevel, OrderingAnnotations,
@@ -16,19 +15,8 @@ use serde_json::Value;
 #[path = "support/fixtures.rs"]
 mod fixtures;
 
-fn fixtures_dir() -> Option<PathBuf> {
-    fixtures::shared_fixtures()
-}
-
 fn vectors() -> Option<Vec<Value>> {
-    let Some(path) = fixtures_dir().map(|dir| dir.join("kalpha").join("vectors.json")) else {
-        println!("fixtures not present, skipping");
-        return None;
-    };
-    if !path.is_file() {
-        println!("fixtures not present, skipping");
-        return None;
-    }
+    let path = fixtures::fixture("kalpha/vectors.json")?;
     let text = std::fs::read_to_string(&path).unwrap();
     let Value::Array(vectors) = serde_json::from_str(&text).unwrap() else {
         panic!("{} is not a JSON list", path.display());
@@ -325,7 +313,7 @@ fn ordering_encodings_reproduce_the_permutation_example() {
         .collect();
     let Some(reference) = examples.get("permutation_encoding_example_E1_whole_answer_nominal")
     else {
-        println!("permutation example not present, skipping");
+        fixtures::missing("the permutation example in kalpha/vectors.json");
         return;
     };
     let items = permutation_items(reference);

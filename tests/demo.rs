@@ -29,10 +29,6 @@ const LABEL_BAND: u32 = 80;
 #[path = "support/fixtures.rs"]
 mod fixtures;
 
-fn fixtures_dir() -> Option<PathBuf> {
-    fixtures::shared_fixtures()
-}
-
 fn write(seed: u64) -> (tempfile::TempDir, DemoSummary) {
     let dir = tempfile::tempdir().unwrap();
     let summary = write_demo_release(dir.path(), seed).unwrap();
@@ -249,8 +245,7 @@ fn the_same_seed_gives_identical_bytes_and_another_seed_other_items() {
 
 #[test]
 fn prompts_and_json_layout_match_the_real_enact_sample() {
-    let Some(fixtures) = fixtures_dir() else {
-        println!("fixtures not present, skipping");
+    let Some(fixtures) = fixtures::fixtures_dir() else {
         return;
     };
     let sample = fixtures.join("enact-sample/QA/enact_ordering_320_no_images.jsonl");
@@ -323,8 +318,7 @@ fn label_box(image: &RgbImage) -> Option<(u32, u32, u32, u32)> {
 
 #[test]
 fn labels_sit_where_enact_draws_them() {
-    let Some(fixtures) = fixtures_dir() else {
-        println!("fixtures not present, skipping");
+    let Some(fixtures) = fixtures::fixtures_dir() else {
         return;
     };
     let sample_root = fixtures.join("enact-sample");

@@ -5,7 +5,6 @@
 
 use std::collections::{BTreeSet, HashMap};
 use std::fs;
-use std::path::PathBuf;
 
 use enact_hub::core::dataset::{QaItem, parse_release_line};
 use enact_hub::core::error_analysis::{
@@ -18,13 +17,6 @@ use serde_json::Value;
 
 #[path = "support/fixtures.rs"]
 mod fixtures;
-
-fn parity_dir() -> Option<PathBuf> {
-    let dir = fixtures::shared_fixtures()?.join("enact-parity");
-    dir.join("reference/eval_analyze/signatures")
-        .is_dir()
-        .then_some(dir)
-}
 
 fn targets(dir: &std::path::Path) -> Vec<ScoringTarget> {
     let text = fs::read_to_string(dir.join("QA/enact_ordering.jsonl")).unwrap();
@@ -48,8 +40,7 @@ fn as_set(v: &Value) -> BTreeSet<String> {
 
 #[test]
 fn step_sets_are_the_ones_enact_writes() {
-    let Some(dir) = parity_dir() else {
-        eprintln!("skipped: ../shared/fixtures/enact-parity not present");
+    let Some(dir) = fixtures::parity_dir() else {
         return;
     };
     let targets = targets(&dir);
@@ -150,8 +141,7 @@ fn check_identities(name: &str, f: &ErrorFigures) {
 
 #[test]
 fn identities_hold_on_every_prediction_file() {
-    let Some(dir) = parity_dir() else {
-        eprintln!("skipped: ../shared/fixtures/enact-parity not present");
+    let Some(dir) = fixtures::parity_dir() else {
         return;
     };
     let targets = targets(&dir);

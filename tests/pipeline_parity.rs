@@ -2,7 +2,7 @@
 //! key frames, segmentation traces, the KFTS graph and path counts, and generated items.
 
 use std::collections::{BTreeMap, HashSet};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use enact_hub::core::pipeline::{
     GenerateOptions, PathTable, TransitionGraph, generate, segment_task,
@@ -12,20 +12,6 @@ use serde_json::Value;
 
 #[path = "support/fixtures.rs"]
 mod fixtures;
-
-fn fixtures_dir() -> Option<PathBuf> {
-    fixtures::shared_fixtures()
-}
-
-fn parity_dir() -> Option<PathBuf> {
-    let dir = fixtures_dir()?.join("enact-parity");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!("fixtures not present, skipping");
-        None
-    }
-}
 
 fn read_json(path: &Path) -> Value {
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
@@ -41,8 +27,7 @@ fn strings(v: &Value) -> Vec<String> {
 
 #[test]
 fn segmentation_and_kfts_match_enact() {
-    let Some(dir) = parity_dir() else {
-        println!("fixtures not present, skipping");
+    let Some(dir) = fixtures::parity_dir() else {
         return;
     };
     let replayed = dir.join("replayed_activities");
@@ -147,8 +132,7 @@ fn segmentation_and_kfts_match_enact() {
 
 #[test]
 fn generated_release_is_valid_and_keeps_signatures() {
-    let Some(dir) = parity_dir() else {
-        println!("fixtures not present, skipping");
+    let Some(dir) = fixtures::parity_dir() else {
         return;
     };
     let replayed = dir.join("replayed_activities");

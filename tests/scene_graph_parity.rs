@@ -3,7 +3,7 @@
 //! Skips (with a message) when the fixtures are not present.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use enact_hub::core::scene_graph::{
     FrameSelection, SceneGraph, SceneGraphTimeline, TransientFilter, View, diff_signatures,
@@ -16,27 +16,11 @@ use serde_json::Value;
 #[path = "support/fixtures.rs"]
 mod fixtures;
 
-fn fixtures_dir() -> Option<PathBuf> {
-    fixtures::shared_fixtures()
-}
-
-fn parity_dir() -> Option<PathBuf> {
-    let dir = fixtures_dir()?.join("enact-parity");
-    if dir.join("reference").is_dir() {
-        Some(dir)
-    } else {
-        None
-    }
-}
-
 macro_rules! parity_or_skip {
     () => {
-        match parity_dir() {
+        match fixtures::parity_dir() {
             Some(dir) => dir,
-            None => {
-                eprintln!("fixtures not present, skipping");
-                return;
-            }
+            None => return,
         }
     };
 }

@@ -17,17 +17,6 @@ use serde_json::Value;
 #[path = "support/fixtures.rs"]
 mod fixtures;
 
-fn fixtures_dir() -> Option<PathBuf> {
-    fixtures::shared_fixtures()
-}
-
-fn parity_dir() -> Option<PathBuf> {
-    let dir = fixtures_dir()?.join("enact-parity");
-    dir.join("reference/pair_signatures.jsonl")
-        .is_file()
-        .then_some(dir)
-}
-
 type PairSets = Result<(BTreeSet<String>, BTreeSet<String>), String>;
 
 /// One task's key frames and ENACT's sets for every ordered pair of distinct key frames.
@@ -368,8 +357,7 @@ fn check_model(
 
 #[test]
 fn enact_policy_matches_enacts_plain_evaluator() {
-    let Some(dir) = parity_dir() else {
-        println!("fixtures not present, skipping");
+    let Some(dir) = fixtures::parity_dir() else {
         return;
     };
     let scenes = FixtureScenes::load(&dir.join("reference/pair_signatures.jsonl"));

@@ -3,15 +3,14 @@
 
 use super::{AppError, Hub, audit, datasets, error_analysis, leaderboard};
 use crate::core::agreement::protocol::{ProtocolError, ProtocolPlan, plan_cross_assignments};
-use crate::core::agreement::report::export::{
-    BundleFile, ErrorRow, audit_file, bundle_files, error_files,
-};
+use crate::core::agreement::report::export::{ErrorRow, audit_file, bundle_files, error_files};
 use crate::core::agreement::report::{
     AgreementReport, AgreementSection, ItemScore, ProtocolStamp, ReportError, ReportInputs,
     SubmissionInput, agreement_section, build_report, dataset_content_hash, overlapping_answers,
 };
 use crate::core::agreement::{BootstrapConfig, MeasurementLevel, OrderingEncoding};
 use crate::core::audit::{Actor, AuditAction};
+use crate::core::bundle::BundleFile;
 use crate::store;
 use crate::store::agreement::AgreementRound;
 use crate::store::datasets::Dataset;

@@ -10,9 +10,9 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::{AppError, Hub, agreement, audit, datasets, error_analysis};
-use crate::core::agreement::report::export::BundleFile;
 use crate::core::annotation::{human_entries, mean_by_item};
 use crate::core::audit::{Actor, AuditAction};
+use crate::core::bundle::BundleFile;
 use crate::core::error_analysis::ErrorAnalysis;
 use crate::core::study::export::study_files;
 use crate::core::study::report::{

@@ -11,6 +11,7 @@
 //! - [`error_analysis`]: the paper's structural and semantic error taxonomy, handedness and
 //!   accepted-but-incomplete answers, per step of every analysed answer.
 //! - [`submission`]: reading, refusing and scoring a leaderboard submission.
+//! - [`heatmap`]: the significance heatmap both reports draw (the paper's ablation figures).
 //! - [`leaderboard`]: leaderboard rows (Table 1 layout) and the TA-vs-L chart geometry.
 //! - [`model_run`]: asking a model an item: the versioned prompt, reading replies, retry
 //!   delays and the in-flight window of a model run.
@@ -21,6 +22,7 @@
 //! - [`annotation`]: human annotation without I/O: the balanced split, drafts, queue
 //!   standing, telemetry, and human answers scored like model answers.
 //! - [`audit`]: the audit log's actors, actions, entries and filters.
+//! - [`bundle`]: the files a report downloads as: stamps, CSV, LaTeX escaping, tar archives.
 //! - [`credentials`]: API tokens, session and invite tokens, passwords, roles, scopes and the
 //!   naming rules of accounts.
 //! - [`release`]: a stored dataset written back out as an ENACT release archive.
@@ -32,10 +34,12 @@
 pub mod agreement;
 pub mod annotation;
 pub mod audit;
+pub mod bundle;
 pub mod credentials;
 pub mod dataset;
 pub mod demo;
 pub mod error_analysis;
+pub mod heatmap;
 pub mod leaderboard;
 pub mod model_run;
 pub mod pipeline;

@@ -16,14 +16,15 @@ use super::session::{Admin, Protected};
 use super::{AppError, AppState};
 use crate::app::agreement::{self, ReportSettings};
 use crate::core::agreement::protocol::DEFAULT_ITEMS_PER_CELL;
-use crate::core::agreement::report::export::{BundleFile, tar_archive};
-use crate::core::agreement::report::heatmap::Heatmap;
+use crate::core::agreement::report::heatmap::comparison_heatmap;
 use crate::core::agreement::report::{AgreementReport, AgreementSection};
 use crate::core::agreement::{
     BootstrapConfig, DEFAULT_BOOTSTRAP_SEED, DEFAULT_CONFIDENCE_LEVEL, DEFAULT_REPLICATES,
     MeasurementLevel, OrderingEncoding, PAPER_COMPARABLE_ENCODING, WelchComparison,
 };
+use crate::core::bundle::{BundleFile, tar_archive};
 use crate::core::dataset::{Direction, StepLength};
+use crate::core::heatmap::Heatmap;
 use crate::core::leaderboard::{AccuracyChart, LeaderboardRow, RowSource};
 
 pub fn router() -> Router<AppState> {
@@ -460,8 +461,8 @@ impl ReportPage {
             } else {
                 format!("?{query}")
             },
-            stamp: crate::core::agreement::report::export::stamp_lines(&report.stamp).join("; "),
-            stamp_lines: crate::core::agreement::report::export::stamp_lines(&report.stamp),
+            stamp: crate::core::bundle::stamp_text(&report.stamp),
+            stamp_lines: crate::core::bundle::stamp_lines(&report.stamp),
             agreement,
             agreement_unavailable: report.agreement_unavailable.clone(),
             step_lengths: StepLength::all().map(StepLength::get).collect(),
@@ -480,7 +481,7 @@ impl ReportPage {
                 .iter()
                 .map(|c| comparison_text(&c.a.label, &c.b.label, c.items, &c.overall))
                 .collect(),
-            heatmap: Heatmap::of_comparisons(&report.comparisons),
+            heatmap: comparison_heatmap(&report.comparisons),
             chart: AccuracyChart::task_accuracy_by_step_length(&report.rows),
             submissions: report
                 .rows

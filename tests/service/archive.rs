@@ -125,8 +125,7 @@ async fn an_unknown_dataset_has_no_archive() {
 
 #[tokio::test]
 async fn the_enact_sample_round_trips_through_its_archive() {
-    let Some(fixtures) = shared_fixtures() else {
-        eprintln!("shared fixtures not present, skipping");
+    let Some(fixtures) = fixtures_dir() else {
         return;
     };
     let sample = fixtures.join("enact-sample");

@@ -55,8 +55,7 @@ fn invalid_rows_fail_the_import_with_line_numbers() {
 
 #[test]
 fn enact_sample_cli_counts() {
-    let Some(fixtures) = shared_fixtures() else {
-        eprintln!("shared fixtures not present, skipping");
+    let Some(fixtures) = fixtures_dir() else {
         return;
     };
     let dir = tempfile::tempdir().expect("tempdir");
@@ -158,8 +157,7 @@ fn agreement_input_errors_name_coder_and_unit() {
 
 #[test]
 fn generate_writes_a_release_that_imports_with_semantic_scoring() {
-    let Some(fixtures) = shared_fixtures() else {
-        eprintln!("shared fixtures not present, skipping");
+    let Some(fixtures) = fixtures_dir() else {
         return;
     };
     let replayed = fixtures.join("enact-parity/replayed_activities");

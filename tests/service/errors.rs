@@ -38,8 +38,7 @@ async fn errors_of(server: &TestServer, id: i64, token: &str, status: u16) -> Va
 
 #[tokio::test]
 async fn the_api_and_the_cli_agree_on_parity_predictions() {
-    let Some(fixtures) = shared_fixtures() else {
-        eprintln!("skipped: ../shared/fixtures not present");
+    let Some(fixtures) = fixtures_dir() else {
         return;
     };
     let parity = fixtures.join("enact-parity");
@@ -216,8 +215,7 @@ async fn the_cli_names_what_is_wrong() {
 
 #[tokio::test]
 async fn a_stored_analysis_is_redone_when_scene_graphs_arrive() {
-    let Some(fixtures) = shared_fixtures() else {
-        eprintln!("skipped: ../shared/fixtures not present");
+    let Some(fixtures) = fixtures_dir() else {
         return;
     };
     let parity = fixtures.join("enact-parity");

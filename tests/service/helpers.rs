@@ -16,7 +16,7 @@ use serde_json::{Value, json};
 use tempfile::TempDir;
 use tokio::sync::oneshot;
 
-pub use crate::fixtures::shared_fixtures;
+pub use crate::fixtures::{fixtures_dir, shared_fixtures};
 
 /// Runs a sqlx query (`$1` placeholders) on the test database, SQLite or PostgreSQL:
 /// `db!(pool, fetch_one, sqlx::query_scalar::<_, i64>("SELECT …"))`.

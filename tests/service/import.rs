@@ -307,8 +307,7 @@ async fn a_jsonl_path_resolves_images_against_the_parent_of_qa() {
 
 #[tokio::test]
 async fn enact_sample_imports_16_items_and_rejects_rows_without_images() {
-    let Some(fixtures) = shared_fixtures() else {
-        eprintln!("shared fixtures not present, skipping");
+    let Some(fixtures) = fixtures_dir() else {
         return;
     };
     let sample = fixtures.join("enact-sample");
@@ -375,8 +374,7 @@ async fn inverse_items_without_scene_graphs_get_action_text_signatures() {
 
 #[tokio::test]
 async fn scene_graph_import_stores_enacts_transition_signatures_and_upgrades_on_reimport() {
-    let Some(fixtures) = shared_fixtures() else {
-        eprintln!("shared fixtures not present, skipping");
+    let Some(fixtures) = fixtures_dir() else {
         return;
     };
     let parity = fixtures.join("enact-parity");

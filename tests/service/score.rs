@@ -21,8 +21,7 @@ fn run(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (bool, String, String) {
 
 #[test]
 fn enact_policy_reproduces_enacts_evaluator_on_every_prediction_file() {
-    let Some(fixtures) = shared_fixtures() else {
-        eprintln!("shared fixtures not present, skipping");
+    let Some(fixtures) = fixtures_dir() else {
         return;
     };
     let parity = fixtures.join("enact-parity");
@@ -248,8 +247,7 @@ fn unknown_ids_are_errors_naming_file_and_line() {
 
 #[test]
 fn key_frame_missing_from_the_scene_graph_is_named() {
-    let Some(fixtures) = shared_fixtures() else {
-        eprintln!("shared fixtures not present, skipping");
+    let Some(fixtures) = fixtures_dir() else {
         return;
     };
     let parity = fixtures.join("enact-parity");
@@ -319,8 +317,7 @@ fn malformed_scene_graph_json_is_named_with_its_place() {
 
 #[test]
 fn strict_scores_agree_between_a_stored_dataset_and_the_release_on_disk() {
-    let Some(fixtures) = shared_fixtures() else {
-        eprintln!("shared fixtures not present, skipping");
+    let Some(fixtures) = fixtures_dir() else {
         return;
     };
     let parity = fixtures.join("enact-parity");

@@ -1,4 +1,10 @@
-//! Where the shared ENACT fixtures are, for the tests and benchmarks that compare with them.
+//! Where the shared ENACT fixtures are, for the tests and benchmarks that compare with them, and
+//! what a test does when they are missing: on a developer's machine it says so and skips; under
+//! CI (`CI` set, as CI services do) it fails, since CI runs with `shared/fixtures` beside the
+//! clone and a skip there would pass without having compared anything.
+
+// Every test binary includes this file and uses its own share of it.
+#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 
@@ -21,4 +27,47 @@ pub fn shared_fixtures() -> Option<PathBuf> {
         }
     }
     None
+}
+
+/// Whether a missing fixture fails the test: `CI` is set to anything but empty, `0` or
+/// `false`.
+pub fn required() -> bool {
+    std::env::var("CI").is_ok_and(|v| !matches!(v.trim(), "" | "0" | "false" | "FALSE"))
+}
+
+/// Says that `what` is missing and the test skips, or panics when [`required`].
+pub fn missing(what: &str) {
+    assert!(
+        !required(),
+        "{what} is missing and CI is set: CI runs with shared/fixtures beside the clone \
+         (or ENACT_FIXTURES naming it), so this test must not skip"
+    );
+    eprintln!("skipping: {what} is missing (put shared/fixtures beside the clone)");
+}
+
+/// `relative` inside the shared fixtures when it exists; otherwise [`missing`] and `None`.
+pub fn fixture(relative: &str) -> Option<PathBuf> {
+    let path = shared_fixtures().map(|dir| dir.join(relative));
+    match path {
+        Some(path) if path.exists() => Some(path),
+        Some(path) => {
+            missing(&path.display().to_string());
+            None
+        }
+        None => {
+            missing(&format!("shared/fixtures/{relative}"));
+            None
+        }
+    }
+}
+
+/// The whole fixtures directory, as [`fixture`].
+pub fn fixtures_dir() -> Option<PathBuf> {
+    fixture("")
+}
+
+/// ENACT's parity fixtures (`enact-parity`: the reference outputs of its own code), as
+/// [`fixture`].
+pub fn parity_dir() -> Option<PathBuf> {
+    fixture("enact-parity")
 }

@@ -8,8 +8,13 @@
 //!   hallucinated component. Missing components are visited in sorted order; among the
 //!   hallucinated ones that fit, the one in the same semantic category wins, then the first in
 //!   sorted order. So a pairing never depends on input order.
-//! - Entity substitution: same kind, operation and predicate, and exactly one entity differs
-//!   in place (an edge whose two ends both differ is an omission plus a hallucination).
+//! - Within a class, the closest pairs are made first: all pairs with no entity different,
+//!   then those with one, then two (a one-end entity substitution of an edge is paired before
+//!   a both-ends one, whichever missing component sorts first).
+//! - Entity substitution is the paper's: the predicate is right but applied to the wrong
+//!   object(s) (section 3.5), "entities differ while other fields match" (appendix D). Same
+//!   kind, operation and predicate, any entity different: both ends of an edge may be wrong,
+//!   and a transition may have other sources.
 //! - A transition "A → B" has entity A and predicate B: "A → C" is a predicate substitution,
 //!   "C → B" an entity substitution, and "B → A" a polarity inversion.
 //! - A paired error is labelled with the semantic category of its true component (what the
@@ -100,18 +105,23 @@ impl StructuralClass {
             StructuralClass::EntitySubstitution => {
                 truth.operation == predicted.operation
                     && truth.predicate == predicted.predicate
-                    && truth.entities.len() == predicted.entities.len()
-                    && truth
-                        .entities
-                        .iter()
-                        .zip(&predicted.entities)
-                        .filter(|(a, b)| a != b)
-                        .count()
-                        == 1
+                    && truth.entities != predicted.entities
             }
             StructuralClass::Omission | StructuralClass::Hallucination => false,
         }
     }
+}
+
+/// How many entities of `predicted` are not `truth`'s in the same place (an entity one has and
+/// the other lacks counts as different): the closeness of two components that fit a class.
+fn entities_differing(truth: &Component, predicted: &Component) -> usize {
+    let in_place = truth
+        .entities
+        .iter()
+        .zip(&predicted.entities)
+        .filter(|(a, b)| a != b)
+        .count();
+    in_place + truth.entities.len().abs_diff(predicted.entities.len())
 }
 
 /// One wrong component (or pair of them).
@@ -166,30 +176,46 @@ pub fn compare_step(truth: &[Component], predicted: &[Component]) -> StepCompari
     let mut hallucinated_left: Vec<bool> = vec![true; hallucinated.len()];
     let mut errors = Vec::new();
     for class in StructuralClass::PAIRED {
-        for (m, truth_c) in missing.iter().enumerate() {
-            if !missing_left[m] {
-                continue;
-            }
-            let truth_category = category(truth_c);
-            let fitting = || {
+        // Closest pairs first, over all missing components: every one-end entity substitution
+        // is paired before any two-end one, so a far pair never takes a near pair's component.
+        let mut rounds: Vec<usize> = missing
+            .iter()
+            .flat_map(|t| {
                 hallucinated
                     .iter()
-                    .enumerate()
-                    .filter(|&(h, p)| hallucinated_left[h] && class.fits(truth_c, p))
-            };
-            let chosen = fitting()
-                .find(|(_, p)| category(p) == truth_category)
-                .or_else(|| fitting().next())
-                .map(|(h, _)| h);
-            if let Some(h) = chosen {
-                missing_left[m] = false;
-                hallucinated_left[h] = false;
-                errors.push(StructuralError {
-                    class,
-                    truth: Some(truth_c.clone()),
-                    predicted: Some(hallucinated[h].clone()),
-                    category: truth_category,
-                });
+                    .filter(|p| class.fits(t, p))
+                    .map(|p| entities_differing(t, p))
+            })
+            .collect();
+        rounds.sort_unstable();
+        rounds.dedup();
+        for distance in rounds {
+            for (m, truth_c) in missing.iter().enumerate() {
+                if !missing_left[m] {
+                    continue;
+                }
+                let truth_category = category(truth_c);
+                let fitting = || {
+                    hallucinated.iter().enumerate().filter(|&(h, p)| {
+                        hallucinated_left[h]
+                            && class.fits(truth_c, p)
+                            && entities_differing(truth_c, p) == distance
+                    })
+                };
+                let chosen = fitting()
+                    .find(|(_, p)| category(p) == truth_category)
+                    .or_else(|| fitting().next())
+                    .map(|(h, _)| h);
+                if let Some(h) = chosen {
+                    missing_left[m] = false;
+                    hallucinated_left[h] = false;
+                    errors.push(StructuralError {
+                        class,
+                        truth: Some(truth_c.clone()),
+                        predicted: Some(hallucinated[h].clone()),
+                        category: truth_category,
+                    });
+                }
             }
         }
     }
@@ -285,24 +311,115 @@ mod tests {
     }
 
     #[test]
-    fn both_ends_of_an_edge_differing_is_not_a_substitution() {
+    fn entity_substitution_is_any_entity_wrong_under_the_right_predicate() {
+        let inside = "edge_add_the apple_the fridge_Inside";
+        // One end, either one.
+        for predicted in [
+            "edge_add_the pear_the fridge_Inside",
+            "edge_add_the apple_the sink_Inside",
+        ] {
+            assert_eq!(
+                classes(&[inside], &[predicted]),
+                [(EntitySubstitution, inside.into(), predicted.into())]
+            );
+        }
+        // Both ends (the paper's "wrong object(s)"), and the two ends swapped.
+        for predicted in [
+            "edge_add_the pear_the sink_Inside",
+            "edge_add_the fridge_the apple_Inside",
+        ] {
+            assert_eq!(
+                classes(&[inside], &[predicted]),
+                [(EntitySubstitution, inside.into(), predicted.into())]
+            );
+        }
+        // A node's one entity.
         assert_eq!(
             classes(
-                &["edge_add_the apple_the fridge_Inside"],
-                &["edge_add_the pear_the sink_Inside"]
-            ),
+                &["node_add_the fridge_Open"],
+                &["node_add_the cabinet_Open"]
+            )[0]
+            .0,
+            EntitySubstitution
+        );
+        // A transition to the right result from other sources, even a different number.
+        assert_eq!(
+            classes(
+                &["node_transition_from_the apple_the pear_to_the fruit salad"],
+                &["node_transition_from_the apple_to_the fruit salad"]
+            )[0]
+            .0,
+            EntitySubstitution
+        );
+        // Another predicate or operation as well is not an entity substitution.
+        assert_eq!(
+            classes(&[inside], &["edge_add_the pear_the sink_OnTop"]),
             [
-                (
-                    Omission,
-                    "edge_add_the apple_the fridge_Inside".into(),
-                    String::new()
-                ),
+                (Omission, inside.into(), String::new()),
                 (
                     Hallucination,
                     String::new(),
-                    "edge_add_the pear_the sink_Inside".into()
+                    "edge_add_the pear_the sink_OnTop".into()
                 )
             ]
+        );
+        assert_eq!(
+            classes(&[inside], &["edge_remove_the pear_the sink_Inside"]).len(),
+            2
+        );
+    }
+
+    #[test]
+    fn competing_entity_substitutions_pair_the_closest_first() {
+        // "the a … the b" sorts first and fits the prediction with both ends wrong, but "the
+        // c … the d" fits it with one end wrong: the closer pair is made.
+        let truth = ["edge_add_the a_the b_Inside", "edge_add_the c_the d_Inside"];
+        assert_eq!(
+            classes(&truth, &["edge_add_the c_the x_Inside"]),
+            [
+                (
+                    EntitySubstitution,
+                    "edge_add_the c_the d_Inside".into(),
+                    "edge_add_the c_the x_Inside".into()
+                ),
+                (
+                    Omission,
+                    "edge_add_the a_the b_Inside".into(),
+                    String::new()
+                ),
+            ]
+        );
+        // With a second prediction both are paired, the far one last; input order does not
+        // matter.
+        let predicted = ["edge_add_the y_the z_Inside", "edge_add_the c_the x_Inside"];
+        let errors = classes(&truth, &predicted);
+        assert_eq!(
+            errors,
+            [
+                (
+                    EntitySubstitution,
+                    "edge_add_the c_the d_Inside".into(),
+                    "edge_add_the c_the x_Inside".into()
+                ),
+                (
+                    EntitySubstitution,
+                    "edge_add_the a_the b_Inside".into(),
+                    "edge_add_the y_the z_Inside".into()
+                ),
+            ]
+        );
+        let (mut t, mut p) = (truth, predicted);
+        t.reverse();
+        p.reverse();
+        assert_eq!(classes(&t, &p), errors);
+        // Equally close candidates: the first in sorted order.
+        assert_eq!(
+            classes(
+                &["edge_add_the a_the b_Inside"],
+                &["edge_add_the a_the z_Inside", "edge_add_the a_the c_Inside"]
+            )[0]
+            .2,
+            "edge_add_the a_the c_Inside"
         );
     }
 
@@ -488,6 +605,16 @@ mod tests {
             for e in &c.errors {
                 if let (Some(t), Some(p)) = (&e.truth, &e.predicted) {
                     assert!(e.class.fits(t, p), "{e:?}");
+                }
+            }
+            // Nothing left over is an entity substitution: an omission and a hallucination
+            // never share kind, operation and predicate.
+            for o in c.errors.iter().filter(|e| e.class == Omission) {
+                for h in c.errors.iter().filter(|e| e.class == Hallucination) {
+                    let (Some(t), Some(p)) = (&o.truth, &h.predicted) else {
+                        unreachable!("omissions have a truth, hallucinations a prediction")
+                    };
+                    assert!(!EntitySubstitution.fits(t, p), "{t} / {p}");
                 }
             }
             // A perfect answer has no errors.

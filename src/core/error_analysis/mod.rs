@@ -35,8 +35,9 @@ use crate::core::verifier::{
 };
 
 /// The analysis's version, stored with every result: a stored result of another version is
-/// recomputed. Raise it whenever a rule here changes what is counted.
-pub const ANALYSIS_VERSION: u32 = 1;
+/// recomputed. Raise it whenever a rule here changes what is counted. Version 2: entity
+/// substitution counts any entity different (both ends of an edge), as the paper defines it.
+pub const ANALYSIS_VERSION: u32 = 2;
 
 /// Examples kept per semantic category × structural class.
 pub const EXAMPLES_PER_CELL: usize = 3;

@@ -5,57 +5,42 @@
 
 use askama::Template;
 
-use super::figure::StudyFigure;
+use super::figure::study_heatmap;
 use super::report::{StudyReport, StudyStamp};
-use crate::core::agreement::report::export::{BundleFile, csv_document, fixed, tex_escape};
+use crate::core::bundle::{
+    BundleFile, Stamp, csv_document, fixed, stamp_text, tex_escape, tex_stamp,
+};
 use crate::core::dataset::Direction;
 use crate::core::error_analysis::HandFigures;
 use crate::core::error_analysis::chart::{BarChart, hand_chart_of};
 
-/// The stamp as `key: value` lines, the same in every file.
-pub fn stamp_lines(stamp: &StudyStamp) -> Vec<String> {
-    let submission = |s: Option<i64>| s.map_or_else(|| "none".to_owned(), |id| id.to_string());
-    let mut lines = vec![
-        format!("study: {}", stamp.study),
-        format!("row: {}", stamp.row),
-        format!("metric_version: {}", stamp.metric_version),
-        format!("tests: {}", stamp.tests),
-        format!(
-            "baseline: {} sha256:{} submission {}",
-            stamp.baseline.name,
-            stamp.baseline.hash,
-            submission(stamp.baseline_submission)
-        ),
-    ];
-    for v in &stamp.variants {
-        lines.push(format!(
-            "variant: {}/{} = {} sha256:{} submission {}",
-            v.family,
-            v.variant,
-            v.dataset,
-            v.dataset_hash,
-            submission(v.submission)
-        ));
+impl Stamp for StudyStamp {
+    fn stamp_fields(&self) -> Vec<String> {
+        let submission = |s: Option<i64>| s.map_or_else(|| "none".to_owned(), |id| id.to_string());
+        let mut lines = vec![
+            format!("study: {}", self.study),
+            format!("row: {}", self.row),
+            format!("metric_version: {}", self.metric_version),
+            format!("tests: {}", self.tests),
+            format!(
+                "baseline: {} sha256:{} submission {}",
+                self.baseline.name,
+                self.baseline.hash,
+                submission(self.baseline_submission)
+            ),
+        ];
+        for v in &self.variants {
+            lines.push(format!(
+                "variant: {}/{} = {} sha256:{} submission {}",
+                v.family,
+                v.variant,
+                v.dataset,
+                v.dataset_hash,
+                submission(v.submission)
+            ));
+        }
+        lines
     }
-    lines
-}
-
-/// Control characters and line breaks would end a stamp line early.
-fn one_line(text: &str) -> String {
-    text.chars()
-        .map(|c| if c.is_control() { ' ' } else { c })
-        .collect()
-}
-
-fn stamp_text(stamp: &StudyStamp) -> String {
-    one_line(&stamp_lines(stamp).join("; "))
-}
-
-#[derive(Template)]
-#[template(path = "study/heatmap.svg")]
-struct HeatmapSvg<'a> {
-    figure: &'a StudyFigure,
-    stamp: String,
 }
 
 /// One direction's hand chart.
@@ -77,11 +62,7 @@ struct HandednessSvg<'a> {
 
 /// The heatmap as a standalone SVG.
 pub fn heatmap_svg(report: &StudyReport) -> Result<String, askama::Error> {
-    HeatmapSvg {
-        figure: &StudyFigure::of_report(report),
-        stamp: stamp_text(&report.stamp),
-    }
-    .render()
+    study_heatmap(report).svg(&stamp_text(&report.stamp))
 }
 
 /// Panel C.2: per direction, left and right precision, recall and mixing (± SE) of the
@@ -231,24 +212,17 @@ fn handedness_csv(report: &StudyReport) -> String {
             row
         })
         .collect();
-    csv_document(&stamp_lines(&report.stamp), &HANDEDNESS_HEADER, &rows)
+    csv_document(&report.stamp, &HANDEDNESS_HEADER, &rows)
 }
 
 /// The cells as one CSV document (stamp lines first, as `# ` comments).
 pub fn cells_csv(report: &StudyReport) -> String {
-    csv_document(
-        &stamp_lines(&report.stamp),
-        &CELL_HEADER,
-        &cell_rows(report),
-    )
+    csv_document(&report.stamp, &CELL_HEADER, &cell_rows(report))
 }
 
 /// The cells as a booktabs table: Δ, Welch's p and the paired p-values.
 pub fn cells_tex(report: &StudyReport) -> String {
-    let mut out: String = stamp_lines(&report.stamp)
-        .iter()
-        .map(|line| format!("% {}\n", one_line(line)))
-        .collect();
+    let mut out = tex_stamp(&report.stamp);
     out.push_str(
         "\\begin{table}[t]\n\\centering\n\\small\n\\begin{tabular}{llllrrrrrr}\n\\toprule\n\
          Family & Variant & Direction & $L$ & $\\Delta$ & $t$ & df & $p$ (Welch) & \

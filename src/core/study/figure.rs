@@ -1,72 +1,19 @@
-//! Geometry of a study's heatmap, drawn like the paper's ablation figures: one panel per
-//! family, one column per variant, forward and inverse rows; each cell coloured by the band of
-//! Welch's two-tailed p (the same four bands as the agreement report's heatmap, and grey for
-//! no test) with Δ and p printed in it. Pure; `templates/study/heatmap.svg` draws it.
-
-use serde::Serialize;
+//! A study's heatmap, drawn like the paper's ablation figures: one panel per family, one
+//! column per variant, forward and inverse rows; each cell coloured by the band of Welch's
+//! two-tailed p with Δ and p printed in it ([`crate::core::heatmap`] lays it out).
 
 use super::families;
-use super::report::StudyReport;
-use crate::core::agreement::report::heatmap::{
-    HeatmapHeader, LegendEntry, significance, significance_legend,
-};
+use super::report::{StudyCell, StudyReport};
 use crate::core::dataset::Direction;
+use crate::core::heatmap::{CellFigures, ColumnFigures, Heatmap, HeatmapSizes, PanelFigures};
 
-/// A generous advance of an 11 px sans-serif character, and of a 12 px bold one, so that
-/// labels are never cut.
-const CHAR_WIDTH: f64 = 7.0;
-const BOLD_CHAR_WIDTH: f64 = 8.2;
-const ROW_LABEL_WIDTH: f64 = 84.0;
-const MIN_COLUMN_WIDTH: f64 = 88.0;
-const CELL_HEIGHT: f64 = 46.0;
-const PANEL_GAP: f64 = 18.0;
-const TOP: f64 = 74.0;
-const LEGEND_ENTRY_WIDTH: f64 = 112.0;
-const MARGIN: f64 = 12.0;
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FigureCell {
-    pub x: f64,
-    pub y: f64,
-    pub width: f64,
-    pub fill: &'static str,
-    pub text_fill: &'static str,
-    /// `Δ=+0.12`, or `Δ n/a`.
-    pub delta: String,
-    /// `p=0.034`, `p<0.001` or `no test`.
-    pub p: String,
-    /// Hover text: the figures in full.
-    pub title: String,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FigurePanel {
-    pub title: String,
-    /// Centre of the title.
-    pub x: f64,
-    /// Centres of the variant headings.
-    pub columns: Vec<HeatmapHeader>,
-    pub cells: Vec<FigureCell>,
-}
-
-/// The whole figure in SVG user units.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct StudyFigure {
-    pub width: f64,
-    pub height: f64,
-    pub title: String,
-    pub cell_height: f64,
-    /// Right edge of the row labels, and each row's (baseline y, label).
-    pub label_right: f64,
-    pub rows: Vec<(f64, String)>,
-    pub panels: Vec<FigurePanel>,
-    pub legend_y: f64,
-    pub legend: Vec<LegendEntry>,
-}
-
-fn text_width(text: &str, char_width: f64) -> f64 {
-    text.chars().count() as f64 * char_width + 14.0
-}
+const SIZES: HeatmapSizes = HeatmapSizes {
+    top: 74.0,
+    cell_height: 46.0,
+    min_label_width: 84.0,
+    min_column_width: 88.0,
+    panel_gap: 18.0,
+};
 
 /// `p=0.034`, `p<0.001`, or `no test`.
 pub fn p_text(p: Option<f64>) -> String {
@@ -77,127 +24,82 @@ pub fn p_text(p: Option<f64>) -> String {
     }
 }
 
-impl StudyFigure {
-    /// The figure of `report`'s direction cells (step-length cells are left to the tables).
-    pub fn of_report(report: &StudyReport) -> StudyFigure {
-        let title = format!(
-            "{}: Δ mean pairwise accuracy, variant − baseline ({}), Welch two-tailed p",
-            report.stamp.row, report.stamp.baseline.name
-        );
-        let specs: Vec<_> = report
-            .variants
-            .iter()
-            .map(|v| super::VariantSpec {
-                family: v.family.clone(),
-                label: v.variant.clone(),
-                dataset: v.dataset.clone(),
-            })
-            .collect();
-        let mut x = ROW_LABEL_WIDTH;
-        let mut panels = Vec::new();
-        for (family, members) in families(&specs) {
-            let mut widths: Vec<f64> = members
-                .iter()
-                .map(|v| text_width(&v.label, CHAR_WIDTH).max(MIN_COLUMN_WIDTH))
-                .collect();
-            let needed = text_width(family, BOLD_CHAR_WIDTH);
-            let total: f64 = widths.iter().sum();
-            if needed > total {
-                let extra = (needed - total) / widths.len() as f64;
-                widths.iter_mut().for_each(|w| *w += extra);
-            }
-            let panel_left = x;
-            let mut columns = Vec::new();
-            let mut cells = Vec::new();
-            for (v, width) in members.iter().zip(&widths) {
-                columns.push(HeatmapHeader {
-                    x: x + width / 2.0,
-                    label: v.label.clone(),
-                });
-                for (r, direction) in Direction::ALL.into_iter().enumerate() {
-                    let y = TOP + r as f64 * CELL_HEIGHT;
-                    let found = report.cells.iter().find(|c| {
-                        c.family == v.family
-                            && c.variant == v.label
-                            && c.direction == direction
-                            && c.step_length.is_none()
-                    });
-                    cells.push(figure_cell(found, x, y, *width, &v.label, direction));
-                }
-                x += width;
-            }
-            panels.push(FigurePanel {
-                title: family.to_owned(),
-                x: (panel_left + x) / 2.0,
-                columns,
-                cells,
-            });
-            x += PANEL_GAP;
-        }
-        let plot_right = x - PANEL_GAP;
-        let legend_y = TOP + 2.0 * CELL_HEIGHT + 18.0;
-        let legend: Vec<LegendEntry> = significance_legend()
-            .into_iter()
-            .enumerate()
-            .map(|(i, (fill, label))| LegendEntry {
-                x: ROW_LABEL_WIDTH + i as f64 * LEGEND_ENTRY_WIDTH,
-                fill,
-                label,
-            })
-            .collect();
-        let legend_right = ROW_LABEL_WIDTH + legend.len() as f64 * LEGEND_ENTRY_WIDTH;
-        let width = [
-            plot_right,
-            legend_right,
-            MARGIN + text_width(&title, CHAR_WIDTH),
-        ]
+/// The figure of `report`'s direction cells (step-length cells are left to the tables).
+pub fn study_heatmap(report: &StudyReport) -> Heatmap {
+    let title = format!(
+        "{}: Δ mean pairwise accuracy, variant − baseline ({}), Welch two-tailed p",
+        report.stamp.row, report.stamp.baseline.name
+    );
+    let specs: Vec<_> = report
+        .variants
+        .iter()
+        .map(|v| super::VariantSpec {
+            family: v.family.clone(),
+            label: v.variant.clone(),
+            dataset: v.dataset.clone(),
+        })
+        .collect();
+    let panels = families(&specs)
         .into_iter()
-        .fold(0.0, f64::max)
-            + MARGIN;
-        StudyFigure {
-            width,
-            height: legend_y + 14.0 + MARGIN,
-            title,
-            cell_height: CELL_HEIGHT,
-            label_right: ROW_LABEL_WIDTH - 8.0,
-            rows: Direction::ALL
-                .into_iter()
-                .enumerate()
-                .map(|(r, d)| {
-                    let mut name = d.as_str().to_owned();
-                    name[..1].make_ascii_uppercase();
-                    (TOP + r as f64 * CELL_HEIGHT + CELL_HEIGHT / 2.0 + 4.0, name)
+        .map(|(family, members)| PanelFigures {
+            title: family.to_owned(),
+            columns: members
+                .iter()
+                .map(|v| ColumnFigures {
+                    label: v.label.clone(),
+                    cells: Direction::ALL
+                        .into_iter()
+                        .map(|direction| {
+                            let found = report.cells.iter().find(|c| {
+                                c.family == v.family
+                                    && c.variant == v.label
+                                    && c.direction == direction
+                                    && c.step_length.is_none()
+                            });
+                            cell_figures(found, &v.label, direction)
+                        })
+                        .collect(),
                 })
                 .collect(),
-            panels,
-            legend_y,
-            legend,
-        }
+        })
+        .collect();
+    let rows: Vec<String> = Direction::ALL
+        .into_iter()
+        .map(|d| {
+            let mut name = d.as_str().to_owned();
+            name[..1].make_ascii_uppercase();
+            name
+        })
+        .collect();
+    let heatmap = Heatmap::layout(
+        format!(
+            "{title}: one panel per family, one column per variant, forward and inverse rows; \
+             colour shows the band of the p-value"
+        ),
+        Some(title),
+        &rows,
+        panels,
+        SIZES,
+        None,
+    );
+    Heatmap {
+        class: "study-heatmap",
+        ..heatmap
     }
 }
 
-fn figure_cell(
-    cell: Option<&super::report::StudyCell>,
-    x: f64,
-    y: f64,
-    width: f64,
-    variant: &str,
-    direction: Direction,
-) -> FigureCell {
+fn cell_figures(cell: Option<&StudyCell>, variant: &str, direction: Direction) -> CellFigures {
     let p = cell.and_then(|c| c.p);
-    let (fill, text_fill) = significance(p);
     let delta = cell.and_then(|c| c.delta);
     let why = cell
         .and_then(|c| c.undefined.clone())
         .unwrap_or_else(|| "no test".to_owned());
-    FigureCell {
-        x,
-        y,
-        width,
-        fill,
-        text_fill,
-        delta: delta.map_or_else(|| "Δ n/a".to_owned(), |d| format!("Δ={d:+.2}")),
-        p: p_text(p),
+    CellFigures {
+        p,
+        lines: vec![
+            delta.map_or_else(|| "Δ n/a".to_owned(), |d| format!("Δ={d:+.2}")),
+            p_text(p),
+        ],
         title: match (cell, p) {
             (Some(c), Some(p)) => format!(
                 "{variant}, {direction}: Δ = {:+.4}, t = {:.3}, df = {:.1}, p = {p:.4}, \
@@ -216,6 +118,7 @@ fn figure_cell(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::core::heatmap::{significance, text_width};
     use crate::core::study::Alignment;
     use crate::core::study::report::{
         DatasetRef, STUDY_METRIC_VERSION, StudyCell, StudyStamp, VariantSummary,
@@ -284,13 +187,17 @@ mod tests {
 
     #[test]
     fn panels_follow_families_and_fit_their_labels() {
-        let figure = StudyFigure::of_report(&report(&[
+        let figure = study_heatmap(&report(&[
             ("Camera FOV", "Aperture 30"),
             ("Image realism", "Ray tracing only (no denoiser)"),
             ("Camera FOV", "Fisheye"),
             ("Robot appearance with a long family name", "Skin"),
         ]));
-        let titles: Vec<&str> = figure.panels.iter().map(|p| p.title.as_str()).collect();
+        let titles: Vec<&str> = figure
+            .panels
+            .iter()
+            .map(|p| p.title.label.as_str())
+            .collect();
         assert_eq!(
             titles,
             [
@@ -307,20 +214,20 @@ mod tests {
                 .iter()
                 .map(|c| c.x + c.width)
                 .fold(0.0, f64::max);
-            assert!(right - left >= text_width(&panel.title, BOLD_CHAR_WIDTH) - 1e-9);
+            assert!(right - left >= text_width(&panel.title.label, 8.2) - 1e-9);
             for (column, cell) in panel.columns.iter().zip(panel.cells.iter().step_by(2)) {
-                assert!(cell.width >= text_width(&column.label, CHAR_WIDTH));
+                assert!(cell.width >= text_width(&column.label, 7.0));
             }
             assert!(right <= figure.width);
         }
         let cell = &figure.panels[0].cells[0];
         assert_eq!(
-            (cell.delta.as_str(), cell.p.as_str()),
+            (cell.lines[0].text.as_str(), cell.lines[1].text.as_str()),
             ("Δ=-0.12", "p<0.001")
         );
         assert_eq!(cell.fill, significance(Some(0.0004)).0);
         let inverse = &figure.panels[0].cells[1];
-        assert_eq!(inverse.p, "no test");
+        assert_eq!(inverse.lines[1].text, "no test");
         assert!(inverse.title.contains("zero variance"));
     }
 }

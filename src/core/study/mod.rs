@@ -6,7 +6,7 @@
 //! - this module: naming rules, the `FAMILY/LABEL=DATASET` variant syntax, and [`align`],
 //!   which pairs a variant's items with the baseline's;
 //! - [`stats`]: the paired t and sign tests reported beside the paper's Welch test;
-//! - [`report`]: the report's cells and handedness rows; [`figure`] the heatmap geometry;
+//! - [`report`]: the report's cells and handedness rows; [`figure`] the heatmap's panels;
 //!   [`export`] its files (JSON, CSV, LaTeX, SVG).
 
 pub mod export;

@@ -6,63 +6,50 @@
 use askama::Template;
 
 use crate::core::agreement::WelchComparison;
-use crate::core::agreement::report::heatmap::Heatmap;
+use crate::core::agreement::report::heatmap::comparison_heatmap;
 use crate::core::agreement::report::{AgreementReport, ReportStamp};
 use crate::core::audit::AuditEntry;
+use crate::core::bundle::{
+    BundleFile, Stamp, csv_document, fixed, stamp_lines, stamp_text, tex_escape, tex_stamp,
+};
 use crate::core::dataset::Direction;
 use crate::core::error_analysis::{ErrorAnalysis, present};
 use crate::core::leaderboard::{
     AccuracyCell, AccuracyChart, LeaderboardRow, MIN_HUMAN_ANSWERS, RowSource,
 };
 
-/// One file of the bundle.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct BundleFile {
-    pub name: &'static str,
-    pub bytes: Vec<u8>,
-}
-
-/// The stamp as `key: value` lines, the same in every file.
-pub fn stamp_lines(stamp: &ReportStamp) -> Vec<String> {
-    let ids = |ids: &[i64]| {
-        if ids.is_empty() {
-            "none".to_owned()
-        } else {
-            ids.iter().map(i64::to_string).collect::<Vec<_>>().join(" ")
+impl Stamp for ReportStamp {
+    fn stamp_fields(&self) -> Vec<String> {
+        let stamp = self;
+        let ids = |ids: &[i64]| {
+            if ids.is_empty() {
+                "none".to_owned()
+            } else {
+                ids.iter().map(i64::to_string).collect::<Vec<_>>().join(" ")
+            }
+        };
+        let mut lines = vec![
+            format!("dataset: {}", stamp.dataset),
+            format!("dataset_hash: sha256:{}", stamp.dataset_hash),
+            format!("metric_version: {}", stamp.metric_version),
+            format!("encoding: {} ({} alpha)", stamp.encoding, stamp.level),
+            format!(
+                "bootstrap: seed {}, {} replicates over items, {}% percentile interval",
+                stamp.bootstrap_seed,
+                stamp.bootstrap_replicates,
+                stamp.confidence_level * 100.0
+            ),
+            format!("submission_ids: {}", ids(&stamp.submission_ids)),
+            format!("annotator_ids: {}", ids(&stamp.annotator_ids)),
+        ];
+        if let Some(protocol) = stamp.protocol {
+            lines.push(format!(
+                "agreement_protocol: k = {} per annotator, direction and step length, seed {}",
+                protocol.items_per_cell, protocol.seed
+            ));
         }
-    };
-    let mut lines = vec![
-        format!("dataset: {}", stamp.dataset),
-        format!("dataset_hash: sha256:{}", stamp.dataset_hash),
-        format!("metric_version: {}", stamp.metric_version),
-        format!("encoding: {} ({} alpha)", stamp.encoding, stamp.level),
-        format!(
-            "bootstrap: seed {}, {} replicates over items, {}% percentile interval",
-            stamp.bootstrap_seed,
-            stamp.bootstrap_replicates,
-            stamp.confidence_level * 100.0
-        ),
-        format!("submission_ids: {}", ids(&stamp.submission_ids)),
-        format!("annotator_ids: {}", ids(&stamp.annotator_ids)),
-    ];
-    if let Some(protocol) = stamp.protocol {
-        lines.push(format!(
-            "agreement_protocol: k = {} per annotator, direction and step length, seed {}",
-            protocol.items_per_cell, protocol.seed
-        ));
+        lines
     }
-    lines
-}
-
-fn stamp_text(stamp: &ReportStamp) -> String {
-    stamp_lines(stamp).join("; ")
-}
-
-#[derive(Template)]
-#[template(path = "report/heatmap.svg")]
-struct HeatmapSvg<'a> {
-    heatmap: &'a Heatmap,
-    stamp: String,
 }
 
 #[derive(Template)]
@@ -74,11 +61,7 @@ struct AccuracyChartSvg<'a> {
 
 /// The heatmap of every comparison, as a standalone SVG file.
 pub fn heatmap_svg(report: &AgreementReport) -> Result<String, askama::Error> {
-    HeatmapSvg {
-        heatmap: &Heatmap::of_comparisons(&report.comparisons),
-        stamp: stamp_text(&report.stamp),
-    }
-    .render()
+    comparison_heatmap(&report.comparisons).svg(&stamp_text(&report.stamp))
 }
 
 /// Task accuracy against step length for every row of the tables, as a standalone SVG file.
@@ -90,48 +73,8 @@ pub fn accuracy_chart_svg(report: &AgreementReport) -> Result<String, askama::Er
     .render()
 }
 
-pub(crate) fn fixed(value: Option<f64>, decimals: usize) -> String {
-    value.map_or_else(String::new, |v| format!("{v:.decimals$}"))
-}
-
 fn percent(value: Option<f64>) -> String {
     value.map_or_else(String::new, |v| format!("{:.2}", v * 100.0))
-}
-
-fn csv_field(text: &str) -> String {
-    // A spreadsheet runs a cell that starts with = + - @ (or a tab or CR) as a formula, and
-    // model names, descriptions and reasons are anyone's text: such a cell gets a leading `'`
-    // (OWASP's advice), unless it is a number or the lone `-` of a missing value.
-    let formula = text.starts_with(['=', '+', '-', '@', '\t', '\r'])
-        && text != "-"
-        && text.parse::<f64>().is_err();
-    let text: std::borrow::Cow<'_, str> = if formula {
-        format!("'{text}").into()
-    } else {
-        text.into()
-    };
-    if text.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.into_owned()
-    }
-}
-
-fn csv(stamp: &ReportStamp, header: &[&str], rows: &[Vec<String>]) -> String {
-    csv_document(&stamp_lines(stamp), header, rows)
-}
-
-/// A CSV file: the stamp as `# ` comment lines, the header, the rows.
-pub(crate) fn csv_document(stamp: &[String], header: &[&str], rows: &[Vec<String>]) -> String {
-    let mut out: String = stamp.iter().map(|line| format!("# {line}\n")).collect();
-    out.push_str(&header.join(","));
-    out.push('\n');
-    for row in rows {
-        let fields: Vec<String> = row.iter().map(|f| csv_field(f)).collect();
-        out.push_str(&fields.join(","));
-        out.push('\n');
-    }
-    out
 }
 
 fn row_label(row: &LeaderboardRow) -> String {
@@ -209,7 +152,7 @@ pub fn csv_files(report: &AgreementReport) -> Vec<(&'static str, String)> {
     let mut files = Vec::new();
     files.push((
         "agreement.csv",
-        csv(
+        csv_document(
             stamp,
             &[
                 "annotator_a",
@@ -246,7 +189,7 @@ pub fn csv_files(report: &AgreementReport) -> Vec<(&'static str, String)> {
     }
     files.push((
         "agreement_counts.csv",
-        csv(
+        csv_document(
             stamp,
             &[
                 "direction",
@@ -284,7 +227,7 @@ pub fn csv_files(report: &AgreementReport) -> Vec<(&'static str, String)> {
     }
     files.push((
         "accuracy.csv",
-        csv(
+        csv_document(
             stamp,
             &[
                 "row",
@@ -321,7 +264,7 @@ pub fn csv_files(report: &AgreementReport) -> Vec<(&'static str, String)> {
     }
     files.push((
         "comparisons.csv",
-        csv(
+        csv_document(
             stamp,
             &[
                 "a",
@@ -490,26 +433,6 @@ pub fn markdown(report: &AgreementReport) -> String {
     out
 }
 
-pub(crate) fn tex_escape(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '\\' => out.push_str("\\textbackslash{}"),
-            '&' | '%' | '$' | '#' | '_' | '{' | '}' => {
-                out.push('\\');
-                out.push(c);
-            }
-            '~' => out.push_str("\\textasciitilde{}"),
-            // In LaTeX's default font encoding `<` and `>` print as ¡ and ¿.
-            '<' => out.push_str("\\textless{}"),
-            '>' => out.push_str("\\textgreater{}"),
-            '^' => out.push_str("\\textasciicircum{}"),
-            _ => out.push(c),
-        }
-    }
-    out
-}
-
 /// One accuracy table in the layout of the paper's Tables 1 (PA) and 3 (TA): a row per
 /// model, forward then inverse columns for L = 3..10, the Human row last and in bold.
 fn latex_accuracy_table(report: &AgreementReport, task: bool) -> String {
@@ -574,10 +497,7 @@ fn latex_accuracy_table(report: &AgreementReport, task: bool) -> String {
 /// The report's tables in LaTeX (needs `booktabs`, `multirow` and `graphicx`).
 pub fn latex(report: &AgreementReport) -> String {
     let stamp = &report.stamp;
-    let mut out: String = stamp_lines(stamp)
-        .iter()
-        .map(|line| format!("% {line}\n"))
-        .collect();
+    let mut out = tex_stamp(stamp);
     out.push_str("% needs \\usepackage{booktabs,multirow,graphicx}\n\n");
     out.push_str(&latex_accuracy_table(report, false));
     out.push('\n');
@@ -703,7 +623,7 @@ pub fn error_files(
         },
         BundleFile {
             name: "errors.csv",
-            bytes: csv(stamp, &header, &lines).into_bytes(),
+            bytes: csv_document(stamp, &header, &lines).into_bytes(),
         },
     ])
 }
@@ -739,44 +659,6 @@ pub fn audit_file(stamp: &ReportStamp, entries: &[AuditEntry]) -> BundleFile {
         .collect();
     BundleFile {
         name: "audit.csv",
-        bytes: csv(stamp, &header, &rows).into_bytes(),
-    }
-}
-
-/// The files as one tar archive under `folder/`, with a fixed mtime so the same report gives
-/// the same bytes.
-pub fn tar_archive(folder: &str, files: &[BundleFile]) -> std::io::Result<Vec<u8>> {
-    let mut builder = tar::Builder::new(Vec::new());
-    for file in files {
-        let mut header = tar::Header::new_ustar();
-        header.set_size(file.bytes.len() as u64);
-        header.set_mode(0o644);
-        header.set_mtime(0);
-        header.set_entry_type(tar::EntryType::Regular);
-        builder.append_data(
-            &mut header,
-            format!("{folder}/{}", file.name),
-            file.bytes.as_slice(),
-        )?;
-    }
-    builder.into_inner()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::csv_field;
-
-    #[test]
-    fn csv_fields_that_a_spreadsheet_would_run_are_made_text() {
-        assert_eq!(csv_field("=HYPERLINK(\"x\")"), "\"'=HYPERLINK(\"\"x\"\")\"");
-        assert_eq!(csv_field("+cmd|' /C calc'!A0"), "'+cmd|' /C calc'!A0");
-        assert_eq!(csv_field("@SUM(A1)"), "'@SUM(A1)");
-        assert_eq!(csv_field("-2+3"), "'-2+3");
-        // Numbers, the missing-value dash and ordinary text stay as they are.
-        assert_eq!(csv_field("-0.125"), "-0.125");
-        assert_eq!(csv_field("+1e-3"), "+1e-3");
-        assert_eq!(csv_field("-"), "-");
-        assert_eq!(csv_field("gpt, mini"), "\"gpt, mini\"");
-        assert_eq!(csv_field("model-1"), "model-1");
+        bytes: csv_document(stamp, &header, &rows).into_bytes(),
     }
 }

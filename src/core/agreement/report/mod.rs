@@ -784,7 +784,7 @@ mod tests {
         assert!(tex.contains(&tex_row), "{tex}");
         let svg = String::from_utf8(files[7].bytes.clone()).unwrap();
         assert!(svg.starts_with("<svg") && svg.contains("m7 (#7) − Human"));
-        let archive = export::tar_archive("bundle", &files).unwrap();
+        let archive = crate::core::bundle::tar_archive("bundle", &files).unwrap();
         let mut reader = tar::Archive::new(archive.as_slice());
         let entries: Vec<String> = reader
             .entries()
