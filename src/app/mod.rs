@@ -16,6 +16,8 @@
 //! - [`error_analysis`]: the paper's error taxonomy of a submission, the Human row, a file, or
 //!   a whole leaderboard.
 //! - [`studies`]: ablation studies (a baseline and variant datasets) and their reports.
+//! - [`rescore`]: stored results (submissions' scores, human verdicts) computed again under
+//!   the current metric version, in the foreground or as a job.
 //! - [`audit`]: the audit log every audited use case writes in its own transaction.
 //! - [`demo`]: the built-in demo dataset, its chance baseline and its login link.
 //! - [`backup`]: online snapshots of the database, and restoring one.
@@ -38,6 +40,7 @@ pub mod import;
 pub mod items;
 pub mod leaderboard;
 pub mod migrate_db;
+pub mod rescore;
 pub mod scoring;
 pub mod standings;
 pub mod studies;

@@ -73,10 +73,12 @@ pub enum AuditAction {
     BackupCreate,
     StudyCreate,
     StudyDelete,
+    /// Stored results computed again under the current metric version.
+    MetricRescore,
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 16] = [
+    pub const ALL: [AuditAction; 17] = [
         AuditAction::DatasetImport,
         AuditAction::DatasetAnswerVisibility,
         AuditAction::TokenIssue,
@@ -93,6 +95,7 @@ impl AuditAction {
         AuditAction::BackupCreate,
         AuditAction::StudyCreate,
         AuditAction::StudyDelete,
+        AuditAction::MetricRescore,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -113,6 +116,7 @@ impl AuditAction {
             AuditAction::BackupCreate => "backup.create",
             AuditAction::StudyCreate => "study.create",
             AuditAction::StudyDelete => "study.delete",
+            AuditAction::MetricRescore => "metric.rescore",
         }
     }
 

@@ -27,6 +27,7 @@ mod leaderboard;
 mod migrate_db;
 mod openapi;
 mod pages;
+mod rescore;
 mod score;
 mod studies;
 mod submissions;

@@ -23,6 +23,7 @@ use crate::core::agreement::{
 use crate::core::annotation::{HumanAnswer, human_entries, mean_by_item};
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::leaderboard::{HumanCoverage, LeaderboardRow};
+use crate::core::metric::MetricStamp;
 use crate::core::verifier::PerformanceReport;
 
 /// Names what the numbers of a report mean. Bump it when a definition changes (which answers
@@ -447,6 +448,8 @@ pub fn build_report(inputs: &ReportInputs) -> Result<AgreementReport, ReportErro
                     .map(|a| (a.annotator_id, a.item_id.as_str())),
                 inputs.dataset_items,
             ),
+            // Judged just now, under the current rules.
+            MetricStamp::current(),
         ));
     }
 
@@ -631,6 +634,7 @@ mod tests {
                 coverage: 1.0,
                 parse_failure_rate: 0.0,
                 human: None,
+                metric: MetricStamp::current(),
             },
             item_scores: values
                 .iter()
