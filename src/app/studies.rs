@@ -10,6 +10,7 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::{AppError, Hub, agreement, audit, datasets, error_analysis};
+use crate::core::metric::METRIC_VERSION;
 use crate::core::agreement::report::export::BundleFile;
 use crate::core::annotation::{human_entries, mean_by_item};
 use crate::core::audit::{Actor, AuditAction};
@@ -300,6 +301,8 @@ async fn row_scores(
                 submission: None,
                 items,
                 hands,
+                // Judged just now.
+                metric_version: METRIC_VERSION,
             }))
         }
         StudyRowChoice::Model { model, account } => {
@@ -357,6 +360,7 @@ async fn row_scores(
                 submission: Some(entry.id),
                 items,
                 hands: Some(hands_of(&analysis)),
+                metric_version: entry.metric_version,
             }))
         }
     }

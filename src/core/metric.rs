@@ -46,6 +46,23 @@ impl MetricStamp {
     }
 }
 
+impl MetricStamp {
+    /// How a report's stamp names the rules behind it: the report's own version and the metric
+    /// version of its figures, e.g. `enact-hub-study-report/1; metric 2`, with a warning when
+    /// some were computed with an older one.
+    pub fn with_report(&self, report_version: &str) -> String {
+        if self.outdated {
+            format!(
+                "{report_version}; metric {} (older than the current {METRIC_VERSION}: some \
+                 stored scores are not rescored yet)",
+                self.metric_version
+            )
+        } else {
+            format!("{report_version}; metric {}", self.metric_version)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -59,5 +76,10 @@ mod tests {
             MetricStamp::of(1)
         );
         assert_eq!(MetricStamp::oldest([]), MetricStamp::current());
+        assert_eq!(
+            MetricStamp::current().with_report("r/1"),
+            format!("r/1; metric {METRIC_VERSION}")
+        );
+        assert!(MetricStamp::of(1).with_report("r/1").contains("older than"));
     }
 }

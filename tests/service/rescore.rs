@@ -412,3 +412,80 @@ async fn the_rescore_job_stops_when_asked_and_resumes_from_the_top() {
     };
     assert!(format!("{e:#}").contains("payload"), "{e:#}");
 }
+
+#[tokio::test]
+async fn reimported_signatures_judge_the_human_answers_again_in_the_import() {
+    let Some(fixtures) = shared_fixtures() else {
+        eprintln!("shared fixtures not present, skipping");
+        return;
+    };
+    let parity = fixtures.join("enact-parity");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pool = fresh_db(&dir).await;
+    import(&pool, &parity, &options("parity")).await;
+    let items = db!(
+        pool,
+        fetch_all,
+        sqlx::query_as::<_, (String, String)>(
+            "SELECT item_id, gt_answer FROM items ORDER BY id LIMIT 24"
+        )
+    )
+    .expect("items");
+    let ann = crate::annotate::annotator_on(&pool, "ann", false).await;
+    let ids: Vec<&str> = items.iter().map(|(id, _)| id.as_str()).collect();
+    crate::annotate::assign_on(&pool, "parity", ann, &ids).await;
+    let hub = Hub::from(pool.clone());
+    let session = Session {
+        annotator: ann,
+        name: "ann".to_owned(),
+        is_admin: false,
+        csrf_token: String::new(),
+    };
+    for (i, (id, gt)) in items.iter().enumerate() {
+        let mut labels: Vec<u8> = serde_json::from_str(gt).expect("gt");
+        // Some right, some with two steps swapped, some reversed.
+        match i % 3 {
+            0 => {}
+            1 => labels.swap(0, 1),
+            _ => labels.reverse(),
+        }
+        let draft = Draft {
+            slots: labels.into_iter().map(Some).collect(),
+            counts: InteractionCounts::default(),
+            history: Vec::new(),
+        };
+        app::annotation::answer(&hub, &session, "parity", id, &draft)
+            .await
+            .expect("answered");
+    }
+    let exact_only = human_verdicts(&pool).await;
+
+    let mut with_graphs = options("parity");
+    with_graphs.scene_graphs = Some(parity.join("replayed_activities"));
+    let report = import(&pool, &parity, &with_graphs).await;
+    assert_eq!(report.signatures_updated, 96);
+    let rejudged = human_verdicts(&pool).await;
+    assert_eq!(rejudged.len(), items.len());
+    assert!(
+        rejudged
+            .iter()
+            .all(|v| v.5 == Some(i64::from(METRIC_VERSION)))
+    );
+    assert_ne!(rejudged, exact_only, "scene graphs give pairwise accuracy");
+    // What the import stored is what judging the answers now gives.
+    let rows = app::leaderboard::of(&Hub::from(pool.clone()), "parity")
+        .await
+        .expect("board")
+        .1;
+    db!(
+        pool,
+        execute,
+        sqlx::query("UPDATE annotations SET metric_version = NULL")
+    )
+    .expect("forget the verdicts");
+    let judged = app::leaderboard::of(&Hub::from(pool.clone()), "parity")
+        .await
+        .expect("board")
+        .1;
+    assert_eq!(rows, judged);
+}

@@ -322,7 +322,8 @@ pub struct ReportInputs {
 pub struct ReportStamp {
     pub dataset: String,
     pub dataset_hash: String,
-    pub metric_version: &'static str,
+    /// The report's rules and the metric version of its figures (the oldest among its rows).
+    pub metric_version: String,
     pub encoding: OrderingEncoding,
     pub level: MeasurementLevel,
     pub bootstrap_seed: u64,
@@ -515,7 +516,8 @@ pub fn build_report(inputs: &ReportInputs) -> Result<AgreementReport, ReportErro
         stamp: ReportStamp {
             dataset: inputs.dataset.clone(),
             dataset_hash: inputs.dataset_hash.clone(),
-            metric_version: REPORT_METRIC_VERSION,
+            metric_version: MetricStamp::oldest(rows.iter().map(|r| r.metric.metric_version))
+                .with_report(REPORT_METRIC_VERSION),
             encoding: inputs.encoding,
             level,
             bootstrap_seed: inputs.bootstrap.seed,
