@@ -20,6 +20,7 @@ use std::time::Duration;
 use serde::{Deserialize, Serialize};
 
 use super::changes::Change;
+use super::jobs::{self, JobContext, JobId, JobKind};
 use super::{AppError, Hub, audit, datasets, submissions};
 use crate::core::annotation::human_verdict;
 use crate::core::audit::{Actor, AuditAction};
@@ -137,8 +138,8 @@ impl RescorePayload {
     }
 }
 
-/// What [`work`] needs of the job carrying a rescore; the job mechanism's context implements it
-/// (`stop_requested`: paused or cancelled).
+/// What the work of a queued rescore needs of the job carrying it: [`JobContext`] for the job
+/// mechanism (`stop_requested`: paused, cancelled, or the instance stopping).
 pub trait RescoreJob: Sync {
     fn payload(&self) -> &serde_json::Value;
     fn stop_requested(&self) -> bool;
@@ -149,13 +150,50 @@ pub trait RescoreJob: Sync {
     ) -> impl Future<Output = Result<(), AppError>> + Send;
 }
 
+impl RescoreJob for JobContext {
+    fn payload(&self) -> &serde_json::Value {
+        &self.payload
+    }
+
+    fn stop_requested(&self) -> bool {
+        JobContext::stop_requested(self).is_some()
+    }
+
+    fn progress(
+        &self,
+        hub: &Hub,
+        progress: serde_json::Value,
+    ) -> impl Future<Output = Result<(), AppError>> + Send {
+        JobContext::progress(self, hub, progress)
+    }
+}
+
+/// Queues a rescore of the dataset named `dataset`, or of every dataset, for the serving
+/// instances' job workers; the rescore's audit entry names `actor`. An unknown dataset is
+/// refused here rather than failing in the job.
+pub async fn request(hub: &Hub, actor: &Actor, dataset: Option<&str>) -> Result<JobId, AppError> {
+    if let Some(name) = dataset {
+        datasets::by_name(hub, name).await?;
+    }
+    let payload = RescorePayload::new(dataset, actor).to_json();
+    let mut tx = hub.begin().await?;
+    let id = jobs::enqueue(&mut tx, JobKind::Rescore, &payload, actor).await?;
+    tx.commit().await?;
+    Ok(id)
+}
+
 /// How often a job's progress is written while it runs.
 const PROGRESS_EVERY: Duration = Duration::from_secs(2);
 
 /// Works a queued rescore (see [`RescorePayload`]): the same work as [`rescore`], stopping
 /// between units when the job is paused or cancelled, its progress stored every few seconds.
 /// Started again after a crash or a takeover, it resumes where the results stand.
-pub async fn work(hub: &Hub, job: &impl RescoreJob) -> Result<(), AppError> {
+pub async fn work(hub: &Hub, job: &JobContext) -> Result<(), AppError> {
+    work_on(hub, job).await
+}
+
+/// [`work`] on any carrier of a rescore job.
+pub async fn work_on(hub: &Hub, job: &impl RescoreJob) -> Result<(), AppError> {
     let payload: RescorePayload = serde_json::from_value(job.payload().clone())
         .map_err(|e| AppError::internal(format!("rescore job: unreadable payload: {e}")))?;
     let actor = Actor::from_parts(&payload.actor_kind, &payload.actor).ok_or_else(|| {

@@ -10,11 +10,11 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::{AppError, Hub, agreement, audit, datasets, error_analysis};
-use crate::core::metric::METRIC_VERSION;
 use crate::core::agreement::report::export::BundleFile;
 use crate::core::annotation::{human_entries, mean_by_item};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::error_analysis::ErrorAnalysis;
+use crate::core::metric::METRIC_VERSION;
 use crate::core::study::export::study_files;
 use crate::core::study::report::{
     DatasetRef, ItemScore, RowScores, StudyInputs, StudyReport, VariantInput, build_study_report,

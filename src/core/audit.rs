@@ -73,12 +73,15 @@ pub enum AuditAction {
     BackupCreate,
     StudyCreate,
     StudyDelete,
+    JobPause,
+    JobResume,
+    JobCancel,
     /// Stored results computed again under the current metric version.
     MetricRescore,
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 17] = [
+    pub const ALL: [AuditAction; 20] = [
         AuditAction::DatasetImport,
         AuditAction::DatasetAnswerVisibility,
         AuditAction::TokenIssue,
@@ -95,6 +98,9 @@ impl AuditAction {
         AuditAction::BackupCreate,
         AuditAction::StudyCreate,
         AuditAction::StudyDelete,
+        AuditAction::JobPause,
+        AuditAction::JobResume,
+        AuditAction::JobCancel,
         AuditAction::MetricRescore,
     ];
 
@@ -116,6 +122,9 @@ impl AuditAction {
             AuditAction::BackupCreate => "backup.create",
             AuditAction::StudyCreate => "study.create",
             AuditAction::StudyDelete => "study.delete",
+            AuditAction::JobPause => "job.pause",
+            AuditAction::JobResume => "job.resume",
+            AuditAction::JobCancel => "job.cancel",
             AuditAction::MetricRescore => "metric.rescore",
         }
     }

@@ -26,6 +26,7 @@ pub mod forwarded;
 mod leaderboard;
 pub mod openapi;
 mod pages;
+mod rescore;
 pub mod session;
 mod studies;
 mod submissions;
@@ -109,6 +110,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(leaderboard::api_routes());
     routes.extend(error_analysis::routes());
     routes.extend(studies::routes());
+    routes.extend(rescore::routes());
     routes.push(
         openapi::ApiRoute::new(
             openapi::Verb::Get,
@@ -202,6 +204,7 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(admin_tokens::router())
         .merge(admin_audit::router())
         .merge(studies::page_router())
+        .merge(rescore::page_router())
         .merge(assets::router())
         .merge(openapi::page_router())
         .nest(openapi::API_PREFIX, openapi::api_router(api_routes()))

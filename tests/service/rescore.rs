@@ -4,6 +4,7 @@
 
 use std::sync::Mutex;
 
+use enact_hub::app::jobs::{self, JobHandlers, JobId, JobSettings, JobState, Worker};
 use enact_hub::app::rescore::{self, RescoreJob, RescorePayload, RescoreProgress, RescoreStage};
 use enact_hub::app::{self, AppError, Hub};
 use enact_hub::core::annotation::{Draft, InteractionCounts, Session};
@@ -365,7 +366,7 @@ async fn the_rescore_job_stops_when_asked_and_resumes_from_the_top() {
         stop: true,
         progress: Mutex::default(),
     };
-    rescore::work(&hub, &paused).await.expect("worked");
+    rescore::work_on(&hub, &paused).await.expect("worked");
     let last = paused
         .progress
         .lock()
@@ -381,7 +382,7 @@ async fn the_rescore_job_stops_when_asked_and_resumes_from_the_top() {
         stop: false,
         progress: Mutex::default(),
     };
-    rescore::work(&hub, &resumed).await.expect("worked");
+    rescore::work_on(&hub, &resumed).await.expect("worked");
     let last = resumed
         .progress
         .lock()
@@ -407,7 +408,7 @@ async fn the_rescore_job_stops_when_asked_and_resumes_from_the_top() {
         stop: false,
         progress: Mutex::default(),
     };
-    let Err(AppError::Internal(e)) = rescore::work(&hub, &unreadable).await else {
+    let Err(AppError::Internal(e)) = rescore::work_on(&hub, &unreadable).await else {
         panic!("an unreadable payload must fail the job");
     };
     assert!(format!("{e:#}").contains("payload"), "{e:#}");
@@ -488,4 +489,80 @@ async fn reimported_signatures_judge_the_human_answers_again_in_the_import() {
         .expect("board")
         .1;
     assert_eq!(rows, judged);
+}
+
+#[tokio::test]
+async fn an_admin_queues_a_rescore_that_a_job_worker_carries_out() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, submitter) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let (_, admin) = api_token(&server.pool, "root", Role::Admin, None, None).await;
+    let id = submit_to(
+        &server,
+        "mini",
+        "model=m",
+        &submitter,
+        answers(&records, &[0]),
+    )
+    .await
+    .id();
+    db!(
+        server.pool,
+        execute,
+        sqlx::query("UPDATE submissions SET metric_version = 1 WHERE id = $1").bind(id)
+    )
+    .expect("age the submission");
+
+    let call = |token: &str, body: serde_json::Value| {
+        server
+            .call(reqwest::Method::POST, "/api/v1/admin/rescore")
+            .bearer(token)
+            .json(&body)
+    };
+    call(&submitter, serde_json::json!({})).expect(403).await;
+    let unknown = call(&admin, serde_json::json!({"dataset": "nope"}))
+        .expect(404)
+        .await;
+    assert!(unknown.error().contains("nope"), "{}", unknown.text);
+    call(&admin, serde_json::json!({"dataset": "mini", "colour": 1}))
+        .expect(422)
+        .await;
+    let queued = call(&admin, serde_json::json!({"dataset": "mini"}))
+        .expect(202)
+        .await
+        .json();
+    assert_eq!(queued["metric_version"], METRIC_VERSION);
+    let job = JobId(queued["job"].as_i64().expect("a job id"));
+
+    let hub = Hub::from(server.pool.clone());
+    let worker = Worker::spawn(
+        hub.clone(),
+        JobHandlers::serving(),
+        JobSettings {
+            poll: std::time::Duration::from_millis(20),
+            ..JobSettings::default()
+        },
+    );
+    let mut row = None;
+    for _ in 0..500 {
+        let job = jobs::get(&hub, job).await.expect("read").expect("the job");
+        if job.state == JobState::Done {
+            row = Some(job);
+            break;
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+    }
+    worker.stop().await;
+    let row = row.expect("the rescore job finished");
+    let progress: Value =
+        serde_json::from_str(row.progress.as_deref().unwrap_or("null")).expect("progress JSON");
+    assert_eq!(progress["submissions"], 1, "{progress}");
+    assert!(!board(&server.pool).await[0].metric.outdated);
+    assert_eq!(
+        count(
+            &server.pool,
+            "SELECT count(*) FROM audit_log WHERE action = 'metric.rescore' AND actor = 'root'"
+        )
+        .await,
+        1
+    );
 }

@@ -11,10 +11,10 @@ use serde::Serialize;
 
 use super::stats::{PairedT, SignTest, paired_t_test, sign_test};
 use super::{Alignment, VariantSpec};
-use crate::core::metric::MetricStamp;
 use crate::core::agreement::welch_t_test;
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::error_analysis::Handedness;
+use crate::core::metric::MetricStamp;
 
 /// Names what the numbers of a study report mean; bump it when a definition changes.
 pub const STUDY_METRIC_VERSION: &str = "enact-hub-study-report/1";
