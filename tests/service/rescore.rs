@@ -566,3 +566,39 @@ async fn an_admin_queues_a_rescore_that_a_job_worker_carries_out() {
         1
     );
 }
+
+#[tokio::test]
+async fn the_command_line_rescores_in_the_foreground() {
+    let (server, records) = spawn_app_with_release().await;
+    if !on_sqlite() {
+        return; // the command opens the database by path; the PostgreSQL run covers the rest
+    }
+    let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let id = submit_to(&server, "mini", "model=m", &token, answers(&records, &[0]))
+        .await
+        .id();
+    db!(
+        server.pool,
+        execute,
+        sqlx::query("UPDATE submissions SET metric_version = 1 WHERE id = $1").bind(id)
+    )
+    .expect("age the submission");
+    let run = |dataset: &str| {
+        enact_hub()
+            .args(["rescore", "--dataset", dataset, "--json", "--db"])
+            .arg(server.db_path())
+            .env("ENACT_HUB_OPERATOR", "ops")
+            .output()
+            .expect("run")
+    };
+    let out = run("mini");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let summary: Value = serde_json::from_slice(&out.stdout).expect("JSON summary");
+    assert_eq!(summary["submissions"], 1);
+    assert_eq!(summary["metric_version"], METRIC_VERSION);
+    assert!(!board(&server.pool).await[0].metric.outdated);
+    let out = run("nope");
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("nope"), "{stderr}");
+}
