@@ -212,9 +212,7 @@ pub struct JobHandlers {
 impl JobHandlers {
     /// The code of every kind of job this version knows, as a serving instance runs it.
     pub fn serving() -> JobHandlers {
-        JobHandlers::default().with(JobKind::Rescore, |hub, job: Arc<JobContext>| {
-            Box::pin(async move { super::rescore::work(&hub, &job).await })
-        })
+        JobHandlers::default()
     }
 
     /// `work` works every job of `kind`.

@@ -95,6 +95,15 @@ pub fn describe_location(location: &Path) -> String {
     }
 }
 
+/// The code of every kind of job this version knows, as a serving instance's worker runs it
+/// (here, above both the job mechanism and the modules owning each kind, so neither uses the
+/// other both ways).
+pub fn job_handlers() -> jobs::JobHandlers {
+    jobs::JobHandlers::serving().with(jobs::JobKind::Rescore, |hub, job| {
+        Box::pin(async move { rescore::work(&hub, &job).await })
+    })
+}
+
 /// What every use case works with: the store and the caches in front of it. Cheap to clone.
 #[derive(Clone)]
 pub struct Hub {

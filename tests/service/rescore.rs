@@ -4,7 +4,7 @@
 
 use std::sync::Mutex;
 
-use enact_hub::app::jobs::{self, JobHandlers, JobId, JobSettings, JobState, Worker};
+use enact_hub::app::jobs::{self, JobId, JobSettings, JobState, Worker};
 use enact_hub::app::rescore::{self, RescoreJob, RescorePayload, RescoreProgress, RescoreStage};
 use enact_hub::app::{self, AppError, Hub};
 use enact_hub::core::annotation::{Draft, InteractionCounts, Session};
@@ -361,34 +361,23 @@ async fn the_rescore_job_stops_when_asked_and_resumes_from_the_top() {
     let admin = Actor::Annotator("root".to_owned());
     let payload = RescorePayload::new(Some("mini"), &admin).to_json();
 
-    let paused = FakeJob {
-        payload: payload.clone(),
-        stop: true,
-        progress: Mutex::default(),
+    // The summary the job stored last, after working it until asked to stop (at once or never).
+    let work = async |stop: bool| {
+        let job = FakeJob {
+            payload: payload.clone(),
+            stop,
+            progress: Mutex::default(),
+        };
+        rescore::work_on(&hub, &job).await.expect("worked");
+        let last = job.progress.lock().expect("lock").pop();
+        last.expect("a summary")
     };
-    rescore::work_on(&hub, &paused).await.expect("worked");
-    let last = paused
-        .progress
-        .lock()
-        .expect("lock")
-        .pop()
-        .expect("a summary");
+    let last = work(true).await;
     assert_eq!(last["stopped"], true);
     assert_eq!(last["submissions"], 0);
     assert!(board(&server.pool).await[0].metric.outdated);
 
-    let resumed = FakeJob {
-        payload,
-        stop: false,
-        progress: Mutex::default(),
-    };
-    rescore::work_on(&hub, &resumed).await.expect("worked");
-    let last = resumed
-        .progress
-        .lock()
-        .expect("lock")
-        .pop()
-        .expect("a summary");
+    let last = work(false).await;
     assert_eq!(last["stopped"], false);
     assert_eq!(last["submissions"], 1);
     assert!(!board(&server.pool).await[0].metric.outdated);
@@ -536,7 +525,7 @@ async fn an_admin_queues_a_rescore_that_a_job_worker_carries_out() {
     let hub = Hub::from(server.pool.clone());
     let worker = Worker::spawn(
         hub.clone(),
-        JobHandlers::serving(),
+        app::job_handlers(),
         JobSettings {
             poll: std::time::Duration::from_millis(20),
             ..JobSettings::default()
@@ -592,7 +581,11 @@ async fn the_command_line_rescores_in_the_foreground() {
             .expect("run")
     };
     let out = run("mini");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let summary: Value = serde_json::from_slice(&out.stdout).expect("JSON summary");
     assert_eq!(summary["submissions"], 1);
     assert_eq!(summary["metric_version"], METRIC_VERSION);
