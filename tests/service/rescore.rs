@@ -111,6 +111,17 @@ async fn annotate(server: &TestServer, records: &[Value], count: usize) {
     }
 }
 
+/// Marks a submission's scores as computed with metric version 1, as a migration raising the
+/// version would leave them.
+async fn age(pool: &Pool, submission: i64) {
+    db!(
+        pool,
+        execute,
+        sqlx::query("UPDATE submissions SET metric_version = 1 WHERE id = $1").bind(submission)
+    )
+    .expect("age the submission");
+}
+
 fn operator() -> Actor {
     Actor::Operator("tester".to_owned())
 }
@@ -159,12 +170,7 @@ async fn an_older_metric_version_is_marked_until_rescored_and_rescoring_changes_
     assert!(board_before.iter().all(|r| !r.metric.outdated));
 
     // As a migration that raises the metric version would leave them: computed with version 1.
-    db!(
-        server.pool,
-        execute,
-        sqlx::query("UPDATE submissions SET metric_version = 1 WHERE id = $1").bind(id)
-    )
-    .expect("age the submission");
+    age(&server.pool, id).await;
     db!(
         server.pool,
         execute,
@@ -348,15 +354,13 @@ impl RescoreJob for FakeJob {
 async fn the_rescore_job_stops_when_asked_and_resumes_from_the_top() {
     let (server, records) = spawn_app_with_release().await;
     let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
-    let id = submit_to(&server, "mini", "model=m", &token, answers(&records, &[0]))
-        .await
-        .id();
-    db!(
-        server.pool,
-        execute,
-        sqlx::query("UPDATE submissions SET metric_version = 1 WHERE id = $1").bind(id)
+    age(
+        &server.pool,
+        submit_to(&server, "mini", "model=m", &token, answers(&records, &[0]))
+            .await
+            .id(),
     )
-    .expect("age the submission");
+    .await;
     let hub = Hub::from(server.pool.clone());
     let admin = Actor::Annotator("root".to_owned());
     let payload = RescorePayload::new(Some("mini"), &admin).to_json();
@@ -494,12 +498,7 @@ async fn an_admin_queues_a_rescore_that_a_job_worker_carries_out() {
     )
     .await
     .id();
-    db!(
-        server.pool,
-        execute,
-        sqlx::query("UPDATE submissions SET metric_version = 1 WHERE id = $1").bind(id)
-    )
-    .expect("age the submission");
+    age(&server.pool, id).await;
 
     let call = |token: &str, body: serde_json::Value| {
         server
@@ -563,15 +562,13 @@ async fn the_command_line_rescores_in_the_foreground() {
         return; // the command opens the database by path; the PostgreSQL run covers the rest
     }
     let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
-    let id = submit_to(&server, "mini", "model=m", &token, answers(&records, &[0]))
-        .await
-        .id();
-    db!(
-        server.pool,
-        execute,
-        sqlx::query("UPDATE submissions SET metric_version = 1 WHERE id = $1").bind(id)
+    age(
+        &server.pool,
+        submit_to(&server, "mini", "model=m", &token, answers(&records, &[0]))
+            .await
+            .id(),
     )
-    .expect("age the submission");
+    .await;
     let run = |dataset: &str| {
         enact_hub()
             .args(["rescore", "--dataset", dataset, "--json", "--db"])
