@@ -324,6 +324,10 @@ async fn finish(
     if !finished {
         return Err(finished_already(&item.summary.item_id));
     }
+    if answered {
+        // Judged once, here, like a submission's lines: the Human row reads the verdict.
+        super::rescore::judge_answer(&mut tx, session.annotator, item.rowid).await?;
+    }
     let (action, detail) = match &outcome {
         Outcome::Answered(answer) => (
             AuditAction::AnnotationAnswer,

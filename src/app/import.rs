@@ -634,6 +634,11 @@ pub async fn import_release(
         if report.signatures_updated + report.replaced_items > 0 {
             store::submissions::clear_error_analyses(&mut tx, dataset.id).await?;
         }
+        // Human verdicts were judged with the old signatures (answers on replaced items went
+        // with them): judged again here, in the same transaction.
+        if report.signatures_updated > 0 {
+            super::rescore::rejudge_dataset(&mut tx, dataset.id).await?;
+        }
     }
     // Frames of unchanged items are reused as well.
     report.reused_frames = report.frames - report.new_frames;

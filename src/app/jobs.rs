@@ -210,11 +210,6 @@ pub struct JobHandlers {
 }
 
 impl JobHandlers {
-    /// The code of every kind of job this version knows, as a serving instance runs it.
-    pub fn serving() -> JobHandlers {
-        JobHandlers::default()
-    }
-
     /// `work` works every job of `kind`.
     pub fn with(
         mut self,

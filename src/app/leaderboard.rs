@@ -15,8 +15,8 @@ use bytes::Bytes;
 
 use super::cache::{BoundedCache, CacheLimits, CacheStats};
 use super::{AppError, Hub, datasets};
-use crate::core::annotation::human_entries;
-use crate::core::leaderboard::{HumanCoverage, LeaderboardRow, RowIdentity, rank};
+use crate::core::annotation::{self, HumanFigures};
+use crate::core::leaderboard::{LeaderboardRow, RowIdentity, rank};
 use crate::core::verifier::PerformanceReport;
 use crate::store;
 use crate::store::datasets::Dataset;
@@ -31,32 +31,41 @@ pub fn submission_row(s: &SubmissionRow) -> LeaderboardRow {
             account: &s.account,
             baseline: s.baseline,
             submitted_at: &s.created_at,
+            metric_version: s.metric_version,
         },
         &s.scores,
     )
 }
 
-/// Human performance on a dataset: every submitted answer scored as model answers are (the
-/// item's stored signatures, exact match where there are none), by direction and step length.
-/// `None` when nobody has answered an item yet. Skipped and flagged items are not answers; an
-/// item answered by several annotators counts once per answer. Verification costs microseconds
-/// per answer, so it runs inline.
-pub async fn human_performance(
+/// The Human row's figures on a dataset: every submitted answer's verdict, stored when the
+/// answer was finished and scored as model answers are (the item's stored signatures, exact
+/// match where there are none), by direction and step length, with the answers, items and
+/// annotators it rests on, all read in one query. Answers finished before verdicts were stored
+/// are judged here until a rescore stores theirs. `None` when nobody has answered an item yet.
+/// Skipped and flagged items are not answers; an item answered by several annotators counts
+/// once per answer.
+pub async fn human_figures(
     hub: &Hub,
     dataset: &Dataset,
-) -> Result<Option<PerformanceReport>, AppError> {
+    dataset_items: usize,
+) -> Result<Option<HumanFigures>, AppError> {
     let mut conn = hub.conn().await?;
-    let answers = store::annotations::human_answers(&mut conn, dataset.id).await?;
-    if answers.is_empty() {
-        return Ok(None);
-    }
-    let entries = human_entries(&answers).map_err(|e| {
+    let answers = store::annotations::counted_answers(&mut conn, dataset.id).await?;
+    drop(conn);
+    annotation::human_figures(&answers, dataset_items).map_err(|e| {
         AppError::internal(format!(
             "dataset '{}': stored annotations: {e}",
             dataset.name
         ))
-    })?;
-    Ok(Some(PerformanceReport::from_entries(&entries)))
+    })
+}
+
+/// Human performance on a dataset (see [`human_figures`]), `None` before the first answer.
+pub async fn human_performance(
+    hub: &Hub,
+    dataset: &Dataset,
+) -> Result<Option<PerformanceReport>, AppError> {
+    Ok(human_figures(hub, dataset, 0).await?.map(|f| f.report))
 }
 
 /// The dataset's leaderboard rows, ranked.
@@ -64,20 +73,14 @@ pub async fn rows(hub: &Hub, dataset: &Dataset) -> Result<Vec<LeaderboardRow>, A
     let mut conn = hub.conn().await?;
     let submissions = store::submissions::published(&mut conn, dataset.id).await?;
     let items = store::datasets::counts(&mut conn, dataset.id).await?.total;
-    let (answers, answered_items, annotators) =
-        store::annotations::human_coverage(&mut conn, dataset.id).await?;
     drop(conn);
     let mut rows: Vec<LeaderboardRow> = submissions.iter().map(submission_row).collect();
-    if let Some(report) = human_performance(hub, dataset).await? {
-        let count = |n: i64| usize::try_from(n).unwrap_or(0);
+    let dataset_items = usize::try_from(items).unwrap_or(0);
+    if let Some(human) = human_figures(hub, dataset, dataset_items).await? {
         rows.push(LeaderboardRow::human(
-            &report,
-            HumanCoverage {
-                answers: count(answers),
-                items: count(answered_items),
-                annotators: count(annotators),
-                dataset_items: count(items),
-            },
+            &human.report,
+            human.coverage,
+            human.stamp,
         ));
     }
     rank(&mut rows);

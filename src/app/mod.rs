@@ -16,6 +16,8 @@
 //! - [`error_analysis`]: the paper's error taxonomy of a submission, the Human row, a file, or
 //!   a whole leaderboard.
 //! - [`studies`]: ablation studies (a baseline and variant datasets) and their reports.
+//! - [`rescore`]: stored results (submissions' scores, human verdicts) computed again under
+//!   the current metric version, in the foreground or as a job.
 //! - [`audit`]: the audit log every audited use case writes in its own transaction.
 //! - [`demo`]: the built-in demo dataset, its chance baseline and its login link.
 //! - [`backup`]: online snapshots of the database, and restoring one.
@@ -44,6 +46,7 @@ pub mod jobs;
 pub mod leaderboard;
 pub mod migrate_db;
 pub mod pipeline;
+pub mod rescore;
 pub mod runs;
 pub mod scoring;
 pub mod standings;
@@ -93,6 +96,15 @@ pub fn describe_location(location: &Path) -> String {
         store::Location::Postgres(url) => store::Location::redacted(&url),
         store::Location::Sqlite(path) => path.display().to_string(),
     }
+}
+
+/// The code of every kind of job this version knows, as a serving instance's worker runs it
+/// (here, above both the job mechanism and the modules owning each kind, so neither uses the
+/// other both ways).
+pub fn job_handlers() -> jobs::JobHandlers {
+    jobs::JobHandlers::default().with(jobs::JobKind::Rescore, |hub, job| {
+        Box::pin(async move { rescore::work(&hub, &job).await })
+    })
 }
 
 /// What every use case works with: the store and the caches in front of it. Cheap to clone.

@@ -14,6 +14,7 @@ use crate::core::annotation::{human_entries, mean_by_item};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::bundle::BundleFile;
 use crate::core::error_analysis::ErrorAnalysis;
+use crate::core::metric::METRIC_VERSION;
 use crate::core::study::export::study_files;
 use crate::core::study::report::{
     DatasetRef, ItemScore, RowScores, StudyInputs, StudyReport, VariantInput, build_study_report,
@@ -300,6 +301,8 @@ async fn row_scores(
                 submission: None,
                 items,
                 hands,
+                // Judged just now.
+                metric_version: METRIC_VERSION,
             }))
         }
         StudyRowChoice::Model { model, account } => {
@@ -357,6 +360,7 @@ async fn row_scores(
                 submission: Some(entry.id),
                 items,
                 hands: Some(hands_of(&analysis)),
+                metric_version: entry.metric_version,
             }))
         }
     }

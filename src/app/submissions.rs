@@ -13,6 +13,7 @@ use super::{AppError, Hub, audit, datasets};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{NewToken, Role, Scope};
 use crate::core::dataset::AnswerVisibility;
+use crate::core::metric::METRIC_VERSION;
 use crate::core::scoring::{self, ScoringTarget};
 use crate::core::submission::{
     ScoredSubmission, SubmissionError, SubmissionMetadata, Visibility, score_submission,
@@ -235,6 +236,7 @@ where
         body_sha256: &sha256,
         metadata: &metadata,
         scores: &scored.scores,
+        metric_version: METRIC_VERSION,
     };
     let Some(id) = store::submissions::insert(&mut tx, &new).await? else {
         // A twin request with the same key committed first.
@@ -411,6 +413,7 @@ pub async fn file_baseline(
         body_sha256: &sha256,
         metadata: &metadata,
         scores: &scored.scores,
+        metric_version: METRIC_VERSION,
     };
     let id = store::submissions::insert(&mut tx, &new)
         .await?

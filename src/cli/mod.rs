@@ -22,6 +22,7 @@ mod database;
 mod frames;
 mod generate;
 mod import;
+mod rescore;
 mod run;
 mod scoring;
 mod serve;
@@ -92,6 +93,9 @@ enum Command {
     /// Copy a whole database into a new, empty one on the other backend: a SQLite file into
     /// PostgreSQL (or back). Stop the servers first; the source's rows are left as they were.
     MigrateDb(database::MigrateDbArgs),
+    /// Compute stored submissions' scores and human answers' verdicts again under the current
+    /// metric version (those already current are skipped, so a stopped run resumes).
+    Rescore(rescore::RescoreArgs),
 }
 
 #[derive(Args)]
@@ -161,6 +165,7 @@ pub fn main() -> ExitCode {
             Command::Annotator(command) => accounts::annotator(command).await,
             Command::Frames(command) => frames::frames(command).await,
             Command::MigrateDb(args) => database::migrate_db(args).await,
+            Command::Rescore(args) => rescore::rescore(args).await,
         }
     });
     match result {

@@ -139,7 +139,7 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     }
     let worker = app::jobs::Worker::spawn(
         hub.clone(),
-        app::jobs::JobHandlers::serving(),
+        app::job_handlers(),
         app::jobs::JobSettings::default(),
     );
     let served = server.run(shutdown_signal()).await;

@@ -10,8 +10,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::error_analysis::{self, AnsweredItem, ErrorAnalysis, Reading};
+use crate::core::leaderboard::HumanCoverage;
+use crate::core::metric::{METRIC_VERSION, MetricStamp};
 use crate::core::verifier::{
-    ItemSignatures, ParsedAnswer, Permutation, ScoredEntry, StrictItem, verify,
+    ItemSignatures, ParsedAnswer, PerformanceReport, Permutation, ScoredEntry, StrictItem,
+    VerifyError, verify,
 };
 
 /// An item to deal out: its store id and its kind.
@@ -169,21 +172,113 @@ pub fn human_entries(answers: &[HumanAnswer]) -> Result<Vec<ScoredEntry>, String
         .iter()
         .enumerate()
         .map(|(i, a)| {
-            let verdict = verify(
-                a.direction,
-                &a.ground_truth,
-                &ParsedAnswer::from(&a.answer),
-                a.signatures.as_ref(),
-            )
-            .map_err(|e| format!("answer {i}: {e}"))?;
-            Ok(ScoredEntry {
-                group: Some(a.direction),
-                states: a.step_length.states(),
-                task_accuracy: verdict.task_accuracy,
-                pairwise_accuracy: verdict.pairwise_accuracy.value(),
-            })
+            let verdict = human_verdict(a).map_err(|e| format!("answer {i}: {e}"))?;
+            Ok(verdict.entry(a.direction, a.step_length))
         })
         .collect()
+}
+
+/// A human answer's verdict, as stored with the answer (the figures a submission line keeps).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HumanVerdict {
+    pub exact_match: bool,
+    pub semantic_match: bool,
+    pub task_accuracy: bool,
+    pub pairwise_accuracy: Option<f64>,
+}
+
+impl HumanVerdict {
+    /// The answer's entry in a performance report.
+    pub fn entry(&self, direction: Direction, step_length: StepLength) -> ScoredEntry {
+        ScoredEntry {
+            group: Some(direction),
+            states: step_length.states(),
+            task_accuracy: self.task_accuracy,
+            pairwise_accuracy: self.pairwise_accuracy,
+        }
+    }
+}
+
+/// Judges one human answer with the verifier models are judged with, under the current metric.
+pub fn human_verdict(a: &HumanAnswer) -> Result<HumanVerdict, VerifyError> {
+    let verdict = verify(
+        a.direction,
+        &a.ground_truth,
+        &ParsedAnswer::from(&a.answer),
+        a.signatures.as_ref(),
+    )?;
+    Ok(HumanVerdict {
+        exact_match: verdict.exact_match,
+        semantic_match: verdict.semantic_match,
+        task_accuracy: verdict.task_accuracy,
+        pairwise_accuracy: verdict.pairwise_accuracy.value(),
+    })
+}
+
+/// One answer the Human row counts: who gave it on which item, and its verdict as stored, or
+/// the answer itself when no verdict is stored yet (answers finished before verdicts were
+/// stored, until a rescore computes theirs).
+#[derive(Debug, Clone)]
+pub struct CountedAnswer {
+    pub annotator: i64,
+    pub item: i64,
+    pub direction: Direction,
+    pub step_length: StepLength,
+    pub verdict: CountedVerdict,
+}
+
+#[derive(Debug, Clone)]
+pub enum CountedVerdict {
+    Stored {
+        verdict: HumanVerdict,
+        metric_version: u32,
+    },
+    Unscored(Box<HumanAnswer>),
+}
+
+/// The Human row's figures: its report, what it rests on, and the oldest metric version among
+/// its verdicts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HumanFigures {
+    pub report: PerformanceReport,
+    pub coverage: HumanCoverage,
+    pub stamp: MetricStamp,
+}
+
+/// The Human row from its answers (`dataset_items`: the dataset's size, for coverage): stored
+/// verdicts as they are, missing ones judged now under the current metric. `None` before the
+/// first answer; an answer the verifier cannot judge is an error naming its item.
+pub fn human_figures(
+    answers: &[CountedAnswer],
+    dataset_items: usize,
+) -> Result<Option<HumanFigures>, String> {
+    if answers.is_empty() {
+        return Ok(None);
+    }
+    let mut entries = Vec::with_capacity(answers.len());
+    let mut versions = Vec::with_capacity(answers.len());
+    for a in answers {
+        let (verdict, version) = match &a.verdict {
+            CountedVerdict::Stored {
+                verdict,
+                metric_version,
+            } => (*verdict, *metric_version),
+            CountedVerdict::Unscored(answer) => (
+                human_verdict(answer).map_err(|e| format!("item {}: {e}", answer.item_id))?,
+                METRIC_VERSION,
+            ),
+        };
+        entries.push(verdict.entry(a.direction, a.step_length));
+        versions.push(version);
+    }
+    Ok(Some(HumanFigures {
+        report: PerformanceReport::from_entries(&entries),
+        coverage: HumanCoverage::of_answers(
+            answers.iter().map(|a| (a.annotator, a.item)),
+            dataset_items,
+        ),
+        stamp: MetricStamp::oldest(versions),
+    }))
 }
 
 /// Each answered item's mean pairwise accuracy over its human answers (an item answered by

@@ -76,10 +76,12 @@ pub enum AuditAction {
     JobPause,
     JobResume,
     JobCancel,
+    /// Stored results computed again under the current metric version.
+    MetricRescore,
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 19] = [
+    pub const ALL: [AuditAction; 20] = [
         AuditAction::DatasetImport,
         AuditAction::DatasetAnswerVisibility,
         AuditAction::TokenIssue,
@@ -99,6 +101,7 @@ impl AuditAction {
         AuditAction::JobPause,
         AuditAction::JobResume,
         AuditAction::JobCancel,
+        AuditAction::MetricRescore,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -122,6 +125,7 @@ impl AuditAction {
             AuditAction::JobPause => "job.pause",
             AuditAction::JobResume => "job.resume",
             AuditAction::JobCancel => "job.cancel",
+            AuditAction::MetricRescore => "metric.rescore",
         }
     }
 

@@ -7,6 +7,7 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use crate::core::dataset::StepLength;
+use crate::core::metric::MetricStamp;
 use crate::core::submission::SubmissionScores;
 use crate::core::verifier::{
     ConfidenceInterval, GroupPerformance, PerformanceReport, StepPerformance,
@@ -102,6 +103,10 @@ pub struct LeaderboardRow {
     /// The Human row's answers, items and annotators; `None` for submissions.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub human: Option<HumanCoverage>,
+    /// The metric version the row's figures were computed with (the Human row: the oldest
+    /// among its answers' verdicts), and whether that is older than the current one.
+    #[serde(flatten)]
+    pub metric: MetricStamp,
 }
 
 fn cell(group: Option<&StepPerformance>) -> AccuracyCell {
@@ -140,6 +145,8 @@ pub struct RowIdentity<'a> {
     pub account: &'a str,
     pub baseline: bool,
     pub submitted_at: &'a str,
+    /// The metric version its scores were computed with.
+    pub metric_version: u32,
 }
 
 impl LeaderboardRow {
@@ -163,12 +170,18 @@ impl LeaderboardRow {
             coverage: scores.coverage.coverage,
             parse_failure_rate: scores.coverage.parse_failure_rate,
             human: None,
+            metric: MetricStamp::of(who.metric_version),
         }
     }
 
-    /// The Human row: `report` over the annotators' submitted answers. It is never ranked
-    /// among models (it is a reference row, like baselines); `human` says what it rests on.
-    pub fn human(report: &PerformanceReport, coverage: HumanCoverage) -> LeaderboardRow {
+    /// The Human row: `report` over the annotators' submitted answers, whose verdicts were
+    /// computed with the metric version `metric` says. It is never ranked among models (it is a
+    /// reference row, like baselines); `human` says what it rests on.
+    pub fn human(
+        report: &PerformanceReport,
+        coverage: HumanCoverage,
+        metric: MetricStamp,
+    ) -> LeaderboardRow {
         let dataset_items = coverage.dataset_items;
         let overall = cell(report.overall.as_ref().map(|g| &g.totals));
         LeaderboardRow {
@@ -192,6 +205,7 @@ impl LeaderboardRow {
             inverse: columns(report.inverse_world_modeling.as_ref()),
             parse_failure_rate: 0.0,
             human: Some(coverage),
+            metric,
         }
     }
 }
@@ -698,6 +712,7 @@ mod tests {
                 account: "team",
                 baseline: false,
                 submitted_at: "2026-01-01T00:00:00Z",
+                metric_version: crate::core::metric::METRIC_VERSION,
             },
             &scores(forward_l3, overall),
         )
@@ -855,6 +870,7 @@ mod tests {
                 dataset_items: 4,
                 ..HumanCoverage::default()
             },
+            MetricStamp::current(),
         );
         human.overall.task_accuracy = Some(0.35);
         rows.push(human);

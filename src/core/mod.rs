@@ -10,6 +10,7 @@
 //!   text); [`scoring`]: scoring whole prediction files and ENACT's output files.
 //! - [`error_analysis`]: the paper's structural and semantic error taxonomy, handedness and
 //!   accepted-but-incomplete answers, per step of every analysed answer.
+//! - [`metric`]: the metric's version, recorded with every stored result it computed.
 //! - [`submission`]: reading, refusing and scoring a leaderboard submission.
 //! - [`heatmap`]: the significance heatmap both reports draw (the paper's ablation figures).
 //! - [`leaderboard`]: leaderboard rows (Table 1 layout) and the TA-vs-L chart geometry.
@@ -41,6 +42,7 @@ pub mod demo;
 pub mod error_analysis;
 pub mod heatmap;
 pub mod leaderboard;
+pub mod metric;
 pub mod model_run;
 pub mod pipeline;
 pub mod release;

@@ -269,6 +269,61 @@ pub fn score_submission(
     Ok(assemble(scoring, raw_answers))
 }
 
+/// An answer a stored submission gave: its item, the body's line (or array element) it came
+/// from, and the `answer` value as submitted (JSON text).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StoredAnswer {
+    pub item_id: String,
+    pub line: usize,
+    pub raw_answer: String,
+}
+
+/// Scores a stored submission's answers again against `targets` as they are now, under the
+/// current metric: each answer is read and judged as if its line were submitted again, and
+/// items it did not answer count as missing, as at submission. With nothing changed (rules,
+/// items, signatures) the result equals the stored one, bit for bit.
+pub fn rescore_submission(
+    targets: &[ScoringTarget],
+    answers: &[StoredAnswer],
+) -> Result<ScoredSubmission, SubmissionError> {
+    let records: Vec<(usize, String)> = answers
+        .iter()
+        .map(|a| {
+            // serde_json writes a string as a valid JSON string; it cannot fail.
+            let id = serde_json::Value::String(a.item_id.clone());
+            (
+                a.line,
+                format!("{{\"id\":{id},\"answer\":{}}}", a.raw_answer),
+            )
+        })
+        .collect();
+    let items: Vec<StrictItem<'_>> = targets.iter().map(ScoringTarget::strict_item).collect();
+    let scoring = score_strict_predictions(&items, records.iter().map(|(l, s)| (*l, s.as_str())))?;
+    if !scoring.problems.is_empty() {
+        return Err(SubmissionError::Rejected(
+            scoring
+                .problems
+                .iter()
+                .map(LineProblem::from_strict)
+                .collect(),
+        ));
+    }
+    let by_line: HashMap<usize, &str> = answers
+        .iter()
+        .map(|a| (a.line, a.raw_answer.as_str()))
+        .collect();
+    let raw_answers = scoring
+        .items
+        .iter()
+        .map(|r| {
+            r.line
+                .and_then(|l| by_line.get(&l))
+                .map(|a| (*a).to_owned())
+        })
+        .collect();
+    Ok(assemble(scoring, raw_answers))
+}
+
 /// The `answer` value of a record, as compact JSON.
 fn raw_answer(record: &str) -> Option<String> {
     #[derive(serde::Deserialize)]
@@ -399,6 +454,39 @@ mod tests {
             ]
         );
         assert!(problems[3].message.contains("line 5"), "{:?}", problems[3]);
+    }
+
+    #[test]
+    fn rescoring_stored_answers_gives_the_same_result() {
+        let body = "{\"id\":\"item0\",\"answer\":\"[2, 1]\"}\n\
+                    {\"id\":\"item2\",\"answer\":[1,2]}\n\
+                    {\"id\":\"item3\",\"answer\":\"I cannot tell\"}\n";
+        let scored = score_submission(&targets(), body).expect("scored");
+        let ids: Vec<String> = targets().iter().map(|t| t.id.clone()).collect();
+        let answers: Vec<StoredAnswer> = scored
+            .items
+            .iter()
+            .filter_map(|v| {
+                Some(StoredAnswer {
+                    item_id: ids[v.target].clone(),
+                    line: v.line?,
+                    raw_answer: v.raw_answer.clone()?,
+                })
+            })
+            .collect();
+        assert_eq!(answers.len(), 3);
+        let again = rescore_submission(&targets(), &answers).expect("rescored");
+        assert_eq!(again, scored);
+        assert_eq!(
+            serde_json::to_string(&again.scores).expect("json"),
+            serde_json::to_string(&scored.scores).expect("json")
+        );
+        // Judged against the items as they are now: a changed ground truth changes the verdict.
+        let mut changed = targets();
+        changed[2].ground_truth = Permutation::new(vec![1, 2]).expect("perm");
+        let rejudged = rescore_submission(&changed, &answers).expect("rescored");
+        assert!(!scored.items[2].task_accuracy);
+        assert!(rejudged.items[2].task_accuracy);
     }
 
     #[test]

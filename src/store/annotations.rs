@@ -6,8 +6,8 @@ use super::db::{Conn, Fields, on};
 use super::{corrupt, kind_from_row};
 
 use crate::core::annotation::{
-    AssignmentState, Draft, HumanAnswer, Outcome, QueueEntry, QueueStatus, Session, SplitItem,
-    StoredDraft, Telemetry,
+    AssignmentState, CountedAnswer, CountedVerdict, Draft, HumanAnswer, HumanVerdict, Outcome,
+    QueueEntry, QueueStatus, Session, SplitItem, StoredDraft, Telemetry,
 };
 use crate::core::verifier::Permutation;
 
@@ -691,18 +691,199 @@ pub async fn take_login_link(conn: &mut Conn, hash: &str) -> Result<Option<i64>,
     })
 }
 
-/// `(answers, distinct items, distinct annotators)` of the submitted answers on a dataset.
-pub async fn human_coverage(
+/// Every submitted answer on a dataset as the Human row counts it, in one query (one
+/// snapshot: the figures and the coverage drawn from them agree), in the order answers were
+/// finished. An answer with a stored verdict comes with it and its metric version; one without
+/// comes with what judging it needs (its item's ground truth and signatures, read only then).
+pub async fn counted_answers(
     conn: &mut Conn,
     dataset_id: i64,
-) -> Result<(i64, i64, i64), sqlx::Error> {
+) -> Result<Vec<CountedAnswer>, sqlx::Error> {
     on!(conn, |c| {
-        sqlx::query_as(
-            "SELECT count(*), count(DISTINCT n.item), count(DISTINCT n.annotator) \
-         FROM annotations n JOIN items i ON i.id = n.item \
-         WHERE i.dataset_id = $1 AND n.outcome = 'answered'",
+        let rows = sqlx::query(
+            "SELECT n.annotator, n.item, i.item_id, i.direction, i.step_length, \
+             n.exact_match, n.semantic_match, n.task_accuracy, n.pairwise_accuracy, \
+             n.metric_version, \
+             CASE WHEN n.metric_version IS NULL THEN i.gt_answer END AS gt_answer, \
+             CASE WHEN n.metric_version IS NULL THEN n.answer END AS answer, \
+             CASE WHEN n.metric_version IS NULL THEN s.signatures END AS signatures \
+             FROM annotations n JOIN items i ON i.id = n.item \
+             LEFT JOIN item_signatures s ON s.item = i.id \
+             WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
+             ORDER BY n.finished_at, i.id, n.annotator",
         )
         .bind(dataset_id)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(counted_answer_from_row).collect()
+    })
+}
+
+fn counted_answer_from_row(r: &impl Fields) -> Result<CountedAnswer, sqlx::Error> {
+    let (direction, step_length) = kind_from_row(r)?;
+    let verdict = match stored_verdict(r)? {
+        Some((verdict, metric_version)) => CountedVerdict::Stored {
+            verdict,
+            metric_version,
+        },
+        None => CountedVerdict::Unscored(Box::new(human_answer_from_row(r)?)),
+    };
+    Ok(CountedAnswer {
+        annotator: r.try_get("annotator")?,
+        item: r.try_get("item")?,
+        direction,
+        step_length,
+        verdict,
+    })
+}
+
+/// A submitted answer with the row ids of its annotator and item.
+#[derive(Debug, Clone)]
+pub struct KeyedAnswer {
+    pub annotator: i64,
+    pub item: i64,
+    pub answer: HumanAnswer,
+    /// The verdict stored with it, if any (of whichever metric version).
+    pub verdict: Option<HumanVerdict>,
+}
+
+const KEYED_ANSWER_SELECT: &str = "SELECT n.annotator, n.item, i.item_id, i.direction, \
+     i.step_length, i.gt_answer, n.answer, s.signatures, n.exact_match, n.semantic_match, \
+     n.task_accuracy, n.pairwise_accuracy, n.metric_version \
+     FROM annotations n JOIN items i ON i.id = n.item \
+     LEFT JOIN item_signatures s ON s.item = i.id";
+
+fn keyed_answer_from_row(r: &impl Fields) -> Result<KeyedAnswer, sqlx::Error> {
+    Ok(KeyedAnswer {
+        annotator: r.try_get("annotator")?,
+        item: r.try_get("item")?,
+        answer: human_answer_from_row(r)?,
+        verdict: stored_verdict(r)?.map(|(verdict, _)| verdict),
+    })
+}
+
+/// The verdict columns of an annotation row and its metric version, when one is stored.
+fn stored_verdict(r: &impl Fields) -> Result<Option<(HumanVerdict, u32)>, sqlx::Error> {
+    let Some(version) = r.try_get::<Option<i64>>("metric_version")? else {
+        return Ok(None);
+    };
+    let verdict = HumanVerdict {
+        exact_match: r.try_get("exact_match")?,
+        semantic_match: r.try_get("semantic_match")?,
+        task_accuracy: r.try_get("task_accuracy")?,
+        pairwise_accuracy: r.try_get("pairwise_accuracy")?,
+    };
+    let version = u32::try_from(version).map_err(|e| corrupt("metric_version", e))?;
+    Ok(Some((verdict, version)))
+}
+
+/// The annotator's submitted answer on `item`, with what judging it needs.
+pub async fn answer_to_judge(
+    conn: &mut Conn,
+    annotator: i64,
+    item: i64,
+) -> Result<Option<KeyedAnswer>, sqlx::Error> {
+    on!(conn, |c| {
+        let row = sqlx::query(&format!(
+            "{KEYED_ANSWER_SELECT} WHERE n.annotator = $1 AND n.item = $2 \
+             AND n.outcome = 'answered'"
+        ))
+        .bind(annotator)
+        .bind(item)
+        .fetch_optional(&mut *c)
+        .await?;
+        row.as_ref().map(keyed_answer_from_row).transpose()
+    })
+}
+
+/// Up to `limit` submitted answers on a dataset whose verdict is missing or was computed with
+/// a metric version below `version`, after `(item, annotator)` in that order (a cursor, so
+/// answers that cannot be judged are passed over, not read again).
+pub async fn answers_below_version(
+    conn: &mut Conn,
+    dataset_id: i64,
+    version: u32,
+    after: (i64, i64),
+    limit: i64,
+) -> Result<Vec<KeyedAnswer>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(&format!(
+            "{KEYED_ANSWER_SELECT} WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
+             AND (n.metric_version IS NULL OR n.metric_version < $2) \
+             AND (n.item > $3 OR (n.item = $3 AND n.annotator > $4)) \
+             ORDER BY n.item, n.annotator LIMIT $5"
+        ))
+        .bind(dataset_id)
+        .bind(i64::from(version))
+        .bind(after.0)
+        .bind(after.1)
+        .bind(limit)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(keyed_answer_from_row).collect()
+    })
+}
+
+/// Stores the verdict of a submitted answer, computed with metric `version`. Returns whether
+/// the answer exists.
+pub async fn set_verdict(
+    conn: &mut Conn,
+    annotator: i64,
+    item: i64,
+    verdict: &HumanVerdict,
+    version: u32,
+) -> Result<bool, sqlx::Error> {
+    on!(conn, |c| {
+        let done = sqlx::query(
+            "UPDATE annotations SET exact_match = $1, semantic_match = $2, task_accuracy = $3, \
+             pairwise_accuracy = $4, metric_version = $5 \
+             WHERE annotator = $6 AND item = $7 AND outcome = 'answered'",
+        )
+        .bind(verdict.exact_match)
+        .bind(verdict.semantic_match)
+        .bind(verdict.task_accuracy)
+        .bind(verdict.pairwise_accuracy)
+        .bind(i64::from(version))
+        .bind(annotator)
+        .bind(item)
+        .execute(&mut *c)
+        .await?;
+        Ok(done.rows_affected() == 1)
+    })
+}
+
+/// Forgets the stored verdicts of every answer on a dataset (its items' signatures changed):
+/// they read as never computed until judged again.
+pub async fn forget_verdicts(conn: &mut Conn, dataset_id: i64) -> Result<u64, sqlx::Error> {
+    on!(conn, |c| {
+        let done = sqlx::query(
+            "UPDATE annotations SET exact_match = NULL, semantic_match = NULL, \
+             task_accuracy = NULL, pairwise_accuracy = NULL, metric_version = NULL \
+             WHERE outcome = 'answered' \
+             AND item IN (SELECT id FROM items WHERE dataset_id = $1)",
+        )
+        .bind(dataset_id)
+        .execute(&mut *c)
+        .await?;
+        Ok(done.rows_affected())
+    })
+}
+
+/// How many submitted answers on a dataset have no verdict or one computed with a metric
+/// version below `version`.
+pub async fn count_below_version(
+    conn: &mut Conn,
+    dataset_id: i64,
+    version: u32,
+) -> Result<i64, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_scalar(
+            "SELECT count(*) FROM annotations n JOIN items i ON i.id = n.item \
+             WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
+             AND (n.metric_version IS NULL OR n.metric_version < $2)",
+        )
+        .bind(dataset_id)
+        .bind(i64::from(version))
         .fetch_one(&mut *c)
         .await
     })

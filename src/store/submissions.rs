@@ -64,12 +64,14 @@ pub struct SubmissionRow {
     pub scores: SubmissionScores,
     pub created_at: String,
     pub body_sha256: String,
+    /// The metric version its scores, verdicts and kept error analysis were computed with.
+    pub metric_version: u32,
 }
 
 const SUBMISSION_COLUMNS: &str = "s.id, s.dataset, d.name AS dataset_name, s.account, \
     a.name AS account_name, s.model, s.description, s.url, s.prompt_version, s.notes, s.policy, \
-    s.status, s.visibility, s.baseline, s.scores, s.created_at, s.body_sha256 \
-    FROM submissions s JOIN datasets d ON d.id = s.dataset JOIN accounts a ON a.id = s.account";
+    s.status, s.visibility, s.baseline, s.scores, s.created_at, s.body_sha256, \
+    s.metric_version FROM submissions s JOIN datasets d ON d.id = s.dataset JOIN accounts a ON a.id = s.account";
 
 fn submission_from_row(row: &impl Fields) -> Result<SubmissionRow, sqlx::Error> {
     let id: i64 = row.try_get("id")?;
@@ -98,7 +100,14 @@ fn submission_from_row(row: &impl Fields) -> Result<SubmissionRow, sqlx::Error> 
         scores,
         created_at: row.try_get("created_at")?,
         body_sha256: row.try_get("body_sha256")?,
+        metric_version: version_column(row, "metric_version")?,
     })
+}
+
+/// A metric version column (a 64-bit integer in the store).
+pub(crate) fn version_column(row: &impl Fields, column: &str) -> Result<u32, sqlx::Error> {
+    let version: i64 = row.try_get(column)?;
+    u32::try_from(version).map_err(|e| corrupt(column, e))
 }
 
 pub async fn by_id(conn: &mut Conn, id: i64) -> Result<Option<SubmissionRow>, sqlx::Error> {
@@ -151,6 +160,8 @@ pub struct NewSubmission<'a> {
     pub body_sha256: &'a str,
     pub metadata: &'a SubmissionMetadata,
     pub scores: &'a SubmissionScores,
+    /// The metric version `scores` were computed with.
+    pub metric_version: u32,
 }
 
 /// Inserts the submission; call inside the transaction that also stores its items. A reused
@@ -161,8 +172,8 @@ pub async fn insert(conn: &mut Conn, new: &NewSubmission<'_>) -> Result<Option<i
         let scores = serde_json::to_string(new.scores).map_err(|e| corrupt("scores", e))?;
         let result = sqlx::query_scalar(
         "INSERT INTO submissions (dataset, account, token, idempotency_key, body_sha256, model, \
-         description, url, prompt_version, notes, scores) \
-         VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11) RETURNING id",
+         description, url, prompt_version, notes, scores, metric_version) \
+         VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12) RETURNING id",
     )
     .bind(new.dataset)
     .bind(new.account)
@@ -175,6 +186,7 @@ pub async fn insert(conn: &mut Conn, new: &NewSubmission<'_>) -> Result<Option<i
     .bind(&new.metadata.prompt_version)
     .bind(&new.metadata.notes)
     .bind(scores)
+    .bind(i64::from(new.metric_version))
     .fetch_one(&mut *c)
     .await;
         match result {
@@ -385,5 +397,72 @@ pub async fn clear_error_analyses(conn: &mut Conn, dataset: i64) -> Result<(), s
             .execute(&mut *c)
             .await
             .map(|_| ())
+    })
+}
+
+/// Ids of a dataset's submissions (listed or not) whose scores were computed with a metric
+/// version below `version`, oldest first.
+pub async fn below_version(
+    conn: &mut Conn,
+    dataset: i64,
+    version: u32,
+) -> Result<Vec<i64>, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_scalar(
+            "SELECT id FROM submissions WHERE dataset = $1 AND metric_version < $2 ORDER BY id",
+        )
+        .bind(dataset)
+        .bind(i64::from(version))
+        .fetch_all(&mut *c)
+        .await
+    })
+}
+
+/// Replaces a submission's scores and every verdict row with ones computed under metric
+/// `version`, and forgets its kept error analysis; only while the stored version is below
+/// `version` (`Ok(false)` otherwise, and nothing is written). Call inside a transaction;
+/// `item_rows[v.target]` is the `items` row id of verdict `v`.
+#[tracing::instrument(skip_all)]
+pub async fn replace_scores(
+    conn: &mut Conn,
+    submission: i64,
+    scores: &SubmissionScores,
+    version: u32,
+    item_rows: &[i64],
+    verdicts: &[ItemVerdict],
+) -> Result<bool, sqlx::Error> {
+    let json = serde_json::to_string(scores).map_err(|e| corrupt("scores", e))?;
+    let updated = on!(conn, |c| {
+        sqlx::query(
+            "UPDATE submissions SET scores = $1, metric_version = $2, error_analysis = NULL \
+             WHERE id = $3 AND metric_version < $2",
+        )
+        .bind(json)
+        .bind(i64::from(version))
+        .bind(submission)
+        .execute(&mut *c)
+        .await?
+        .rows_affected()
+    });
+    if updated == 0 {
+        return Ok(false);
+    }
+    on!(conn, |c| {
+        sqlx::query("DELETE FROM submission_items WHERE submission = $1")
+            .bind(submission)
+            .execute(&mut *c)
+            .await?;
+    });
+    insert_items(conn, submission, item_rows, verdicts).await?;
+    Ok(true)
+}
+
+/// The stored scores of a submission as JSON text, exactly as kept.
+pub async fn scores_json(conn: &mut Conn, submission: i64) -> Result<Option<String>, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_scalar("SELECT scores FROM submissions WHERE id = $1")
+            .bind(submission)
+            .fetch_optional(&mut *c)
+            .await
     })
 }

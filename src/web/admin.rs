@@ -89,6 +89,7 @@ struct AdminPage {
     notice: Option<String>,
     /// A new account's invite link, shown once.
     invite: Option<(String, String)>,
+    metric_version: u32,
 }
 
 fn percent(v: f64) -> String {
@@ -149,6 +150,7 @@ pub(super) async fn render_admin(
     }
     let flags = annotation::flags(&state.hub).await?;
     let page = AdminPage {
+        metric_version: crate::core::metric::METRIC_VERSION,
         name: session.name,
         csrf: session.csrf_token,
         annotators: accounts

@@ -26,6 +26,7 @@ use crate::core::leaderboard::{
     AccuracyCell, AccuracyChart, BoardPage, BoardQuery, ColumnGroup, Interval, LeaderboardRow,
     MIN_HUMAN_ANSWERS, RowSource, SortKey, board_page, chart_rows,
 };
+use crate::core::metric::METRIC_VERSION;
 
 /// Rows a page may ask for at once.
 const MAX_PER_PAGE: usize = 1000;
@@ -252,6 +253,9 @@ struct RowView {
 struct LeaderboardView<'a> {
     dataset: &'a str,
     policy: &'static str,
+    /// The metric version this server computes with; a row whose `metric_version` is older is
+    /// `outdated` until an admin rescores it.
+    metric_version: u32,
     sort: String,
     every_submission: bool,
     page: usize,
@@ -304,6 +308,7 @@ fn leaderboard_view<'a>(board: &'a Board, request: &BoardRequest) -> Leaderboard
     LeaderboardView {
         dataset: &board.dataset.name,
         policy: "strict",
+        metric_version: METRIC_VERSION,
         sort: request.query.sort.name(),
         every_submission: request.query.every_submission,
         page: request.query.page,
@@ -382,6 +387,8 @@ struct RowText {
     parse_failures: String,
     /// The Human row: answers, items and annotators it rests on.
     human_note: Option<String>,
+    /// Set when the row was computed with an older metric version: which, and what to do.
+    outdated: Option<String>,
 }
 
 /// A column header that sorts the board by its column.
@@ -400,6 +407,7 @@ struct SortPair {
 #[template(path = "leaderboard.html")]
 struct LeaderboardPage {
     dataset: String,
+    metric_version: u32,
     step_lengths: Vec<u8>,
     rows: Vec<RowText>,
     chart: AccuracyChart,
@@ -463,6 +471,7 @@ impl LeaderboardPage {
         };
         LeaderboardPage {
             dataset: name.clone(),
+            metric_version: METRIC_VERSION,
             step_lengths: StepLength::all().map(StepLength::get).collect(),
             rows: page
                 .rows
@@ -545,6 +554,13 @@ fn row_text(r: &LeaderboardRow, history: Option<String>, drawn: &[i64]) -> RowTe
             .collect(),
         coverage: format!("{:.1}%", r.coverage * 100.0),
         parse_failures: format!("{:.1}%", r.parse_failure_rate * 100.0),
+        outdated: r.metric.outdated.then(|| {
+            format!(
+                "computed with metric version {} (current: {METRIC_VERSION}); not comparable \
+                 with the other rows until an admin rescores it",
+                r.metric.metric_version
+            )
+        }),
     }
 }
 

@@ -27,6 +27,7 @@ pub mod forwarded;
 mod leaderboard;
 pub mod openapi;
 mod pages;
+mod rescore;
 pub mod session;
 mod studies;
 mod submissions;
@@ -110,6 +111,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(leaderboard::api_routes());
     routes.extend(error_analysis::routes());
     routes.extend(studies::routes());
+    routes.extend(rescore::routes());
     routes.push(
         openapi::ApiRoute::new(
             openapi::Verb::Get,
@@ -188,6 +190,7 @@ fn admin_pages(state: &AppState) -> Router<AppState> {
         .merge(admin_tokens::router())
         .merge(admin_audit::router())
         .merge(studies::admin_router())
+        .merge(rescore::router())
         .route_layer(axum::middleware::from_fn_with_state(
             state.clone(),
             session::admin_only,

@@ -17,6 +17,7 @@ use crate::app::submissions::{self, StoredVerdict, SubmissionRow, Submitted};
 use crate::app::tokens::{self, Caller, CreatedToken, TokenListing};
 use crate::core::credentials::{Role, Scope};
 use crate::core::dataset::AnswerVisibility;
+use crate::core::metric::MetricStamp;
 use crate::core::submission::{SubmissionMetadata, SubmissionScores, SubmissionStatus, Visibility};
 use crate::core::verifier::ScoringPolicy;
 
@@ -213,6 +214,10 @@ struct SubmissionView {
     baseline: bool,
     created_at: String,
     scores: SubmissionScores,
+    /// The metric version `scores` and the verdicts were computed with, and whether it is
+    /// older than the server's (then they are not comparable with current rows until rescored).
+    #[serde(flatten)]
+    metric: MetricStamp,
     /// Per-item verdicts: only for the owner, and only if the dataset's answers are public.
     #[serde(skip_serializing_if = "Option::is_none")]
     items: Option<Vec<ItemVerdictView>>,
@@ -279,6 +284,7 @@ impl From<SubmissionRow> for SubmissionView {
             baseline: row.baseline,
             created_at: row.created_at,
             scores: row.scores,
+            metric: MetricStamp::of(row.metric_version),
             items: None,
             items_withheld: None,
         }

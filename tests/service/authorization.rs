@@ -86,6 +86,9 @@ fn body_of(verb: Verb, path: &str, records: &[Value], n: usize) -> Option<(Strin
             "application/json",
         )),
         (Verb::Delete, "/admin/studies/{study}") => Some((String::new(), "text/plain")),
+        (Verb::Post, "/admin/rescore") => {
+            Some((json!({"dataset": "mini"}).to_string(), "application/json"))
+        }
         (verb, path) => {
             panic!("the authorization matrix has no request for {verb:?} {path}: add it to body_of")
         }
@@ -381,6 +384,7 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("POST", "/admin/tokens", Page::Admin),
     ("POST", "/admin/tokens/revoke", Page::Admin),
     ("GET", "/admin/audit", Page::Admin),
+    ("POST", "/admin/rescore", Page::Admin),
     (
         "POST",
         "/admin/datasets/{dataset}/agreement-protocol",

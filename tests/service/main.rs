@@ -28,6 +28,7 @@ mod leaderboard;
 mod migrate_db;
 mod openapi;
 mod pages;
+mod rescore;
 mod runs;
 mod score;
 #[path = "../support/standin.rs"]

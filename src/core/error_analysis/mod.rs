@@ -35,9 +35,9 @@ use crate::core::verifier::{
 };
 
 /// The analysis's version, stored with every result: a stored result of another version is
-/// recomputed. Raise it whenever a rule here changes what is counted. Version 2: entity
-/// substitution counts any entity different (both ends of an edge), as the paper defines it.
-pub const ANALYSIS_VERSION: u32 = 2;
+/// recomputed. The analysis is part of the metric, so this is the metric's version: raise
+/// [`crate::core::metric::METRIC_VERSION`] whenever a rule here changes what is counted.
+pub const ANALYSIS_VERSION: u32 = crate::core::metric::METRIC_VERSION;
 
 /// Examples kept per semantic category × structural class.
 pub const EXAMPLES_PER_CELL: usize = 3;

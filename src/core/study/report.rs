@@ -14,6 +14,7 @@ use super::{Alignment, VariantSpec};
 use crate::core::agreement::welch_t_test;
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::error_analysis::Handedness;
+use crate::core::metric::MetricStamp;
 
 /// Names what the numbers of a study report mean; bump it when a definition changes.
 pub const STUDY_METRIC_VERSION: &str = "enact-hub-study-report/1";
@@ -48,6 +49,8 @@ pub struct RowScores {
     pub items: HashMap<String, ItemScore>,
     /// Forward and inverse hand figures, when the error analysis could be made.
     pub hands: Option<[Handedness; 2]>,
+    /// The metric version its scores were computed with.
+    pub metric_version: u32,
 }
 
 /// One variant with what the report needs of it.
@@ -242,7 +245,12 @@ pub fn build_study_report(inputs: &StudyInputs) -> Result<StudyReport, String> {
     Ok(StudyReport {
         stamp: StudyStamp {
             study: inputs.study.clone(),
-            metric_version: STUDY_METRIC_VERSION.to_owned(),
+            metric_version: MetricStamp::oldest(
+                std::iter::once(&inputs.baseline_row)
+                    .chain(inputs.variants.iter().filter_map(|v| v.row.as_ref().ok()))
+                    .map(|r| r.metric_version),
+            )
+            .with_report(STUDY_METRIC_VERSION),
             tests: STUDY_TESTS.to_owned(),
             row: inputs.row_label.clone(),
             model: inputs.model.clone(),
@@ -370,6 +378,7 @@ pub(crate) mod fixtures {
     pub fn row(submission: i64, scores: &[(&str, Direction, usize, f64)]) -> RowScores {
         RowScores {
             submission: Some(submission),
+            metric_version: crate::core::metric::METRIC_VERSION,
             items: scores
                 .iter()
                 .map(|(id, d, n, pa)| {

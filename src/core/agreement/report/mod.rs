@@ -23,6 +23,7 @@ use crate::core::agreement::{
 use crate::core::annotation::{HumanAnswer, human_entries, mean_by_item};
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::leaderboard::{HumanCoverage, LeaderboardRow};
+use crate::core::metric::MetricStamp;
 use crate::core::verifier::PerformanceReport;
 
 /// Names what the numbers of a report mean. Bump it when a definition changes (which answers
@@ -321,7 +322,8 @@ pub struct ReportInputs {
 pub struct ReportStamp {
     pub dataset: String,
     pub dataset_hash: String,
-    pub metric_version: &'static str,
+    /// The report's rules and the metric version of its figures (the oldest among its rows).
+    pub metric_version: String,
     pub encoding: OrderingEncoding,
     pub level: MeasurementLevel,
     pub bootstrap_seed: u64,
@@ -447,6 +449,8 @@ pub fn build_report(inputs: &ReportInputs) -> Result<AgreementReport, ReportErro
                     .map(|a| (a.annotator_id, a.item_id.as_str())),
                 inputs.dataset_items,
             ),
+            // Judged just now, under the current rules.
+            MetricStamp::current(),
         ));
     }
 
@@ -512,7 +516,8 @@ pub fn build_report(inputs: &ReportInputs) -> Result<AgreementReport, ReportErro
         stamp: ReportStamp {
             dataset: inputs.dataset.clone(),
             dataset_hash: inputs.dataset_hash.clone(),
-            metric_version: REPORT_METRIC_VERSION,
+            metric_version: MetricStamp::oldest(rows.iter().map(|r| r.metric.metric_version))
+                .with_report(REPORT_METRIC_VERSION),
             encoding: inputs.encoding,
             level,
             bootstrap_seed: inputs.bootstrap.seed,
@@ -631,6 +636,7 @@ mod tests {
                 coverage: 1.0,
                 parse_failure_rate: 0.0,
                 human: None,
+                metric: MetricStamp::current(),
             },
             item_scores: values
                 .iter()

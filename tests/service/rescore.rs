@@ -1,0 +1,594 @@
+//! Metric versions and rescoring: human verdicts stored when an answer is finished, results
+//! of an older metric version marked on the leaderboard until `rescore` brings them to the
+//! current one (audited, resumable, byte-identical when nothing changed), and the job form.
+
+use std::sync::Mutex;
+
+use enact_hub::app::jobs::{self, JobId, JobSettings, JobState, Worker};
+use enact_hub::app::rescore::{self, RescoreJob, RescorePayload, RescoreProgress, RescoreStage};
+use enact_hub::app::{self, AppError, Hub};
+use enact_hub::core::annotation::{Draft, InteractionCounts, Session};
+use enact_hub::core::audit::Actor;
+use enact_hub::core::credentials::Role;
+use enact_hub::core::leaderboard::RowSource;
+use enact_hub::core::metric::METRIC_VERSION;
+use enact_hub::store::Pool;
+use serde_json::Value;
+
+use crate::helpers::*;
+
+type VerdictRow = (
+    i64,
+    Option<i64>,
+    Option<String>,
+    Option<String>,
+    String,
+    Option<String>,
+    bool,
+    bool,
+    bool,
+    Option<f64>,
+);
+
+type HumanVerdictRow = (
+    i64,
+    Option<bool>,
+    Option<bool>,
+    Option<bool>,
+    Option<f64>,
+    Option<i64>,
+);
+
+async fn scores_text(pool: &Pool, id: i64) -> String {
+    db!(
+        pool,
+        fetch_one,
+        sqlx::query_scalar::<_, String>("SELECT scores FROM submissions WHERE id = $1").bind(id)
+    )
+    .expect("scores")
+}
+
+async fn verdict_rows(pool: &Pool, id: i64) -> Vec<VerdictRow> {
+    db!(
+        pool,
+        fetch_all,
+        sqlx::query_as::<_, VerdictRow>(
+            "SELECT item, line, raw_answer, permutation, outcome, failure, exact_match, \
+             semantic_match, task_accuracy, pairwise_accuracy FROM submission_items \
+             WHERE submission = $1 ORDER BY item"
+        )
+        .bind(id)
+    )
+    .expect("verdicts")
+}
+
+async fn human_verdicts(pool: &Pool) -> Vec<HumanVerdictRow> {
+    db!(
+        pool,
+        fetch_all,
+        sqlx::query_as::<_, HumanVerdictRow>(
+            "SELECT item, exact_match, semantic_match, task_accuracy, pairwise_accuracy, \
+             metric_version FROM annotations WHERE outcome = 'answered' ORDER BY item"
+        )
+    )
+    .expect("human verdicts")
+}
+
+/// "ann" answers the first `count` records through the annotation use case, the first one
+/// wrongly (its ground truth reversed).
+async fn annotate(server: &TestServer, records: &[Value], count: usize) {
+    let hub = Hub::from(server.pool.clone());
+    let ann = crate::annotate::annotator(server, "ann", false).await;
+    let ids: Vec<&str> = records[..count]
+        .iter()
+        .map(|r| r["id"].as_str().expect("id"))
+        .collect();
+    crate::annotate::assign(server, ann, &ids).await;
+    let session = Session {
+        annotator: ann,
+        name: "ann".to_owned(),
+        is_admin: false,
+        csrf_token: String::new(),
+    };
+    for (i, record) in records[..count].iter().enumerate() {
+        let mut slots: Vec<Option<u8>> = record["gt_answer"]
+            .as_array()
+            .expect("gt")
+            .iter()
+            .map(|l| Some(l.as_u64().expect("label") as u8))
+            .collect();
+        if i == 0 {
+            slots.reverse();
+        }
+        let draft = Draft {
+            slots,
+            counts: InteractionCounts::default(),
+            history: Vec::new(),
+        };
+        app::annotation::answer(&hub, &session, "mini", ids[i], &draft)
+            .await
+            .expect("answered");
+    }
+}
+
+/// Marks a submission's scores as computed with metric version 1, as a migration raising the
+/// version would leave them.
+async fn age(pool: &Pool, submission: i64) {
+    db!(
+        pool,
+        execute,
+        sqlx::query("UPDATE submissions SET metric_version = 1 WHERE id = $1").bind(submission)
+    )
+    .expect("age the submission");
+}
+
+fn operator() -> Actor {
+    Actor::Operator("tester".to_owned())
+}
+
+/// The leaderboard as a hub with empty caches reads it from the store.
+async fn board(pool: &Pool) -> Vec<enact_hub::core::leaderboard::LeaderboardRow> {
+    app::leaderboard::of(&Hub::from(pool.clone()), "mini")
+        .await
+        .expect("leaderboard")
+        .1
+}
+
+#[tokio::test]
+async fn an_older_metric_version_is_marked_until_rescored_and_rescoring_changes_no_byte() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let reply = submit_to(
+        &server,
+        "mini",
+        "model=m",
+        &token,
+        answers(&records, &[1, 2]),
+    )
+    .await;
+    assert_eq!(reply.status, 201, "{}", reply.text);
+    let id = reply.id();
+    assert_eq!(reply.json()["metric_version"], METRIC_VERSION);
+    assert_eq!(reply.json()["outdated"], false);
+    annotate(&server, &records, 3).await;
+
+    // Verdicts were stored when the answers were finished, at the current version.
+    let human_before = human_verdicts(&server.pool).await;
+    assert_eq!(human_before.len(), 3);
+    for (_, exact, _, task, _, version) in &human_before {
+        assert_eq!(*version, Some(i64::from(METRIC_VERSION)));
+        assert!(exact.is_some() && task.is_some());
+    }
+    assert_eq!(
+        human_before.iter().filter(|v| v.3 == Some(true)).count(),
+        2,
+        "the reversed answer is wrong"
+    );
+    let scores_before = scores_text(&server.pool, id).await;
+    let verdicts_before = verdict_rows(&server.pool, id).await;
+    let board_before = board(&server.pool).await;
+    assert!(board_before.iter().all(|r| !r.metric.outdated));
+
+    // As a migration that raises the metric version would leave them: computed with version 1.
+    age(&server.pool, id).await;
+    db!(
+        server.pool,
+        execute,
+        sqlx::query(
+            "UPDATE annotations SET metric_version = 1 WHERE item = \
+             (SELECT min(item) FROM annotations)"
+        )
+    )
+    .expect("age a human verdict");
+
+    let marked = board(&server.pool).await;
+    assert_eq!(marked.len(), 2);
+    for row in &marked {
+        assert!(row.metric.outdated, "{:?} must be marked", row.source);
+        assert_eq!(row.metric.metric_version, 1);
+    }
+    let (status, json) = server.get_json("/api/v1/datasets/mini/leaderboard").await;
+    assert_eq!(status, 200);
+    assert_eq!(json["metric_version"], METRIC_VERSION);
+    for row in json["rows"].as_array().expect("rows") {
+        assert_eq!(row["metric_version"], 1, "{row}");
+        assert_eq!(row["outdated"], true, "{row}");
+    }
+    let page = server
+        .get("/leaderboard/mini")
+        .await
+        .text()
+        .await
+        .expect("page");
+    assert_eq!(
+        page.matches("class=\"tag outdated\" title=").count(),
+        2,
+        "{page}"
+    );
+    assert!(page.contains("computed with metric version 1"), "{page}");
+
+    let seen = Mutex::new(Vec::new());
+    let summary = rescore::rescore(
+        &Hub::from(server.pool.clone()),
+        &operator(),
+        Some("mini"),
+        &|p| seen.lock().expect("lock").push(p),
+    )
+    .await
+    .expect("rescored");
+    assert_eq!(summary.metric_version, METRIC_VERSION);
+    assert_eq!((summary.submissions, summary.submissions_changed), (1, 0));
+    assert_eq!(
+        (summary.human_answers, summary.human_answers_changed),
+        (1, 0)
+    );
+    assert!(summary.failures.is_empty(), "{:?}", summary.failures);
+    let seen = seen.into_inner().expect("lock");
+    assert!(seen.contains(&RescoreProgress {
+        dataset: "mini".to_owned(),
+        stage: RescoreStage::Submissions,
+        done: 1,
+        total: 1,
+    }));
+    assert!(
+        seen.iter()
+            .any(|p| p.stage == RescoreStage::HumanAnswers && p.done == 1)
+    );
+
+    // Brought to the current version, bit for bit what was stored before.
+    assert_eq!(scores_text(&server.pool, id).await, scores_before);
+    assert_eq!(verdict_rows(&server.pool, id).await, verdicts_before);
+    assert_eq!(human_verdicts(&server.pool).await, human_before);
+    let rescored = board(&server.pool).await;
+    assert_eq!(rescored, board_before);
+    // The server's board, built before, is dropped as after an import by another process.
+    let mut current = false;
+    for _ in 0..100 {
+        let (_, json) = server.get_json("/api/v1/datasets/mini/leaderboard").await;
+        let rows = json["rows"].as_array().expect("rows").clone();
+        if rows.iter().all(|r| r["outdated"] == false) {
+            current = true;
+            break;
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+    }
+    assert!(current, "the server still serves the outdated board");
+
+    let audit = db!(
+        server.pool,
+        fetch_all,
+        sqlx::query_as::<_, (String, String, Option<String>, String)>(
+            "SELECT actor, target, dataset, detail FROM audit_log \
+             WHERE action = 'metric.rescore'"
+        )
+    )
+    .expect("audit");
+    assert_eq!(audit.len(), 1);
+    let (actor, target, dataset, detail) = &audit[0];
+    assert_eq!(
+        (actor.as_str(), target.as_str(), dataset.as_deref()),
+        ("tester", "dataset mini", Some("mini"))
+    );
+    assert!(
+        detail.contains(&format!("to metric version {METRIC_VERSION}"))
+            && detail.contains("1 submissions (0 changed), 1 human answers (0 changed)"),
+        "{detail}"
+    );
+
+    // Everything is current: a second run finds nothing to do (and says so in its own entry).
+    let again = rescore::rescore(&Hub::from(server.pool.clone()), &operator(), None, &|_| {})
+        .await
+        .expect("rescored");
+    assert_eq!((again.submissions, again.human_answers), (0, 0));
+    assert_eq!(
+        count(
+            &server.pool,
+            "SELECT count(*) FROM audit_log WHERE action = 'metric.rescore'"
+        )
+        .await,
+        2
+    );
+}
+
+#[tokio::test]
+async fn answers_without_a_stored_verdict_are_judged_on_the_fly_until_rescored() {
+    let (server, records) = spawn_app_with_release().await;
+    annotate(&server, &records, 4).await;
+    let stored = board(&server.pool).await;
+    let human = stored
+        .iter()
+        .find(|r| r.source == RowSource::Human)
+        .expect("the Human row");
+    assert_eq!(human.overall.task_accuracy, Some(0.75));
+    assert_eq!(human.human.expect("coverage").answers, 4);
+    let verdicts = human_verdicts(&server.pool).await;
+
+    // A database migrated from before verdicts were stored: answers without one.
+    db!(
+        server.pool,
+        execute,
+        sqlx::query(
+            "UPDATE annotations SET exact_match = NULL, semantic_match = NULL, \
+             task_accuracy = NULL, pairwise_accuracy = NULL, metric_version = NULL"
+        )
+    )
+    .expect("forget the verdicts");
+    assert_eq!(
+        board(&server.pool).await,
+        stored,
+        "judged now, the same row"
+    );
+
+    let summary = rescore::rescore(&Hub::from(server.pool.clone()), &operator(), None, &|_| {})
+        .await
+        .expect("rescored");
+    assert_eq!(summary.human_answers, 4);
+    assert_eq!(human_verdicts(&server.pool).await, verdicts);
+    assert_eq!(board(&server.pool).await, stored);
+}
+
+/// A job context as the job mechanism hands one over: a payload, a stop flag, and the
+/// progress values it stored.
+struct FakeJob {
+    payload: Value,
+    stop: bool,
+    progress: Mutex<Vec<Value>>,
+}
+
+impl RescoreJob for FakeJob {
+    fn payload(&self) -> &Value {
+        &self.payload
+    }
+
+    fn stop_requested(&self) -> bool {
+        self.stop
+    }
+
+    async fn progress(&self, _hub: &Hub, progress: Value) -> Result<(), AppError> {
+        self.progress.lock().expect("lock").push(progress);
+        Ok(())
+    }
+}
+
+#[tokio::test]
+async fn the_rescore_job_stops_when_asked_and_resumes_from_the_top() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    age(
+        &server.pool,
+        submit_to(&server, "mini", "model=m", &token, answers(&records, &[0]))
+            .await
+            .id(),
+    )
+    .await;
+    let hub = Hub::from(server.pool.clone());
+    let admin = Actor::Annotator("root".to_owned());
+    let payload = RescorePayload::new(Some("mini"), &admin).to_json();
+
+    // The summary the job stored last, after working it until asked to stop (at once or never).
+    let work = async |stop: bool| {
+        let job = FakeJob {
+            payload: payload.clone(),
+            stop,
+            progress: Mutex::default(),
+        };
+        rescore::work_on(&hub, &job).await.expect("worked");
+        let last = job.progress.lock().expect("lock").pop();
+        last.expect("a summary")
+    };
+    let last = work(true).await;
+    assert_eq!(last["stopped"], true);
+    assert_eq!(last["submissions"], 0);
+    assert!(board(&server.pool).await[0].metric.outdated);
+
+    let last = work(false).await;
+    assert_eq!(last["stopped"], false);
+    assert_eq!(last["submissions"], 1);
+    assert!(!board(&server.pool).await[0].metric.outdated);
+    let actors = db!(
+        server.pool,
+        fetch_all,
+        sqlx::query_scalar::<_, String>(
+            "SELECT actor_kind || ' ' || actor FROM audit_log WHERE action = 'metric.rescore' \
+             ORDER BY id"
+        )
+    )
+    .expect("audit");
+    assert_eq!(actors, vec!["annotator root", "annotator root"]);
+
+    let unreadable = FakeJob {
+        payload: serde_json::json!({"dataset": 7}),
+        stop: false,
+        progress: Mutex::default(),
+    };
+    let Err(AppError::Internal(e)) = rescore::work_on(&hub, &unreadable).await else {
+        panic!("an unreadable payload must fail the job");
+    };
+    assert!(format!("{e:#}").contains("payload"), "{e:#}");
+}
+
+#[tokio::test]
+async fn reimported_signatures_judge_the_human_answers_again_in_the_import() {
+    let Some(fixtures) = shared_fixtures() else {
+        eprintln!("shared fixtures not present, skipping");
+        return;
+    };
+    let parity = fixtures.join("enact-parity");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pool = fresh_db(&dir).await;
+    import(&pool, &parity, &options("parity")).await;
+    let items = db!(
+        pool,
+        fetch_all,
+        sqlx::query_as::<_, (String, String)>(
+            "SELECT item_id, gt_answer FROM items ORDER BY id LIMIT 24"
+        )
+    )
+    .expect("items");
+    let ann = crate::annotate::annotator_on(&pool, "ann", false).await;
+    let ids: Vec<&str> = items.iter().map(|(id, _)| id.as_str()).collect();
+    crate::annotate::assign_on(&pool, "parity", ann, &ids).await;
+    let hub = Hub::from(pool.clone());
+    let session = Session {
+        annotator: ann,
+        name: "ann".to_owned(),
+        is_admin: false,
+        csrf_token: String::new(),
+    };
+    for (i, (id, gt)) in items.iter().enumerate() {
+        let mut labels: Vec<u8> = serde_json::from_str(gt).expect("gt");
+        // Some right, some with two steps swapped, some reversed.
+        match i % 3 {
+            0 => {}
+            1 => labels.swap(0, 1),
+            _ => labels.reverse(),
+        }
+        let draft = Draft {
+            slots: labels.into_iter().map(Some).collect(),
+            counts: InteractionCounts::default(),
+            history: Vec::new(),
+        };
+        app::annotation::answer(&hub, &session, "parity", id, &draft)
+            .await
+            .expect("answered");
+    }
+    let exact_only = human_verdicts(&pool).await;
+
+    let mut with_graphs = options("parity");
+    with_graphs.scene_graphs = Some(parity.join("replayed_activities"));
+    let report = import(&pool, &parity, &with_graphs).await;
+    assert_eq!(report.signatures_updated, 96);
+    let rejudged = human_verdicts(&pool).await;
+    assert_eq!(rejudged.len(), items.len());
+    assert!(
+        rejudged
+            .iter()
+            .all(|v| v.5 == Some(i64::from(METRIC_VERSION)))
+    );
+    assert_ne!(rejudged, exact_only, "scene graphs give pairwise accuracy");
+    // What the import stored is what judging the answers now gives.
+    let rows = app::leaderboard::of(&Hub::from(pool.clone()), "parity")
+        .await
+        .expect("board")
+        .1;
+    db!(
+        pool,
+        execute,
+        sqlx::query("UPDATE annotations SET metric_version = NULL")
+    )
+    .expect("forget the verdicts");
+    let judged = app::leaderboard::of(&Hub::from(pool.clone()), "parity")
+        .await
+        .expect("board")
+        .1;
+    assert_eq!(rows, judged);
+}
+
+#[tokio::test]
+async fn an_admin_queues_a_rescore_that_a_job_worker_carries_out() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, submitter) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let (_, admin) = api_token(&server.pool, "root", Role::Admin, None, None).await;
+    let id = submit_to(
+        &server,
+        "mini",
+        "model=m",
+        &submitter,
+        answers(&records, &[0]),
+    )
+    .await
+    .id();
+    age(&server.pool, id).await;
+
+    let call = |token: &str, body: serde_json::Value| {
+        server
+            .call(reqwest::Method::POST, "/api/v1/admin/rescore")
+            .bearer(token)
+            .json(&body)
+    };
+    call(&submitter, serde_json::json!({})).expect(403).await;
+    let unknown = call(&admin, serde_json::json!({"dataset": "nope"}))
+        .expect(404)
+        .await;
+    assert!(unknown.error().contains("nope"), "{}", unknown.text);
+    call(&admin, serde_json::json!({"dataset": "mini", "colour": 1}))
+        .expect(422)
+        .await;
+    let queued = call(&admin, serde_json::json!({"dataset": "mini"}))
+        .expect(202)
+        .await
+        .json();
+    assert_eq!(queued["metric_version"], METRIC_VERSION);
+    let job = JobId(queued["job"].as_i64().expect("a job id"));
+
+    let hub = Hub::from(server.pool.clone());
+    let worker = Worker::spawn(
+        hub.clone(),
+        app::job_handlers(),
+        JobSettings {
+            poll: std::time::Duration::from_millis(20),
+            ..JobSettings::default()
+        },
+    );
+    let mut row = None;
+    for _ in 0..500 {
+        let job = jobs::get(&hub, job).await.expect("read").expect("the job");
+        if job.state == JobState::Done {
+            row = Some(job);
+            break;
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+    }
+    worker.stop().await;
+    let row = row.expect("the rescore job finished");
+    let progress: Value =
+        serde_json::from_str(row.progress.as_deref().unwrap_or("null")).expect("progress JSON");
+    assert_eq!(progress["submissions"], 1, "{progress}");
+    assert!(!board(&server.pool).await[0].metric.outdated);
+    assert_eq!(
+        count(
+            &server.pool,
+            "SELECT count(*) FROM audit_log WHERE action = 'metric.rescore' AND actor = 'root'"
+        )
+        .await,
+        1
+    );
+}
+
+#[tokio::test]
+async fn the_command_line_rescores_in_the_foreground() {
+    let (server, records) = spawn_app_with_release().await;
+    if !on_sqlite() {
+        return; // the command opens the database by path; the PostgreSQL run covers the rest
+    }
+    let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    age(
+        &server.pool,
+        submit_to(&server, "mini", "model=m", &token, answers(&records, &[0]))
+            .await
+            .id(),
+    )
+    .await;
+    let run = |dataset: &str| {
+        enact_hub()
+            .args(["rescore", "--dataset", dataset, "--json", "--db"])
+            .arg(server.db_path())
+            .env("ENACT_HUB_OPERATOR", "ops")
+            .output()
+            .expect("run")
+    };
+    let out = run("mini");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&out.stdout).expect("JSON summary");
+    assert_eq!(summary["submissions"], 1);
+    assert_eq!(summary["metric_version"], METRIC_VERSION);
+    assert!(!board(&server.pool).await[0].metric.outdated);
+    let out = run("nope");
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("nope"), "{stderr}");
+}
