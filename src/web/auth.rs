@@ -15,14 +15,14 @@ impl FromRequestParts<AppState> for Caller {
             .headers
             .get(header::AUTHORIZATION)
             .ok_or_else(|| {
-                AppError::Unauthorized(
+                AppError::Unauthenticated(
                     "this endpoint needs an API token: send `Authorization: Bearer TOKEN`"
                         .to_owned(),
                 )
             })?
             .to_str()
             .map_err(|_| {
-                AppError::Unauthorized("the Authorization header is not text".to_owned())
+                AppError::Unauthenticated("the Authorization header is not text".to_owned())
             })?;
         let token = header
             .strip_prefix("Bearer ")
@@ -30,7 +30,7 @@ impl FromRequestParts<AppState> for Caller {
             .map(str::trim)
             .filter(|t| !t.is_empty())
             .ok_or_else(|| {
-                AppError::Unauthorized(
+                AppError::Unauthenticated(
                     "the Authorization header must read `Bearer TOKEN`".to_owned(),
                 )
             })?;
