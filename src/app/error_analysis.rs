@@ -18,6 +18,7 @@ use crate::core::error_analysis::{
 };
 use crate::core::leaderboard::RowSource;
 use crate::core::scoring::ScoringTarget;
+use crate::core::submission::VerdictOutcome;
 use crate::core::verifier::{
     Permutation, StrictParseFailure, parse_answer_strict, parse_python_json, python_text_lines,
     score_strict_predictions,
@@ -61,15 +62,15 @@ fn stored_reading(
     let corrupt = |what: &str, e: &dyn std::fmt::Display| {
         format!("item {}: stored {what} is unreadable: {e}", verdict.id)
     };
-    match verdict.outcome.as_str() {
-        "scored" => {
+    match verdict.outcome {
+        VerdictOutcome::Scored => {
             let text = verdict.permutation.as_deref().unwrap_or_default();
             let p: Permutation =
                 serde_json::from_str(text).map_err(|e| corrupt("permutation", &e))?;
             Ok((Some(p), Reading::Missing))
         }
-        "missing" => Ok((None, Reading::Missing)),
-        _ => {
+        VerdictOutcome::Missing => Ok((None, Reading::Missing)),
+        VerdictOutcome::Unparseable => {
             let raw = verdict.raw_answer.as_deref().unwrap_or("null");
             let value = parse_python_json(raw).map_err(|e| corrupt("answer", &e))?;
             Ok(match parse_answer_strict(Some(&value), actions) {
