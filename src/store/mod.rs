@@ -250,6 +250,7 @@ text_column!(
     crate::core::annotation::OutcomeKind,
     crate::core::credentials::Role,
     crate::core::dataset::AnswerVisibility,
+    crate::core::semantics::SignatureSource,
     crate::core::submission::SubmissionStatus,
     crate::core::submission::VerdictOutcome,
     crate::core::submission::Visibility,
