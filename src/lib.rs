@@ -7,7 +7,7 @@
 //! |---------------|----------------------------------------------------------------------|
 //! | `src/cli/`, `src/web/` | adapters: parse arguments or requests, call one [`app`] use case, render text, JSON or HTML |
 //! | `src/app/`    | use cases: import, submit, tokens, annotators, assignment, drafts and answers, the agreement protocol and report, error analyses, leaderboards, the demo |
-//! | `src/store/`  | SQLite: connection setup, migrations, rows in and rows out, no decisions |
+//! | `src/store/`  | SQLite or PostgreSQL: connection setup, migrations, rows in and rows out, no decisions |
 //! | `src/core/`   | the benchmark, pure: dataset, scene graphs, verifier, error analysis, pipeline, agreement statistics, world |
 //!
 //! Start with `migrations/` for the schema, then [`core`] for the benchmark, then [`app`] for

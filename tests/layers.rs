@@ -130,6 +130,20 @@ fn expand_use_tree(tree: &str) -> Vec<String> {
         .collect()
 }
 
+/// Where the path that starts at `at` ends, or `None` when `at` is inside a longer name.
+fn path_end(bytes: &[u8], at: usize) -> Option<usize> {
+    if at > 0 && (bytes[at - 1].is_ascii_alphanumeric() || bytes[at - 1] == b'_') {
+        return None;
+    }
+    let mut end = at;
+    while end < bytes.len()
+        && (bytes[end].is_ascii_alphanumeric() || bytes[end] == b'_' || bytes[end] == b':')
+    {
+        end += 1;
+    }
+    Some(end)
+}
+
 /// Every path that starts with `crate`, `super` or `self`, as written.
 fn referenced_paths(code: &str) -> Vec<String> {
     let mut paths = Vec::new();
@@ -156,16 +170,9 @@ fn referenced_paths(code: &str) -> Vec<String> {
         while let Some(at) = code[from..].find(start) {
             let at = from + at;
             from = at + start.len();
-            if at > 0 && (bytes[at - 1].is_ascii_alphanumeric() || bytes[at - 1] == b'_') {
-                continue;
+            if let Some(end) = path_end(bytes, at) {
+                paths.push(code[at..end].trim_end_matches(':').to_owned());
             }
-            let mut end = at;
-            while end < bytes.len()
-                && (bytes[end].is_ascii_alphanumeric() || bytes[end] == b'_' || bytes[end] == b':')
-            {
-                end += 1;
-            }
-            paths.push(code[at..end].trim_end_matches(':').to_owned());
         }
     }
     paths
@@ -417,5 +424,132 @@ fn the_checker_sees_paths_in_every_form() {
     assert_eq!(
         cycles(&nodes, &edges),
         vec![vec!["a".to_owned(), "b".to_owned()]]
+    );
+}
+
+/// The last segment of a path names a type (`UpperCamel`) or a constant (`UPPER_SNAKE`), not a
+/// function or a module.
+fn names_a_type_or_constant(path: &str) -> bool {
+    let last = path.rsplit("::").next().unwrap_or("");
+    last.chars().next().is_some_and(|c| c.is_ascii_uppercase())
+}
+
+/// Every `crate::core::…` path in `code`, use trees expanded into their branches (a tree's
+/// prefix is not itself a use of the module).
+fn core_paths(code: &str) -> Vec<String> {
+    const START: &str = "crate::core::";
+    let bytes = code.as_bytes();
+    let mut paths = Vec::new();
+    let mut from = 0;
+    while let Some(at) = code[from..].find(START) {
+        let at = from + at;
+        from = at + START.len();
+        let Some(end) = path_end(bytes, at) else {
+            continue;
+        };
+        if bytes.get(end) == Some(&b'{') {
+            let mut depth = 0;
+            let mut close = end;
+            for (i, &b) in bytes.iter().enumerate().skip(end) {
+                match b {
+                    b'{' => depth += 1,
+                    b'}' => depth -= 1,
+                    _ => {}
+                }
+                if depth == 0 {
+                    close = i;
+                    break;
+                }
+            }
+            paths.extend(expand_use_tree(&code[at..=close]));
+            from = close;
+        } else {
+            paths.push(code[at..end].trim_end_matches(':').to_owned());
+        }
+    }
+    paths
+}
+
+/// Every `crate::core` path used by the files of `area` whose last segment is neither a type
+/// nor a constant nor in `allowed`, with the file it is in.
+fn core_calls_in(area: &str, allowed: &[&str]) -> Vec<String> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    source_files(&src.join(area), &mut files);
+    let mut found = Vec::new();
+    for file in files {
+        let text = std::fs::read_to_string(&file).expect("readable source");
+        for path in core_paths(&code_only(&text)) {
+            let Some(inside) = path.strip_prefix("crate::core::") else {
+                continue;
+            };
+            if !names_a_type_or_constant(&path) && !allowed.contains(&inside) {
+                found.push(format!(
+                    "{} uses `{path}`",
+                    file.strip_prefix(&src).unwrap_or(&file).display()
+                ));
+            }
+        }
+    }
+    found
+}
+
+/// The command line does no work of its own: it names the core's types and constants (to
+/// parse arguments and print results) and calls only these formatting functions of the core;
+/// scoring, analysing, generating and simulating are use cases in `app` that it calls.
+const CLI_MAY_CALL: &[&str] = &[
+    "error_analysis::present::text_table",
+    "scoring::performance_table",
+    "study::figure::p_text",
+    "world::parse_colour",
+];
+
+/// The store decides nothing: it names the core's types (the rows it maps) and calls only the
+/// codecs of columns stored as text.
+const STORE_MAY_CALL: &[&str] = &[
+    "credentials::scopes_from_text",
+    "credentials::scopes_to_text",
+    "dataset::Direction::parse",
+    "dataset::StepLength::new",
+];
+
+#[test]
+fn the_cli_calls_no_core_logic() {
+    let found = core_calls_in("cli", CLI_MAY_CALL);
+    assert!(
+        found.is_empty(),
+        "the command line calls into the core (move the work into an app use case):\n{}",
+        found.join("\n")
+    );
+}
+
+#[test]
+fn the_store_calls_no_core_logic() {
+    let found = core_calls_in("store", STORE_MAY_CALL);
+    assert!(
+        found.is_empty(),
+        "the store calls into the core (decisions belong to app):\n{}",
+        found.join("\n")
+    );
+}
+
+#[test]
+fn core_calls_are_found_in_every_form() {
+    let code = code_only(
+        "use crate::core::verifier::{score_strict_predictions, StrictItem};\n\
+         use crate::core::agreement;\n\
+         fn f() { crate::core::world::simulate(&o); let x = crate::core::agreement::DEFAULT_SEED; }",
+    );
+    let offending: Vec<String> = core_paths(&code)
+        .into_iter()
+        .filter(|p| !names_a_type_or_constant(p))
+        .collect();
+    assert_eq!(
+        offending,
+        [
+            "crate::core::verifier::score_strict_predictions",
+            "crate::core::agreement",
+            "crate::core::world::simulate",
+        ]
     );
 }

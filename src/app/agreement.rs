@@ -259,3 +259,75 @@ pub async fn report_bundle(
     files.push(audit_file(&report.stamp, &entries));
     Ok((report, files))
 }
+
+/// Krippendorff's alpha of a reliability-data file, with its bootstrap interval when asked.
+#[derive(Debug, serde::Serialize)]
+pub struct FileAgreement {
+    pub input: String,
+    pub level: String,
+    /// `None` when alpha is undefined; `reason` says why.
+    pub alpha: Option<f64>,
+    pub reason: Option<String>,
+    pub coders: usize,
+    pub units: usize,
+    pub units_used: usize,
+    pub pairable_values: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bootstrap: Option<FileBootstrap>,
+}
+
+/// The bootstrap interval of a [`FileAgreement`]: units resampled with replacement.
+#[derive(Debug, serde::Serialize)]
+pub struct FileBootstrap {
+    pub resampled: &'static str,
+    pub replicates: usize,
+    pub undefined_replicates: usize,
+    pub confidence_level: f64,
+    pub ci_low: Option<f64>,
+    pub ci_high: Option<f64>,
+    pub seed: Option<u64>,
+    pub rng: Option<String>,
+}
+
+/// `enact-hub agreement --input FILE`: alpha of the `{"data": [[...], ...]}` file at `input`
+/// (one list per coder) at `level`, each unit its own bootstrap item, with an interval when
+/// `bootstrap` is given. Refusals name the file and what is wrong in it.
+pub fn of_file(
+    input: &std::path::Path,
+    level: MeasurementLevel,
+    bootstrap: Option<&BootstrapConfig>,
+) -> Result<FileAgreement, AppError> {
+    use crate::core::agreement::{PreparedAlpha, UnitItems, read_reliability_json};
+    let refused = |e: &dyn std::fmt::Display| AppError::Invalid(e.to_string());
+    let data = read_reliability_json(input).map_err(|e| refused(&e))?;
+    let prepared = PreparedAlpha::with_items(&data, level, &UnitItems::one_per_unit(data.units()))
+        .map_err(|e| refused(&e))?;
+    let estimate = prepared.estimate();
+    let bootstrap = match bootstrap {
+        Some(config) if config.replicates > 0 => {
+            let b = prepared.bootstrap(config).map_err(|e| refused(&e))?;
+            Some(FileBootstrap {
+                resampled: "units",
+                replicates: b.replicates,
+                undefined_replicates: b.undefined_replicates,
+                confidence_level: b.confidence_level,
+                ci_low: b.ci_low,
+                ci_high: b.ci_high,
+                seed: b.seed,
+                rng: b.rng,
+            })
+        }
+        _ => None,
+    };
+    Ok(FileAgreement {
+        input: input.display().to_string(),
+        level: level.to_string(),
+        alpha: estimate.alpha,
+        reason: estimate.reason.as_ref().map(ToString::to_string),
+        coders: estimate.coders,
+        units: estimate.units,
+        units_used: estimate.units_used,
+        pairable_values: estimate.pairable_values,
+        bootstrap,
+    })
+}

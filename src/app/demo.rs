@@ -38,7 +38,7 @@ pub async fn load(hub: &Hub) -> anyhow::Result<ImportReport> {
         dataset: DEMO_DATASET.to_owned(),
         skip_invalid: false,
         replace: true,
-        progress: false,
+        progress: None,
         scene_graphs: Some(written.replayed_dir),
     };
     let report = import_release(hub, &Actor::Server, dir.path(), &options)

@@ -8,6 +8,7 @@
 
 use std::collections::HashMap;
 
+use super::scoring::{self, ScoreFileError, ScoringStep};
 use super::submissions::{self, DatasetTargets};
 use super::tokens::Caller;
 use super::{AppError, Hub, datasets, leaderboard};
@@ -257,18 +258,24 @@ pub async fn comparison(
     Ok((dataset, rows))
 }
 
-/// A prediction file analysed against a stored dataset's items, read as the leaderboard reads
-/// submissions (the CLI's `errors --db`). `Err` lines name what is wrong with the file.
+/// A prediction file analysed against a stored dataset or a release folder, read as the
+/// leaderboard reads submissions (`enact-hub errors`). `progress` hears of each slow step.
 pub async fn of_file(
-    hub: &Hub,
-    dataset: &str,
+    against: scoring::Against<'_>,
     text: String,
-) -> Result<Result<ErrorAnalysis, Vec<String>>, AppError> {
-    let dataset = datasets::by_name(hub, dataset).await?;
-    let targets = submissions::dataset_targets(hub, dataset.id).await?;
-    tokio::task::spawn_blocking(move || analyse_file(&targets.targets, &text))
-        .await?
-        .map_err(AppError::internal)
+    progress: &(dyn Fn(ScoringStep) + Sync),
+) -> Result<ErrorAnalysis, ScoreFileError> {
+    let targets = scoring::targets(&against, progress).await?;
+    progress(ScoringStep::Scoring);
+    let analysed = tokio::task::spawn_blocking(move || analyse_file(&targets, &text))
+        .await
+        .map_err(AppError::from)?;
+    progress(ScoringStep::Finished);
+    match analysed {
+        Ok(Ok(analysis)) => Ok(analysis),
+        Ok(Err(problems)) => Err(ScoreFileError::FileProblems(problems)),
+        Err(e) => Err(ScoreFileError::Unscorable(e)),
+    }
 }
 
 /// A prediction file analysed against `targets` (strict reading, every item counts).

@@ -15,7 +15,6 @@ use std::io::{BufRead, BufReader};
 use std::path::{Component, Path, PathBuf};
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
 use sha2::{Digest, Sha256};
@@ -80,12 +79,44 @@ pub struct ImportOptions {
     pub skip_invalid: bool,
     /// Overwrite stored items whose content differs from the file.
     pub replace: bool,
-    /// Draw progress bars (only when attached to a terminal).
-    pub progress: bool,
+    /// Told after each batch how far the import has got (the command line draws a bar).
+    pub progress: Option<ImportObserver>,
     /// ENACT's `replayed_activities` folder: compute each item's transition signatures from
     /// `{task}/scene_graph_0.json`. Without it, inverse items get signatures parsed from their
     /// action text where possible (see `semantics`).
     pub scene_graphs: Option<PathBuf>,
+}
+
+/// How far an import has got: told after each batch and once at the end.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImportProgress {
+    /// Bytes of the QA file read so far, of `qa_bytes`.
+    pub qa_bytes_read: u64,
+    pub qa_bytes: u64,
+    /// Lines read so far.
+    pub rows: usize,
+    /// Bytes of the images the lines read so far name.
+    pub image_bytes: u64,
+    /// Every line is read (the import may still be refused).
+    pub finished: bool,
+}
+
+/// Who hears of an import's [`ImportProgress`].
+#[derive(Clone)]
+pub struct ImportObserver(pub std::sync::Arc<dyn Fn(&ImportProgress) + Send + Sync>);
+
+impl fmt::Debug for ImportObserver {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("ImportObserver")
+    }
+}
+
+impl ImportObserver {
+    fn tell(observer: Option<&ImportObserver>, progress: ImportProgress) {
+        if let Some(observer) = observer {
+            (observer.0)(&progress);
+        }
+    }
 }
 
 /// A problem with one line of the QA file.
@@ -265,20 +296,6 @@ struct Validated {
 /// How many lines are validated and written at a time: memory holds one batch, whatever the
 /// size of the file.
 const BATCH_LINES: usize = 512;
-
-/// A bar over the QA file's bytes; its message counts items and image bytes.
-fn progress_bar(enabled: bool, qa_bytes: u64) -> ProgressBar {
-    if !enabled {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(qa_bytes);
-    if let Ok(style) = ProgressStyle::with_template(
-        "{msg:>32} [{bar:40}] {bytes}/{total_bytes} of QA file ({bytes_per_sec}, eta {eta})",
-    ) {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    bar
-}
 
 /// A path from the QA file, checked to stay inside the release root.
 fn image_path(root: &Path, relative: &str) -> Result<PathBuf, String> {
@@ -503,7 +520,14 @@ pub async fn import_release(
         .map(|m| m.len())
         .unwrap_or(0);
     let validator = Validator::open(&location, options.scene_graphs.as_deref())?;
-    let bar = progress_bar(options.progress, qa_bytes);
+    let observer = options.progress.as_ref();
+    let told = |validator: &Validator, finished: bool| ImportProgress {
+        qa_bytes_read: validator.bytes_read,
+        qa_bytes,
+        rows: validator.rows,
+        image_bytes: validator.image_bytes,
+        finished,
+    };
     let (mut validator, mut next) = next_batch(validator).await?;
 
     // The write lock is taken now and kept to the end (later batches are validated while it is
@@ -579,15 +603,10 @@ pub async fn import_release(
                     refresh_semantics(&mut tx, dataset.id, &batch.valid, &stored_hashes).await?;
             }
         }
-        bar.set_position(validator.bytes_read);
-        bar.set_message(format!(
-            "{} items, {} MB of images",
-            validator.rows,
-            validator.image_bytes / 1_000_000
-        ));
+        ImportObserver::tell(observer, told(&validator, false));
         (validator, next) = next_batch(validator).await?;
     }
-    bar.finish_and_clear();
+    ImportObserver::tell(observer, told(&validator, true));
     report.rows = validator.rows;
     invalid.sort_by_key(|s| s.line);
     if !invalid.is_empty() && !options.skip_invalid {

@@ -19,6 +19,8 @@
 //! - [`audit`]: the audit log every audited use case writes in its own transaction.
 //! - [`demo`]: the built-in demo dataset, its chance baseline and its login link.
 //! - [`backup`]: online snapshots of the database, and restoring one.
+//! - [`jobs`]: long work that survives restarts, worked by one instance at a time (model runs,
+//!   rescoring); [`pipeline`]: new items from replays, and simulated replays.
 //!
 //! Errors are [`AppError`]: each kind says what was wrong, in words a person can act on.
 
@@ -36,8 +38,10 @@ pub mod error_analysis;
 pub mod frames;
 pub mod import;
 pub mod items;
+pub mod jobs;
 pub mod leaderboard;
 pub mod migrate_db;
+pub mod pipeline;
 pub mod scoring;
 pub mod standings;
 pub mod studies;

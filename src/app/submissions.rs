@@ -228,7 +228,8 @@ async fn by_id(hub: &Hub, id: i64) -> Result<Option<SubmissionRow>, AppError> {
 
 /// Submits a model's answers to `dataset`: counts the attempt against the caller's quotas,
 /// reads the body (only then, so an attempt over quota never uploads), scores it against
-/// every item and stores the submission with every verdict in one transaction.
+/// every item and stores the submission with every verdict in one transaction. The caller's
+/// `submit` scope was checked before the request reached this (the web's route table).
 ///
 /// With an `idempotency_key` already used by this token, the first submission is returned
 /// when the body is the same, and 409 when it differs.
@@ -243,7 +244,6 @@ pub async fn submit<B>(
 where
     B: Future<Output = Result<Vec<u8>, AppError>>,
 {
-    caller.require(Scope::Submit)?;
     let dataset = datasets::by_name(hub, dataset_name).await?;
     let metadata = metadata.checked().map_err(AppError::Invalid)?;
     if let Some(key) = idempotency_key {
@@ -359,14 +359,10 @@ pub async fn read(hub: &Hub, caller: &Caller, id: &str) -> Result<SubmissionDeta
     Ok(SubmissionDetail { row, verdicts })
 }
 
-/// A submission its caller may read: their own (with the `read_own` scope) or any (admin).
-/// Another account's submission is answered like a missing one.
+/// A submission its caller may read: their own, or any when the caller is an admin. Another
+/// account's submission is answered like a missing one. (The `read_own` scope is the route's
+/// to check, before this is called.)
 pub async fn readable(hub: &Hub, caller: &Caller, id: &str) -> Result<SubmissionRow, AppError> {
-    if !caller.has(Scope::ReadOwn) && !caller.has(Scope::Admin) {
-        return Err(AppError::NotPermitted(
-            "this token lacks the `read_own` scope".to_owned(),
-        ));
-    }
     let not_found = || AppError::NotFound(format!("no submission {id}"));
     let numeric: i64 = id.parse().map_err(|_| not_found())?;
     let admin = caller.has(Scope::Admin);

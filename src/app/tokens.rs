@@ -45,8 +45,17 @@ impl Caller {
     }
 }
 
+/// The caller `presented` stands for, if it may do what needs `scope`: refused as
+/// unauthorized when the token is unknown or revoked, as forbidden when it lacks the scope.
+/// The web checks every route's scope here, once, before the route's handler runs.
+pub async fn authorize(hub: &Hub, presented: &str, scope: Scope) -> Result<Caller, AppError> {
+    let caller = authenticate(hub, presented).await?;
+    caller.require(scope)?;
+    Ok(caller)
+}
+
 /// The live (unrevoked) token `presented` stands for; 401 otherwise.
-pub async fn authenticate(hub: &Hub, presented: &str) -> Result<Caller, AppError> {
+async fn authenticate(hub: &Hub, presented: &str) -> Result<Caller, AppError> {
     let refused =
         || AppError::Unauthenticated("the API token is unknown or has been revoked".to_owned());
     let mut conn = hub.conn().await?;

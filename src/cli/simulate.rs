@@ -7,8 +7,9 @@ use std::process::ExitCode;
 use anyhow::Context;
 use clap::Args;
 
+use crate::app;
 use crate::core::world::{
-    Activity, CameraRig, FrameImages, RecordMode, SimulateOptions, parse_colour, simulate,
+    Activity, CameraRig, FrameImages, RecordMode, SimulateOptions, parse_colour,
 };
 
 #[derive(Args)]
@@ -75,26 +76,31 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
     } else {
         FrameImages::KeyFrames
     };
-    for activity in activities {
-        let options = SimulateOptions {
-            seed: args.seed,
-            activity,
-            length: args.length,
-            camera,
-        };
-        let simulation = simulate(&options)?;
-        let mode = RecordMode::parse(&args.record_mode).context("--record-mode: mixed or full")?;
-        let written = simulation.write_replay_with(&args.out, images, mode)?;
-        println!(
-            "{}: {} actions over {} frames, {} key frames, {} glitches, {} images in {}",
-            simulation.task_name,
-            simulation.actions.len(),
-            simulation.num_frames,
-            simulation.key_frames.len(),
-            simulation.flickers.len(),
-            written.images,
-            written.task_dir.display()
-        );
-    }
+    let mode = RecordMode::parse(&args.record_mode).context("--record-mode: mixed or full")?;
+    let options = SimulateOptions {
+        seed: args.seed,
+        activity: activities[0],
+        length: args.length,
+        camera,
+    };
+    app::pipeline::simulate(
+        &activities,
+        &options,
+        &args.out,
+        images,
+        mode,
+        |simulation, written| {
+            println!(
+                "{}: {} actions over {} frames, {} key frames, {} glitches, {} images in {}",
+                simulation.task_name,
+                simulation.actions.len(),
+                simulation.num_frames,
+                simulation.key_frames.len(),
+                simulation.flickers.len(),
+                written.images,
+                written.task_dir.display()
+            );
+        },
+    )?;
     Ok(ExitCode::SUCCESS)
 }

@@ -73,10 +73,13 @@ pub enum AuditAction {
     BackupCreate,
     StudyCreate,
     StudyDelete,
+    JobPause,
+    JobResume,
+    JobCancel,
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 16] = [
+    pub const ALL: [AuditAction; 19] = [
         AuditAction::DatasetImport,
         AuditAction::DatasetAnswerVisibility,
         AuditAction::TokenIssue,
@@ -93,6 +96,9 @@ impl AuditAction {
         AuditAction::BackupCreate,
         AuditAction::StudyCreate,
         AuditAction::StudyDelete,
+        AuditAction::JobPause,
+        AuditAction::JobResume,
+        AuditAction::JobCancel,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -113,6 +119,9 @@ impl AuditAction {
             AuditAction::BackupCreate => "backup.create",
             AuditAction::StudyCreate => "study.create",
             AuditAction::StudyDelete => "study.delete",
+            AuditAction::JobPause => "job.pause",
+            AuditAction::JobResume => "job.resume",
+            AuditAction::JobCancel => "job.cancel",
         }
     }
 

@@ -293,6 +293,26 @@ pub const TABLES: &[Table] = &[
         ],
         false,
     ),
+    table(
+        "jobs",
+        &[
+            ("id", Int),
+            ("kind", Text),
+            ("payload", Text),
+            ("state", Text),
+            ("progress", Text),
+            ("attempts", Int),
+            ("last_error", Text),
+            ("run_after_ms", Int),
+            ("lease_owner", Text),
+            ("lease_until_ms", Int),
+            ("created_by", Text),
+            ("created_at", Text),
+            ("updated_at", Text),
+            ("finished_at", Text),
+        ],
+        true,
+    ),
 ];
 
 /// One column's value.

@@ -14,6 +14,7 @@ pub mod datasets;
 pub mod db;
 pub mod frames;
 pub mod items;
+pub mod jobs;
 pub mod studies;
 pub mod submissions;
 
@@ -255,6 +256,7 @@ text_column!(
     crate::core::submission::VerdictOutcome,
     crate::core::submission::Visibility,
     crate::core::verifier::ScoringPolicy,
+    jobs::JobState,
 );
 
 /// Writes a consistent copy of the whole SQLite database to `out` (`VACUUM INTO`): one read

@@ -10,7 +10,6 @@ use axum::response::{Html, IntoResponse, Response};
 use axum::routing::{get, post};
 use serde::Deserialize;
 
-use super::admin::require_admin;
 use super::error::PageError;
 use super::session::{Admin, Protected};
 use super::submissions::parse_role;
@@ -90,7 +89,6 @@ async fn create(
     State(state): State<AppState>,
     request: Protected<NewTokenForm>,
 ) -> Result<Response, PageError> {
-    require_admin(&request.session)?;
     let form = request.body;
     let role = if form.role.trim().is_empty() {
         Role::Submitter
@@ -131,7 +129,6 @@ async fn revoke(
     State(state): State<AppState>,
     request: Protected<RevokeForm>,
 ) -> Result<Response, PageError> {
-    require_admin(&request.session)?;
     let which = request.body.token.trim().to_owned();
     tokens::revoke(&state.hub, &request.session.actor(), &which).await?;
     tracing::info!(token = %which, by = %request.session.name, "API token revoked on the admin page");

@@ -9,7 +9,7 @@ use axum::response::{Html, IntoResponse, Response};
 use axum::routing::{get, post};
 use serde::Deserialize;
 
-use super::admin::{render_admin, require_admin};
+use super::admin::render_admin;
 use super::error::PageError;
 use super::extract::{Json, Path};
 use super::session::{Admin, Protected};
@@ -63,7 +63,6 @@ async fn run_protocol(
     Path(name): Path<String>,
     request: Protected<ProtocolForm>,
 ) -> Result<Html<String>, PageError> {
-    require_admin(&request.session)?;
     let items_per_cell = parse_field(
         "items_per_cell",
         &request.body.items_per_cell,

@@ -1,39 +1,76 @@
-//! Bearer-token authentication: the `Caller` extractor.
+//! Bearer-token authorization of the JSON API: [`require_scope`], the layer that
+//! [`super::openapi::api_router`] puts in front of every route the table marks
+//! [`Access::Bearer`](super::openapi::Access), and the [`Caller`] extractor through which
+//! handlers learn who passed it.
 
-use axum::extract::FromRequestParts;
-use axum::http::header;
+use axum::extract::{FromRequestParts, Request, State};
 use axum::http::request::Parts;
+use axum::http::{HeaderMap, header};
+use axum::middleware::Next;
+use axum::response::Response;
 
 use super::{AppError, AppState};
 use crate::app::tokens::{self, Caller};
+use crate::core::credentials::Scope;
 
-impl FromRequestParts<AppState> for Caller {
+/// What [`require_scope`] needs: the use cases, and the scope the route's table entry names.
+#[derive(Clone)]
+pub(super) struct ScopeGuard {
+    pub state: AppState,
+    pub scope: Scope,
+}
+
+/// Refuses a request without a live token holding the route's scope (401 or 403), before the
+/// handler reads anything; lets the rest through with their [`Caller`].
+pub(super) async fn require_scope(
+    State(guard): State<ScopeGuard>,
+    mut request: Request,
+    next: Next,
+) -> Result<Response, AppError> {
+    let token = bearer_token(request.headers())?.to_owned();
+    let caller = tokens::authorize(&guard.state.hub, &token, guard.scope).await?;
+    request.extensions_mut().insert(caller);
+    Ok(next.run(request).await)
+}
+
+/// The token of an `Authorization: Bearer TOKEN` header.
+fn bearer_token(headers: &HeaderMap) -> Result<&str, AppError> {
+    let header = headers
+        .get(header::AUTHORIZATION)
+        .ok_or_else(|| {
+            AppError::Unauthenticated(
+                "this endpoint needs an API token: send `Authorization: Bearer TOKEN`".to_owned(),
+            )
+        })?
+        .to_str()
+        .map_err(|_| {
+            AppError::Unauthenticated("the Authorization header is not text".to_owned())
+        })?;
+    header
+        .strip_prefix("Bearer ")
+        .or_else(|| header.strip_prefix("bearer "))
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .ok_or_else(|| {
+            AppError::Unauthenticated(
+                "the Authorization header must read `Bearer TOKEN`".to_owned(),
+            )
+        })
+}
+
+/// The caller [`require_scope`] let through. A handler that asks for one on a route the table
+/// calls public is a mistake in the table, answered with 500 (the authorization tests call
+/// every route).
+impl<S: Send + Sync> FromRequestParts<S> for Caller {
     type Rejection = AppError;
 
-    async fn from_request_parts(parts: &mut Parts, state: &AppState) -> Result<Self, AppError> {
-        let header = parts
-            .headers
-            .get(header::AUTHORIZATION)
-            .ok_or_else(|| {
-                AppError::Unauthenticated(
-                    "this endpoint needs an API token: send `Authorization: Bearer TOKEN`"
-                        .to_owned(),
-                )
-            })?
-            .to_str()
-            .map_err(|_| {
-                AppError::Unauthenticated("the Authorization header is not text".to_owned())
-            })?;
-        let token = header
-            .strip_prefix("Bearer ")
-            .or_else(|| header.strip_prefix("bearer "))
-            .map(str::trim)
-            .filter(|t| !t.is_empty())
-            .ok_or_else(|| {
-                AppError::Unauthenticated(
-                    "the Authorization header must read `Bearer TOKEN`".to_owned(),
-                )
-            })?;
-        tokens::authenticate(&state.hub, token).await
+    async fn from_request_parts(parts: &mut Parts, _: &S) -> Result<Self, AppError> {
+        parts.extensions.get::<Caller>().cloned().ok_or_else(|| {
+            AppError::internal(format!(
+                "{} {} reads its caller, but its route table entry asks for no token",
+                parts.method,
+                parts.uri.path()
+            ))
+        })
     }
 }

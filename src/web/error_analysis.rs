@@ -21,6 +21,7 @@ use super::session::LoggedIn;
 use super::{AppError, AppState};
 use crate::app::error_analysis::{self, Analysed, ComparedRow};
 use crate::app::tokens::Caller;
+use crate::core::credentials::Scope;
 use crate::core::error_analysis::chart::{self, BarChart};
 use crate::core::error_analysis::{
     ErrorExample, ErrorFigures, Hand, HandFigures, SemanticCategory, StructuralClass,
@@ -49,7 +50,7 @@ pub fn routes() -> Vec<ApiRoute> {
              predicted changes as sentences) only when the dataset's answers are public; \
              otherwise `examples_withheld` says why. Same JSON as `enact-hub errors --json`.",
         )
-        .bearer("read_own")
+        .bearer(Scope::ReadOwn)
         .responds_json::<AnalysisJson>(200, "The analysis.")
         .errors(&[401, 403, 404]),
         ApiRoute::new(

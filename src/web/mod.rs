@@ -2,13 +2,14 @@
 //! parse a request, call one use case of [`crate::app`] and render its result.
 //!
 //! `api` serves JSON under `/api/v1`, `pages` the HTML site, `assets` the embedded CSS and
-//! scripts; `auth` reads API tokens, `session` logs annotators in, `annotate` is their side of
-//! human annotation and `admin`, `admin_tokens` and `admin_audit` the admins';
+//! scripts; `auth` checks API tokens (before the handler, for every route whose table entry
+//! asks for one), `session` logs annotators in (and gates the admin pages), `annotate` is
+//! their side of human annotation and `admin`, `admin_tokens` and `admin_audit` the admins';
 //! `error_analysis` serves the error taxonomy as JSON and pages. Each page module exposes one
-//! `router()`; they are
-//! merged once in [`router`]. The JSON routes are one table instead ([`api_routes`]): the
-//! `/api/v1` router and the OpenAPI document (`openapi`) are both built from it. `extract`
-//! holds the extractors whose rejections are the JSON error body.
+//! `router()`; they are merged once in [`router`], the admin pages behind one gate
+//! ([`admin_pages`]). The JSON routes are one table instead ([`api_routes`]): the `/api/v1`
+//! router, its authorization and the OpenAPI document (`openapi`) are all built from it.
+//! `extract` holds the extractors whose rejections are the JSON error body.
 
 mod admin;
 mod admin_audit;
@@ -178,6 +179,21 @@ async fn security_headers(
     response
 }
 
+/// Every admin page, behind one gate ([`session::admin_only`]) that refuses anyone but a
+/// logged-in admin before a handler runs, so before a form is read.
+fn admin_pages(state: &AppState) -> Router<AppState> {
+    Router::new()
+        .merge(admin::router())
+        .merge(agreement::router())
+        .merge(admin_tokens::router())
+        .merge(admin_audit::router())
+        .merge(studies::admin_router())
+        .route_layer(axum::middleware::from_fn_with_state(
+            state.clone(),
+            session::admin_only,
+        ))
+}
+
 /// The whole application with its middleware; `frame_origin` is where frame requests may be
 /// redirected ([`crate::app::frames::redirect_origin`]).
 pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -> Router {
@@ -197,14 +213,14 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(error_analysis::page_router())
         .merge(session::router())
         .merge(annotate::router())
-        .merge(admin::router())
-        .merge(agreement::router())
-        .merge(admin_tokens::router())
-        .merge(admin_audit::router())
+        .merge(admin_pages(&state))
         .merge(studies::page_router())
         .merge(assets::router())
         .merge(openapi::page_router())
-        .nest(openapi::API_PREFIX, openapi::api_router(api_routes()))
+        .nest(
+            openapi::API_PREFIX,
+            openapi::api_router(api_routes(), &state),
+        )
         .with_state(state)
         .layer(axum::middleware::map_response(move |response| {
             security_headers(policy.clone(), response)

@@ -13,14 +13,17 @@ use axum::Json;
 use axum::Router;
 use axum::handler::Handler;
 use axum::http::Method;
+use axum::middleware::from_fn_with_state;
 use axum::response::Html;
 use axum::routing::{MethodFilter, MethodRouter, get, on};
 use schemars::generate::SchemaSettings;
 use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde_json::{Map, Value, json};
 
+use super::auth::{ScopeGuard, require_scope};
 use super::error::PageError;
 use super::{AppError, AppState};
+use crate::core::credentials::Scope;
 
 /// Where the table is mounted.
 pub const API_PREFIX: &str = "/api/v1";
@@ -72,8 +75,9 @@ impl Verb {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Access {
     Public,
-    /// `Authorization: Bearer TOKEN` with this scope.
-    Bearer(&'static str),
+    /// `Authorization: Bearer TOKEN` with this scope, checked by [`api_router`] before the
+    /// handler runs.
+    Bearer(Scope),
 }
 
 /// A query parameter or request header.
@@ -186,7 +190,7 @@ impl ApiRoute {
         self
     }
 
-    pub fn bearer(mut self, scope: &'static str) -> Self {
+    pub fn bearer(mut self, scope: Scope) -> Self {
         self.access = Access::Bearer(scope);
         self
     }
@@ -315,13 +319,28 @@ impl ApiRoute {
     }
 }
 
-/// The router of exactly the routes in `routes` (to be nested under [`API_PREFIX`]).
-pub fn api_router(routes: Vec<ApiRoute>) -> Router<AppState> {
+/// The router of exactly the routes in `routes` (to be nested under [`API_PREFIX`]), each
+/// behind the check its [`Access`] names.
+pub fn api_router(routes: Vec<ApiRoute>, state: &AppState) -> Router<AppState> {
     // Two methods on one path merge into one method router; a method given twice panics at
     // start-up, which the test suite would show.
     routes
         .into_iter()
-        .fold(Router::new(), |router, r| router.route(r.path, r.handler))
+        .fold(Router::new(), |router, r| {
+            let handler = match r.access {
+                Access::Public => r.handler,
+                // A layer runs before the handler's extractors, so a caller without the right
+                // hears 401 or 403 before any of the body is read, whatever the body holds.
+                Access::Bearer(scope) => r.handler.route_layer(from_fn_with_state(
+                    ScopeGuard {
+                        state: state.clone(),
+                        scope,
+                    },
+                    require_scope,
+                )),
+            };
+            router.route(r.path, handler)
+        })
         .fallback(unknown_route)
 }
 
@@ -413,7 +432,7 @@ fn operation_json(
         Access::Public => operation["security"] = json!([]),
         Access::Bearer(scope) => {
             operation["security"] = json!([{"bearer": []}]);
-            operation["x-scope"] = json!(scope);
+            operation["x-scope"] = json!(scope.as_str());
         }
     }
     if let Some(body) = &route.body {

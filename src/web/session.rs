@@ -7,6 +7,9 @@
 //! a hidden `csrf` field and scripts in the `X-CSRF-Token` header; [`Protected`] is the only way
 //! a handler gets a request body, so no state-changing handler can skip the check. The login
 //! and invite forms come before any session and use a double-submit cookie instead.
+//!
+//! The admin pages are all mounted behind [`admin_only`] (see [`super::router`]), which refuses
+//! anyone but a logged-in admin before the handler runs, so before a form is read.
 
 use std::collections::{HashMap, VecDeque};
 use std::net::{IpAddr, SocketAddr};
@@ -241,6 +244,9 @@ impl FromRequestParts<AppState> for LoggedIn {
         parts: &mut Parts,
         state: &AppState,
     ) -> Result<Self, Self::Rejection> {
+        if let Some(AdminSession(session)) = parts.extensions.get::<AdminSession>() {
+            return Ok(LoggedIn(session.clone()));
+        }
         let now = now_ms();
         let session = match cookie(&parts.headers, SESSION_COOKIE) {
             None => None,
@@ -301,6 +307,22 @@ impl FromRequestParts<AppState> for Admin {
             .into_response())
         }
     }
+}
+
+/// The session [`admin_only`] let through, for the handler behind it.
+#[derive(Clone)]
+struct AdminSession(Session);
+
+/// The gate in front of every admin page: refuses anyone but a logged-in admin (a redirect to
+/// the login form, 401 or 403, as [`Admin`] does) before the handler runs, whatever the request
+/// carries; lets admins through with their session.
+pub(super) async fn admin_only(
+    Admin(session): Admin,
+    mut request: Request,
+    next: axum::middleware::Next,
+) -> Response {
+    request.extensions_mut().insert(AdminSession(session));
+    next.run(request).await
 }
 
 /// A state-changing request: a logged-in session whose CSRF token matched, and the body. Form

@@ -13,7 +13,6 @@ use schemars::JsonSchema;
 use serde::Deserialize;
 use serde_json::json;
 
-use super::admin::require_admin;
 use super::agreement::fixed;
 use super::error::PageError;
 use super::extract::{Json, Path, Query};
@@ -41,7 +40,7 @@ pub fn routes() -> Vec<ApiRoute> {
                  by id, or by task, type and key frames where ids differ; a variant with no \
                  aligned item is refused. The response says how many aligned.",
             )
-            .bearer("admin")
+            .bearer(Scope::Admin)
             .body_json::<StudyRequest>(
                 "`name` (letters, digits, `.`, `_`, `-`), `baseline` (a dataset) and \
                  `variants`.",
@@ -53,7 +52,7 @@ pub fn routes() -> Vec<ApiRoute> {
             .errors(&[400, 401, 403, 409, 415, 422]),
         ApiRoute::new(Verb::Delete, "/admin/studies/{study}", delete_study, "Delete a study")
             .describe("The datasets and submissions stay.")
-            .bearer("admin")
+            .bearer(Scope::Admin)
             .responds(204, None, "Deleted.")
             .errors(&[401, 403, 404]),
         ApiRoute::new(Verb::Get, "/studies", list_studies, "List ablation studies")
@@ -120,6 +119,11 @@ pub fn page_router() -> Router<AppState> {
     Router::new()
         .route("/studies", get(studies_page))
         .route("/studies/{study}", get(study_page))
+}
+
+/// The admin's page (mounted behind the admin gate, [`super::admin_pages`]).
+pub fn admin_router() -> Router<AppState> {
+    Router::new()
         .route("/admin/studies", get(admin_page).post(admin_create))
         .route("/admin/studies/delete", post(admin_delete))
 }
@@ -129,33 +133,28 @@ pub fn page_router() -> Router<AppState> {
 #[serde(untagged)]
 enum VariantBody {
     Text(String),
-    Parts {
-        family: String,
-        label: String,
-        dataset: String,
-    },
+    Parts(VariantParts),
+}
+
+/// A variant given as its three parts. The type both reads and documents them, so the
+/// document's `additionalProperties: false` is exactly the refusal of unknown fields.
+#[derive(Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+struct VariantParts {
+    family: String,
+    label: String,
+    dataset: String,
 }
 
 /// Read by hand so that a wrong variant is told what a variant is (an untagged enum only says
 /// that nothing matched).
 impl<'de> Deserialize<'de> for VariantBody {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        #[derive(Deserialize)]
-        #[serde(deny_unknown_fields)]
-        struct Parts {
-            family: String,
-            label: String,
-            dataset: String,
-        }
         use serde::de::Error;
         match serde_json::Value::deserialize(d)? {
             serde_json::Value::String(text) => Ok(VariantBody::Text(text)),
-            object @ serde_json::Value::Object(_) => serde_json::from_value::<Parts>(object)
-                .map(|p| VariantBody::Parts {
-                    family: p.family,
-                    label: p.label,
-                    dataset: p.dataset,
-                })
+            object @ serde_json::Value::Object(_) => serde_json::from_value::<VariantParts>(object)
+                .map(VariantBody::Parts)
                 .map_err(|e| {
                     D::Error::custom(format!(
                         "a variant object has string fields `family`, `label` and `dataset` \
@@ -185,11 +184,7 @@ fn variant_specs(variants: &[VariantBody]) -> Result<Vec<VariantSpec>, AppError>
         .map(|(i, v)| {
             match v {
                 VariantBody::Text(text) => VariantSpec::parse(text),
-                VariantBody::Parts {
-                    family,
-                    label,
-                    dataset,
-                } => VariantSpec::new(family, label, dataset),
+                VariantBody::Parts(p) => VariantSpec::new(&p.family, &p.label, &p.dataset),
             }
             .map_err(|e| AppError::Invalid(format!("variants[{i}]: {e}")))
         })
@@ -201,7 +196,6 @@ async fn create_study(
     caller: Caller,
     Json(request): Json<StudyRequest>,
 ) -> Result<(StatusCode, Json<StudyView>), AppError> {
-    caller.require(Scope::Admin)?;
     let variants = variant_specs(&request.variants)?;
     let view = studies::create(
         &state.hub,
@@ -219,7 +213,6 @@ async fn delete_study(
     Path(name): Path<String>,
     caller: Caller,
 ) -> Result<StatusCode, AppError> {
-    caller.require(Scope::Admin)?;
     studies::delete(&state.hub, &caller.actor(), &name).await?;
     Ok(StatusCode::NO_CONTENT)
 }
@@ -590,7 +583,6 @@ async fn admin_create(
     State(state): State<AppState>,
     request: Protected<NewStudyForm>,
 ) -> Result<Html<String>, PageError> {
-    require_admin(&request.session)?;
     let form = &request.body;
     let mut variants = Vec::new();
     for (i, line) in form.variants.lines().enumerate() {
@@ -647,7 +639,6 @@ async fn admin_delete(
     State(state): State<AppState>,
     request: Protected<DeleteForm>,
 ) -> Result<Html<String>, PageError> {
-    require_admin(&request.session)?;
     let name = request.body.study.trim().to_owned();
     studies::delete(&state.hub, &request.session.actor(), &name).await?;
     render_admin(

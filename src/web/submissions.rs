@@ -39,7 +39,7 @@ pub fn routes() -> Vec<ApiRoute> {
              Every dataset item counts: unanswered items score 0. Each attempt (refused ones \
              too) counts against the token's daily and total quotas; admin tokens are exempt.",
         )
-        .bearer("submit")
+        .bearer(Scope::Submit)
         .query_with(
             "model",
             true,
@@ -76,7 +76,7 @@ pub fn routes() -> Vec<ApiRoute> {
                  verdicts (`items`) only to the owner (or an admin) and only if the dataset's \
                  answers are public; otherwise `items_withheld` says why.",
             )
-            .bearer("read_own")
+            .bearer(Scope::ReadOwn)
             .responds_json::<SubmissionView>(200, "The submission.")
             .errors(&[401, 403, 404]),
         ApiRoute::new(
@@ -86,7 +86,7 @@ pub fn routes() -> Vec<ApiRoute> {
             "Change a submission's leaderboard listing",
         )
         .describe("Mark a baseline, or hide, publish or withdraw a leaderboard row.")
-        .bearer("admin")
+        .bearer(Scope::Admin)
         .body_json::<ListingChange>(
             "`baseline` (bool) and/or `visibility`: `published`, `hidden` or `withdrawn`.",
             "{\"baseline\": true, \"visibility\": \"published\"}",
@@ -104,7 +104,7 @@ pub fn routes() -> Vec<ApiRoute> {
              submitters, and leaves ground truth out of the dataset archive; `public` shows \
              both.",
         )
-        .bearer("admin")
+        .bearer(Scope::Admin)
         .body_json::<AnswersChange>(
             "`{\"answers\": \"public\" | \"hidden\"}`.",
             "{\"answers\": \"public\"}",
@@ -116,7 +116,7 @@ pub fn routes() -> Vec<ApiRoute> {
                 "Creates the account if it is new, and a token for it. The token's secret is in \
                  this response only; the server keeps its SHA-256.",
             )
-            .bearer("admin")
+            .bearer(Scope::Admin)
             .body_json::<TokenRequest>(
                 "`name` (1 to 100 characters), `role` (`submitter`, the default, or `admin`), \
                  optional `daily_quota` and `total_quota` (else the server's defaults).",
@@ -126,12 +126,12 @@ pub fn routes() -> Vec<ApiRoute> {
             .errors(&[400, 401, 403, 409, 415, 422]),
         ApiRoute::new(Verb::Get, "/admin/tokens", list_tokens, "List API tokens")
             .describe("Every token with its account, role, scopes, quotas, creation, last use and revocation; never a secret.")
-            .bearer("admin")
+            .bearer(Scope::Admin)
             .responds_json::<Vec<TokenListing>>(200, "The tokens.")
             .errors(&[401, 403]),
         ApiRoute::new(Verb::Delete, "/admin/tokens/{token_id_or_prefix}", revoke_token, "Revoke an API token")
             .describe("Takes effect at once: the next request with the token gets 401.")
-            .bearer("admin")
+            .bearer(Scope::Admin)
             .responds(204, None, "Revoked.")
             .errors(&[401, 403, 404]),
     ]
@@ -350,7 +350,6 @@ async fn update_listing(
     caller: Caller,
     Json(change): Json<ListingChange>,
 ) -> Result<Json<SubmissionView>, AppError> {
-    caller.require(Scope::Admin)?;
     let row = submissions::update_listing(
         &state.hub,
         &caller.actor(),
@@ -380,7 +379,6 @@ async fn set_answers(
     caller: Caller,
     Json(change): Json<AnswersChange>,
 ) -> Result<Json<AnswersView>, AppError> {
-    caller.require(Scope::Admin)?;
     let dataset =
         datasets::set_answer_visibility(&state.hub, &caller.actor(), &dataset, change.answers)
             .await?;
@@ -429,7 +427,6 @@ async fn create_token(
     caller: Caller,
     Json(request): Json<TokenRequest>,
 ) -> Result<(StatusCode, Json<CreatedToken>), AppError> {
-    caller.require(Scope::Admin)?;
     let role = match request.role.as_deref() {
         None => Role::Submitter,
         Some(r) => parse_role(r)?,
@@ -452,11 +449,7 @@ pub(super) fn parse_role(text: &str) -> Result<Role, AppError> {
     })
 }
 
-async fn list_tokens(
-    State(state): State<AppState>,
-    caller: Caller,
-) -> Result<Json<Vec<TokenListing>>, AppError> {
-    caller.require(Scope::Admin)?;
+async fn list_tokens(State(state): State<AppState>) -> Result<Json<Vec<TokenListing>>, AppError> {
     Ok(Json(tokens::list(&state.hub).await?))
 }
 
@@ -465,7 +458,6 @@ async fn revoke_token(
     Path(which): Path<String>,
     caller: Caller,
 ) -> Result<StatusCode, AppError> {
-    caller.require(Scope::Admin)?;
     tokens::revoke(&state.hub, &caller.actor(), &which).await?;
     Ok(StatusCode::NO_CONTENT)
 }

@@ -4,7 +4,7 @@
 
 use enact_hub::app::{self, AppError, Hub};
 use enact_hub::core::agreement::protocol::ProtocolPlan;
-use enact_hub::core::credentials::{Role, random_token, token_hash};
+use enact_hub::core::credentials::{Role, Scope, random_token, token_hash};
 use enact_hub::core::submission::SubmissionMetadata;
 use enact_hub::store;
 use enact_hub::store::Pool;
@@ -234,7 +234,7 @@ async fn a_twin_request_that_stores_first_is_answered_as_a_repeat() {
     let (server, records) = spawn_app_with_release().await;
     let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
     let hub = Hub::from(server.pool.clone());
-    let caller = app::tokens::authenticate(&hub, &token)
+    let caller = app::tokens::authorize(&hub, &token, Scope::Submit)
         .await
         .expect("caller");
     let metadata = || SubmissionMetadata {

@@ -99,7 +99,7 @@ pub fn options(dataset: &str) -> ImportOptions {
         dataset: dataset.to_owned(),
         skip_invalid: false,
         replace: false,
-        progress: false,
+        progress: None,
         scene_graphs: None,
     }
 }

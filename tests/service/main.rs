@@ -24,6 +24,7 @@ mod helpers;
 mod hostile;
 mod import;
 mod instances;
+mod jobs;
 mod leaderboard;
 mod migrate_db;
 mod openapi;

@@ -252,3 +252,142 @@ async fn the_docs_page_renders_the_document_without_scripts_or_network() {
     assert!(html.contains("waiting will"));
     server.stop().await;
 }
+
+/// `schema` with its `$ref`s followed into the document's components.
+fn resolved<'a>(doc: &'a Value, mut schema: &'a Value) -> &'a Value {
+    while let Some(reference) = schema["$ref"].as_str() {
+        let name = reference.trim_start_matches("#/components/schemas/");
+        schema = &doc["components"]["schemas"][name];
+    }
+    schema
+}
+
+/// The schema an object in the body is read as: `schema` itself, or the branch of an
+/// `anyOf`/`oneOf` that describes objects.
+fn object_schema<'a>(doc: &'a Value, schema: &'a Value) -> Option<&'a Value> {
+    let schema = resolved(doc, schema);
+    if schema["type"] == "object" || schema["properties"].is_object() {
+        return Some(schema);
+    }
+    ["anyOf", "oneOf"]
+        .iter()
+        .filter_map(|k| schema[*k].as_array())
+        .flatten()
+        .find_map(|branch| object_schema(doc, branch))
+}
+
+/// The schema of what `step` (a property name or an array index) leads to from `schema`.
+fn child_schema<'a>(doc: &'a Value, schema: &'a Value, step: &str) -> Option<&'a Value> {
+    if let Some(object) = object_schema(doc, schema) {
+        return object["properties"].get(step);
+    }
+    let schema = resolved(doc, schema);
+    let array = std::iter::once(schema)
+        .chain(
+            ["anyOf", "oneOf"]
+                .iter()
+                .filter_map(|k| schema[*k].as_array())
+                .flatten()
+                .map(|b| resolved(doc, b)),
+        )
+        .find(|s| s["type"] == "array")?;
+    array.get("items")
+}
+
+/// The JSON pointer of every object in `value`, the root included.
+fn object_pointers(value: &Value, at: String, out: &mut Vec<String>) {
+    match value {
+        Value::Object(fields) => {
+            out.push(at.clone());
+            for (k, v) in fields {
+                object_pointers(v, format!("{at}/{k}"), out);
+            }
+        }
+        Value::Array(items) => {
+            for (i, v) in items.iter().enumerate() {
+                object_pointers(v, format!("{at}/{i}"), out);
+            }
+        }
+        _ => {}
+    }
+}
+
+/// `additionalProperties: false` in a request schema says the server refuses unknown fields
+/// there, and its absence that it ignores them: every object of every JSON body's example is
+/// sent with one unknown field added, and the refusal must match the schema both ways.
+#[tokio::test]
+async fn request_schemas_forbid_unknown_fields_exactly_where_the_server_refuses_them() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, admin) = token(&server, "root", Role::Admin).await;
+    let submission = submit_to(&server, "mini", "model=m", &admin, answers(&records, &[]))
+        .await
+        .id()
+        .to_string();
+    let (_, doc) = server.get_json("/api/v1/openapi.json").await;
+
+    let mut checked = 0;
+    let mut forbidding = 0;
+    for (path, item) in doc["paths"].as_object().expect("paths") {
+        for (method, operation) in item.as_object().expect("path item") {
+            let content = &operation["requestBody"]["content"]["application/json"];
+            if content.is_null() {
+                continue;
+            }
+            let example = &content["example"];
+            let mut pointers = Vec::new();
+            object_pointers(example, String::new(), &mut pointers);
+            assert!(
+                !pointers.is_empty(),
+                "{method} {path}: no object in the example"
+            );
+            for pointer in pointers {
+                let mut schema = &content["schema"];
+                for step in pointer.split('/').skip(1) {
+                    schema = child_schema(&doc, schema, step).unwrap_or_else(|| {
+                        panic!("{method} {path}: the schema does not describe {pointer}")
+                    });
+                }
+                let object = object_schema(&doc, schema)
+                    .unwrap_or_else(|| panic!("{method} {path}: {pointer} is no object schema"));
+                let forbids = object["additionalProperties"] == false;
+                let mut body = example.clone();
+                body.pointer_mut(&pointer)
+                    .and_then(Value::as_object_mut)
+                    .expect("an object")
+                    .insert("zz_not_a_field".to_owned(), json!(1));
+                let url = path
+                    .trim_start_matches("/api/v1")
+                    .replace("{dataset}", "mini")
+                    .replace("{id}", &submission);
+                let reply = server
+                    .call(
+                        Method::from_bytes(method.to_ascii_uppercase().as_bytes()).expect("verb"),
+                        &format!("/api/v1{url}"),
+                    )
+                    .bearer(&admin)
+                    .json(&body)
+                    .send()
+                    .await;
+                let refused = reply.status == 422 && reply.text.contains("zz_not_a_field");
+                assert_eq!(
+                    forbids,
+                    refused,
+                    "{method} {path} at {pointer:?}: the schema {} unknown fields, the server \
+                     answered {}: {}",
+                    if forbids { "forbids" } else { "allows" },
+                    reply.status,
+                    reply.text
+                );
+                checked += 1;
+                forbidding += usize::from(forbids);
+            }
+        }
+    }
+    // Four JSON bodies, one with variant objects inside; every one refuses unknown fields.
+    assert!(checked >= 5, "{checked} objects checked");
+    assert!(
+        forbidding >= 5,
+        "{forbidding} objects forbid unknown fields"
+    );
+    server.stop().await;
+}

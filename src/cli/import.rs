@@ -1,0 +1,176 @@
+//! `import`: an ENACT release into the database, with a progress bar on a terminal.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::Args;
+
+use super::{DbArg, frames, open, operator};
+use crate::app::import::{
+    ImportError, ImportObserver, ImportOptions, ImportProgress, ReleaseLocation, SkippedLine,
+    import_release,
+};
+
+#[derive(Args)]
+pub(super) struct ImportArgs {
+    /// Release folder holding QA/enact_ordering.jsonl, or a path to a .jsonl file in its QA/ folder.
+    data: PathBuf,
+    #[command(flatten)]
+    db: DbArg,
+    #[command(flatten)]
+    frames: frames::FramesArg,
+    /// Dataset to import into (default: the release folder's name).
+    #[arg(long)]
+    dataset: Option<String>,
+    /// Import the valid rows and report the invalid ones, instead of refusing the whole file.
+    #[arg(long)]
+    skip_invalid: bool,
+    /// Overwrite stored items whose content differs from the file.
+    #[arg(long)]
+    replace: bool,
+    /// ENACT's replayed_activities folder: compute transition signatures from
+    /// {task}/scene_graph_0.json for semantic scoring. Default: the release's own
+    /// replayed_activities/ beside QA/, when there is one.
+    #[arg(long, value_name = "REPLAYED_DIR")]
+    scene_graphs: Option<PathBuf>,
+    /// Do not read the release's replayed_activities/ even if it has one.
+    #[arg(long, conflicts_with = "scene_graphs")]
+    no_scene_graphs: bool,
+    /// Print the full report as JSON on standard output.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The dataset name `import` uses when none is given: the release folder's name.
+fn default_dataset_name(data: &Path) -> String {
+    let folder = if data.is_file() {
+        data.parent().and_then(Path::parent)
+    } else {
+        Some(data)
+    };
+    folder
+        .and_then(|f| std::fs::canonicalize(f).ok())
+        .and_then(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .filter(|n| !n.is_empty())
+        .unwrap_or_else(|| "enact".to_owned())
+}
+
+/// One line per rejected row: the row's first problems, and how many more it has.
+fn describe_line(line: &SkippedLine) -> String {
+    const SHOWN: usize = 3;
+    let mut s = format!("line {}", line.line);
+    if let Some(id) = &line.item_id {
+        s.push_str(&format!(" ({id})"));
+    }
+    s.push_str(": ");
+    let shown: Vec<String> = line
+        .problems
+        .iter()
+        .take(SHOWN)
+        .map(ToString::to_string)
+        .collect();
+    s.push_str(&shown.join("; "));
+    if line.problems.len() > SHOWN {
+        s.push_str(&format!(
+            " (+{} more problems)",
+            line.problems.len() - SHOWN
+        ));
+    }
+    s
+}
+
+pub(super) async fn import(args: ImportArgs) -> anyhow::Result<ExitCode> {
+    let dataset = args
+        .dataset
+        .clone()
+        .unwrap_or_else(|| default_dataset_name(&args.data));
+    let scene_graphs = match (&args.scene_graphs, args.no_scene_graphs) {
+        (Some(dir), _) => Some(dir.clone()),
+        (None, true) => None,
+        // ENACT's download layout: QA/ beside replayed_activities/ (and segmented_activities/).
+        (None, false) => ReleaseLocation::resolve(&args.data)
+            .ok()
+            .map(|location| location.root.join("replayed_activities"))
+            .filter(|dir| dir.is_dir())
+            .inspect(|dir| {
+                eprintln!(
+                    "scene graphs: {} (the release's own; --scene-graphs DIR overrides, \
+                     --no-scene-graphs skips)",
+                    dir.display()
+                );
+            }),
+    };
+    let hub = open(&args.db.db)
+        .await?
+        .with_frame_store(args.frames.store()?, None);
+    let options = ImportOptions {
+        dataset,
+        skip_invalid: args.skip_invalid,
+        replace: args.replace,
+        progress: std::io::stderr().is_terminal().then(progress_bar),
+        scene_graphs,
+    };
+    let result = import_release(&hub, &operator(), &args.data, &options).await;
+    if result.as_ref().is_ok_and(|r| r.new_frames > 0) {
+        hub.truncate_log().await;
+    }
+    hub.close().await;
+    match result {
+        Ok(report) => {
+            if !report.skipped.is_empty() {
+                eprintln!("skipped {} invalid rows:", report.skipped.len());
+                for line in &report.skipped {
+                    eprintln!("  {}", describe_line(line));
+                }
+            }
+            if args.json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            }
+            eprintln!("{}", report.summary_line());
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(ImportError::Invalid { file, rows, lines }) => {
+            for line in &lines {
+                eprintln!("{}", describe_line(line));
+            }
+            eprintln!(
+                "error: {file}: {} invalid rows of {rows}; nothing was imported \
+                 (fix them, or use --skip-invalid to import the {} valid rows)",
+                lines.len(),
+                rows - lines.len()
+            );
+            Ok(ExitCode::FAILURE)
+        }
+        Err(e) => {
+            for detail in e.details() {
+                eprintln!("{detail}");
+            }
+            eprintln!("error: {e}");
+            Ok(ExitCode::FAILURE)
+        }
+    }
+}
+
+/// A bar over the QA file's bytes; its message counts items and image bytes.
+fn progress_bar() -> ImportObserver {
+    let bar = indicatif::ProgressBar::new(0);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{msg:>32} [{bar:40}] {bytes}/{total_bytes} of QA file ({bytes_per_sec}, eta {eta})",
+    ) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    ImportObserver(std::sync::Arc::new(move |p: &ImportProgress| {
+        if p.finished {
+            bar.finish_and_clear();
+            return;
+        }
+        bar.set_length(p.qa_bytes);
+        bar.set_position(p.qa_bytes_read);
+        bar.set_message(format!(
+            "{} items, {} MB of images",
+            p.rows,
+            p.image_bytes / 1_000_000
+        ));
+    }))
+}

@@ -1,0 +1,174 @@
+//! `serve`: the web service, and the admin token it makes sure of at start.
+
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::Context;
+use clap::Args;
+
+use super::{DEFAULT_DB, MIB, describe_db, frames, resolve};
+use crate::app::cache::CacheLimits;
+use crate::app::{self, Hub, Quotas};
+use crate::web::{Server, WebConfig, shutdown_signal};
+
+#[derive(Args)]
+pub(super) struct ServeArgs {
+    /// SQLite database file (created if missing), or a PostgreSQL URL
+    /// (postgres://user:password@host/db; also ENACT_HUB_DATABASE_URL). With --demo and no
+    /// --db, a temporary SQLite database is used and removed at exit.
+    #[arg(long, visible_alias = "database-url", env = "ENACT_HUB_DB")]
+    db: Option<PathBuf>,
+    /// Address to listen on.
+    #[arg(long, env = "ENACT_HUB_ADDR", default_value = "127.0.0.1:8080")]
+    addr: SocketAddr,
+    #[command(flatten)]
+    frames: frames::FramesArg,
+    /// Answer requests for frames held in an object store that signs URLs (S3, GCS, Azure)
+    /// with a redirect to a URL valid this many seconds, instead of the bytes.
+    #[arg(long, value_name = "SECONDS")]
+    frame_redirect: Option<u64>,
+    /// Reverse proxies (addresses or networks, e.g. 10.0.0.0/8) whose X-Forwarded-For header
+    /// names the client, for the login rate limit; repeat or separate with commas. Without
+    /// one, every client behind a proxy counts as the proxy.
+    #[arg(
+        long = "trusted-proxy",
+        env = "ENACT_HUB_TRUSTED_PROXIES",
+        value_delimiter = ',',
+        value_name = "ADDRESS[/BITS]"
+    )]
+    trusted_proxies: Vec<crate::web::forwarded::TrustedProxy>,
+    /// Generate the built-in demo dataset at start and serve it (as dataset "demo").
+    #[arg(long)]
+    demo: bool,
+    /// Largest request body accepted, in bytes.
+    #[arg(long, default_value_t = WebConfig::default().body_limit)]
+    body_limit: usize,
+    /// Seconds a request may take before it is answered with 408.
+    #[arg(long, default_value_t = 30)]
+    request_timeout: u64,
+    /// Memory for caching frame images, in MiB.
+    #[arg(long, default_value_t = CacheLimits::default().frame_bytes / MIB)]
+    frame_cache_mib: u64,
+    /// Memory for caching items (their JSON and decoded form), in MiB.
+    #[arg(long, default_value_t = CacheLimits::default().item_bytes / MIB)]
+    item_cache_mib: u64,
+    /// Annotators' item standings kept in memory, in entries.
+    #[arg(long, default_value_t = CacheLimits::default().standing_entries)]
+    standing_cache_entries: u64,
+    /// Datasets whose scoring targets (every item's signatures) are kept in memory.
+    #[arg(long, default_value_t = CacheLimits::default().target_datasets)]
+    target_cache_datasets: u64,
+    /// Datasets whose leaderboard is kept built in memory.
+    #[arg(long, default_value_t = CacheLimits::default().board_datasets)]
+    board_cache_datasets: u64,
+    /// SQLite's page cache over all connections, in MiB.
+    #[arg(long, default_value_t = CacheLimits::default().db_page_cache_bytes / MIB)]
+    db_cache_mib: u64,
+    /// Largest submission body accepted, in bytes.
+    #[arg(long, default_value_t = WebConfig::default().submission_body_limit)]
+    submission_body_limit: usize,
+    /// Submissions a token may make per UTC day (rejected ones count too).
+    #[arg(long, default_value_t = Quotas::default().daily)]
+    daily_quota: i64,
+    /// Submissions a token may make in total (rejected ones count too).
+    #[arg(long, default_value_t = Quotas::default().total)]
+    total_quota: i64,
+}
+
+pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
+    // Held until the server stops: dropping it removes the temporary demo database.
+    let mut _temporary = None;
+    let db = match (&args.db, args.demo) {
+        (Some(db), _) => db.clone(),
+        (None, true) => {
+            let dir = tempfile::tempdir().context("cannot create a temporary directory")?;
+            let db = dir.path().join("demo.db");
+            _temporary = Some(dir);
+            db
+        }
+        (None, false) => resolve(Path::new(DEFAULT_DB)),
+    };
+    let limits = CacheLimits {
+        item_bytes: args.item_cache_mib * MIB,
+        standing_entries: args.standing_cache_entries,
+        target_datasets: args.target_cache_datasets,
+        board_datasets: args.board_cache_datasets,
+        frame_bytes: args.frame_cache_mib * MIB,
+        db_page_cache_bytes: args.db_cache_mib * MIB,
+    };
+    let frame_store = args.frames.store()?;
+    let hub = Hub::open_serving(&db, &limits)
+        .await?
+        .with_quotas(Quotas {
+            daily: args.daily_quota,
+            total: args.total_quota,
+        })
+        .with_frame_store(frame_store, args.frame_redirect.map(Duration::from_secs));
+    if args.demo {
+        app::demo::load(&hub).await?;
+    }
+    ensure_admin_token(&hub).await?;
+    let config = WebConfig {
+        body_limit: args.body_limit,
+        request_timeout: Duration::from_secs(args.request_timeout),
+        submission_body_limit: args.submission_body_limit,
+        trusted_proxies: args.trusted_proxies.clone(),
+    };
+    let server = Server::bind(args.addr, hub.clone(), &config)
+        .await
+        .with_context(|| format!("cannot listen on {}", args.addr))?;
+    let addr = server.local_addr()?;
+    tracing::info!(
+        %addr,
+        db = %describe_db(&db),
+        frames = hub.frame_store().describe(),
+        "enact-hub is listening on http://{addr}/"
+    );
+    if args.demo {
+        let link = app::demo::annotator_link(&hub)
+            .await
+            .map_err(anyhow::Error::from)?;
+        eprintln!("enact-hub is serving the demo on http://{addr}/");
+        eprintln!("annotate at once (a single-use login link for the demo admin):");
+        println!("http://{addr}/login/link/{link}");
+        if args.db.is_none() {
+            eprintln!("(the demo database is temporary; give --db FILE to keep it)");
+        }
+    }
+    let worker = app::jobs::Worker::spawn(
+        hub.clone(),
+        app::jobs::JobHandlers::serving(),
+        app::jobs::JobSettings::default(),
+    );
+    let served = server.run(shutdown_signal()).await;
+    // Jobs in progress let go of their leases, to be resumed at the next start (or at once by
+    // another instance).
+    worker.stop().await;
+    served?;
+    hub.close().await;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The admin token: ENACT_HUB_ADMIN_TOKEN if set (stored hashed on first sight), otherwise one
+/// generated at the first start and printed once on standard output.
+async fn ensure_admin_token(hub: &Hub) -> anyhow::Result<()> {
+    let operator = std::env::var("ENACT_HUB_ADMIN_TOKEN")
+        .ok()
+        .filter(|t| !t.is_empty());
+    match app::tokens::ensure_admin_token(hub, operator.as_deref()).await? {
+        app::tokens::AdminToken::Present => {}
+        app::tokens::AdminToken::StoredFromOperator(prefix) => {
+            tracing::info!(%prefix, "admin token from ENACT_HUB_ADMIN_TOKEN stored");
+        }
+        app::tokens::AdminToken::Generated(token) => {
+            eprintln!(
+                "created the admin API token (shown only this once; set ENACT_HUB_ADMIN_TOKEN to \
+                 choose your own):"
+            );
+            println!("{token}");
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,242 @@
+//! The job mechanism: claimed by one worker at a time, leases renewed and taken over when they
+//! run out, failures retried then failed, pause/resume/cancel, and a graceful stop that lets
+//! go at once. The jobs here are the tests' own code under the `rescore` kind.
+
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use enact_hub::app::jobs::{
+    JobContext, JobControl, JobHandlers, JobId, JobKind, JobSettings, JobState, Worker,
+};
+use enact_hub::app::{AppError, Hub, jobs};
+use enact_hub::core::audit::Actor;
+use enact_hub::store::Pool;
+use serde_json::json;
+use tempfile::TempDir;
+
+use crate::helpers::{db, fresh_db, tester};
+
+fn fast() -> JobSettings {
+    JobSettings {
+        lease: Duration::from_millis(600),
+        poll: Duration::from_millis(20),
+        max_running: 4,
+        max_attempts: 3,
+        retry_base: Duration::from_millis(50),
+    }
+}
+
+async fn enqueue(pool: &Pool, payload: serde_json::Value) -> JobId {
+    let mut tx = pool.begin().await.expect("a transaction");
+    let id = jobs::enqueue(&mut tx, JobKind::Rescore, &payload, &tester())
+        .await
+        .expect("enqueued");
+    tx.commit().await.expect("committed");
+    id
+}
+
+async fn wait_for(hub: &Hub, id: JobId, state: JobState) -> jobs::JobRow {
+    for _ in 0..500 {
+        let job = jobs::get(hub, id).await.expect("read").expect("the job");
+        if job.state == state {
+            return job;
+        }
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    let job = jobs::get(hub, id).await.expect("read").expect("the job");
+    panic!("{id} never became {state:?}; it is {job:?}");
+}
+
+/// Handlers under which each job counts its starts by owner-less key (its `n`), and does what
+/// its payload says: `"finish"`, `"fail"`, or `"wait"` until asked to stop.
+fn recording(starts: Arc<Mutex<BTreeMap<i64, u32>>>) -> JobHandlers {
+    JobHandlers::default().with(JobKind::Rescore, move |hub, job: Arc<JobContext>| {
+        let starts = Arc::clone(&starts);
+        Box::pin(async move {
+            let n = job.payload["n"].as_i64().unwrap_or(-1);
+            *starts.lock().expect("lock").entry(n).or_default() += 1;
+            match job.payload["do"].as_str() {
+                Some("fail") => Err(AppError::internal("told to fail")),
+                Some("wait") => {
+                    let why = job.stopped().await;
+                    job.progress(&hub, json!({"stopped": format!("{why:?}")}))
+                        .await?;
+                    Ok(())
+                }
+                _ => {
+                    job.progress(&hub, json!({"done": n})).await?;
+                    Ok(())
+                }
+            }
+        })
+    })
+}
+
+#[tokio::test]
+async fn a_job_runs_once_and_records_its_progress() {
+    let dir = TempDir::new().unwrap();
+    let pool = fresh_db(&dir).await;
+    let hub = Hub::from(pool.clone());
+    let starts = Arc::new(Mutex::new(BTreeMap::new()));
+    let worker = Worker::spawn(hub.clone(), recording(Arc::clone(&starts)), fast());
+    let id = enqueue(&pool, json!({"n": 1, "do": "finish"})).await;
+    let job = wait_for(&hub, id, JobState::Done).await;
+    assert_eq!(job.attempts, 1);
+    assert_eq!(job.progress.as_deref(), Some(r#"{"done":1}"#));
+    assert!(job.finished_at.is_some() && job.lease_owner.is_none());
+    worker.stop().await;
+    assert_eq!(starts.lock().unwrap().get(&1), Some(&1));
+}
+
+#[tokio::test]
+async fn two_workers_never_take_the_same_job() {
+    let dir = TempDir::new().unwrap();
+    let pool = fresh_db(&dir).await;
+    let hub = Hub::from(pool.clone());
+    let starts = Arc::new(Mutex::new(BTreeMap::new()));
+    let a = Worker::spawn(hub.clone(), recording(Arc::clone(&starts)), fast());
+    let b = Worker::spawn(hub.clone(), recording(Arc::clone(&starts)), fast());
+    let mut ids = Vec::new();
+    for n in 0..40 {
+        ids.push(enqueue(&pool, json!({"n": n, "do": "finish"})).await);
+    }
+    for id in ids {
+        wait_for(&hub, id, JobState::Done).await;
+    }
+    a.stop().await;
+    b.stop().await;
+    let starts = starts.lock().unwrap();
+    assert_eq!(starts.len(), 40);
+    assert!(starts.values().all(|&n| n == 1), "{starts:?}");
+}
+
+#[tokio::test]
+async fn a_failing_job_is_retried_then_failed_with_its_error() {
+    let dir = TempDir::new().unwrap();
+    let pool = fresh_db(&dir).await;
+    let hub = Hub::from(pool.clone());
+    let starts = Arc::new(Mutex::new(BTreeMap::new()));
+    let worker = Worker::spawn(hub.clone(), recording(Arc::clone(&starts)), fast());
+    let id = enqueue(&pool, json!({"n": 7, "do": "fail"})).await;
+    let job = wait_for(&hub, id, JobState::Failed).await;
+    worker.stop().await;
+    assert_eq!(job.attempts, 3);
+    assert_eq!(job.last_error.as_deref(), Some("told to fail"));
+    assert_eq!(starts.lock().unwrap().get(&7), Some(&3));
+}
+
+#[tokio::test]
+async fn a_dead_instances_job_is_taken_over_when_its_lease_runs_out() {
+    let dir = TempDir::new().unwrap();
+    let pool = fresh_db(&dir).await;
+    let hub = Hub::from(pool.clone());
+    let id = enqueue(&pool, json!({"n": 3, "do": "finish"})).await;
+    // An instance that claimed it and died: its lease runs out in 300 ms and is never renewed.
+    let until = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_millis() as i64
+        + 300;
+    db!(
+        pool,
+        execute,
+        sqlx::query(
+            "UPDATE jobs SET state = 'running', lease_owner = 'dead', lease_until_ms = $1, \
+             attempts = 1 WHERE id = $2"
+        )
+        .bind(until)
+        .bind(id.0)
+    )
+    .unwrap();
+    let starts = Arc::new(Mutex::new(BTreeMap::new()));
+    let worker = Worker::spawn(hub.clone(), recording(Arc::clone(&starts)), fast());
+    tokio::time::sleep(Duration::from_millis(150)).await;
+    assert!(
+        starts.lock().unwrap().is_empty(),
+        "taken before the lease ran out"
+    );
+    let job = wait_for(&hub, id, JobState::Done).await;
+    worker.stop().await;
+    assert_eq!(job.attempts, 2);
+    assert_eq!(starts.lock().unwrap().get(&3), Some(&1));
+}
+
+#[tokio::test]
+async fn paused_jobs_stop_and_resume_and_cancel_is_audited() {
+    let dir = TempDir::new().unwrap();
+    let pool = fresh_db(&dir).await;
+    let hub = Hub::from(pool.clone());
+    let starts = Arc::new(Mutex::new(BTreeMap::new()));
+    let worker = Worker::spawn(hub.clone(), recording(Arc::clone(&starts)), fast());
+    let admin = Actor::Operator("admin".into());
+    let id = enqueue(&pool, json!({"n": 5, "do": "wait"})).await;
+    wait_for(&hub, id, JobState::Running).await;
+    jobs::control(&hub, &admin, id, JobControl::Pause)
+        .await
+        .unwrap();
+    // The job's code saw the pause at its next lease renewal and stopped; the state stays.
+    for _ in 0..200 {
+        let job = jobs::get(&hub, id).await.unwrap().unwrap();
+        if job.lease_owner.is_none() {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    let job = jobs::get(&hub, id).await.unwrap().unwrap();
+    assert_eq!(job.state, JobState::Paused);
+    assert_eq!(job.progress.as_deref(), Some(r#"{"stopped":"Paused"}"#));
+    let refused = jobs::control(&hub, &admin, id, JobControl::Pause).await;
+    assert!(
+        matches!(&refused, Err(AppError::Conflict(m)) if m.contains("is paused")),
+        "{refused:?}"
+    );
+    jobs::control(&hub, &admin, id, JobControl::Resume)
+        .await
+        .unwrap();
+    wait_for(&hub, id, JobState::Running).await;
+    assert_eq!(starts.lock().unwrap().get(&5), Some(&2));
+    jobs::control(&hub, &admin, id, JobControl::Cancel)
+        .await
+        .unwrap();
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let job = wait_for(&hub, id, JobState::Cancelled).await;
+    assert!(job.finished_at.is_some());
+    worker.stop().await;
+    let actions = enact_hub::app::audit::list(
+        &hub,
+        enact_hub::core::audit::AuditFilter {
+            action: Some("job".into()),
+            limit: 100,
+            ..Default::default()
+        },
+    )
+    .await
+    .unwrap();
+    let actions: Vec<&str> = actions.iter().map(|e| e.action.as_str()).collect();
+    assert_eq!(actions, ["job.cancel", "job.resume", "job.pause"]);
+}
+
+#[tokio::test]
+async fn a_graceful_stop_lets_go_at_once_for_the_next_instance() {
+    let dir = TempDir::new().unwrap();
+    let pool = fresh_db(&dir).await;
+    let hub = Hub::from(pool.clone());
+    let starts = Arc::new(Mutex::new(BTreeMap::new()));
+    let slow = JobSettings {
+        lease: Duration::from_secs(60),
+        ..fast()
+    };
+    let first = Worker::spawn(hub.clone(), recording(Arc::clone(&starts)), slow);
+    let id = enqueue(&pool, json!({"n": 9, "do": "wait"})).await;
+    wait_for(&hub, id, JobState::Running).await;
+    first.stop().await;
+    let job = jobs::get(&hub, id).await.unwrap().unwrap();
+    assert_eq!(job.state, JobState::Queued);
+    assert!(job.lease_owner.is_none());
+    // The next instance takes it at once, not 60 s later when the lease would have run out.
+    let second = Worker::spawn(hub.clone(), recording(Arc::clone(&starts)), slow);
+    wait_for(&hub, id, JobState::Running).await;
+    assert_eq!(starts.lock().unwrap().get(&9), Some(&2));
+    second.stop().await;
+}
