@@ -267,32 +267,27 @@ pub async fn of_file(
 ) -> Result<ErrorAnalysis, ScoreFileError> {
     let targets = scoring::targets(&against, progress).await?;
     progress(ScoringStep::Scoring);
-    let analysed = tokio::task::spawn_blocking(move || analyse_file(&targets, &text))
+    let analysis = tokio::task::spawn_blocking(move || analyse_file(&targets, &text))
         .await
-        .map_err(AppError::from)?;
+        .map_err(AppError::from)??;
     progress(ScoringStep::Finished);
-    match analysed {
-        Ok(Ok(analysis)) => Ok(analysis),
-        Ok(Err(problems)) => Err(ScoreFileError::FileProblems(problems)),
-        Err(e) => Err(ScoreFileError::Unscorable(e)),
-    }
+    Ok(analysis)
 }
 
 /// A prediction file analysed against `targets` (strict reading, every item counts).
-/// `Ok(Err(lines))` when the file has problems, one message per problem. Blocking.
+/// [`ScoreFileError::FileProblems`] when the file has problems, one message per problem.
+/// Blocking.
 pub fn analyse_file(
     targets: &[ScoringTarget],
     text: &str,
-) -> Result<Result<ErrorAnalysis, Vec<String>>, String> {
+) -> Result<ErrorAnalysis, ScoreFileError> {
     let items: Vec<_> = targets.iter().map(ScoringTarget::strict_item).collect();
-    let scoring =
-        score_strict_predictions(&items, python_text_lines(text)).map_err(|e| e.to_string())?;
+    let scoring = score_strict_predictions(&items, python_text_lines(text))
+        .map_err(|e| ScoreFileError::Unscorable(e.to_string()))?;
     if !scoring.problems.is_empty() {
-        return Ok(Err(scoring
-            .problems
-            .iter()
-            .map(|p| p.to_string())
-            .collect()));
+        return Err(ScoreFileError::FileProblems(
+            scoring.problems.iter().map(|p| p.to_string()).collect(),
+        ));
     }
-    Ok(Ok(analyse_strict(&items, &scoring)))
+    Ok(analyse_strict(&items, &scoring))
 }
