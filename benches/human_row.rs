@@ -55,7 +55,6 @@ async fn setup() -> Setup {
             &format!("invite-{annotator}"),
         )
         .await
-        .expect("insert")
         .expect("a new name");
         for item in items.iter().take(ANSWERS - answered) {
             let mut labels: Vec<u8> = (1..=item.step_length.actions() as u8).collect();

@@ -459,8 +459,7 @@ async fn annotation_saves_and_answers_acknowledged_before_a_kill_survive_it() {
             &token_hash(&random_token()),
         )
         .await
-        .expect("insert")
-        .expect("new");
+        .expect("insert");
         sqlx::query("UPDATE annotators SET password_hash = ?, invite_hash = NULL WHERE id = ?")
             .bind(hash_password("a long enough password").expect("hash"))
             .bind(annotator)
@@ -475,6 +474,8 @@ async fn annotation_saves_and_answers_acknowledged_before_a_kill_survive_it() {
         let rows = store::annotations::item_rowids(&mut conn, dataset.id, &ids)
             .await
             .expect("query")
+            .into_iter()
+            .collect::<Option<Vec<i64>>>()
             .expect("known");
         let pairs: Vec<(i64, i64)> = rows.into_iter().map(|r| (annotator, r)).collect();
         store::annotations::assign(&mut conn, &pairs)

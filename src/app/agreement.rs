@@ -14,6 +14,7 @@ use crate::core::bundle::BundleFile;
 use crate::store;
 use crate::store::agreement::AgreementRound;
 use crate::store::datasets::Dataset;
+use crate::store::db::UniqueKey;
 
 /// Why the protocol did not run on a dataset.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -33,7 +34,7 @@ impl ProtocolRefusal {
         let message = format!("dataset '{dataset}': {self}");
         match self {
             ProtocolRefusal::AlreadyRan(_) => AppError::Conflict(message),
-            ProtocolRefusal::Plan(_) => AppError::BadRequest(message),
+            ProtocolRefusal::Plan(_) => AppError::Invalid(message),
         }
     }
 }
@@ -67,12 +68,21 @@ pub async fn run_protocol(
     let annotators = store::agreement::primary_annotators(&mut tx, dataset.id).await?;
     let plan = plan_cross_assignments(&answers, &annotators, items_per_cell, seed)
         .map_err(|e| ProtocolRefusal::from(e).into_error(&dataset.name))?;
-    let added = match store::agreement::record_round(&mut tx, dataset.id, &plan, started_by).await?
-    {
+    let added = match store::agreement::insert_round(&mut tx, dataset.id, &plan, started_by).await {
         Ok(added) => added,
-        Err(existing) => {
+        // The round was read above inside this write transaction, and write transactions are
+        // serialised on both databases, so this is a second line of defence: a run that got
+        // there first anyway is reported as the run it was. The failed statement ends a
+        // PostgreSQL transaction, so the round is read after rolling back.
+        Err(e) if UniqueKey::AGREEMENT_ROUND.is_violated_by(&e) => {
+            tx.rollback().await?;
+            let mut conn = hub.conn().await?;
+            let existing = store::agreement::round(&mut conn, dataset.id)
+                .await?
+                .ok_or_else(|| AppError::internal(e))?;
             return Err(ProtocolRefusal::AlreadyRan(existing).into_error(&dataset.name));
         }
+        Err(e) => return Err(e.into()),
     };
     audit::record(
         &mut tx,
@@ -127,9 +137,8 @@ pub async fn agreement(
     let answers = store::agreement::annotator_answers(&mut conn, dataset.id).await?;
     drop(conn);
     let (hash, _) = dataset_hash(hub, &dataset).await?;
-    let unavailable = |e: &dyn std::fmt::Display| {
-        AppError::BadRequest(format!("dataset '{}': {e}", dataset.name))
-    };
+    let unavailable =
+        |e: &dyn std::fmt::Display| AppError::Invalid(format!("dataset '{}': {e}", dataset.name));
     let overlap = overlapping_answers(&answers).map_err(|e| unavailable(&e))?;
     let section = tokio::task::spawn_blocking(move || {
         agreement_section(
@@ -213,7 +222,7 @@ pub async fn report(
         .map_err(|e| match e {
             // The reader's choices: a submission id or a level that does not apply.
             ReportError::UnknownSubmission(_) | ReportError::Agreement(_) => {
-                AppError::BadRequest(format!("dataset '{}': {e}", dataset.name))
+                AppError::Invalid(format!("dataset '{}': {e}", dataset.name))
             }
             // Stored answers the verifier or the test cannot use: our side.
             ReportError::Unscorable { .. } | ReportError::Comparison { .. } => {
@@ -288,7 +297,7 @@ pub fn of_file(
     bootstrap: Option<&BootstrapConfig>,
 ) -> Result<FileAgreement, AppError> {
     use crate::core::agreement::{PreparedAlpha, UnitItems, read_reliability_json};
-    let refused = |e: &dyn std::fmt::Display| AppError::BadRequest(e.to_string());
+    let refused = |e: &dyn std::fmt::Display| AppError::Invalid(e.to_string());
     let data = read_reliability_json(input).map_err(|e| refused(&e))?;
     let prepared = PreparedAlpha::with_items(&data, level, &UnitItems::one_per_unit(data.units()))
         .map_err(|e| refused(&e))?;

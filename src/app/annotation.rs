@@ -11,7 +11,8 @@ use super::annotators::now_ms;
 use super::changes::Change;
 use super::{AppError, Hub, audit, datasets};
 use crate::core::annotation::{
-    AssignmentState, Draft, Outcome, QueueEntry, Session, Telemetry, balanced_split, next_in_queue,
+    AssignmentState, Draft, Outcome, QueueEntry, QueueStatus, Session, Telemetry, balanced_split,
+    next_in_queue,
 };
 use crate::core::audit::{Actor, AuditAction};
 use crate::store;
@@ -58,14 +59,14 @@ pub async fn assign(
         Assignment::List { annotator, .. } => std::slice::from_ref(annotator),
     };
     if let Some(unknown) = chosen.iter().find(|a| !names.contains_key(a)) {
-        return Err(AppError::BadRequest(format!(
+        return Err(AppError::Invalid(format!(
             "annotator: no annotator has id {unknown}"
         )));
     }
     let pairs = match how {
         Assignment::Split(annotators) => {
             if annotators.is_empty() {
-                return Err(AppError::BadRequest(
+                return Err(AppError::Invalid(
                     "choose at least one annotator to split the dataset over".to_owned(),
                 ));
             }
@@ -77,20 +78,28 @@ pub async fn assign(
             item_ids,
         } => {
             if item_ids.is_empty() {
-                return Err(AppError::BadRequest(
+                return Err(AppError::Invalid(
                     "items: give at least one item id".to_owned(),
                 ));
             }
-            match store::annotations::item_rowids(&mut conn, dataset.id, item_ids).await? {
-                Ok(rows) => rows.into_iter().map(|r| (*annotator, r)).collect(),
-                Err(missing) => {
-                    return Err(AppError::BadRequest(format!(
-                        "items: not in dataset '{}': {}",
-                        dataset.name,
-                        missing.join(", ")
-                    )));
-                }
+            let rows = store::annotations::item_rowids(&mut conn, dataset.id, item_ids).await?;
+            let missing: Vec<&str> = item_ids
+                .iter()
+                .zip(&rows)
+                .filter(|(_, row)| row.is_none())
+                .map(|(id, _)| id.as_str())
+                .collect();
+            if !missing.is_empty() {
+                return Err(AppError::Invalid(format!(
+                    "items: not in dataset '{}': {}",
+                    dataset.name,
+                    missing.join(", ")
+                )));
             }
+            rows.into_iter()
+                .flatten()
+                .map(|r| (*annotator, r))
+                .collect()
         }
     };
     drop(conn);
@@ -120,7 +129,17 @@ pub async fn assign(
 /// An annotator's assigned items in queue order, with where each stands.
 pub async fn queue(hub: &Hub, annotator: i64) -> Result<Vec<QueueEntry>, AppError> {
     let mut conn = hub.conn().await?;
-    Ok(store::annotations::queue(&mut conn, annotator).await?)
+    let rows = store::annotations::queue(&mut conn, annotator).await?;
+    Ok(rows
+        .into_iter()
+        .map(|r| QueueEntry {
+            dataset: r.dataset,
+            item_id: r.item_id,
+            direction: r.direction,
+            step_length: r.step_length,
+            status: QueueStatus::of(r.finished, r.started),
+        })
+        .collect())
 }
 
 /// The item an annotator should work on next: one already started, else the first to do.
@@ -154,7 +173,7 @@ async fn assigned(
     let read = store::annotations::assignment_state(&mut conn, session.annotator, item.rowid)
         .await?
         .ok_or_else(|| {
-            AppError::Forbidden(format!(
+            AppError::NotPermitted(format!(
                 "item '{item_id}' of dataset '{dataset}' is not assigned to you"
             ))
         })?;
@@ -186,20 +205,30 @@ pub async fn open(
         (false, None) => {
             // Ordered with a finish made on another instance, as `save_draft` is.
             let mut tx = hub.begin().await?;
-            let opened = store::annotations::open_draft(
-                &mut tx,
-                session.annotator,
-                item.rowid,
-                &Draft::empty(item.summary.step_length),
-                now_ms(),
-            )
-            .await?;
+            // A draft made meanwhile (another tab, another instance) is the one to open.
+            let opened =
+                match store::annotations::draft(&mut tx, session.annotator, item.rowid).await? {
+                    Some(found) => Some(found.draft),
+                    None => {
+                        let empty = Draft::empty(item.summary.step_length);
+                        let created = store::annotations::create_draft(
+                            &mut tx,
+                            session.annotator,
+                            item.rowid,
+                            &empty,
+                            now_ms(),
+                        )
+                        .await?;
+                        // Not created: finished meanwhile (the standing read was older than the
+                        // answer), which leaves no draft.
+                        created.then_some(empty)
+                    }
+                };
             hub.publish(&mut tx, &standing_changed(session, &item))
                 .await?;
             tx.commit().await?;
             hub.standings.forget(session.annotator, item.rowid);
-            // None: finished meanwhile (the standing read was older than the answer).
-            opened.map(|o| o.draft)
+            opened
         }
     };
     Ok(AssignedItem {
@@ -232,7 +261,7 @@ fn finished_already(item_id: &str) -> AppError {
 fn checked(item: &StoredItem, draft: &Draft) -> Result<(), AppError> {
     draft
         .check(item.summary.step_length)
-        .map_err(|e| AppError::BadRequest(format!("draft of item '{}': {e}", item.summary.item_id)))
+        .map_err(|e| AppError::Invalid(format!("draft of item '{}': {e}", item.summary.item_id)))
 }
 
 /// Saves the annotator's draft of an unfinished item.
@@ -279,7 +308,7 @@ pub async fn answer(
             .filter(|(_, s)| s.is_none())
             .map(|(i, _)| (i + 1).to_string())
             .collect();
-        return Err(AppError::BadRequest(format!(
+        return Err(AppError::Invalid(format!(
             "item '{item_id}': slots {} are empty; fill every slot before submitting",
             empty.join(", ")
         )));
@@ -371,13 +400,13 @@ pub async fn skip(
     let item = unfinished(hub, session, dataset, item_id).await?;
     let reason = reason.trim().to_owned();
     if reason.is_empty() {
-        return Err(AppError::BadRequest(format!(
+        return Err(AppError::Invalid(format!(
             "to {} item '{item_id}', say why in the reason field",
             if action == "flag" { "flag" } else { "skip" }
         )));
     }
     if reason.chars().count() > 2000 {
-        return Err(AppError::BadRequest(
+        return Err(AppError::Invalid(
             "the reason is over 2000 characters".to_owned(),
         ));
     }
@@ -385,7 +414,7 @@ pub async fn skip(
         "skip" => Outcome::Skipped(reason),
         "flag" => Outcome::Flagged(reason),
         other => {
-            return Err(AppError::BadRequest(format!(
+            return Err(AppError::Invalid(format!(
                 "form field `action` is {other:?}; expected \"skip\" or \"flag\""
             )));
         }

@@ -12,6 +12,7 @@ use crate::core::credentials::{
 };
 use crate::store;
 use crate::store::annotations::Annotator;
+use crate::store::db::UniqueKey;
 
 /// How long a login lasts.
 pub const SESSION_LIFETIME: Duration = Duration::from_secs(12 * 3600);
@@ -44,15 +45,17 @@ pub async fn create(
     name: &str,
     is_admin: bool,
 ) -> Result<Invited, AppError> {
-    let name = credentials::annotator_name(name).map_err(AppError::BadRequest)?;
+    let name = credentials::annotator_name(name).map_err(AppError::Invalid)?;
     let token = random_token();
     let mut tx = hub.begin().await?;
-    let created =
-        store::annotations::create_annotator(&mut tx, name, is_admin, &token_hash(&token)).await?;
-    if created.is_none() {
-        return Err(AppError::Conflict(format!(
-            "an annotator named '{name}' already exists"
-        )));
+    match store::annotations::create_annotator(&mut tx, name, is_admin, &token_hash(&token)).await {
+        Ok(_) => {}
+        Err(e) if UniqueKey::ANNOTATOR_NAME.is_violated_by(&e) => {
+            return Err(AppError::Conflict(format!(
+                "an annotator named '{name}' already exists"
+            )));
+        }
+        Err(e) => return Err(e.into()),
     }
     audit::record(
         &mut tx,
@@ -98,10 +101,10 @@ pub async fn accept_invite(
     repeat: &str,
 ) -> Result<i64, AppError> {
     if password != repeat {
-        return Err(AppError::BadRequest("the two passwords differ".to_owned()));
+        return Err(AppError::Invalid("the two passwords differ".to_owned()));
     }
     if let Some(problem) = password_problem(password) {
-        return Err(AppError::BadRequest(problem));
+        return Err(AppError::Invalid(problem));
     }
     let password = password.to_owned();
     let hash = tokio::task::spawn_blocking(move || hash_password(&password))

@@ -39,7 +39,7 @@ pub async fn of_dataset(hub: &Hub, dataset: &str) -> Result<Vec<AuditEntry>, App
 /// Entries matching `filter`, newest first; a filter value that cannot match is refused with
 /// the field it is in.
 pub async fn list(hub: &Hub, filter: AuditFilter) -> Result<Vec<AuditEntry>, AppError> {
-    let filter = filter.checked().map_err(AppError::BadRequest)?;
+    let filter = filter.checked().map_err(AppError::Invalid)?;
     let mut conn = hub.conn().await?;
     Ok(store::audit::list(&mut conn, &filter).await?)
 }

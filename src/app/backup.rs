@@ -181,7 +181,7 @@ async fn restore_into_database(
     snapshot: Snapshot,
 ) -> Result<Snapshot, AppError> {
     if replace {
-        return Err(AppError::BadRequest(
+        return Err(AppError::Invalid(
             "--replace moves a SQLite file aside; a PostgreSQL restore goes into an empty \
              database: create one (createdb) and restore into it"
                 .into(),

@@ -1,39 +1,45 @@
-//! What a use case can refuse, and why, in words a person can act on. The web maps each kind
-//! to a status code (`web::error`); the command line prints the message and exits non-zero.
-//! Everything unexpected is `Internal`: its details go to the log, never to the client.
+//! What a use case can refuse, and why, in words a person can act on. The variants say what
+//! went wrong in the application's terms; the web maps each to a status code in one place
+//! (`web::error`), the command line prints the message and exits non-zero. Everything
+//! unexpected is `Internal`: its details go to the log, never to the client.
 
 use crate::core::submission::LineProblem;
 
 #[derive(Debug, thiserror::Error)]
 pub enum AppError {
+    /// What was asked for does not exist (or is not this caller's to see).
     #[error("{0}")]
     NotFound(String),
+    /// The request's input is malformed or out of range: a field, a parameter, a name.
     #[error("{0}")]
-    BadRequest(String),
+    Invalid(String),
     /// No valid bearer token (missing, unknown or revoked), or no login session.
     #[error("{0}")]
-    Unauthorized(String),
-    /// A token without the scope the request needs, or a page or item that is not this
-    /// annotator's (or a wrong CSRF token).
+    Unauthenticated(String),
+    /// The caller is known but may not do this: a token without the scope the request needs,
+    /// a page or item that is not this annotator's, or a wrong CSRF token.
     #[error("{0}")]
-    Forbidden(String),
+    NotPermitted(String),
+    /// The request contradicts what is stored: a name in use, a finished item, a protocol
+    /// that already ran, an idempotency key used with another body.
     #[error("{0}")]
     Conflict(String),
+    /// The input is larger than the limit for it.
     #[error("{0}")]
-    PayloadTooLarge(String),
-    /// A body in a format the route does not take.
+    TooLarge(String),
+    /// The input is in a format this use case does not take.
     #[error("{0}")]
-    UnsupportedMediaType(String),
-    /// The body was read but refused; `problems` says where.
+    UnsupportedFormat(String),
+    /// The input was read but refused as a whole; `problems` says where.
     #[error("{message}")]
-    Unprocessable {
+    Rejected {
         message: String,
         problems: Vec<LineProblem>,
     },
-    /// A quota or rate limit. `retry_after` is set only when waiting helps: a used-up total
-    /// quota never refills, so it sends no `Retry-After`.
+    /// A quota or rate limit is used up. `retry_after` (seconds) is set only when waiting
+    /// helps: a used-up total quota never refills.
     #[error("{message}")]
-    TooManyRequests {
+    LimitReached {
         message: String,
         retry_after: Option<u64>,
     },
@@ -58,7 +64,7 @@ impl From<sqlx::Error> for AppError {
         // input's fault, not the server's.
         if let sqlx::Error::Database(db) = &e {
             if db.code().as_deref() == Some("22021") {
-                return AppError::BadRequest(
+                return AppError::Invalid(
                     "text with a NUL character (\\u0000) cannot be stored or looked up".into(),
                 );
             }

@@ -19,6 +19,7 @@ use crate::core::error_analysis::{
 };
 use crate::core::leaderboard::RowSource;
 use crate::core::scoring::ScoringTarget;
+use crate::core::submission::VerdictOutcome;
 use crate::core::verifier::{
     Permutation, StrictParseFailure, parse_answer_strict, parse_python_json, python_text_lines,
     score_strict_predictions,
@@ -62,15 +63,15 @@ fn stored_reading(
     let corrupt = |what: &str, e: &dyn std::fmt::Display| {
         format!("item {}: stored {what} is unreadable: {e}", verdict.id)
     };
-    match verdict.outcome.as_str() {
-        "scored" => {
+    match verdict.outcome {
+        VerdictOutcome::Scored => {
             let text = verdict.permutation.as_deref().unwrap_or_default();
             let p: Permutation =
                 serde_json::from_str(text).map_err(|e| corrupt("permutation", &e))?;
             Ok((Some(p), Reading::Missing))
         }
-        "missing" => Ok((None, Reading::Missing)),
-        _ => {
+        VerdictOutcome::Missing => Ok((None, Reading::Missing)),
+        VerdictOutcome::Unparseable => {
             let raw = verdict.raw_answer.as_deref().unwrap_or("null");
             let value = parse_python_json(raw).map_err(|e| corrupt("answer", &e))?;
             Ok(match parse_answer_strict(Some(&value), actions) {
@@ -266,32 +267,27 @@ pub async fn of_file(
 ) -> Result<ErrorAnalysis, ScoreFileError> {
     let targets = scoring::targets(&against, progress).await?;
     progress(ScoringStep::Scoring);
-    let analysed = tokio::task::spawn_blocking(move || analyse_file(&targets, &text))
+    let analysis = tokio::task::spawn_blocking(move || analyse_file(&targets, &text))
         .await
-        .map_err(AppError::from)?;
+        .map_err(AppError::from)??;
     progress(ScoringStep::Finished);
-    match analysed {
-        Ok(Ok(analysis)) => Ok(analysis),
-        Ok(Err(problems)) => Err(ScoreFileError::FileProblems(problems)),
-        Err(e) => Err(ScoreFileError::Unscorable(e)),
-    }
+    Ok(analysis)
 }
 
 /// A prediction file analysed against `targets` (strict reading, every item counts).
-/// `Ok(Err(lines))` when the file has problems, one message per problem. Blocking.
+/// [`ScoreFileError::FileProblems`] when the file has problems, one message per problem.
+/// Blocking.
 pub fn analyse_file(
     targets: &[ScoringTarget],
     text: &str,
-) -> Result<Result<ErrorAnalysis, Vec<String>>, String> {
+) -> Result<ErrorAnalysis, ScoreFileError> {
     let items: Vec<_> = targets.iter().map(ScoringTarget::strict_item).collect();
-    let scoring =
-        score_strict_predictions(&items, python_text_lines(text)).map_err(|e| e.to_string())?;
+    let scoring = score_strict_predictions(&items, python_text_lines(text))
+        .map_err(|e| ScoreFileError::Unscorable(e.to_string()))?;
     if !scoring.problems.is_empty() {
-        return Ok(Err(scoring
-            .problems
-            .iter()
-            .map(|p| p.to_string())
-            .collect()));
+        return Err(ScoreFileError::FileProblems(
+            scoring.problems.iter().map(|p| p.to_string()).collect(),
+        ));
     }
-    Ok(Ok(analyse_strict(&items, &scoring)))
+    Ok(analyse_strict(&items, &scoring))
 }

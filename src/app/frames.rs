@@ -67,7 +67,7 @@ impl FrameStore {
             return Ok(FrameStore::Database);
         }
         let bad = |why: String| {
-            AppError::BadRequest(format!(
+            AppError::Invalid(format!(
                 "--frames {spec:?}: {why} (expected `database`, s3://bucket/prefix, \
                  gs://bucket/prefix, az://container/prefix or file:///dir)"
             ))
@@ -363,7 +363,7 @@ pub async fn migrate(
     // Another object store to read the frames held outside the database from.
     let source = from.objects().filter(|_| from.describe() != to.describe());
     if to.objects().is_none() && elsewhere > 0 && source.is_none() {
-        return Err(AppError::BadRequest(format!(
+        return Err(AppError::Invalid(format!(
             "{elsewhere} frames are held in object storage; name where with --from URL"
         )));
     }
@@ -393,7 +393,7 @@ pub async fn migrate(
                 } else if let Some(source) = source {
                     copies.push((sha256.clone(), source.get_checked(sha256).await?));
                 } else {
-                    return Err(AppError::BadRequest(format!(
+                    return Err(AppError::Invalid(format!(
                         "frame {sha256} is held in object storage but not in {}; name where \
                          the frames are with --from URL",
                         target.url

@@ -766,8 +766,7 @@ async fn store_semantics(
             item_id: item_id.to_owned(),
             message: e.to_string(),
         })?;
-    store::items::set_semantics(conn, dataset_id, item_id, semantics.source.as_str(), &json)
-        .await?;
+    store::items::set_semantics(conn, dataset_id, item_id, semantics.source, &json).await?;
     Ok(())
 }
 
@@ -794,7 +793,7 @@ async fn refresh_semantics(
             None => true,
             Some((source, stored_json)) => {
                 semantics.source == SignatureSource::SceneGraph
-                    && (source != SignatureSource::SceneGraph.as_str() || *stored_json != json)
+                    && (*source != SignatureSource::SceneGraph || *stored_json != json)
             }
         };
         if wanted {

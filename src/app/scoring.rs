@@ -55,15 +55,18 @@ pub async fn stored_signatures(hub: &Hub, dataset: &str) -> Result<StoredSignatu
 }
 
 /// Reads a release's QA file (images are not needed to score) and computes each item's
-/// signatures, from scene graphs when given. `Ok(Err(problems))` names every line that is
-/// not a valid item, with its file and line. Blocking: call from `spawn_blocking`.
+/// signatures, from scene graphs when given. [`ScoreFileError::DatasetProblems`] names every
+/// line that is not a valid item, with its file and line. Blocking: call from
+/// `spawn_blocking`.
 pub fn release_targets(
     data: &Path,
     scene_graphs: Option<&Path>,
-) -> anyhow::Result<Result<Vec<ScoringTarget>, Vec<String>>> {
-    let location = ReleaseLocation::resolve(data)?;
+) -> Result<Vec<ScoringTarget>, ScoreFileError> {
+    let unscorable = |e: anyhow::Error| ScoreFileError::Unscorable(format!("{e:#}"));
+    let location = ReleaseLocation::resolve(data).map_err(|e| unscorable(e.into()))?;
     let text = std::fs::read_to_string(&location.qa_file)
-        .with_context(|| format!("cannot read {}", location.qa_file.display()))?;
+        .with_context(|| format!("cannot read {}", location.qa_file.display()))
+        .map_err(unscorable)?;
     let file = location.qa_file.display().to_string();
     let mut items = Vec::new();
     let mut problems = Vec::new();
@@ -80,25 +83,27 @@ pub fn release_targets(
         }
     }
     if !problems.is_empty() {
-        return Ok(Err(problems));
+        return Err(ScoreFileError::DatasetProblems(problems));
     }
     let refs: Vec<&QaItem> = items.iter().map(|(_, i)| i).collect();
     let semantics = semantics::for_items(scene_graphs, &refs);
     let mut targets = Vec::with_capacity(items.len());
     for ((line, item), semantics) in items.iter().zip(semantics) {
         match semantics {
-            Ok(s) => targets.push(ScoringTarget::from_item(item, s).map_err(anyhow::Error::msg)?),
+            Ok(s) => {
+                targets.push(ScoringTarget::from_item(item, s).map_err(ScoreFileError::Unscorable)?)
+            }
             Err(ps) => problems.extend(
                 ps.iter()
                     .map(|p| format!("{file}: line {line} ({}): {p}", item.id)),
             ),
         }
     }
-    Ok(if problems.is_empty() {
+    if problems.is_empty() {
         Ok(targets)
     } else {
-        Err(problems)
-    })
+        Err(ScoreFileError::DatasetProblems(problems))
+    }
 }
 
 /// What a prediction file is scored or analysed against.
@@ -227,16 +232,9 @@ pub async fn targets(
                 with_scene_graphs: scene_graphs.is_some(),
             });
             let (data, scene_graphs) = (data.clone(), scene_graphs.clone());
-            let read = tokio::task::spawn_blocking(move || {
-                release_targets(&data, scene_graphs.as_deref())
-            })
-            .await
-            .map_err(AppError::from)?;
-            match read {
-                Ok(Ok(targets)) => Ok(targets),
-                Ok(Err(problems)) => Err(ScoreFileError::DatasetProblems(problems)),
-                Err(e) => Err(ScoreFileError::Unscorable(format!("{e:#}"))),
-            }
+            tokio::task::spawn_blocking(move || release_targets(&data, scene_graphs.as_deref()))
+                .await
+                .map_err(AppError::from)?
         }
     }
 }

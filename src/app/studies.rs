@@ -22,6 +22,7 @@ use crate::core::study::report::{
 use crate::core::study::{AlignKey, Alignment, VariantSpec, align, check_variants, study_name};
 use crate::store;
 use crate::store::datasets::Dataset;
+use crate::store::db::UniqueKey;
 use crate::store::studies::StudyRow;
 
 /// A variant as shown: its spec and, when computed, how its items align with the baseline's.
@@ -103,7 +104,7 @@ async fn alignments(
 
 async fn dataset_named(hub: &Hub, what: &str, name: &str) -> Result<Dataset, AppError> {
     match datasets::by_name(hub, name).await {
-        Err(AppError::NotFound(_)) => Err(AppError::BadRequest(format!(
+        Err(AppError::NotFound(_)) => Err(AppError::Invalid(format!(
             "{what}: no dataset named '{name}'"
         ))),
         other => other,
@@ -119,9 +120,9 @@ pub async fn create(
     baseline: &str,
     variants: &[VariantSpec],
 ) -> Result<StudyView, AppError> {
-    let name = study_name(name).map_err(AppError::BadRequest)?;
+    let name = study_name(name).map_err(AppError::Invalid)?;
     let baseline = baseline.trim();
-    check_variants(baseline, variants).map_err(AppError::BadRequest)?;
+    check_variants(baseline, variants).map_err(AppError::Invalid)?;
     let base = dataset_named(hub, "baseline", baseline).await?;
     let mut resolved = Vec::with_capacity(variants.len());
     for spec in variants {
@@ -132,7 +133,7 @@ pub async fn create(
     let (baseline_keys, aligned) = alignments(hub, base.id, &resolved).await?;
     for ((spec, _), (variant_keys, alignment)) in resolved.iter().zip(&aligned) {
         if alignment.aligned() == 0 {
-            return Err(AppError::BadRequest(format!(
+            return Err(AppError::Invalid(format!(
                 "variant {}/{}: none of dataset '{}''s {} items aligns with baseline '{}''s {} \
                  (by id, or by task, type and key frames); a variant asks the baseline's \
                  questions with other images (see `generate --items-from`)",
@@ -146,11 +147,14 @@ pub async fn create(
         }
     }
     let mut tx = hub.begin().await?;
-    let inserted = store::studies::insert(&mut tx, name, base.id, actor.name(), &resolved).await?;
-    if inserted.is_none() {
-        return Err(AppError::Conflict(format!(
-            "a study named '{name}' exists already"
-        )));
+    match store::studies::insert(&mut tx, name, base.id, actor.name(), &resolved).await {
+        Ok(_) => {}
+        Err(e) if UniqueKey::STUDY_NAME.is_violated_by(&e) => {
+            return Err(AppError::Conflict(format!(
+                "a study named '{name}' exists already"
+            )));
+        }
+        Err(e) => return Err(e.into()),
     }
     let detail = resolved
         .iter()
@@ -330,7 +334,7 @@ async fn row_scores(
                 _ => {
                     let mut accounts: Vec<&str> = latest.keys().copied().collect();
                     accounts.sort_unstable();
-                    return Err(AppError::BadRequest(format!(
+                    return Err(AppError::Invalid(format!(
                         "model '{model}' is published on dataset '{}' by {} accounts ({}); \
                          choose one with `account`",
                         dataset.name,

@@ -19,7 +19,8 @@ use crate::core::submission::{
     ScoredSubmission, SubmissionError, SubmissionMetadata, Visibility, score_submission,
 };
 use crate::store;
-use crate::store::accounts::AttemptQuota;
+use crate::store::accounts::AttemptsMade;
+use crate::store::db::UniqueKey;
 use crate::store::submissions::NewSubmission;
 pub use crate::store::submissions::{StoredVerdict, SubmissionRow};
 
@@ -102,6 +103,35 @@ pub enum Submitted {
     Repeated(SubmissionRow),
 }
 
+/// The outcome of asking for one more submission attempt.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum AttemptQuota {
+    Granted,
+    DailyExhausted {
+        limit: i64,
+    },
+    /// `used` attempts were made against a total of `limit`; waiting will not help.
+    TotalExhausted {
+        used: i64,
+        limit: i64,
+    },
+}
+
+/// Whether one more attempt fits under `daily` and `total`, given those already `made`. The
+/// total is named first when both are used up: it is the one waiting cannot fix.
+fn attempt_quota(made: AttemptsMade, daily: i64, total: i64) -> AttemptQuota {
+    if made.total >= total {
+        AttemptQuota::TotalExhausted {
+            used: made.total,
+            limit: total,
+        }
+    } else if made.today >= daily {
+        AttemptQuota::DailyExhausted { limit: daily }
+    } else {
+        AttemptQuota::Granted
+    }
+}
+
 /// Takes one attempt from the caller's quotas, refused ones counted too; admins are exempt.
 async fn take_attempt(hub: &Hub, caller: &Caller) -> Result<(), AppError> {
     if caller.has(Scope::Admin) {
@@ -109,15 +139,21 @@ async fn take_attempt(hub: &Hub, caller: &Caller) -> Result<(), AppError> {
     }
     let daily = caller.daily_quota.unwrap_or(hub.quotas.daily);
     let total = caller.total_quota.unwrap_or(hub.quotas.total);
-    // In a write transaction: the count and the insert hold across every server instance.
+    // In a write transaction, serialised with every other on either database: the count and
+    // the insert hold across every server instance, so two requests cannot both take the
+    // last attempt.
     let mut tx = hub.begin().await?;
-    let quota = store::accounts::record_attempt(&mut tx, caller.token_id, daily, total).await?;
+    let made = store::accounts::attempts_made(&mut tx, caller.token_id).await?;
+    let quota = attempt_quota(made, daily, total);
+    if quota == AttemptQuota::Granted {
+        store::accounts::record_attempt(&mut tx, caller.token_id).await?;
+    }
     tx.commit().await?;
     match quota {
         AttemptQuota::Granted => Ok(()),
         AttemptQuota::DailyExhausted { limit } => {
             let retry_after = seconds_until_utc_midnight();
-            Err(AppError::TooManyRequests {
+            Err(AppError::LimitReached {
                 message: format!(
                     "this token has used its {limit} submissions for today (UTC); \
                      try again in {retry_after} s"
@@ -126,7 +162,7 @@ async fn take_attempt(hub: &Hub, caller: &Caller) -> Result<(), AppError> {
             })
         }
         // No Retry-After: the total never refills, so waiting would not help.
-        AttemptQuota::TotalExhausted { used, limit } => Err(AppError::TooManyRequests {
+        AttemptQuota::TotalExhausted { used, limit } => Err(AppError::LimitReached {
             message: format!(
                 "this token's total quota is used up: {used} of {limit} submissions made; \
                  waiting will not help, ask an admin for a new token or a larger total quota"
@@ -155,7 +191,7 @@ async fn score_body(
                 .filter(|b| **b == b'\n')
                 .count()
                 + 1;
-            AppError::Unprocessable {
+            AppError::Rejected {
                 message: format!(
                     "line {line}: the body is not UTF-8 text (byte {} is invalid)",
                     e.valid_up_to()
@@ -168,7 +204,7 @@ async fn score_body(
             Err(SubmissionError::Rejected(problems)) => {
                 let first: Vec<String> =
                     problems.iter().take(5).map(|p| p.message.clone()).collect();
-                Err(AppError::Unprocessable {
+                Err(AppError::Rejected {
                     message: format!(
                         "{} problems; nothing was stored: {}{}",
                         problems.len(),
@@ -210,7 +246,7 @@ where
     B: Future<Output = Result<Vec<u8>, AppError>>,
 {
     let dataset = datasets::by_name(hub, dataset_name).await?;
-    let metadata = metadata.checked().map_err(AppError::BadRequest)?;
+    let metadata = metadata.checked().map_err(AppError::Invalid)?;
     if let Some(key) = idempotency_key {
         let mut conn = hub.conn().await?;
         let existing =
@@ -238,18 +274,24 @@ where
         scores: &scored.scores,
         metric_version: METRIC_VERSION,
     };
-    let Some(id) = store::submissions::insert(&mut tx, &new).await? else {
-        // A twin request with the same key committed first.
-        tx.rollback().await?;
-        let mut conn = hub.conn().await?;
-        let existing = store::submissions::by_idempotency_key(
-            &mut conn,
-            caller.token_id,
-            idempotency_key.unwrap_or_default(),
-        )
-        .await?
-        .ok_or_else(|| AppError::internal("an idempotent twin submission vanished"))?;
-        return Ok(Submitted::Repeated(existing));
+    let id = match store::submissions::insert(&mut tx, &new).await {
+        Ok(id) => id,
+        // A twin request with the same key committed first (both passed the lookup above
+        // before either stored anything): answered as a repeat of it. The failed statement
+        // ends a PostgreSQL transaction, so the twin is read after rolling back.
+        Err(e) if UniqueKey::SUBMISSION_IDEMPOTENCY_KEY.is_violated_by(&e) => {
+            tx.rollback().await?;
+            let mut conn = hub.conn().await?;
+            let existing = store::submissions::by_idempotency_key(
+                &mut conn,
+                caller.token_id,
+                idempotency_key.unwrap_or_default(),
+            )
+            .await?
+            .ok_or_else(|| AppError::internal("an idempotent twin submission vanished"))?;
+            return repeat_of_digest(existing, &sha256);
+        }
+        Err(e) => return Err(e.into()),
     };
     store::submissions::insert_items(&mut tx, id, &targets.item_rows, &scored.items).await?;
     audit::record(
@@ -278,7 +320,13 @@ where
 }
 
 fn repeat_of(existing: SubmissionRow, body: &[u8]) -> Result<Submitted, AppError> {
-    if body_sha256(body) != existing.body_sha256 {
+    repeat_of_digest(existing, &body_sha256(body))
+}
+
+/// The earlier submission under the same Idempotency-Key, when the body (by its SHA-256) is
+/// the same; 409 when it differs.
+fn repeat_of_digest(existing: SubmissionRow, sha256: &str) -> Result<Submitted, AppError> {
+    if sha256 != existing.body_sha256 {
         return Err(AppError::Conflict(format!(
             "this Idempotency-Key was used for submission {} with a different body",
             existing.id
@@ -339,7 +387,7 @@ pub async fn update_listing(
     let visibility = visibility
         .map(|v| {
             Visibility::parse(v).ok_or_else(|| {
-                AppError::BadRequest(format!(
+                AppError::Invalid(format!(
                     "visibility must be 'published', 'hidden' or 'withdrawn', not {v:?}"
                 ))
             })
@@ -415,9 +463,7 @@ pub async fn file_baseline(
         scores: &scored.scores,
         metric_version: METRIC_VERSION,
     };
-    let id = store::submissions::insert(&mut tx, &new)
-        .await?
-        .ok_or_else(|| AppError::internal("the baseline's submission row was not written"))?;
+    let id = store::submissions::insert(&mut tx, &new).await?;
     store::submissions::insert_items(&mut tx, id, &targets.item_rows, &scored.items).await?;
     store::submissions::update_listing(&mut tx, id, Some(true), None).await?;
     audit::record(
@@ -433,4 +479,46 @@ pub async fn file_baseline(
     tx.commit().await?;
     hub.boards.changed();
     Ok(true)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn made(today: i64, total: i64) -> AttemptsMade {
+        AttemptsMade { today, total }
+    }
+
+    #[test]
+    fn an_attempt_is_granted_while_both_quotas_have_room() {
+        assert_eq!(attempt_quota(made(0, 0), 1, 1), AttemptQuota::Granted);
+        assert_eq!(attempt_quota(made(4, 9), 5, 10), AttemptQuota::Granted);
+    }
+
+    #[test]
+    fn the_daily_quota_runs_out_on_its_own() {
+        assert_eq!(
+            attempt_quota(made(5, 7), 5, 10),
+            AttemptQuota::DailyExhausted { limit: 5 }
+        );
+    }
+
+    #[test]
+    fn the_total_quota_is_named_when_both_are_used_up() {
+        assert_eq!(
+            attempt_quota(made(5, 10), 5, 10),
+            AttemptQuota::TotalExhausted {
+                used: 10,
+                limit: 10
+            }
+        );
+        // A total lowered below what was already used still reports what was used.
+        assert_eq!(
+            attempt_quota(made(0, 12), 5, 10),
+            AttemptQuota::TotalExhausted {
+                used: 12,
+                limit: 10
+            }
+        );
+    }
 }

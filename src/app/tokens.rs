@@ -37,7 +37,7 @@ impl Caller {
         if self.has(scope) {
             Ok(())
         } else {
-            Err(AppError::Forbidden(format!(
+            Err(AppError::NotPermitted(format!(
                 "this token lacks the `{}` scope",
                 scope.as_str()
             )))
@@ -57,7 +57,7 @@ pub async fn authorize(hub: &Hub, presented: &str, scope: Scope) -> Result<Calle
 /// The live (unrevoked) token `presented` stands for; 401 otherwise.
 async fn authenticate(hub: &Hub, presented: &str) -> Result<Caller, AppError> {
     let refused =
-        || AppError::Unauthorized("the API token is unknown or has been revoked".to_owned());
+        || AppError::Unauthenticated("the API token is unknown or has been revoked".to_owned());
     let mut conn = hub.conn().await?;
     let row = store::accounts::token_by_prefix(&mut conn, &credentials::lookup_prefix(presented))
         .await?
@@ -114,12 +114,10 @@ pub async fn issue(
     daily_quota: Option<i64>,
     total_quota: Option<i64>,
 ) -> Result<CreatedToken, AppError> {
-    let name = credentials::account_name(name).map_err(AppError::BadRequest)?;
+    let name = credentials::account_name(name).map_err(AppError::Invalid)?;
     for (field, quota) in [("daily_quota", daily_quota), ("total_quota", total_quota)] {
         if quota.is_some_and(|q| q < 0) {
-            return Err(AppError::BadRequest(format!(
-                "`{field}` must not be negative"
-            )));
+            return Err(AppError::Invalid(format!("`{field}` must not be negative")));
         }
     }
     let token = NewToken::generate();
@@ -199,7 +197,7 @@ pub async fn ensure_admin_token(hub: &Hub, operator: Option<&str>) -> Result<Adm
     let (token, generated) = match operator {
         Some(text) => {
             let token = NewToken::from_operator(text)
-                .map_err(|e| AppError::BadRequest(format!("ENACT_HUB_ADMIN_TOKEN: {e}")))?;
+                .map_err(|e| AppError::Invalid(format!("ENACT_HUB_ADMIN_TOKEN: {e}")))?;
             if store::accounts::token_hash_exists(&mut tx, &token.hash).await? {
                 return Ok(AdminToken::Present);
             }

@@ -178,7 +178,7 @@ async fn create_annotator(args: CreateAnnotatorArgs) -> anyhow::Result<ExitCode>
     hub.close().await;
     let invited = match created {
         Ok(invited) => invited,
-        Err(AppError::BadRequest(problem)) => {
+        Err(AppError::Invalid(problem)) => {
             eprintln!("error: --name: {problem}");
             return Ok(ExitCode::FAILURE);
         }

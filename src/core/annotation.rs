@@ -362,6 +362,18 @@ pub enum QueueStatus {
 }
 
 impl QueueStatus {
+    /// Where an item stands given how it was finished, if it was, and whether a draft of it
+    /// exists (a finished item keeps none).
+    pub fn of(finished: Option<OutcomeKind>, started: bool) -> QueueStatus {
+        match finished {
+            Some(OutcomeKind::Answered) => QueueStatus::Answered,
+            Some(OutcomeKind::Skipped) => QueueStatus::Skipped,
+            Some(OutcomeKind::Flagged) => QueueStatus::Flagged,
+            None if started => QueueStatus::Started,
+            None => QueueStatus::Todo,
+        }
+    }
+
     pub fn as_str(self) -> &'static str {
         match self {
             QueueStatus::Todo => "to do",
@@ -420,6 +432,44 @@ pub enum Outcome {
     Flagged(String),
 }
 
+impl Outcome {
+    pub fn kind(&self) -> OutcomeKind {
+        match self {
+            Outcome::Answered(_) => OutcomeKind::Answered,
+            Outcome::Skipped(_) => OutcomeKind::Skipped,
+            Outcome::Flagged(_) => OutcomeKind::Flagged,
+        }
+    }
+}
+
+/// How an item was finished, without the answer or reason: the `annotations.outcome` column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutcomeKind {
+    Answered,
+    Skipped,
+    Flagged,
+}
+
+impl OutcomeKind {
+    pub const ALL: [OutcomeKind; 3] = [
+        OutcomeKind::Answered,
+        OutcomeKind::Skipped,
+        OutcomeKind::Flagged,
+    ];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            OutcomeKind::Answered => "answered",
+            OutcomeKind::Skipped => "skipped",
+            OutcomeKind::Flagged => "flagged",
+        }
+    }
+
+    pub fn parse(text: &str) -> Option<OutcomeKind> {
+        OutcomeKind::ALL.into_iter().find(|o| o.as_str() == text)
+    }
+}
+
 /// Telemetry stored with each finished item.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Telemetry {
@@ -462,6 +512,29 @@ impl Telemetry {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_queued_item_stands_where_its_outcome_or_its_draft_puts_it() {
+        for kind in OutcomeKind::ALL {
+            let status = QueueStatus::of(Some(kind), false);
+            assert_eq!(status.as_str(), kind.as_str());
+            assert!(status.is_done());
+            // A finished item keeps no draft, but a stray one would not reopen it.
+            assert_eq!(QueueStatus::of(Some(kind), true), status);
+            assert_eq!(OutcomeKind::parse(kind.as_str()), Some(kind));
+        }
+        assert_eq!(QueueStatus::of(None, true), QueueStatus::Started);
+        assert_eq!(QueueStatus::of(None, false), QueueStatus::Todo);
+        assert_eq!(OutcomeKind::parse("done"), None);
+    }
+
+    #[test]
+    fn an_outcome_is_of_its_kind() {
+        let answered = Outcome::Answered(Permutation::new(vec![2, 1, 3]).expect("a permutation"));
+        assert_eq!(answered.kind(), OutcomeKind::Answered);
+        assert_eq!(Outcome::Skipped("x".into()).kind(), OutcomeKind::Skipped);
+        assert_eq!(Outcome::Flagged("x".into()).kind(), OutcomeKind::Flagged);
+    }
 
     fn l(n: usize) -> StepLength {
         StepLength::new(n).expect("valid L")

@@ -175,6 +175,43 @@ impl SubmissionStatus {
     }
 }
 
+/// What became of one item's answer, as the `submission_items.outcome` column spells it: the
+/// kind of a [`StrictOutcome`] without its data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VerdictOutcome {
+    Scored,
+    Unparseable,
+    Missing,
+}
+
+impl VerdictOutcome {
+    pub const ALL: [VerdictOutcome; 3] = [
+        VerdictOutcome::Scored,
+        VerdictOutcome::Unparseable,
+        VerdictOutcome::Missing,
+    ];
+
+    pub fn of(outcome: &StrictOutcome) -> VerdictOutcome {
+        match outcome {
+            StrictOutcome::Scored { .. } => VerdictOutcome::Scored,
+            StrictOutcome::Unparseable { .. } => VerdictOutcome::Unparseable,
+            StrictOutcome::Missing => VerdictOutcome::Missing,
+        }
+    }
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            VerdictOutcome::Scored => "scored",
+            VerdictOutcome::Unparseable => "unparseable",
+            VerdictOutcome::Missing => "missing",
+        }
+    }
+
+    pub fn parse(text: &str) -> Option<VerdictOutcome> {
+        VerdictOutcome::ALL.into_iter().find(|o| o.as_str() == text)
+    }
+}
+
 /// One dataset item's verdict, with the answer as submitted.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ItemVerdict {
@@ -389,6 +426,18 @@ fn assemble(scoring: StrictScoring, raw_answers: Vec<Option<String>>) -> ScoredS
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_verdict_outcome_is_spelled_as_its_column_checks() {
+        for outcome in VerdictOutcome::ALL {
+            assert_eq!(VerdictOutcome::parse(outcome.as_str()), Some(outcome));
+        }
+        assert_eq!(
+            VerdictOutcome::of(&StrictOutcome::Missing),
+            VerdictOutcome::Missing
+        );
+        assert_eq!(VerdictOutcome::parse("skipped"), None);
+    }
     use crate::core::dataset::{Direction, StepLength};
     use crate::core::verifier::Permutation;
 

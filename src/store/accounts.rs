@@ -186,53 +186,37 @@ pub async fn token_hash_exists(conn: &mut Conn, hash: &str) -> Result<bool, sqlx
     })
 }
 
-/// The outcome of asking for one more submission attempt.
+/// A token's submission attempts so far.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum AttemptQuota {
-    Granted,
-    DailyExhausted {
-        limit: i64,
-    },
-    /// `used` attempts were made against a total of `limit`; waiting will not help.
-    TotalExhausted {
-        used: i64,
-        limit: i64,
-    },
+pub struct AttemptsMade {
+    /// Since midnight UTC.
+    pub today: i64,
+    pub total: i64,
 }
 
-/// Records one attempt unless a quota is used up; the check and the insert are one statement,
-/// so concurrent requests cannot both take the last slot.
-#[tracing::instrument(skip_all)]
-pub async fn record_attempt(
-    conn: &mut Conn,
-    token: i64,
-    daily: i64,
-    total: i64,
-) -> Result<AttemptQuota, sqlx::Error> {
+/// How many attempts `token` has made, today and in all.
+pub async fn attempts_made(conn: &mut Conn, token: i64) -> Result<AttemptsMade, sqlx::Error> {
     on!(conn, |c| {
         let today = c.utc_today();
-        let inserted = sqlx::query(&format!(
-        "INSERT INTO submission_attempts (token) SELECT $1 \
-         WHERE (SELECT count(*) FROM submission_attempts WHERE token = $1 AND created_at >= {today}) < $2 \
-         AND (SELECT count(*) FROM submission_attempts WHERE token = $1) < $3"
-    ))
-    .bind(token)
-    .bind(daily)
-    .bind(total)
-    .execute(&mut *c)
-    .await?;
-        if inserted.rows_affected() > 0 {
-            return Ok(AttemptQuota::Granted);
-        }
-        let used: i64 =
-            sqlx::query_scalar("SELECT count(*) FROM submission_attempts WHERE token = $1")
-                .bind(token)
-                .fetch_one(&mut *c)
-                .await?;
-        Ok(if used >= total {
-            AttemptQuota::TotalExhausted { used, limit: total }
-        } else {
-            AttemptQuota::DailyExhausted { limit: daily }
-        })
+        let (today, total): (i64, i64) = sqlx::query_as(&format!(
+            "SELECT CAST(coalesce(sum(CASE WHEN created_at >= {today} THEN 1 ELSE 0 END), 0) \
+             AS BIGINT), count(*) FROM submission_attempts WHERE token = $1"
+        ))
+        .bind(token)
+        .fetch_one(&mut *c)
+        .await?;
+        Ok(AttemptsMade { today, total })
+    })
+}
+
+/// Records one submission attempt by `token`.
+#[tracing::instrument(skip_all)]
+pub async fn record_attempt(conn: &mut Conn, token: i64) -> Result<(), sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query("INSERT INTO submission_attempts (token) VALUES ($1)")
+            .bind(token)
+            .execute(&mut *c)
+            .await?;
+        Ok(())
     })
 }

@@ -5,9 +5,9 @@
 use super::db::{Conn, Fields, on};
 
 use super::annotations::human_answer_from_row;
-use super::{corrupt, kind_from_row};
+use super::kind_from_row;
 
-use crate::core::agreement::protocol::{AssignmentKind, PrimaryAnswer, ProtocolPlan};
+use crate::core::agreement::protocol::{PrimaryAnswer, ProtocolPlan};
 use crate::core::agreement::report::AnnotatorAnswer;
 
 /// Every answered item of a dataset, per annotator, with the item's ground truth and
@@ -32,13 +32,11 @@ pub async fn annotator_answers(
         .await?;
         rows.iter()
             .map(|r| {
-                let kind: String = r.try_get("kind")?;
                 Ok(AnnotatorAnswer {
                     annotator_id: r.try_get("annotator")?,
                     annotator: r.try_get("name")?,
                     item_id: r.try_get("item_id")?,
-                    kind: AssignmentKind::parse(&kind)
-                        .ok_or_else(|| corrupt("kind", format!("unknown kind {kind:?}")))?,
+                    kind: r.try_get("kind")?,
                     human: human_answer_from_row(r)?,
                 })
             })
@@ -140,20 +138,19 @@ pub async fn round(
 }
 
 /// Records a protocol round and its cross-assignments, appended to each annotator's queue
-/// like any other assignment. Call inside a transaction. `Ok(Err(round))` when the dataset
-/// already has a round: nothing is written then. Otherwise returns the assignments added (a
-/// pair already assigned, under either kind, is left as it was).
-pub async fn record_round(
+/// like any other assignment. Call inside a transaction. Returns the assignments added (a
+/// pair already assigned, under either kind, is left as it was). A dataset that already has
+/// a round refuses the insert with a violation of
+/// [`UniqueKey::AGREEMENT_ROUND`](super::db::UniqueKey::AGREEMENT_ROUND); whether that may
+/// happen is the caller's to decide.
+pub async fn insert_round(
     conn: &mut Conn,
     dataset_id: i64,
     plan: &ProtocolPlan,
     started_by: Option<i64>,
-) -> Result<Result<u64, AgreementRound>, sqlx::Error> {
+) -> Result<u64, sqlx::Error> {
     on!(conn, |c| {
-        if let Some(existing) = round(&mut *c, dataset_id).await? {
-            return Ok(Err(existing));
-        }
-        let inserted = sqlx::query(
+        sqlx::query(
             "INSERT INTO agreement_rounds (dataset, items_per_cell, seed, started_by) \
          VALUES ($1, $2, $3, $4)",
         )
@@ -162,18 +159,7 @@ pub async fn record_round(
         .bind(plan.seed as i64)
         .bind(started_by)
         .execute(&mut *c)
-        .await;
-        match inserted {
-            Ok(_) => {}
-            // A concurrent run got there first.
-            Err(sqlx::Error::Database(e)) if e.is_unique_violation() => {
-                if let Some(existing) = round(&mut *c, dataset_id).await? {
-                    return Ok(Err(existing));
-                }
-                return Err(sqlx::Error::Database(e));
-            }
-            Err(e) => return Err(e),
-        }
+        .await?;
         for sample in &plan.samples {
             sqlx::query(
             "INSERT INTO agreement_samples (dataset, item, source_annotator) VALUES ($1, $2, $3)",
@@ -197,6 +183,6 @@ pub async fn record_round(
             .await?;
             added += done.rows_affected();
         }
-        Ok(Ok(added))
+        Ok(added)
     })
 }

@@ -7,8 +7,9 @@ use super::{corrupt, kind_from_row};
 
 use crate::core::annotation::{
     AssignmentState, CountedAnswer, CountedVerdict, Draft, HumanAnswer, HumanVerdict, Outcome,
-    QueueEntry, QueueStatus, Session, SplitItem, StoredDraft, Telemetry,
+    OutcomeKind, Session, SplitItem, StoredDraft, Telemetry,
 };
+use crate::core::dataset::{Direction, StepLength};
 use crate::core::verifier::Permutation;
 
 #[derive(Debug, Clone)]
@@ -34,27 +35,23 @@ fn annotator_from_row(row: &impl Fields) -> Result<Annotator, sqlx::Error> {
 const ANNOTATOR_COLUMNS: &str = "id, name, is_admin, password_hash, created_at";
 
 /// Creates an annotator with a pending invite (`invite_hash` = sha256 of the invite token).
-/// `Ok(None)` when the name is taken.
+/// A name in use refuses the insert with a violation of
+/// [`UniqueKey::ANNOTATOR_NAME`](super::db::UniqueKey::ANNOTATOR_NAME).
 pub async fn create_annotator(
     conn: &mut Conn,
     name: &str,
     is_admin: bool,
     invite_hash: &str,
-) -> Result<Option<i64>, sqlx::Error> {
+) -> Result<i64, sqlx::Error> {
     on!(conn, |c| {
-        let result = sqlx::query_scalar(
+        sqlx::query_scalar(
             "INSERT INTO annotators (name, is_admin, invite_hash) VALUES ($1, $2, $3) RETURNING id",
         )
         .bind(name)
         .bind(is_admin)
         .bind(invite_hash)
         .fetch_one(&mut *c)
-        .await;
-        match result {
-            Ok(id) => Ok(Some(id)),
-            Err(sqlx::Error::Database(e)) if e.is_unique_violation() => Ok(None),
-            Err(e) => Err(e),
-        }
+        .await
     })
 }
 
@@ -244,32 +241,25 @@ pub async fn unassigned_items(
     })
 }
 
-/// Store ids of the given item ids of a dataset; ids not in the dataset come back in `Err`.
+/// Store ids of the given item ids of a dataset, in the same order; `None` for an id not in
+/// the dataset.
 pub async fn item_rowids(
     conn: &mut Conn,
     dataset_id: i64,
     item_ids: &[String],
-) -> Result<Result<Vec<i64>, Vec<String>>, sqlx::Error> {
+) -> Result<Vec<Option<i64>>, sqlx::Error> {
     on!(conn, |c| {
         let mut found = Vec::with_capacity(item_ids.len());
-        let mut missing = Vec::new();
         for id in item_ids {
-            let rowid: Option<i64> =
+            found.push(
                 sqlx::query_scalar("SELECT id FROM items WHERE dataset_id = $1 AND item_id = $2")
                     .bind(dataset_id)
                     .bind(id)
                     .fetch_optional(&mut *c)
-                    .await?;
-            match rowid {
-                Some(r) => found.push(r),
-                None => missing.push(id.clone()),
-            }
+                    .await?,
+            );
         }
-        Ok(if missing.is_empty() {
-            Ok(found)
-        } else {
-            Err(missing)
-        })
+        Ok(found)
     })
 }
 
@@ -294,8 +284,20 @@ pub async fn assign(conn: &mut Conn, pairs: &[(i64, i64)]) -> Result<u64, sqlx::
     })
 }
 
-/// An annotator's assigned items in queue order, with where each stands.
-pub async fn queue(conn: &mut Conn, annotator: i64) -> Result<Vec<QueueEntry>, sqlx::Error> {
+/// One assigned item of an annotator's queue: how it was finished, if it was, and whether a
+/// draft of it exists.
+#[derive(Debug, Clone)]
+pub struct QueuedItem {
+    pub dataset: String,
+    pub item_id: String,
+    pub direction: Direction,
+    pub step_length: StepLength,
+    pub finished: Option<OutcomeKind>,
+    pub started: bool,
+}
+
+/// An annotator's assigned items in queue order.
+pub async fn queue(conn: &mut Conn, annotator: i64) -> Result<Vec<QueuedItem>, sqlx::Error> {
     on!(conn, |c| {
         let rows = sqlx::query(
             "SELECT d.name AS dataset, i.item_id, i.direction, i.step_length, n.outcome, \
@@ -311,22 +313,13 @@ pub async fn queue(conn: &mut Conn, annotator: i64) -> Result<Vec<QueueEntry>, s
         rows.iter()
             .map(|r| {
                 let (direction, step_length) = kind_from_row(r)?;
-                let outcome: Option<String> = r.try_get("outcome")?;
-                let started: bool = r.try_get("started")?;
-                let status = match outcome.as_deref() {
-                    Some("answered") => QueueStatus::Answered,
-                    Some("skipped") => QueueStatus::Skipped,
-                    Some("flagged") => QueueStatus::Flagged,
-                    Some(other) => return Err(corrupt("outcome", format!("unknown {other:?}"))),
-                    None if started => QueueStatus::Started,
-                    None => QueueStatus::Todo,
-                };
-                Ok(QueueEntry {
+                Ok(QueuedItem {
                     dataset: r.try_get("dataset")?,
                     item_id: r.try_get("item_id")?,
                     direction,
                     step_length,
-                    status,
+                    finished: r.try_get("outcome")?,
+                    started: r.try_get("started")?,
                 })
             })
             .collect()
@@ -367,22 +360,19 @@ pub async fn assignment_state(
     })
 }
 
-/// The annotator's draft of an item, creating an empty one (which starts the item's clock);
-/// `None` when the item is finished, which leaves no draft behind.
-pub async fn open_draft(
+/// Creates an empty draft of an item (which starts the item's clock) unless the item is
+/// finished or already has a draft: the check and the write are one statement, so a draft
+/// can never outlive the answer that finished its item. Returns whether it was created.
+pub async fn create_draft(
     conn: &mut Conn,
     annotator: i64,
     item: i64,
     empty: &Draft,
     now_ms: i64,
-) -> Result<Option<StoredDraft>, sqlx::Error> {
+) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
-        // Read first: page views are many, and a write would take SQLite's one write lock.
-        if let Some(found) = draft(&mut *c, annotator, item).await? {
-            return Ok(Some(found));
-        }
         let json = serde_json::to_string(empty).map_err(|e| corrupt("state", e))?;
-        sqlx::query(
+        let done = sqlx::query(
             "INSERT INTO drafts (annotator, item, slots, state, started_at_ms, updated_at_ms) \
          SELECT $1, $2, '[]', $3, $4, $4 WHERE NOT EXISTS \
          (SELECT 1 FROM annotations WHERE annotator = $1 AND item = $2) \
@@ -394,7 +384,7 @@ pub async fn open_draft(
         .bind(now_ms)
         .execute(&mut *c)
         .await?;
-        draft(&mut *c, annotator, item).await
+        Ok(done.rows_affected() > 0)
     })
 }
 
@@ -469,14 +459,12 @@ pub async fn finish(
     telemetry: &Telemetry,
 ) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
-        let (kind, answer, reason) = match outcome {
+        let (answer, reason) = match outcome {
             Outcome::Answered(p) => (
-                "answered",
                 Some(serde_json::to_string(p).map_err(|e| corrupt("answer", e))?),
                 "",
             ),
-            Outcome::Skipped(r) => ("skipped", None, r.as_str()),
-            Outcome::Flagged(r) => ("flagged", None, r.as_str()),
+            Outcome::Skipped(r) | Outcome::Flagged(r) => (None, r.as_str()),
         };
         let done = sqlx::query(
         "INSERT INTO annotations (annotator, item, outcome, answer, reason, time_on_item_ms, \
@@ -485,7 +473,7 @@ pub async fn finish(
     )
     .bind(annotator)
     .bind(item)
-    .bind(kind)
+    .bind(outcome.kind())
     .bind(answer)
     .bind(reason)
     .bind(telemetry.time_on_item_ms)
@@ -511,7 +499,7 @@ pub struct StoredAnnotation {
     pub annotator: String,
     pub dataset: String,
     pub item_id: String,
-    pub outcome: String,
+    pub outcome: OutcomeKind,
     pub answer: Option<Vec<u8>>,
     pub reason: String,
     pub telemetry: Telemetry,

@@ -271,3 +271,102 @@ impl Dialect for PgConnection {
         "SELECT value::bigint FROM json_array_elements_text($1::json)"
     }
 }
+
+/// The kind of constraint a refused write broke.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ViolationKind {
+    Unique,
+    ForeignKey,
+    NotNull,
+    Check,
+}
+
+/// A write the database refused because it would break a constraint: the kind, and the
+/// constraint's name where the database reports one.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Violation {
+    pub kind: ViolationKind,
+    /// PostgreSQL names the constraint (`submissions_idempotency_key`, `studies_name_key`);
+    /// SQLite never does (its extended result code says the kind, its message lists columns).
+    pub constraint: Option<String>,
+}
+
+/// The constraint `e` broke, if it is a constraint violation. Read from the error's code
+/// through sqlx's `DatabaseError::kind()` (SQLSTATE 23505/23503/23502/23514 on PostgreSQL,
+/// the extended result codes `SQLITE_CONSTRAINT_UNIQUE`/`_PRIMARYKEY`/`_FOREIGNKEY`/… on
+/// SQLite) and `constraint()`, never from the message text, which is neither stable across
+/// versions nor the same on the two databases.
+pub fn violation(e: &sqlx::Error) -> Option<Violation> {
+    let sqlx::Error::Database(db) = e else {
+        return None;
+    };
+    let kind = match db.kind() {
+        sqlx::error::ErrorKind::UniqueViolation => ViolationKind::Unique,
+        sqlx::error::ErrorKind::ForeignKeyViolation => ViolationKind::ForeignKey,
+        sqlx::error::ErrorKind::NotNullViolation => ViolationKind::NotNull,
+        sqlx::error::ErrorKind::CheckViolation => ViolationKind::Check,
+        _ => return None,
+    };
+    Some(Violation {
+        kind,
+        constraint: db.constraint().map(str::to_owned),
+    })
+}
+
+/// A unique key a use case tells apart from others: the table it is on and the name
+/// PostgreSQL gives it (as the migrations declare it, or PostgreSQL's `<table>_<column>_key` /
+/// `<table>_pkey` default).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct UniqueKey {
+    pub table: &'static str,
+    pub constraint: &'static str,
+}
+
+impl UniqueKey {
+    pub const SUBMISSION_IDEMPOTENCY_KEY: UniqueKey = UniqueKey {
+        table: "submissions",
+        constraint: "submissions_idempotency_key",
+    };
+    pub const ANNOTATOR_NAME: UniqueKey = UniqueKey {
+        table: "annotators",
+        constraint: "annotators_name_key",
+    };
+    pub const STUDY_NAME: UniqueKey = UniqueKey {
+        table: "studies",
+        constraint: "studies_name_key",
+    };
+    pub const AGREEMENT_ROUND: UniqueKey = UniqueKey {
+        table: "agreement_rounds",
+        constraint: "agreement_rounds_pkey",
+    };
+    /// Every key a use case recognises; `store::tests` checks each against both schemas.
+    pub const ALL: [UniqueKey; 4] = [
+        UniqueKey::SUBMISSION_IDEMPOTENCY_KEY,
+        UniqueKey::ANNOTATOR_NAME,
+        UniqueKey::STUDY_NAME,
+        UniqueKey::AGREEMENT_ROUND,
+    ];
+
+    /// Whether `e`, returned by an INSERT into this key's table, is a duplicate of this key.
+    ///
+    /// PostgreSQL names the constraint, so the name decides. SQLite reports a UNIQUE or
+    /// PRIMARY KEY violation by its extended result code only (no name; the message lists the
+    /// columns, and matching text is what this replaces), so there the kind decides, which is
+    /// exact because each of these tables has no other unique key an INSERT can collide with:
+    /// the rest are generated ids or hashes of 32 random bytes (`annotators.invite_hash`).
+    /// `store::tests::unique_keys_are_the_only_ones_on_their_tables` reads both schemas and
+    /// fails when a migration adds another unique key to one of these tables.
+    pub fn is_violated_by(self, e: &sqlx::Error) -> bool {
+        match violation(e) {
+            Some(Violation {
+                kind: ViolationKind::Unique,
+                constraint: Some(name),
+            }) => name == self.constraint,
+            Some(Violation {
+                kind: ViolationKind::Unique,
+                constraint: None,
+            }) => true,
+            _ => false,
+        }
+    }
+}

@@ -8,6 +8,7 @@ use super::{corrupt, kind_from_row};
 
 use crate::core::dataset::{Direction, QaItem, StepLength};
 use crate::core::scoring::ScoringItem;
+use crate::core::semantics::SignatureSource;
 
 /// What a list of items shows of each one.
 #[derive(Debug, Clone)]
@@ -253,7 +254,7 @@ pub async fn semantics_json(
     conn: &mut Conn,
     dataset_id: i64,
     item_id: &str,
-) -> Result<Option<(String, String)>, sqlx::Error> {
+) -> Result<Option<(SignatureSource, String)>, sqlx::Error> {
     on!(conn, |c| {
         let row = sqlx::query(
             "SELECT s.source, s.signatures FROM item_signatures s JOIN items i ON i.id = s.item \
@@ -273,7 +274,7 @@ pub async fn set_semantics(
     conn: &mut Conn,
     dataset_id: i64,
     item_id: &str,
-    source: &str,
+    source: SignatureSource,
     signatures_json: &str,
 ) -> Result<(), sqlx::Error> {
     on!(conn, |c| {

@@ -248,9 +248,13 @@ macro_rules! text_column {
 }
 
 text_column!(
+    crate::core::agreement::protocol::AssignmentKind,
+    crate::core::annotation::OutcomeKind,
     crate::core::credentials::Role,
     crate::core::dataset::AnswerVisibility,
+    crate::core::semantics::SignatureSource,
     crate::core::submission::SubmissionStatus,
+    crate::core::submission::VerdictOutcome,
     crate::core::submission::Visibility,
     crate::core::verifier::ScoringPolicy,
     jobs::JobState,

@@ -16,28 +16,24 @@ pub struct StudyRow {
     pub variants: Vec<(VariantSpec, i64)>,
 }
 
-/// Writes a study and its variants (`dataset id` beside each); `None` when the name is taken.
+/// Writes a study and its variants (`dataset id` beside each). A name in use refuses the
+/// insert with a violation of [`UniqueKey::STUDY_NAME`](super::db::UniqueKey::STUDY_NAME).
 pub async fn insert(
     conn: &mut Conn,
     name: &str,
     baseline: i64,
     created_by: &str,
     variants: &[(VariantSpec, i64)],
-) -> Result<Option<i64>, sqlx::Error> {
+) -> Result<i64, sqlx::Error> {
     on!(conn, |c| {
-        let inserted = sqlx::query_scalar(
+        let id: i64 = sqlx::query_scalar(
             "INSERT INTO studies (name, baseline, created_by) VALUES ($1, $2, $3) RETURNING id",
         )
         .bind(name)
         .bind(baseline)
         .bind(created_by)
         .fetch_one(&mut *c)
-        .await;
-        let id: i64 = match inserted {
-            Ok(id) => id,
-            Err(sqlx::Error::Database(e)) if e.is_unique_violation() => return Ok(None),
-            Err(e) => return Err(e),
-        };
+        .await?;
         for (position, (spec, dataset)) in variants.iter().enumerate() {
             sqlx::query(
                 "INSERT INTO study_variants (study, position, family, label, dataset) \
@@ -51,7 +47,7 @@ pub async fn insert(
             .execute(&mut *c)
             .await?;
         }
-        Ok(Some(id))
+        Ok(id)
     })
 }
 

@@ -7,7 +7,7 @@ use super::db::{Conn, Fields, on};
 use super::{corrupt, kind_from_row};
 use crate::core::dataset::{AnswerVisibility, Direction, StepLength};
 use crate::core::submission::{
-    ItemVerdict, SubmissionMetadata, SubmissionScores, SubmissionStatus, Visibility,
+    ItemVerdict, SubmissionMetadata, SubmissionScores, SubmissionStatus, VerdictOutcome, Visibility,
 };
 use crate::core::verifier::{ScoringPolicy, StrictOutcome};
 
@@ -164,40 +164,32 @@ pub struct NewSubmission<'a> {
     pub metric_version: u32,
 }
 
-/// Inserts the submission; call inside the transaction that also stores its items. A reused
-/// Idempotency-Key (a concurrent twin request) comes back as `Ok(None)`.
+/// Inserts the submission; call inside the transaction that also stores its items. An
+/// Idempotency-Key this token already used refuses the insert with a violation of
+/// [`UniqueKey::SUBMISSION_IDEMPOTENCY_KEY`](super::db::UniqueKey::SUBMISSION_IDEMPOTENCY_KEY).
 #[tracing::instrument(skip_all)]
-pub async fn insert(conn: &mut Conn, new: &NewSubmission<'_>) -> Result<Option<i64>, sqlx::Error> {
+pub async fn insert(conn: &mut Conn, new: &NewSubmission<'_>) -> Result<i64, sqlx::Error> {
     on!(conn, |c| {
         let scores = serde_json::to_string(new.scores).map_err(|e| corrupt("scores", e))?;
-        let result = sqlx::query_scalar(
-        "INSERT INTO submissions (dataset, account, token, idempotency_key, body_sha256, model, \
-         description, url, prompt_version, notes, scores, metric_version) \
-         VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12) RETURNING id",
-    )
-    .bind(new.dataset)
-    .bind(new.account)
-    .bind(new.token)
-    .bind(new.idempotency_key)
-    .bind(new.body_sha256)
-    .bind(&new.metadata.model)
-    .bind(&new.metadata.description)
-    .bind(&new.metadata.url)
-    .bind(&new.metadata.prompt_version)
-    .bind(&new.metadata.notes)
-    .bind(scores)
-    .bind(i64::from(new.metric_version))
-    .fetch_one(&mut *c)
-    .await;
-        match result {
-            Ok(id) => Ok(Some(id)),
-            Err(sqlx::Error::Database(e))
-                if e.is_unique_violation() && e.message().contains("idempotency_key") =>
-            {
-                Ok(None)
-            }
-            Err(e) => Err(e),
-        }
+        sqlx::query_scalar(
+            "INSERT INTO submissions (dataset, account, token, idempotency_key, body_sha256, \
+             model, description, url, prompt_version, notes, scores, metric_version) \
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12) RETURNING id",
+        )
+        .bind(new.dataset)
+        .bind(new.account)
+        .bind(new.token)
+        .bind(new.idempotency_key)
+        .bind(new.body_sha256)
+        .bind(&new.metadata.model)
+        .bind(&new.metadata.description)
+        .bind(&new.metadata.url)
+        .bind(&new.metadata.prompt_version)
+        .bind(&new.metadata.notes)
+        .bind(scores)
+        .bind(i64::from(new.metric_version))
+        .fetch_one(&mut *c)
+        .await
     })
 }
 
@@ -219,25 +211,24 @@ pub async fn insert_items(
              outcome, failure, exact_match, semantic_match, task_accuracy, pairwise_accuracy) ",
             );
             builder.push_values(chunk, |mut b, v| {
-                let (outcome, permutation, failure, exact, semantic) = match &v.outcome {
+                let (permutation, failure, exact, semantic) = match &v.outcome {
                     StrictOutcome::Scored { answer, verdict } => (
-                        "scored",
                         serde_json::to_string(answer).ok(),
                         None,
                         verdict.exact_match,
                         verdict.semantic_match,
                     ),
                     StrictOutcome::Unparseable { reason } => {
-                        ("unparseable", None, Some(reason.to_string()), false, false)
+                        (None, Some(reason.to_string()), false, false)
                     }
-                    StrictOutcome::Missing => ("missing", None, None, false, false),
+                    StrictOutcome::Missing => (None, None, false, false),
                 };
                 b.push_bind(submission)
                     .push_bind(item_rows.get(v.target).copied())
                     .push_bind(v.line.map(|l| l as i64))
                     .push_bind(v.raw_answer.clone())
                     .push_bind(permutation)
-                    .push_bind(outcome)
+                    .push_bind(VerdictOutcome::of(&v.outcome))
                     .push_bind(failure)
                     .push_bind(exact)
                     .push_bind(semantic)
@@ -259,7 +250,7 @@ pub struct StoredVerdict {
     pub line: Option<i64>,
     pub raw_answer: Option<String>,
     pub permutation: Option<String>,
-    pub outcome: String,
+    pub outcome: VerdictOutcome,
     pub failure: Option<String>,
     pub exact_match: bool,
     pub semantic_match: bool,

@@ -180,7 +180,7 @@ pub(super) async fn render_admin(
                 annotator: f.annotator,
                 dataset: f.dataset,
                 item_id: f.item_id,
-                outcome: f.outcome,
+                outcome: f.outcome.as_str().to_owned(),
                 reason: f.reason,
                 finished_at: f.finished_at,
             })
@@ -273,14 +273,14 @@ async fn assign(
     let mut chosen = Vec::new();
     for part in &form.annotators {
         chosen.push(part.trim().parse::<i64>().map_err(|_| {
-            AppError::BadRequest(format!("annotator: '{part}' is not an annotator id"))
+            AppError::Invalid(format!("annotator: '{part}' is not an annotator id"))
         })?);
     }
     let how = match form.mode.as_str() {
         "split" => Assignment::Split(chosen),
         "list" => {
             let [annotator] = chosen[..] else {
-                return Err(AppError::BadRequest(format!(
+                return Err(AppError::Invalid(format!(
                     "an id list goes to exactly one annotator; {} were chosen",
                     chosen.len()
                 ))
@@ -298,7 +298,7 @@ async fn assign(
             }
         }
         other => {
-            return Err(AppError::BadRequest(format!(
+            return Err(AppError::Invalid(format!(
                 "form field `mode` is {other:?}; expected \"split\" or \"list\""
             ))
             .into());

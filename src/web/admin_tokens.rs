@@ -79,7 +79,7 @@ fn optional_quota(field: &str, text: &str) -> Result<Option<i64>, AppError> {
         return Ok(None);
     }
     text.parse::<i64>().map(Some).map_err(|_| {
-        AppError::BadRequest(format!(
+        AppError::Invalid(format!(
             "{field}: '{text}' is not a whole number (leave it empty for the server's default)"
         ))
     })

@@ -53,7 +53,7 @@ fn parse_field<T: std::str::FromStr>(name: &str, text: &str, default: T) -> Resu
         return Ok(default);
     }
     text.parse().map_err(|_| {
-        AppError::BadRequest(format!(
+        AppError::Invalid(format!(
             "form field `{name}`: '{text}' is not a whole number ≥ 0"
         ))
     })
@@ -129,13 +129,13 @@ where
     }
     text.parse()
         .map(Some)
-        .map_err(|e| AppError::BadRequest(format!("query parameter `{name}`: '{text}': {e}")))
+        .map_err(|e| AppError::Invalid(format!("query parameter `{name}`: '{text}': {e}")))
 }
 
 impl ReportQuery {
     fn parse(raw: Option<&str>) -> Result<ReportQuery, AppError> {
         serde_urlencoded::from_str(raw.unwrap_or(""))
-            .map_err(|e| AppError::BadRequest(format!("query string: {e}")))
+            .map_err(|e| AppError::Invalid(format!("query string: {e}")))
     }
 
     fn settings(&self) -> Result<ReportSettings, AppError> {
@@ -146,7 +146,7 @@ impl ReportQuery {
             (Some(a), Some(b)) => Some((a, b)),
             (None, None) => None,
             _ => {
-                return Err(AppError::BadRequest(
+                return Err(AppError::Invalid(
                     "query parameters `a` and `b`: give both submission ids to compare, or neither"
                         .to_owned(),
                 ));
@@ -155,7 +155,7 @@ impl ReportQuery {
         let confidence_level =
             optional::<f64>("confidence", &self.confidence)?.unwrap_or(DEFAULT_CONFIDENCE_LEVEL);
         if !(confidence_level > 0.0 && confidence_level < 1.0) {
-            return Err(AppError::BadRequest(format!(
+            return Err(AppError::Invalid(format!(
                 "query parameter `confidence`: {confidence_level} is not strictly between 0 and 1"
             )));
         }
@@ -163,7 +163,7 @@ impl ReportQuery {
             optional::<usize>("bootstrap", &self.bootstrap)?.unwrap_or(DEFAULT_REPLICATES);
         // A page request must stay bounded; the command line has no such limit.
         if replicates > 20_000 {
-            return Err(AppError::BadRequest(format!(
+            return Err(AppError::Invalid(format!(
                 "query parameter `bootstrap`: {replicates} replicates; at most 20000 here"
             )));
         }

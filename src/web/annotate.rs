@@ -368,7 +368,7 @@ async fn own_answer(
     Ok(Json(OwnAnswer {
         dataset: a.dataset,
         item_id: a.item_id,
-        outcome: a.outcome,
+        outcome: a.outcome.as_str().to_owned(),
         answer: a.answer,
         reason: a.reason,
         time_on_item_ms: a.telemetry.time_on_item_ms,

@@ -214,7 +214,7 @@ impl ItemQuery {
         let direction = match blank(&self.direction) {
             None => None,
             Some(d) => Some(Direction::parse(&d.to_ascii_lowercase()).ok_or_else(|| {
-                AppError::BadRequest(format!(
+                AppError::Invalid(format!(
                     "direction must be 'forward' or 'inverse', not {d:?}"
                 ))
             })?),
@@ -226,7 +226,7 @@ impl ItemQuery {
                     .ok()
                     .and_then(StepLength::new)
                     .ok_or_else(|| {
-                        AppError::BadRequest(format!(
+                        AppError::Invalid(format!(
                             "step_length must be a whole number from 3 to 10, not {s:?}"
                         ))
                     })?,
@@ -239,7 +239,7 @@ impl ItemQuery {
                 .ok()
                 .filter(|n| (1..=max).contains(n))
                 .ok_or_else(|| {
-                    AppError::BadRequest(format!(
+                    AppError::Invalid(format!(
                         "{name} must be a whole number from 1 to {max}, not {s:?}"
                     ))
                 }),
@@ -493,7 +493,7 @@ mod tests {
             direction: Some("sideways".into()),
             ..ItemQuery::default()
         };
-        let Err(AppError::BadRequest(m)) = q.selection() else {
+        let Err(AppError::Invalid(m)) = q.selection() else {
             panic!("expected a bad request");
         };
         assert!(m.contains("direction"), "{m}");
@@ -501,11 +501,11 @@ mod tests {
             step_length: Some("11".into()),
             ..ItemQuery::default()
         };
-        assert!(matches!(q.selection(), Err(AppError::BadRequest(m)) if m.contains("step_length")));
+        assert!(matches!(q.selection(), Err(AppError::Invalid(m)) if m.contains("step_length")));
         let q = ItemQuery {
             per_page: Some("0".into()),
             ..ItemQuery::default()
         };
-        assert!(matches!(q.selection(), Err(AppError::BadRequest(m)) if m.contains("per_page")));
+        assert!(matches!(q.selection(), Err(AppError::Invalid(m)) if m.contains("per_page")));
     }
 }

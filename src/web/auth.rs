@@ -38,19 +38,23 @@ fn bearer_token(headers: &HeaderMap) -> Result<&str, AppError> {
     let header = headers
         .get(header::AUTHORIZATION)
         .ok_or_else(|| {
-            AppError::Unauthorized(
+            AppError::Unauthenticated(
                 "this endpoint needs an API token: send `Authorization: Bearer TOKEN`".to_owned(),
             )
         })?
         .to_str()
-        .map_err(|_| AppError::Unauthorized("the Authorization header is not text".to_owned()))?;
+        .map_err(|_| {
+            AppError::Unauthenticated("the Authorization header is not text".to_owned())
+        })?;
     header
         .strip_prefix("Bearer ")
         .or_else(|| header.strip_prefix("bearer "))
         .map(str::trim)
         .filter(|t| !t.is_empty())
         .ok_or_else(|| {
-            AppError::Unauthorized("the Authorization header must read `Bearer TOKEN`".to_owned())
+            AppError::Unauthenticated(
+                "the Authorization header must read `Bearer TOKEN`".to_owned(),
+            )
         })
 }
 

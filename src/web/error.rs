@@ -14,14 +14,14 @@ impl AppError {
     pub fn status(&self) -> StatusCode {
         match self {
             AppError::NotFound(_) => StatusCode::NOT_FOUND,
-            AppError::BadRequest(_) => StatusCode::BAD_REQUEST,
-            AppError::Unauthorized(_) => StatusCode::UNAUTHORIZED,
-            AppError::Forbidden(_) => StatusCode::FORBIDDEN,
+            AppError::Invalid(_) => StatusCode::BAD_REQUEST,
+            AppError::Unauthenticated(_) => StatusCode::UNAUTHORIZED,
+            AppError::NotPermitted(_) => StatusCode::FORBIDDEN,
             AppError::Conflict(_) => StatusCode::CONFLICT,
-            AppError::PayloadTooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
-            AppError::UnsupportedMediaType(_) => StatusCode::UNSUPPORTED_MEDIA_TYPE,
-            AppError::Unprocessable { .. } => StatusCode::UNPROCESSABLE_ENTITY,
-            AppError::TooManyRequests { .. } => StatusCode::TOO_MANY_REQUESTS,
+            AppError::TooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
+            AppError::UnsupportedFormat(_) => StatusCode::UNSUPPORTED_MEDIA_TYPE,
+            AppError::Rejected { .. } => StatusCode::UNPROCESSABLE_ENTITY,
+            AppError::LimitReached { .. } => StatusCode::TOO_MANY_REQUESTS,
             AppError::Unavailable(_) => StatusCode::SERVICE_UNAVAILABLE,
             AppError::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
         }
@@ -55,19 +55,19 @@ impl IntoResponse for AppError {
         let body = ErrorBody {
             error: self.to_string(),
             problems: match &self {
-                AppError::Unprocessable { problems, .. } => Some(problems),
+                AppError::Rejected { problems, .. } => Some(problems),
                 _ => None,
             },
         };
         let mut response = (self.status(), Json(body)).into_response();
         match &self {
-            AppError::Unauthorized(_) => {
+            AppError::Unauthenticated(_) => {
                 response.headers_mut().insert(
                     header::WWW_AUTHENTICATE,
                     HeaderValue::from_static("Bearer realm=\"enact-hub\""),
                 );
             }
-            AppError::TooManyRequests {
+            AppError::LimitReached {
                 retry_after: Some(retry_after),
                 ..
             } => {

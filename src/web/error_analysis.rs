@@ -127,7 +127,7 @@ impl CompareQuery {
         match self.top {
             None => Ok(DEFAULT_ROWS),
             Some(n @ 1..=50) => Ok(n),
-            Some(n) => Err(AppError::BadRequest(format!(
+            Some(n) => Err(AppError::Invalid(format!(
                 "query parameter `top`: {n} is outside 1..=50"
             ))),
         }
@@ -140,7 +140,7 @@ impl CompareQuery {
         text.split(',')
             .map(|id| {
                 id.trim().parse().map_err(|_| {
-                    AppError::BadRequest(format!(
+                    AppError::Invalid(format!(
                         "query parameter `pick`: `{id}` is not a submission id"
                     ))
                 })
@@ -153,7 +153,7 @@ impl CompareQuery {
             None | Some("" | "overall") => Ok(None),
             Some("forward") => Ok(Some(Direction::Forward)),
             Some("inverse") => Ok(Some(Direction::Inverse)),
-            Some(other) => Err(AppError::BadRequest(format!(
+            Some(other) => Err(AppError::Invalid(format!(
                 "query parameter `direction`: `{other}` is not overall, forward or inverse"
             ))),
         }

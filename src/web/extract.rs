@@ -35,30 +35,30 @@ impl From<JsonRejection> for AppError {
     fn from(rejection: JsonRejection) -> Self {
         let detail = rejection.body_text();
         if rejection.status() == axum::http::StatusCode::PAYLOAD_TOO_LARGE {
-            return AppError::PayloadTooLarge(format!("the body is too large: {detail}"));
+            return AppError::TooLarge(format!("the body is too large: {detail}"));
         }
         match rejection {
-            JsonRejection::JsonDataError(_) => AppError::Unprocessable {
+            JsonRejection::JsonDataError(_) => AppError::Rejected {
                 message: format!("the JSON body does not fit this route: {detail}"),
                 problems: Vec::new(),
             },
-            JsonRejection::MissingJsonContentType(_) => AppError::UnsupportedMediaType(
+            JsonRejection::MissingJsonContentType(_) => AppError::UnsupportedFormat(
                 "this route takes a JSON body: send `Content-Type: application/json`".to_owned(),
             ),
-            _ => AppError::BadRequest(format!("the body is not valid JSON: {detail}")),
+            _ => AppError::Invalid(format!("the body is not valid JSON: {detail}")),
         }
     }
 }
 
 impl From<QueryRejection> for AppError {
     fn from(rejection: QueryRejection) -> Self {
-        AppError::BadRequest(format!("query string: {}", rejection.body_text()))
+        AppError::Invalid(format!("query string: {}", rejection.body_text()))
     }
 }
 
 impl From<PathRejection> for AppError {
     fn from(rejection: PathRejection) -> Self {
-        AppError::BadRequest(format!("path: {}", rejection.body_text()))
+        AppError::Invalid(format!("path: {}", rejection.body_text()))
     }
 }
 
@@ -79,7 +79,7 @@ impl<S: Send + Sync> FromRequestParts<S> for IdempotencyKey {
             .filter(|k| !k.is_empty() && k.len() <= 200)
             .map(|k| IdempotencyKey(Some(k.to_owned())))
             .ok_or_else(|| {
-                AppError::BadRequest(
+                AppError::Invalid(
                     "the Idempotency-Key header must be 1 to 200 printable characters".to_owned(),
                 )
             })

@@ -103,7 +103,7 @@ struct BoardRequest {
 impl BoardRequest {
     fn parse(raw: Option<&str>) -> Result<BoardRequest, AppError> {
         let pairs: Vec<(String, String)> = serde_urlencoded::from_str(raw.unwrap_or(""))
-            .map_err(|e| AppError::BadRequest(format!("query string: {e}")))?;
+            .map_err(|e| AppError::Invalid(format!("query string: {e}")))?;
         let mut query = BoardQuery::default();
         let mut chart: Option<Vec<i64>> = None;
         let number = |name: &str, text: &str, max: usize| {
@@ -112,7 +112,7 @@ impl BoardRequest {
                 .ok()
                 .filter(|n| (1..=max).contains(n))
                 .ok_or_else(|| {
-                    AppError::BadRequest(format!(
+                    AppError::Invalid(format!(
                         "{name} must be a whole number from 1 to {max}, not {text:?}"
                     ))
                 })
@@ -121,7 +121,7 @@ impl BoardRequest {
             let value = value.trim();
             match key.as_str() {
                 _ if value.is_empty() => {}
-                "sort" => query.sort = SortKey::parse(value).map_err(AppError::BadRequest)?,
+                "sort" => query.sort = SortKey::parse(value).map_err(AppError::Invalid)?,
                 "page" => query.page = number("page", value, 1_000_000)?,
                 "per_page" => query.per_page = number("per_page", value, MAX_PER_PAGE)?,
                 "all" => {
@@ -129,7 +129,7 @@ impl BoardRequest {
                         "1" | "true" => true,
                         "0" | "false" => false,
                         other => {
-                            return Err(AppError::BadRequest(format!(
+                            return Err(AppError::Invalid(format!(
                                 "all must be 1 or 0, not {other:?}"
                             )));
                         }
@@ -140,7 +140,7 @@ impl BoardRequest {
                 "chart" => {
                     for part in value.split(',').filter(|p| !p.trim().is_empty()) {
                         let id = part.trim().parse().map_err(|_| {
-                            AppError::BadRequest(format!("chart: {part:?} is not a submission id"))
+                            AppError::Invalid(format!("chart: {part:?} is not a submission id"))
                         })?;
                         chart.get_or_insert_with(Vec::new).push(id);
                     }

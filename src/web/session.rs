@@ -94,7 +94,7 @@ impl LoginLimiter {
                 } else {
                     "your address".to_owned()
                 };
-                return Err(AppError::TooManyRequests {
+                return Err(AppError::LimitReached {
                     message: format!(
                         "too many failed logins for {what} ({limit} in {} minutes); try again in \
                          {minutes} minutes",
@@ -271,7 +271,7 @@ impl FromRequestParts<AppState> for LoggedIn {
             None if parts.method == Method::GET && !wants_json(&parts.headers, &parts.uri) => {
                 Err(Redirect::to("/login").into_response())
             }
-            None => Err(AppError::Unauthorized(
+            None => Err(AppError::Unauthenticated(
                 "not logged in, or the session has expired: log in at /login".to_owned(),
             )
             .into_response()),
@@ -300,7 +300,7 @@ impl FromRequestParts<AppState> for Admin {
         if session.is_admin {
             Ok(Admin(session))
         } else {
-            Err(PageError(AppError::Forbidden(format!(
+            Err(PageError(AppError::NotPermitted(format!(
                 "the admin pages are for admins; '{}' is an annotator",
                 session.name
             )))
@@ -333,7 +333,7 @@ pub struct Protected<T> {
 }
 
 fn csrf_rejected(json: bool) -> Response {
-    let error = AppError::Forbidden(
+    let error = AppError::NotPermitted(
         "this request lacks the page's CSRF token, or carries a stale one: reload the page and \
          try again"
             .to_owned(),
@@ -372,7 +372,7 @@ impl<T: DeserializeOwned + Send> FromRequest<AppState> for Protected<T> {
                 return Err(csrf_rejected(true));
             }
             serde_json::from_slice::<T>(&bytes)
-                .map_err(|e| AppError::BadRequest(format!("request body: {e}")).into_response())?
+                .map_err(|e| AppError::Invalid(format!("request body: {e}")).into_response())?
         } else {
             let fields: Vec<(String, String)> =
                 serde_urlencoded::from_bytes(&bytes).unwrap_or_default();
@@ -384,9 +384,8 @@ impl<T: DeserializeOwned + Send> FromRequest<AppState> for Protected<T> {
             if !token_ok(field_token.as_deref()) {
                 return Err(csrf_rejected(false));
             }
-            serde_urlencoded::from_bytes::<T>(&bytes).map_err(|e| {
-                PageError(AppError::BadRequest(format!("form: {e}"))).into_response()
-            })?
+            serde_urlencoded::from_bytes::<T>(&bytes)
+                .map_err(|e| PageError(AppError::Invalid(format!("form: {e}"))).into_response())?
         };
         Ok(Protected { session, body })
     }
@@ -585,7 +584,7 @@ async fn accept_invite(
     match annotators::accept_invite(&state.hub, &token, &form.password, &form.repeat).await {
         Ok(annotator) => Ok(start_session(&state, &headers, annotator, "/annotate").await?),
         // A password the rules refuse: the form again, saying why.
-        Err(AppError::BadRequest(message)) => {
+        Err(AppError::Invalid(message)) => {
             invite_form(
                 &state,
                 &headers,

@@ -186,7 +186,7 @@ fn variant_specs(variants: &[VariantBody]) -> Result<Vec<VariantSpec>, AppError>
                 VariantBody::Text(text) => VariantSpec::parse(text),
                 VariantBody::Parts(p) => VariantSpec::new(&p.family, &p.label, &p.dataset),
             }
-            .map_err(|e| AppError::BadRequest(format!("variants[{i}]: {e}")))
+            .map_err(|e| AppError::Invalid(format!("variants[{i}]: {e}")))
         })
         .collect()
 }
@@ -246,7 +246,7 @@ impl ReportQuery {
             .map(str::trim)
             .filter(|m| !m.is_empty());
         match (model, self.human.unwrap_or(false)) {
-            (Some(_), true) => Err(AppError::BadRequest(
+            (Some(_), true) => Err(AppError::Invalid(
                 "query: give `model` or `human=true`, not both".to_owned(),
             )),
             (None, true) => Ok(StudyRowChoice::Human),
@@ -259,7 +259,7 @@ impl ReportQuery {
                     .filter(|a| !a.is_empty())
                     .map(str::to_owned),
             }),
-            (None, false) => Err(AppError::BadRequest(
+            (None, false) => Err(AppError::Invalid(
                 "query: `model` is required (or `human=true` for the Human row)".to_owned(),
             )),
         }
@@ -291,7 +291,7 @@ async fn study_report(
     let choice = query.choice()?;
     let format = query.format.as_deref().unwrap_or("json");
     if !["json", "csv", "tex", "svg", "handedness-svg", "tar"].contains(&format) {
-        return Err(AppError::BadRequest(format!(
+        return Err(AppError::Invalid(format!(
             "query parameter `format`: {format:?} is not one of json, csv, tex, svg, \
              handedness-svg, tar"
         )));
@@ -467,7 +467,7 @@ async fn study_page(
                 account: account.clone(),
             }),
             None => {
-                return Err(AppError::BadRequest(format!(
+                return Err(AppError::Invalid(format!(
                     "query parameter `row`: {other:?} is neither `human` nor `model:NAME`"
                 ))
                 .into());
@@ -591,7 +591,7 @@ async fn admin_create(
         }
         variants.push(
             VariantSpec::parse(line)
-                .map_err(|e| AppError::BadRequest(format!("variants, line {}: {e}", i + 1)))?,
+                .map_err(|e| AppError::Invalid(format!("variants, line {}: {e}", i + 1)))?,
         );
     }
     let view = studies::create(

@@ -164,7 +164,7 @@ impl From<SubmitQuery> for SubmissionMetadata {
 /// before reading, and a body that grows past it as soon as it does.
 async fn read_body(body: Body, headers: &HeaderMap, limit: usize) -> Result<Vec<u8>, AppError> {
     let too_large = || {
-        AppError::PayloadTooLarge(format!(
+        AppError::TooLarge(format!(
             "the submission body is larger than the limit of {limit} bytes"
         ))
     };
@@ -178,7 +178,7 @@ async fn read_body(body: Body, headers: &HeaderMap, limit: usize) -> Result<Vec<
     match axum::body::to_bytes(body, limit).await {
         Ok(bytes) => Ok(bytes.into()),
         Err(e) if is_length_limit(&e) => Err(too_large()),
-        Err(e) => Err(AppError::BadRequest(format!(
+        Err(e) => Err(AppError::Invalid(format!(
             "the request body could not be read: {e}"
         ))),
     }
@@ -256,7 +256,7 @@ impl From<StoredVerdict> for ItemVerdictView {
             direction: v.direction.as_str().to_owned(),
             step_length: v.step_length.get(),
             line: v.line,
-            outcome: v.outcome,
+            outcome: v.outcome.as_str().to_owned(),
             failure: v.failure,
             exact_match: v.exact_match,
             semantic_match: v.semantic_match,
@@ -451,7 +451,7 @@ async fn create_token(
 
 pub(super) fn parse_role(text: &str) -> Result<Role, AppError> {
     Role::parse(text).ok_or_else(|| {
-        AppError::BadRequest(format!("role must be 'submitter' or 'admin', not {text:?}"))
+        AppError::Invalid(format!("role must be 'submitter' or 'admin', not {text:?}"))
     })
 }
 

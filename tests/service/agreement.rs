@@ -44,6 +44,8 @@ async fn stored_answers(
     let rows = store::annotations::item_rowids(&mut conn, dataset.id, &ids)
         .await
         .expect("query")
+        .into_iter()
+        .collect::<Option<Vec<i64>>>()
         .expect("ids");
     for (a, row) in answers.iter().enumerate() {
         let annotator = store::annotations::create_annotator(
@@ -53,8 +55,7 @@ async fn stored_answers(
             &token_hash(&new_token()),
         )
         .await
-        .expect("insert")
-        .expect("new");
+        .expect("insert");
         for (item, answer) in row.iter().enumerate() {
             let Some(answer) = answer else { continue };
             let outcome = Outcome::Answered(Permutation::new(answer.clone()).expect("perm"));
@@ -402,7 +403,7 @@ async fn answer_queue(
     .await
     .expect("queue");
     let mut answered = 0;
-    for entry in queue.iter().filter(|e| !e.status.is_done()) {
+    for entry in queue.iter().filter(|e| e.finished.is_none()) {
         let labels = answer_of(who, &entry.item_id, entry.step_length.get());
         let path = format!("/annotate/mini/{}", entry.item_id);
         let (status, _) = browser.text(&path).await;

@@ -199,8 +199,7 @@ pub async fn annotator_on(pool: &Pool, name: &str, admin: bool) -> i64 {
     let id =
         store::annotations::create_annotator(&mut conn, name, admin, &token_hash(&new_token()))
             .await
-            .expect("insert")
-            .expect("new name");
+            .expect("insert");
     let hash = hash_password(PASSWORD).expect("hash");
     db!(
         pool,
@@ -234,6 +233,8 @@ pub async fn assign_on(pool: &Pool, dataset: &str, annotator: i64, item_ids: &[&
     let rows = store::annotations::item_rowids(&mut conn, dataset.id, &ids)
         .await
         .expect("query")
+        .into_iter()
+        .collect::<Option<Vec<i64>>>()
         .expect("known ids");
     let pairs: Vec<(i64, i64)> = rows.into_iter().map(|r| (annotator, r)).collect();
     store::annotations::assign(&mut conn, &pairs)
@@ -280,8 +281,7 @@ async fn invite_sets_a_password_once_and_logs_in() {
         let mut conn = server.pool.acquire().await.expect("conn");
         store::annotations::create_annotator(&mut conn, "ada", false, &token_hash(&token))
             .await
-            .expect("insert")
-            .expect("new");
+            .expect("insert");
     }
     let mut browser = Browser::new(&server);
     let path = format!("/invite/{token}");

@@ -129,7 +129,7 @@ async fn the_web_and_the_command_line_share_one_naming_rule() {
     assert!(!output.status.success());
     let cli = String::from_utf8_lossy(&output.stderr);
     let hub = Hub::from(server.pool.clone());
-    let Err(AppError::BadRequest(rule)) =
+    let Err(AppError::Invalid(rule)) =
         app::annotators::create(&hub, &tester(), "two words", false).await
     else {
         panic!("a name with a space is refused");

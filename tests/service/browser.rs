@@ -124,7 +124,6 @@ async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
         store::annotations::create_annotator(&mut conn, "eve", false, &token_hash(&token))
             .await
             .expect("insert")
-            .expect("new")
     };
     assign(
         &server,

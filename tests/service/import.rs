@@ -408,7 +408,7 @@ async fn scene_graph_import_stores_enacts_transition_signatures_and_upgrades_on_
             .await
             .expect("q")
             .expect("stored");
-        assert_eq!(source, "scene_graph");
+        assert_eq!(source.as_str(), "scene_graph");
         let table: enact_hub::core::verifier::ItemSignatures =
             serde_json::from_str(&json).expect("table");
         for (i, t) in r["transitions"]

@@ -13,6 +13,7 @@ mod backup;
 mod browser;
 mod cli;
 mod client;
+mod constraints;
 mod demo_link;
 mod errors;
 mod escaping;

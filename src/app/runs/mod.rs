@@ -119,7 +119,7 @@ pub struct RunStamp {
 /// Errors in the endpoint URL are the caller's: a base URL over http(s), with no credentials
 /// or query in it (keys go in the key's variable, never in the URL that is stored).
 pub fn endpoint_url(endpoint: &str) -> Result<url::Url, AppError> {
-    let bad = |why: &str| AppError::BadRequest(format!("endpoint {endpoint:?}: {why}"));
+    let bad = |why: &str| AppError::Invalid(format!("endpoint {endpoint:?}: {why}"));
     let url = url::Url::parse(endpoint.trim()).map_err(|e| bad(&e.to_string()))?;
     if !matches!(url.scheme(), "http" | "https") {
         return Err(bad("must be an http:// or https:// URL"));
@@ -189,13 +189,13 @@ pub async fn open(hub: &Hub, actor: &Actor, spec: &RunSpec) -> Result<RunRow, Ap
     let dataset = datasets::by_name(hub, &spec.dataset).await?;
     let endpoint = stored_endpoint(&endpoint_url(&spec.endpoint)?);
     if spec.model.trim().is_empty() {
-        return Err(AppError::BadRequest("the model name is empty".to_owned()));
+        return Err(AppError::Invalid("the model name is empty".to_owned()));
     }
     let params = serde_json::to_string(&spec.params)?;
     let prompt_hash = prompt_template_hash();
     let name = match &spec.name {
         Some(n) if n.trim().is_empty() || n.chars().count() > 200 => {
-            return Err(AppError::BadRequest(
+            return Err(AppError::Invalid(
                 "a run's name must be 1 to 200 characters".to_owned(),
             ));
         }
@@ -287,12 +287,12 @@ pub async fn execute(
     stop: &(dyn Fn() -> bool + Send + Sync),
 ) -> Result<RunReport, AppError> {
     if settings.concurrency == 0 {
-        return Err(AppError::BadRequest(
+        return Err(AppError::Invalid(
             "concurrency must be at least 1".to_owned(),
         ));
     }
     if spec.limit == Some(0) {
-        return Err(AppError::BadRequest("limit must be at least 1".to_owned()));
+        return Err(AppError::Invalid("limit must be at least 1".to_owned()));
     }
     let run = open(hub, actor, spec).await?;
     let params: GenerationParams = serde_json::from_str(&run.params)?;
