@@ -380,7 +380,7 @@ async fn the_protocol_runs_once_with_csrf_and_cross_assigns_blind() {
 fn answer_of(who: usize, item_id: &str, length: u8) -> Vec<u8> {
     let mut labels: Vec<u8> = (1..length).rev().collect();
     let spread: usize = item_id.bytes().map(usize::from).sum();
-    if (spread + who) % 6 == 0 {
+    if (spread + who).is_multiple_of(6) {
         labels.swap(0, 1);
     }
     labels
