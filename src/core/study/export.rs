@@ -19,6 +19,10 @@ pub fn stamp_lines(stamp: &StudyStamp) -> Vec<String> {
         format!("study: {}", stamp.study),
         format!("row: {}", stamp.row),
         format!("metric_version: {}", stamp.metric_version),
+        format!(
+            "hub: enact-hub {} (commit {})",
+            stamp.hub.version, stamp.hub.commit
+        ),
         format!("tests: {}", stamp.tests),
         format!(
             "baseline: {} sha256:{} submission {}",

@@ -14,6 +14,7 @@ use super::{Alignment, VariantSpec};
 use crate::core::agreement::welch_t_test;
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::error_analysis::Handedness;
+use crate::core::version::{HubBuild, THIS_BUILD};
 
 /// Names what the numbers of a study report mean; bump it when a definition changes.
 pub const STUDY_METRIC_VERSION: &str = "enact-hub-study-report/1";
@@ -92,6 +93,8 @@ pub struct StampedVariant {
 pub struct StudyStamp {
     pub study: String,
     pub metric_version: String,
+    /// The enact-hub build that computed the report.
+    pub hub: HubBuild,
     pub tests: String,
     pub row: String,
     pub model: Option<String>,
@@ -243,6 +246,7 @@ pub fn build_study_report(inputs: &StudyInputs) -> Result<StudyReport, String> {
         stamp: StudyStamp {
             study: inputs.study.clone(),
             metric_version: STUDY_METRIC_VERSION.to_owned(),
+            hub: THIS_BUILD,
             tests: STUDY_TESTS.to_owned(),
             row: inputs.row_label.clone(),
             model: inputs.model.clone(),

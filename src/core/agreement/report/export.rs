@@ -35,6 +35,10 @@ pub fn stamp_lines(stamp: &ReportStamp) -> Vec<String> {
         format!("dataset: {}", stamp.dataset),
         format!("dataset_hash: sha256:{}", stamp.dataset_hash),
         format!("metric_version: {}", stamp.metric_version),
+        format!(
+            "hub: enact-hub {} (commit {})",
+            stamp.hub.version, stamp.hub.commit
+        ),
         format!("encoding: {} ({} alpha)", stamp.encoding, stamp.level),
         format!(
             "bootstrap: seed {}, {} replicates over items, {}% percentile interval",

@@ -24,6 +24,7 @@ use crate::core::annotation::{HumanAnswer, human_entries, mean_by_item};
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::leaderboard::{HumanCoverage, LeaderboardRow};
 use crate::core::verifier::PerformanceReport;
+use crate::core::version::{HubBuild, THIS_BUILD};
 
 /// Names what the numbers of a report mean. Bump it when a definition changes (which answers
 /// count, how an encoding or a comparison is computed), so stamped files say which rules made
@@ -322,6 +323,8 @@ pub struct ReportStamp {
     pub dataset: String,
     pub dataset_hash: String,
     pub metric_version: &'static str,
+    /// The enact-hub build that computed the report.
+    pub hub: HubBuild,
     pub encoding: OrderingEncoding,
     pub level: MeasurementLevel,
     pub bootstrap_seed: u64,
@@ -513,6 +516,7 @@ pub fn build_report(inputs: &ReportInputs) -> Result<AgreementReport, ReportErro
             dataset: inputs.dataset.clone(),
             dataset_hash: inputs.dataset_hash.clone(),
             metric_version: REPORT_METRIC_VERSION,
+            hub: THIS_BUILD,
             encoding: inputs.encoding,
             level,
             bootstrap_seed: inputs.bootstrap.seed,
