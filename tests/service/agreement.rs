@@ -163,6 +163,7 @@ async fn agreement_on_stored_annotations_matches_the_core() {
         assert_eq!(json["encoding"], encoding.name());
         assert_eq!(json["level"], expected.level.name());
         assert_eq!(json["metric_version"], "enact-hub-agreement-report/1");
+        assert_eq!(json["hub"]["version"], env!("CARGO_PKG_VERSION"));
         assert_eq!(json["dataset_hash"].as_str().expect("hash").len(), 64);
         close(&json["alpha"], expected.alpha.estimate.alpha);
         close(&json["ci"]["low"], expected.alpha.ci_low);
@@ -590,6 +591,8 @@ async fn end_to_end_primary_split_protocol_answers_and_report() {
     assert_eq!(stamp["submission_ids"], serde_json::json!([submission]));
     assert_eq!(stamp["annotator_ids"], serde_json::json!(ids));
     assert_eq!(stamp["protocol"]["seed"], 3);
+    assert_eq!(stamp["hub"]["version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(stamp["hub"]["commit"], enact_hub::core::version::COMMIT);
     let rows = report["rows"].as_array().expect("rows");
     assert_eq!(rows.last().expect("human")["source"], "human");
     let comparison = &report["comparisons"][0];

@@ -770,6 +770,13 @@ mod tests {
             let text = String::from_utf8(file.bytes.clone()).unwrap();
             assert!(text.contains(&report.stamp.dataset_hash), "{}", file.name);
             assert!(text.contains(REPORT_METRIC_VERSION), "{}", file.name);
+            // The JSON holds the stamp as an object, the other files as `hub:` lines.
+            assert!(
+                text.contains(crate::core::version::VERSION)
+                    && text.contains(crate::core::version::COMMIT),
+                "{}",
+                file.name
+            );
         }
         let tex = String::from_utf8(files[6].bytes.clone()).unwrap();
         assert!(tex.contains("\\toprule") && tex.contains("Human Performance"));
