@@ -71,7 +71,7 @@ serve_demo() {
 echo "== maturin build --profile $PROFILE (the wheel)"
 WHEELS="$WORK/wheels"
 BUILD_START=$(date +%s)
-"$TOOLS_VENV/bin/maturin" build --locked --profile "$PROFILE" --compatibility manylinux_2_28 \
+"$TOOLS_VENV/bin/maturin" build --locked --profile "$PROFILE" --compatibility manylinux_2_34 \
   --out "$WHEELS"
 WHEEL=$(ls "$WHEELS"/enact_hub-"$VERSION"-*.whl 2>/dev/null | head -n 1 || true)
 if [ -z "$WHEEL" ]; then
