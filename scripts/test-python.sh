@@ -93,6 +93,8 @@ data = re.escape("enact_hub-{}.data/".format(version))
 allowed = [
     r"enact_hub/[a-z_]+\.py", r"enact_hub/py\.typed",
     info + r"(METADATA|WHEEL|RECORD)", info + r"licenses/.+",
+    # The dependency tree's SBOM (PEP 770), which maturin writes into the metadata.
+    info + r"sboms/[a-z_-]+\.cyclonedx\.json",
     data + r"scripts/enact-hub",
 ]
 required = [
