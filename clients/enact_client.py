@@ -2,22 +2,25 @@
 """Example enact-hub client: ask a model every item of a dataset (or of every dataset of an
 ablation study), then submit its answers.
 
-For each item of DATASET on the hub, this script
+It is written over the `enact_hub` Python package (`pip install enact-hub`, or from a checkout
+`PYTHONPATH=python`), whose `Hub` does the hub's side. For each item of DATASET on the hub,
+this script
 
-1. reads the item over the hub's JSON API (`GET /api/v1/datasets/{dataset}/items`, then each
-   item's own URL for its question and image URLs, then the PNG frames);
+1. reads the item and its PNG frames through `Hub.items` (the hub's JSON API);
 2. sends the images and the question to an OpenAI-compatible chat-completions endpoint
    (`POST {model_url}/chat/completions`) as one user message: for each image a text part with
    its label ("Current State", "Next State 1", ...) followed by the image as a base64
    `data:image/png` URL, then the question text;
 3. keeps the model's raw answer text (the hub parses it, as ENACT's evaluation does);
 
-then posts all answers as compact JSONL (`{"id": ..., "answer": "<raw text>"}` per line) to
-`POST /api/v1/datasets/{dataset}/submissions?model=...` with the hub token, and prints the
+then submits all answers with `Hub.submit` (compact JSONL to
+`POST /api/v1/datasets/{dataset}/submissions?model=...` with the hub token), and prints the
 scores the hub returns. Items not answered (with --limit, or when the model endpoint keeps
 failing) count as unanswered: the hub scores every item of the dataset.
 
-Needs Python 3.8+ and `requests`. Example:
+Needs Python 3.9+ and the `enact_hub` package (which brings `requests`). The binary's own
+`enact-hub run DATASET --hub URL ...` does the same job resumably, with rate limits and cost;
+this script shows the package's API. Example:
 
     export ENACT_HUB_TOKEN=ehub_...          # from your hub admin
     export OPENAI_API_KEY=sk-...             # if the model endpoint needs one
@@ -25,9 +28,9 @@ Needs Python 3.8+ and `requests`. Example:
         --model-url https://api.openai.com/v1 --model gpt-4o --limit 5
 
 With `--study NAME` instead of `--dataset`, the client reads the study
-(`GET /api/v1/studies/{study}`), runs the model over its baseline and then every variant
-dataset in turn, submits each under the same model name, and prints the study report
-(`GET /api/v1/studies/{study}/report?model=...`): Δ and p per variant and direction.
+(`Hub.study`), runs the model over its baseline and then every variant dataset in turn, submits
+each under the same model name, and prints the study report (`Hub.study_report`): Δ and p per
+variant and direction.
 `--answers-out` is then a folder, with one `{dataset}.jsonl` per dataset.
 
 Exit status: 0 when the submission was stored, 1 on any error (the message says which
@@ -43,7 +46,12 @@ import time
 
 import requests
 
-USER_AGENT = "enact-hub-example-client/1"
+try:
+    import enact_hub
+except ImportError:
+    sys.exit("error: this example needs the enact_hub package: pip install enact-hub (from a checkout: PYTHONPATH=python)")
+
+USER_AGENT = "enact-hub-example-client/2 enact-hub/" + enact_hub.__version__
 
 
 class ClientError(Exception):
@@ -99,73 +107,6 @@ def request_with_retries(session, method, url, what, max_retries, base_delay, **
     raise ClientError(what + ": no attempt was made")
 
 
-class Hub:
-    """The enact-hub side: reading items and posting the submission."""
-
-    def __init__(self, base_url, token, timeout):
-        self.base = base_url.rstrip("/")
-        self.token = token
-        self.timeout = timeout
-        self.session = requests.Session()
-        self.session.headers["User-Agent"] = USER_AGENT
-
-    def get(self, path, what, **kwargs):
-        url = path if path.startswith("http") else self.base + path
-        # Reading is idempotent: retry transient failures a few times.
-        return request_with_retries(self.session, "GET", url, what, 3, 1.0, timeout=self.timeout, **kwargs)
-
-    def item_urls(self, dataset, limit):
-        """Item URLs in dataset order, at most `limit` of them (all when None)."""
-        urls = []
-        path = "/api/v1/datasets/{}/items?per_page=500".format(dataset)
-        while path and (limit is None or len(urls) < limit):
-            page = self.get(path, "listing items of dataset '{}'".format(dataset)).json()
-            urls.extend(entry["url"] for entry in page["items"])
-            path = page.get("next")
-        return urls if limit is None else urls[:limit]
-
-    def item(self, url):
-        return self.get(url, "reading item {}".format(url)).json()
-
-    def study_datasets(self, study):
-        """The baseline and then each variant dataset of a study."""
-        view = self.get("/api/v1/studies/{}".format(study), "reading study '{}'".format(study)).json()
-        return [view["baseline"]] + [v["dataset"] for v in view["variants"]]
-
-    def study_report(self, study, model):
-        return self.get(
-            "/api/v1/studies/{}/report".format(study),
-            "reading the report of study '{}'".format(study),
-            params={"model": model},
-        ).json()
-
-    def image_data_url(self, url):
-        png = self.get(url, "reading frame {}".format(url)).content
-        return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
-
-    def submit(self, dataset, answers, metadata):
-        body = "".join(json.dumps({"id": i, "answer": a}, ensure_ascii=False) + "\n" for i, a in answers)
-        url = "{}/api/v1/datasets/{}/submissions".format(self.base, dataset)
-        try:
-            response = self.session.post(
-                url,
-                params=metadata,
-                data=body.encode("utf-8"),
-                headers={
-                    "Authorization": "Bearer " + self.token,
-                    "Content-Type": "application/x-ndjson",
-                },
-                timeout=max(self.timeout, 300),
-            )
-        except requests.RequestException as error:
-            raise ClientError("posting the submission failed: {}".format(error))
-        if response.status_code not in (200, 201):
-            raise ClientError(
-                "posting the submission: HTTP {}: {}".format(response.status_code, describe_failure(response))
-            )
-        return response.json()
-
-
 class ChatModel:
     """Any OpenAI-compatible chat-completions endpoint."""
 
@@ -183,10 +124,10 @@ class ChatModel:
 
     def answer(self, item, image_urls):
         content = []
-        for image, data_url in zip(item["images"], image_urls):
-            content.append({"type": "text", "text": image["label"] + ":"})
+        for image, data_url in zip(item.images, image_urls):
+            content.append({"type": "text", "text": image.label + ":"})
             content.append({"type": "image_url", "image_url": {"url": data_url}})
-        content.append({"type": "text", "text": item["question"]})
+        content.append({"type": "text", "text": item.question})
         payload = {
             "model": self.model,
             "messages": [{"role": "user", "content": content}],
@@ -198,7 +139,7 @@ class ChatModel:
             self.session,
             "POST",
             self.url,
-            "model endpoint, item {}".format(item["id"]),
+            "model endpoint, item {}".format(item.id),
             self.max_retries,
             self.base_delay,
             json=payload,
@@ -209,7 +150,7 @@ class ChatModel:
         except (ValueError, KeyError, IndexError, TypeError):
             raise ClientError(
                 "model endpoint, item {}: the reply has no choices[0].message.content: {}".format(
-                    item["id"], response.text[:300]
+                    item.id, response.text[:300]
                 )
             )
         if isinstance(message, list):
@@ -251,7 +192,7 @@ def main(argv=None):
     if not token:
         print("error: set {} to your enact-hub token".format(args.hub_token_env), file=sys.stderr)
         return 1
-    hub = Hub(args.hub, token, args.timeout)
+    hub = enact_hub.Hub(args.hub, token, timeout=args.timeout)
     model = ChatModel(
         args.model_url,
         args.model,
@@ -263,7 +204,8 @@ def main(argv=None):
     )
     try:
         if args.study:
-            datasets = hub.study_datasets(args.study)
+            study = hub.study(args.study)
+            datasets = [study["baseline"]] + [v["dataset"] for v in study["variants"]]
             print("study '{}': {} datasets".format(args.study, len(datasets)), file=sys.stderr)
         else:
             datasets = [args.dataset]
@@ -277,7 +219,7 @@ def main(argv=None):
             print_scores(submission)
             submissions.append(submission)
         report = hub.study_report(args.study, args.name or args.model) if args.study else None
-    except ClientError as error:
+    except (ClientError, enact_hub.HubError) as error:
         print("error: {}".format(error), file=sys.stderr)
         return 1
     if report is None:
@@ -295,26 +237,30 @@ def main(argv=None):
 
 
 def run_dataset(hub, model, args, dataset, answers_out):
-    """Asks the model every item of `dataset` and submits the answers; the stored submission."""
-    urls = hub.item_urls(dataset, args.limit)
-    print("answering {} items of '{}' with {}".format(len(urls), dataset, args.model), file=sys.stderr)
+    """Asks the model every item of `dataset` and submits the answers; the stored submission
+    as the hub's JSON."""
+    total = hub.dataset(dataset).items
+    if args.limit is not None:
+        total = min(args.limit, total)
+    print("answering {} items of '{}' with {}".format(total, dataset, args.model), file=sys.stderr)
     answers = []
-    for n, url in enumerate(urls, 1):
-        item = hub.item(url)
-        images = [hub.image_data_url(image["url"]) for image in item["images"]]
-        answers.append((item["id"], model.answer(item, images)))
-        print("  {}/{} {}".format(n, len(urls), item["id"]), file=sys.stderr)
+    for n, item in enumerate(hub.items(dataset, limit=args.limit), 1):
+        images = ["data:image/png;base64," + base64.b64encode(image.data).decode("ascii") for image in item.images]
+        answers.append((item.id, model.answer(item, images)))
+        print("  {}/{} {}".format(n, total, item.id), file=sys.stderr)
     if answers_out:
         with open(answers_out, "w", encoding="utf-8") as out:
             for item_id, answer in answers:
                 out.write(json.dumps({"id": item_id, "answer": answer}, ensure_ascii=False) + "\n")
-    metadata = {
-        "model": args.name or args.model,
-        "description": args.description,
-        "prompt_version": args.prompt_version,
-        "notes": "sent by clients/enact_client.py; {} items answered".format(len(answers)),
-    }
-    return hub.submit(dataset, answers, metadata)
+    submission = hub.submit(
+        dataset,
+        args.name or args.model,
+        answers,
+        description=args.description,
+        prompt_version=args.prompt_version,
+        notes="sent by clients/enact_client.py; {} items answered".format(len(answers)),
+    )
+    return submission.raw
 
 
 def print_scores(submission):

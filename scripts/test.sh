@@ -98,6 +98,22 @@ echo "== PostgreSQL $("$PG_BIN/postgres" --version | awk '{print $3}') on 127.0.
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
 
+# Cargo.toml's rust-version is what `cargo install` users are promised. Cargo refuses a toolchain
+# older than it; here no dependency may need a newer one, and clippy's `incompatible_msrv` lint
+# (on by default, so under -D warnings below) refuses standard-library items newer than it.
+echo "== rust-version: no dependency needs a newer Rust"
+cargo metadata --format-version 1 --locked | python3 -c '
+import json, sys
+packages = json.load(sys.stdin)["packages"]
+ours = next(p for p in packages if p["name"] == "enact-hub")["rust_version"]
+def key(v): return tuple(int(x) for x in v.split("."))
+newer = ["%s %s needs %s" % (p["name"], p["version"], p["rust_version"]) for p in packages
+         if p.get("rust_version") and key(p["rust_version"]) > key(ours)]
+if newer:
+    sys.exit("error: rust-version is %s, but %s" % (ours, "; ".join(newer)))
+print("   rust-version %s" % ours)
+'
+
 echo "== cargo clippy --all-targets -- -D warnings"
 cargo clippy --all-targets --locked -- -D warnings
 
@@ -106,3 +122,6 @@ cargo test --all-targets --locked
 
 echo "== the service suite again, on PostgreSQL"
 ENACT_HUB_TEST_POSTGRES="postgres://postgres@127.0.0.1:$PG_PORT" cargo test --locked --test service
+
+echo "== the Python package, the wheel and cargo install (scripts/test-python.sh)"
+./scripts/test-python.sh

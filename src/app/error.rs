@@ -62,12 +62,12 @@ impl From<sqlx::Error> for AppError {
     fn from(e: sqlx::Error) -> Self {
         // PostgreSQL refuses text holding a NUL character (SQLite stores it): that is the
         // input's fault, not the server's.
-        if let sqlx::Error::Database(db) = &e {
-            if db.code().as_deref() == Some("22021") {
-                return AppError::Invalid(
-                    "text with a NUL character (\\u0000) cannot be stored or looked up".into(),
-                );
-            }
+        if let sqlx::Error::Database(db) = &e
+            && db.code().as_deref() == Some("22021")
+        {
+            return AppError::Invalid(
+                "text with a NUL character (\\u0000) cannot be stored or looked up".into(),
+            );
         }
         AppError::Internal(e.into())
     }

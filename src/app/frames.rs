@@ -478,10 +478,10 @@ pub(super) async fn put_all(
 ) -> Result<(), AppError> {
     let mut pending = tokio::task::JoinSet::new();
     for (sha256, png) in frames {
-        if pending.len() >= PUTS_IN_FLIGHT {
-            if let Some(done) = pending.join_next().await {
-                done??;
-            }
+        if pending.len() >= PUTS_IN_FLIGHT
+            && let Some(done) = pending.join_next().await
+        {
+            done??;
         }
         let store = target.clone();
         pending.spawn(async move { store.put(&sha256, png).await });

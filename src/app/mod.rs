@@ -53,6 +53,7 @@ pub mod standings;
 pub mod studies;
 pub mod submissions;
 pub mod tokens;
+pub mod version;
 pub mod watch;
 
 use std::path::Path;

@@ -33,7 +33,7 @@ mod study;
 #[derive(Parser)]
 #[command(
     name = "enact-hub",
-    version,
+    version = crate::core::version::VERSION_LINE,
     about = "Self-hosted evaluation service for the ENACT benchmark"
 )]
 struct Cli {
@@ -183,10 +183,11 @@ pub(crate) const DEFAULT_DB: &str = "enact-hub.db";
 /// The database a command names: `--db` (or `--database-url`), else `ENACT_HUB_DB`, else
 /// `ENACT_HUB_DATABASE_URL`, else [`DEFAULT_DB`].
 fn resolve(db: &Path) -> PathBuf {
-    if db == Path::new(DEFAULT_DB) && std::env::var_os("ENACT_HUB_DB").is_none() {
-        if let Some(url) = std::env::var_os("ENACT_HUB_DATABASE_URL") {
-            return PathBuf::from(url);
-        }
+    if db == Path::new(DEFAULT_DB)
+        && std::env::var_os("ENACT_HUB_DB").is_none()
+        && let Some(url) = std::env::var_os("ENACT_HUB_DATABASE_URL")
+    {
+        return PathBuf::from(url);
     }
     db.to_path_buf()
 }

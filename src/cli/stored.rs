@@ -36,6 +36,7 @@ pub fn agreement_json(
         "dataset": dataset,
         "dataset_hash": dataset_hash,
         "metric_version": REPORT_METRIC_VERSION,
+        "hub": crate::core::version::THIS_BUILD,
         "encoding": section.encoding,
         "level": section.level,
         "alpha": alpha.estimate.alpha,

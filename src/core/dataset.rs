@@ -286,21 +286,21 @@ pub fn parse_release_line(line: &str) -> Result<QaItem, Vec<FieldProblem>> {
     let mut actions = Vec::new();
     if let (Some((_, step_length)), Some(q)) = (direction_and_length, &question) {
         let l = step_length.states();
-        if let Some(kf) = &key_frame_ids {
-            if kf.len() != l {
-                problems.push(FieldProblem::new(
-                    "key_frame_ids",
-                    format!("has {} frame ids, the type says L = {l}", kf.len()),
-                ));
-            }
+        if let Some(kf) = &key_frame_ids
+            && kf.len() != l
+        {
+            problems.push(FieldProblem::new(
+                "key_frame_ids",
+                format!("has {} frame ids, the type says L = {l}", kf.len()),
+            ));
         }
-        if let Some(imgs) = &images {
-            if imgs.len() != l {
-                problems.push(FieldProblem::new(
-                    "images",
-                    format!("has {} images, the type says L = {l}", imgs.len()),
-                ));
-            }
+        if let Some(imgs) = &images
+            && imgs.len() != l
+        {
+            problems.push(FieldProblem::new(
+                "images",
+                format!("has {} images, the type says L = {l}", imgs.len()),
+            ));
         }
         if let Some(gt) = &gt_answer {
             check_permutation(gt, step_length.actions(), &mut problems);

@@ -29,6 +29,7 @@
 //! - [`release`]: a stored dataset written back out as an ENACT release archive.
 //! - [`study`]: ablation studies: variant datasets aligned with a baseline, the Welch, paired t
 //!   and sign tests per variant and direction, the paper's heatmap and handedness panel.
+//! - [`version`]: this build's version, git commit and schema versions.
 //! - [`world`]: a synthetic household world and its BEHAVIOR-format replays; [`demo`] plays it
 //!   through the pipeline for `serve --demo`.
 
@@ -52,4 +53,5 @@ pub mod semantics;
 pub mod study;
 pub mod submission;
 pub mod verifier;
+pub mod version;
 pub mod world;

@@ -431,17 +431,17 @@ impl Table {
             }
         });
         copied += self.insert(to, &batch).await?;
-        if self.generated_id {
-            if let Handle::Pg(c) = super::db::Connection::handle(to) {
-                // The next generated id follows the copied ones.
-                sqlx::query(&format!(
-                    "SELECT setval(pg_get_serial_sequence('{0}', 'id'), \
-                     COALESCE((SELECT max(id) FROM {0}), 0) + 1, false)",
-                    self.name
-                ))
-                .execute(c)
-                .await?;
-            }
+        if self.generated_id
+            && let Handle::Pg(c) = super::db::Connection::handle(to)
+        {
+            // The next generated id follows the copied ones.
+            sqlx::query(&format!(
+                "SELECT setval(pg_get_serial_sequence('{0}', 'id'), \
+                 COALESCE((SELECT max(id) FROM {0}), 0) + 1, false)",
+                self.name
+            ))
+            .execute(c)
+            .await?;
         }
         Ok(copied)
     }

@@ -206,6 +206,21 @@ pub async fn ping(pool: &Pool) -> Result<(), sqlx::Error> {
     Ok(())
 }
 
+/// Which backend a database is and the highest migration applied to it.
+pub async fn schema_version(pool: &Pool) -> Result<(&'static str, i64), sqlx::Error> {
+    let backend = match pool {
+        Pool::Sqlite(_) => "sqlite",
+        Pool::Pg(_) => "postgres",
+    };
+    let mut conn = pool.acquire().await?;
+    let applied: i64 = on!(&mut conn, |c| {
+        sqlx::query_scalar("SELECT COALESCE(MAX(version), 0) FROM _sqlx_migrations WHERE success")
+            .fetch_one(&mut *c)
+            .await?
+    });
+    Ok((backend, applied))
+}
+
 /// Maps an enum of the benchmark to a TEXT column through its `as_str` and `parse`, so rows
 /// carry the enum and the column's CHECK constraint stays the one list of spellings on disk.
 macro_rules! text_column {

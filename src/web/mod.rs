@@ -103,9 +103,27 @@ async fn healthz(axum::extract::State(state): axum::extract::State<AppState>) ->
     }
 }
 
+async fn version(
+    axum::extract::State(state): axum::extract::State<AppState>,
+) -> Result<extract::Json<crate::app::version::BuildReport>, AppError> {
+    Ok(extract::Json(
+        crate::app::version::describe(&state.hub).await?,
+    ))
+}
+
 /// Every route of the JSON API, in the order the document lists them.
 pub fn api_routes() -> Vec<openapi::ApiRoute> {
-    let mut routes = api::routes();
+    let mut routes = vec![
+        openapi::ApiRoute::new(openapi::Verb::Get, "/version", version, "This build")
+            .describe(
+                "The version and git commit the server was built from (what `enact-hub \
+                 --version` prints) and its database's backend and schema version: the highest \
+                 migration applied, and the highest this build knows.",
+            )
+            .responds_json::<crate::app::version::BuildReport>(200, "The build and its schema.")
+            .errors(&[]),
+    ];
+    routes.extend(api::routes());
     routes.extend(archive::routes());
     routes.extend(submissions::routes());
     routes.extend(leaderboard::api_routes());

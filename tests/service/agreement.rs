@@ -164,6 +164,7 @@ async fn agreement_on_stored_annotations_matches_the_core() {
         assert_eq!(json["encoding"], encoding.name());
         assert_eq!(json["level"], expected.level.name());
         assert_eq!(json["metric_version"], "enact-hub-agreement-report/1");
+        assert_eq!(json["hub"]["version"], env!("CARGO_PKG_VERSION"));
         assert_eq!(json["dataset_hash"].as_str().expect("hash").len(), 64);
         close(&json["alpha"], expected.alpha.estimate.alpha);
         close(&json["ci"]["low"], expected.alpha.ci_low);
@@ -381,7 +382,7 @@ async fn the_protocol_runs_once_with_csrf_and_cross_assigns_blind() {
 fn answer_of(who: usize, item_id: &str, length: u8) -> Vec<u8> {
     let mut labels: Vec<u8> = (1..length).rev().collect();
     let spread: usize = item_id.bytes().map(usize::from).sum();
-    if (spread + who) % 6 == 0 {
+    if (spread + who).is_multiple_of(6) {
         labels.swap(0, 1);
     }
     labels
@@ -591,6 +592,8 @@ async fn end_to_end_primary_split_protocol_answers_and_report() {
     assert_eq!(stamp["submission_ids"], serde_json::json!([submission]));
     assert_eq!(stamp["annotator_ids"], serde_json::json!(ids));
     assert_eq!(stamp["protocol"]["seed"], 3);
+    assert_eq!(stamp["hub"]["version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(stamp["hub"]["commit"], enact_hub::core::version::COMMIT);
     let rows = report["rows"].as_array().expect("rows");
     assert_eq!(rows.last().expect("human")["source"], "human");
     let comparison = &report["comparisons"][0];

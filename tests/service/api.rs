@@ -13,6 +13,47 @@ async fn healthz_is_ok() {
     server.stop().await;
 }
 
+/// The highest `NNNN_` number among a migrations folder's files.
+fn highest_migration(backend: &str) -> i64 {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("migrations")
+        .join(backend);
+    std::fs::read_dir(&dir)
+        .expect("migrations folder")
+        .filter_map(|e| {
+            let name = e.expect("entry").file_name().into_string().ok()?;
+            name.split('_').next()?.parse::<i64>().ok()
+        })
+        .max()
+        .expect("a migration")
+}
+
+#[tokio::test]
+async fn version_names_the_build_and_the_schema_its_database_is_at() {
+    use enact_hub::core::version::{COMMIT, POSTGRES_SCHEMA, SQLITE_SCHEMA, VERSION};
+    let server = spawn_app_with(|_, _| async {}).await;
+    let (status, body) = server.get_json("/api/v1/version").await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(body["version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(body["version"], VERSION);
+    assert_eq!(body["commit"], COMMIT);
+    let database = &body["database"];
+    let backend = database["backend"].as_str().expect("backend");
+    let known = match backend {
+        "sqlite" => SQLITE_SCHEMA,
+        "postgres" => POSTGRES_SCHEMA,
+        other => panic!("backend {other}"),
+    };
+    assert_eq!(
+        known,
+        highest_migration(backend),
+        "build.rs read the folder"
+    );
+    assert_eq!(database["expected"], known);
+    assert_eq!(database["applied"], known, "a fresh database is migrated");
+    server.stop().await;
+}
+
 #[tokio::test]
 async fn datasets_list_counts_by_direction_and_step_length() {
     let (server, _) = spawn_app_with_release().await;

@@ -32,6 +32,36 @@ fn import_prints_a_summary_and_reports_nothing_changed_the_second_time() {
 }
 
 #[test]
+fn version_prints_the_crate_version_the_commit_and_the_schema_versions() {
+    let out = enact_hub()
+        .arg("--version")
+        .output()
+        .expect("run enact-hub --version");
+    assert!(out.status.success());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout.trim_end();
+    assert_eq!(
+        line,
+        format!("enact-hub {}", enact_hub::core::version::VERSION_LINE)
+    );
+    let expected_start = format!("enact-hub {} (commit ", env!("CARGO_PKG_VERSION"));
+    assert!(line.starts_with(&expected_start), "{line}");
+    // Built from a checkout, the commit is git's HEAD.
+    if enact_hub::core::version::COMMIT != "unknown"
+        && let Ok(head) = std::process::Command::new("git")
+            .args(["-C", env!("CARGO_MANIFEST_DIR"), "rev-parse", "HEAD"])
+            .output()
+        && head.status.success()
+    {
+        let head = String::from_utf8_lossy(&head.stdout);
+        assert!(
+            line.contains(&format!("(commit {}, ", &head.trim()[..12])),
+            "{line} is not HEAD {head}"
+        );
+    }
+}
+
+#[test]
 fn invalid_rows_fail_the_import_with_line_numbers() {
     let dir = tempfile::tempdir().expect("tempdir");
     let root = dir.path().join("release");

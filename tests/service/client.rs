@@ -1,6 +1,7 @@
 //! clients/enact_client.py end to end: a real server with a small dataset, a fake
 //! OpenAI-compatible endpoint (an axum server here) that checks each prompt and its images and
-//! answers deterministically, and the client run by python3 in between.
+//! answers deterministically, and the client run by python3 in between, over the checkout's
+//! `enact_hub` package (`python/`).
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -185,10 +186,13 @@ async fn run_client_on(
     hub_token: &str,
     extra: &[&str],
 ) -> std::process::Output {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("clients/enact_client.py");
+    let checkout = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let script = checkout.join("clients/enact_client.py");
     let mut command = Command::new("python3");
     command
         .arg(script)
+        // The example is written over the `enact_hub` package: the checkout's copy of it.
+        .env("PYTHONPATH", checkout.join("python"))
         .args(["--hub", &server.url("")])
         .args(target)
         .args(["--model-url", model_url, "--model", "fake-vlm"])

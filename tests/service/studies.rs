@@ -245,6 +245,8 @@ async fn a_study_reports_no_difference_for_the_same_answers_and_the_planted_one_
     assert_eq!(stamp["baseline"]["hash"].as_str().unwrap().len(), 64);
     assert_eq!(stamp["variants"][0]["dataset"], "world-fov30");
     assert!(stamp["variants"][0]["submission"].is_i64());
+    assert_eq!(stamp["hub"]["version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(stamp["hub"]["commit"], enact_hub::core::version::COMMIT);
 
     // A planted difference: the baseline misses every 5th item, the variant every 3rd.
     let base_missed = within_direction(&records, |k| k % 5 == 0);

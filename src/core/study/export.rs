@@ -21,6 +21,10 @@ impl Stamp for StudyStamp {
             format!("study: {}", self.study),
             format!("row: {}", self.row),
             format!("metric_version: {}", self.metric_version),
+            format!(
+                "hub: enact-hub {} (commit {})",
+                self.hub.version, self.hub.commit
+            ),
             format!("tests: {}", self.tests),
             format!(
                 "baseline: {} sha256:{} submission {}",

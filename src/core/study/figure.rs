@@ -157,6 +157,7 @@ mod tests {
             stamp: StudyStamp {
                 study: "s".into(),
                 metric_version: STUDY_METRIC_VERSION.into(),
+                hub: crate::core::version::THIS_BUILD,
                 tests: String::new(),
                 row: "model".into(),
                 model: None,

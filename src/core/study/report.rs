@@ -15,6 +15,7 @@ use crate::core::agreement::welch_t_test;
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::error_analysis::Handedness;
 use crate::core::metric::MetricStamp;
+use crate::core::version::{HubBuild, THIS_BUILD};
 
 /// Names what the numbers of a study report mean; bump it when a definition changes.
 pub const STUDY_METRIC_VERSION: &str = "enact-hub-study-report/1";
@@ -95,6 +96,8 @@ pub struct StampedVariant {
 pub struct StudyStamp {
     pub study: String,
     pub metric_version: String,
+    /// The enact-hub build that computed the report.
+    pub hub: HubBuild,
     pub tests: String,
     pub row: String,
     pub model: Option<String>,
@@ -251,6 +254,7 @@ pub fn build_study_report(inputs: &StudyInputs) -> Result<StudyReport, String> {
                     .map(|r| r.metric_version),
             )
             .with_report(STUDY_METRIC_VERSION),
+            hub: THIS_BUILD,
             tests: STUDY_TESTS.to_owned(),
             row: inputs.row_label.clone(),
             model: inputs.model.clone(),

@@ -32,6 +32,10 @@ impl Stamp for ReportStamp {
             format!("dataset: {}", stamp.dataset),
             format!("dataset_hash: sha256:{}", stamp.dataset_hash),
             format!("metric_version: {}", stamp.metric_version),
+            format!(
+                "hub: enact-hub {} (commit {})",
+                stamp.hub.version, stamp.hub.commit
+            ),
             format!("encoding: {} ({} alpha)", stamp.encoding, stamp.level),
             format!(
                 "bootstrap: seed {}, {} replicates over items, {}% percentile interval",

@@ -25,6 +25,7 @@ use crate::core::dataset::{Direction, StepLength};
 use crate::core::leaderboard::{HumanCoverage, LeaderboardRow};
 use crate::core::metric::MetricStamp;
 use crate::core::verifier::PerformanceReport;
+use crate::core::version::{HubBuild, THIS_BUILD};
 
 /// Names what the numbers of a report mean. Bump it when a definition changes (which answers
 /// count, how an encoding or a comparison is computed), so stamped files say which rules made
@@ -324,6 +325,8 @@ pub struct ReportStamp {
     pub dataset_hash: String,
     /// The report's rules and the metric version of its figures (the oldest among its rows).
     pub metric_version: String,
+    /// The enact-hub build that computed the report.
+    pub hub: HubBuild,
     pub encoding: OrderingEncoding,
     pub level: MeasurementLevel,
     pub bootstrap_seed: u64,
@@ -518,6 +521,7 @@ pub fn build_report(inputs: &ReportInputs) -> Result<AgreementReport, ReportErro
             dataset_hash: inputs.dataset_hash.clone(),
             metric_version: MetricStamp::oldest(rows.iter().map(|r| r.metric.metric_version))
                 .with_report(REPORT_METRIC_VERSION),
+            hub: THIS_BUILD,
             encoding: inputs.encoding,
             level,
             bootstrap_seed: inputs.bootstrap.seed,
@@ -772,6 +776,13 @@ mod tests {
             let text = String::from_utf8(file.bytes.clone()).unwrap();
             assert!(text.contains(&report.stamp.dataset_hash), "{}", file.name);
             assert!(text.contains(REPORT_METRIC_VERSION), "{}", file.name);
+            // The JSON holds the stamp as an object, the other files as `hub:` lines.
+            assert!(
+                text.contains(crate::core::version::VERSION)
+                    && text.contains(crate::core::version::COMMIT),
+                "{}",
+                file.name
+            );
         }
         let tex = String::from_utf8(files[6].bytes.clone()).unwrap();
         assert!(tex.contains("\\toprule") && tex.contains("Human Performance"));
