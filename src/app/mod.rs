@@ -112,6 +112,8 @@ pub struct Hub {
     /// Changes other instances announced, for caches outside the app layer.
     changes: tokio::sync::broadcast::Sender<changes::Change>,
     quotas: Quotas,
+    /// The environment variables a server-side model run may take its API key from.
+    endpoint_keys: runs::EndpointKeys,
 }
 
 impl From<SqlitePool> for Hub {
@@ -140,6 +142,7 @@ impl Hub {
             frame_redirect: None,
             changes: tokio::sync::broadcast::channel(1024).0,
             quotas,
+            endpoint_keys: runs::EndpointKeys::default(),
         }
     }
 
@@ -231,6 +234,17 @@ impl Hub {
     pub fn with_quotas(mut self, quotas: Quotas) -> Hub {
         self.quotas = quotas;
         self
+    }
+
+    /// The hub whose model runs may take their API keys from `keys` (`serve --endpoint-key`).
+    pub fn with_endpoint_keys(mut self, keys: runs::EndpointKeys) -> Hub {
+        self.endpoint_keys = keys;
+        self
+    }
+
+    /// The environment variables a server-side model run may take its API key from.
+    pub fn endpoint_keys(&self) -> &runs::EndpointKeys {
+        &self.endpoint_keys
     }
 
     /// Folds the write-ahead log into the database and empties the log file, after work that

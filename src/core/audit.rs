@@ -76,10 +76,11 @@ pub enum AuditAction {
     JobPause,
     JobResume,
     JobCancel,
+    RunStart,
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 19] = [
+    pub const ALL: [AuditAction; 20] = [
         AuditAction::DatasetImport,
         AuditAction::DatasetAnswerVisibility,
         AuditAction::TokenIssue,
@@ -99,6 +100,7 @@ impl AuditAction {
         AuditAction::JobPause,
         AuditAction::JobResume,
         AuditAction::JobCancel,
+        AuditAction::RunStart,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -122,6 +124,7 @@ impl AuditAction {
             AuditAction::JobPause => "job.pause",
             AuditAction::JobResume => "job.resume",
             AuditAction::JobCancel => "job.cancel",
+            AuditAction::RunStart => "run.start",
         }
     }
 

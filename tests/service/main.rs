@@ -30,6 +30,7 @@ mod openapi;
 mod pages;
 mod runs;
 mod score;
+mod server_runs;
 #[path = "../support/standin.rs"]
 mod standin;
 mod studies;
