@@ -93,7 +93,7 @@ async fn stored_submission(
         .expect("stored")
 }
 
-fn spec(standin: &StandIn, name: &str) -> RunSpec {
+pub fn spec(standin: &StandIn, name: &str) -> RunSpec {
     RunSpec {
         dataset: "mini".to_owned(),
         endpoint: standin.endpoint(),

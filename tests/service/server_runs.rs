@@ -4,13 +4,12 @@
 use std::time::Duration;
 
 use enact_hub::app::jobs::{self, JobControl, JobHandlers, JobId, JobSettings, JobState, Worker};
-use enact_hub::app::runs::{self, EndpointKeys, RunCalls, RunSpec};
+use enact_hub::app::runs::{self, EndpointKeys, RunCalls};
 use enact_hub::app::{AppError, Hub};
-use enact_hub::core::model_run::{GenerationParams, Prices};
 use serde_json::Value;
 
 use crate::helpers::*;
-use crate::runs::{SECRET_KEY, answer_text, assert_key_stored_nowhere, run_fixture, scripts};
+use crate::runs::{SECRET_KEY, answer_text, assert_key_stored_nowhere, run_fixture, scripts, spec};
 use crate::standin::{StandIn, StandInConfig, Step};
 
 const KEY_VARIABLE: &str = "STANDIN_API_KEY";
@@ -29,26 +28,6 @@ fn keyed(hub: Hub) -> Hub {
     let keys = EndpointKeys::from_pairs([(KEY_VARIABLE.to_owned(), SECRET_KEY.to_owned())])
         .expect("an allowlist");
     hub.with_endpoint_keys(keys)
-}
-
-fn spec(standin: &StandIn, name: &str) -> RunSpec {
-    RunSpec {
-        dataset: "mini".to_owned(),
-        endpoint: standin.endpoint(),
-        model: "standin-vl".to_owned(),
-        name: Some(name.to_owned()),
-        params: GenerationParams {
-            temperature: Some(0.0),
-            max_tokens: Some(256),
-        },
-        limit: None,
-        retry_failed: false,
-        submit_as: Some("Stand-in VL (server)".to_owned()),
-        prices: Prices {
-            input_usd_per_mtok: 2.5,
-            output_usd_per_mtok: 10.0,
-        },
-    }
 }
 
 fn calls(concurrency: usize) -> RunCalls {
