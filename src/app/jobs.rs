@@ -210,15 +210,6 @@ pub struct JobHandlers {
 }
 
 impl JobHandlers {
-    /// The code of every kind of job this version knows, as a serving instance runs it.
-    pub fn serving() -> JobHandlers {
-        // A model run's key comes from the hub's allowlist of variables, which is the
-        // serving instance's (`serve --endpoint-key`), so the hub it is handed is enough.
-        JobHandlers::default().with(JobKind::ModelRun, |hub, job| {
-            Box::pin(async move { super::runs::work(&hub, &job).await })
-        })
-    }
-
     /// `work` works every job of `kind`.
     pub fn with(
         mut self,

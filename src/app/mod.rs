@@ -116,6 +116,15 @@ pub struct Hub {
     endpoint_keys: runs::EndpointKeys,
 }
 
+/// The code of every kind of job this version knows, as a serving instance runs it. Here, above
+/// the modules that own the kinds, so that `jobs` uses none of them. A model run's key comes
+/// from the hub's allowlist (`serve --endpoint-key`), so the hub it is handed is enough.
+pub fn serving_jobs() -> jobs::JobHandlers {
+    jobs::JobHandlers::default().with(jobs::JobKind::ModelRun, |hub, job| {
+        Box::pin(async move { runs::work(&hub, &job).await })
+    })
+}
+
 impl From<SqlitePool> for Hub {
     fn from(pool: SqlitePool) -> Hub {
         Hub::new(Pool::Sqlite(pool), Quotas::default())

@@ -152,7 +152,7 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     }
     let worker = app::jobs::Worker::spawn(
         hub.clone(),
-        app::jobs::JobHandlers::serving(),
+        app::serving_jobs(),
         app::jobs::JobSettings::default(),
     );
     let served = server.run(shutdown_signal()).await;

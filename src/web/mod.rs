@@ -27,6 +27,7 @@ pub mod forwarded;
 mod leaderboard;
 pub mod openapi;
 mod pages;
+mod runs;
 pub mod session;
 mod studies;
 mod submissions;
@@ -110,6 +111,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(leaderboard::api_routes());
     routes.extend(error_analysis::routes());
     routes.extend(studies::routes());
+    routes.extend(runs::routes());
     routes.push(
         openapi::ApiRoute::new(
             openapi::Verb::Get,

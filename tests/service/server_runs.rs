@@ -3,13 +3,18 @@
 
 use std::time::Duration;
 
-use enact_hub::app::jobs::{self, JobControl, JobHandlers, JobId, JobSettings, JobState, Worker};
+use enact_hub::app::jobs::{self, JobControl, JobId, JobSettings, JobState, Worker};
 use enact_hub::app::runs::{self, EndpointKeys, RunCalls};
 use enact_hub::app::{AppError, Hub};
-use serde_json::Value;
+use enact_hub::core::credentials::Role;
+use reqwest::Method;
+use serde_json::{Value, json};
 
 use crate::helpers::*;
-use crate::runs::{SECRET_KEY, answer_text, assert_key_stored_nowhere, run_fixture, scripts, spec};
+use crate::runs::{
+    SECRET_KEY, answer_text, assert_key_stored_nowhere, run_fixture, scripts, spec,
+    stored_submission,
+};
 use crate::standin::{StandIn, StandInConfig, Step};
 
 const KEY_VARIABLE: &str = "STANDIN_API_KEY";
@@ -79,7 +84,7 @@ async fn a_run_started_on_the_server_is_worked_as_a_job_and_submits_what_the_end
         other => panic!("a second start was not refused: {other:?}"),
     }
 
-    let worker = Worker::spawn(hub.clone(), JobHandlers::serving(), fast());
+    let worker = Worker::spawn(hub.clone(), enact_hub::app::serving_jobs(), fast());
     wait_until(&hub, job, "done", |j| j.state == JobState::Done).await;
     worker.stop().await;
 
@@ -90,12 +95,7 @@ async fn a_run_started_on_the_server_is_worked_as_a_job_and_submits_what_the_end
     let submission = shown["submission"].as_i64().expect("a submission");
     let run = runs::by_name(&hub, "served").await.expect("the run");
     assert_eq!(run.submission, Some(submission));
-    let mut conn = pool.acquire().await.expect("conn");
-    let stored = enact_hub::store::submissions::by_id(&mut conn, submission)
-        .await
-        .expect("read")
-        .expect("stored");
-    drop(conn);
+    let stored = stored_submission(&pool, submission).await;
     assert_eq!(stored.scores.coverage.answered, records.len());
     let right = (0..records.len()).filter(|i| i % 3 != 0).count();
     let overall = &stored
@@ -151,7 +151,7 @@ async fn a_server_run_stopped_paused_and_resumed_never_asks_an_answered_item_aga
         .expect("started");
 
     // The first instance stops gracefully part-way: the job is released, not failed.
-    let first = Worker::spawn(hub.clone(), JobHandlers::serving(), fast());
+    let first = Worker::spawn(hub.clone(), enact_hub::app::serving_jobs(), fast());
     while standin.total_requests() < 4 {
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
@@ -162,7 +162,7 @@ async fn a_server_run_stopped_paused_and_resumed_never_asks_an_answered_item_aga
     assert!(asked < records.len(), "the run was not stopped part-way");
 
     // A second instance on the same database carries on; an admin pauses and resumes it.
-    let second = Worker::spawn(hub.clone(), JobHandlers::serving(), fast());
+    let second = Worker::spawn(hub.clone(), enact_hub::app::serving_jobs(), fast());
     while standin.total_requests() < asked + 4 {
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
@@ -224,4 +224,115 @@ async fn a_key_variable_not_on_the_allowlist_is_refused_and_nothing_is_started()
     assert!(matches!(unset, Err(AppError::BadRequest(m)) if m.contains("EMPTY_KEY")));
     let bad = EndpointKeys::from_pairs([("1-KEY".to_owned(), "x".to_owned())]);
     assert!(matches!(bad, Err(AppError::BadRequest(m)) if m.contains("1-KEY")));
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_run_started_over_the_api_finishes_and_its_errors_name_the_field() {
+    let (dir, pool, records) = run_fixture(1).await;
+    let root = dir.path().join("release");
+    let standin = StandIn::start(StandInConfig {
+        scripts: scripts(&root, &records, |_, r| {
+            vec![Step::Answer(answer_text(r, true))]
+        }),
+        ..StandInConfig::default()
+    })
+    .await;
+    let hub = keyed(Hub::from(pool.clone()));
+    let server = serve_hub(hub.clone(), pool.clone(), dir, &Default::default()).await;
+    let (_, admin) = api_token(&pool, "root", Role::Admin, None, None).await;
+    let body = |change: Value| {
+        let mut body = json!({
+            "dataset": "mini", "endpoint": standin.endpoint(), "model": "standin-vl",
+            "name": "over-api", "temperature": 0, "key_variable": KEY_VARIABLE,
+            "concurrency": 2, "timeout_s": 5, "submit_as": "Stand-in (API)",
+        });
+        for (k, v) in change.as_object().expect("an object") {
+            body[k] = v.clone();
+        }
+        body
+    };
+    let mut replies = Vec::new();
+    for (change, status, named) in [
+        (
+            json!({"key_variable": "ENACT_HUB_DATABASE_URL"}),
+            400,
+            "key_variable",
+        ),
+        (json!({"dataset": "nowhere"}), 404, "nowhere"),
+        (json!({"endpoint": "ftp://example.org/v1"}), 400, "endpoint"),
+        (json!({"concurrency": 0}), 400, "concurrency"),
+        (json!({"price_input": -1}), 400, "price_input"),
+    ] {
+        let reply = server
+            .call(Method::POST, "/api/v1/admin/runs")
+            .bearer(&admin)
+            .json(&body(change))
+            .expect(status)
+            .await;
+        assert!(reply.text.contains(named), "{named}: {}", reply.text);
+        replies.push(reply.text);
+    }
+    assert!(runs::list(&hub).await.expect("runs").is_empty());
+
+    let started = server
+        .call(Method::POST, "/api/v1/admin/runs")
+        .bearer(&admin)
+        .json(&body(json!({})))
+        .expect(202)
+        .await
+        .json();
+    let run = started["run"].as_i64().expect("a run id");
+    assert_eq!(started["name"], "over-api");
+    let worker = Worker::spawn(hub.clone(), enact_hub::app::serving_jobs(), fast());
+    let path = format!("/api/v1/admin/runs/{run}");
+    let mut shown = Value::Null;
+    for _ in 0..1500 {
+        let reply = server
+            .call(Method::GET, &path)
+            .bearer(&admin)
+            .expect(200)
+            .await;
+        replies.push(reply.text.clone());
+        shown = reply.json();
+        if shown["state"] == "done" {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    worker.stop().await;
+    assert_eq!(shown["state"], "done", "{shown}");
+    assert_eq!(shown["progress"]["stage"], "submitted", "{shown}");
+    assert_eq!(shown["progress"]["answered"], records.len());
+    assert!(shown["submission"].is_i64(), "{shown}");
+    let listed = server
+        .call(Method::GET, "/api/v1/admin/runs")
+        .bearer(&admin)
+        .expect(200)
+        .await;
+    assert!(
+        listed
+            .json()
+            .as_array()
+            .expect("a list")
+            .iter()
+            .any(|r| r["id"] == run)
+    );
+    replies.push(listed.text);
+    // A finished run cannot be paused; an unknown change is named.
+    let refused = server
+        .call(Method::POST, &format!("{path}/pause"))
+        .bearer(&admin)
+        .expect(409)
+        .await;
+    assert!(refused.text.contains("done"), "{}", refused.text);
+    let unknown = server
+        .call(Method::POST, &format!("{path}/explode"))
+        .bearer(&admin)
+        .expect(400)
+        .await;
+    assert!(unknown.text.contains("explode"), "{}", unknown.text);
+    // The key reached the endpoint and no reply.
+    assert!(!standin.authorizations().is_empty());
+    assert!(replies.iter().all(|r| !r.contains(SECRET_KEY)));
+    server.stop().await;
 }

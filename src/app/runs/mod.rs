@@ -24,7 +24,7 @@ use sha2::{Digest, Sha256};
 use tokio::task::JoinSet;
 
 pub use asker::{ApiKey, CallSettings};
-pub use server::{EndpointKeys, RunCalls, start, work};
+pub use server::{EndpointKeys, RunCalls, ServerRunView, control, start, view, views, work};
 
 use super::submissions::{self, SubmissionRow, Submitted};
 use super::tokens::{self, Caller};

@@ -253,12 +253,7 @@ async fn unfinished_job(
     run_id: i64,
 ) -> Result<Option<jobs::JobRow>, AppError> {
     let open = store::jobs::unfinished(conn, JobKind::ModelRun).await?;
-    Ok(open.into_iter().find(|job| {
-        serde_json::from_str::<serde_json::Value>(&job.payload)
-            .ok()
-            .and_then(|p| p.get("run_id").and_then(serde_json::Value::as_i64))
-            == Some(run_id)
-    }))
+    Ok(open.into_iter().find(|job| run_of(job) == Some(run_id)))
 }
 
 /// How often a running job's progress is written at most.
@@ -273,12 +268,17 @@ pub async fn work(hub: &Hub, job: &JobContext) -> Result<(), AppError> {
     let settings = payload.calls.settings(hub)?;
     let spec = payload.spec();
     let (shown, mut seen) = watch::channel(None::<RunProgress>);
-    let progress = move |p: &RunProgress| {
-        shown.send_replace(Some(p.clone()));
-    };
     let stop = || job.stop_requested().is_some();
+    let ran = async {
+        let progress = move |p: &RunProgress| {
+            shown.send_replace(Some(p.clone()));
+        };
+        // `progress`, the sender, is dropped when the run returns: that ends the writer.
+        execute(hub, &Actor::Server, &spec, &settings, &progress, &stop).await
+    };
     // Progress is written from here, at most once a PROGRESS_EVERY, not from the callback
-    // (which is synchronous and called as often as an item finishes).
+    // (which is synchronous and called as often as an item finishes). The writer is never
+    // dropped mid-write, so no late write lands after the last one below.
     let writer = async {
         while seen.changed().await.is_ok() {
             let current = seen.borrow_and_update().clone();
@@ -289,12 +289,9 @@ pub async fn work(hub: &Hub, job: &JobContext) -> Result<(), AppError> {
             }
             tokio::time::sleep(PROGRESS_EVERY).await;
         }
-        std::future::pending::<()>().await;
     };
-    let report = tokio::select! {
-        report = execute(hub, &Actor::Server, &spec, &settings, &progress, &stop) => report?,
-        () = writer => return Err(AppError::internal("the progress writer ended")),
-    };
+    let (report, ()) = tokio::join!(ran, writer);
+    let report = report?;
     let stage = if report.stopped {
         "stopped"
     } else if report.submission.is_some() {
@@ -333,4 +330,103 @@ fn shown_progress(p: &RunProgress, stage: &str) -> serde_json::Value {
         "refused": p.refused,
         "recent_errors": p.recent_errors,
     })
+}
+
+/// A server-side run as the API shows it: the run, its newest job and that job's progress.
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
+pub struct ServerRunView {
+    pub id: i64,
+    pub name: String,
+    pub dataset: String,
+    pub endpoint: String,
+    pub model: String,
+    /// The generation parameters.
+    pub params: serde_json::Value,
+    pub prompt_version: String,
+    /// The submission made, once every item was done.
+    pub submission: Option<i64>,
+    pub created_by: String,
+    pub created_at: String,
+    /// Its newest job's id and state (`queued`, `running`, `paused`, `done`, `failed`,
+    /// `cancelled`), when it was started on the server.
+    pub job: Option<i64>,
+    pub state: Option<String>,
+    /// The job's last error, when it failed.
+    pub last_error: Option<String>,
+    /// What the job last reported: stage, total, done, answered, failed, in_flight,
+    /// items_per_s, eta_s, tokens, cost_usd, recent_errors.
+    pub progress: serde_json::Value,
+}
+
+fn view_of(run: &RunRow, job: Option<&jobs::JobRow>) -> ServerRunView {
+    ServerRunView {
+        id: run.id,
+        name: run.name.clone(),
+        dataset: run.dataset.clone(),
+        endpoint: run.endpoint.clone(),
+        model: run.model.clone(),
+        params: serde_json::from_str(&run.params).unwrap_or(serde_json::Value::Null),
+        prompt_version: run.prompt_version.clone(),
+        submission: run.submission,
+        created_by: run.created_by.clone(),
+        created_at: run.created_at.clone(),
+        job: job.map(|j| j.id),
+        state: job.map(|j| j.state.as_str().to_owned()),
+        last_error: job.and_then(|j| j.last_error.clone()),
+        progress: job
+            .and_then(|j| j.progress.as_deref())
+            .and_then(|p| serde_json::from_str(p).ok())
+            .unwrap_or(serde_json::Value::Null),
+    }
+}
+
+/// The run of a model-run job's payload.
+fn run_of(job: &jobs::JobRow) -> Option<i64> {
+    serde_json::from_str::<serde_json::Value>(&job.payload)
+        .ok()
+        .and_then(|p| p.get("run_id").and_then(serde_json::Value::as_i64))
+}
+
+/// Model-run jobs looked at when matching runs to their newest job.
+const JOBS_LOOKED_AT: i64 = 1000;
+
+/// Every run, newest first, with its newest job.
+pub async fn views(hub: &Hub) -> Result<Vec<ServerRunView>, AppError> {
+    let mut conn = hub.conn().await?;
+    let runs = store::runs::list(&mut conn).await?;
+    let jobs = store::jobs::list(&mut conn, Some(JobKind::ModelRun), JOBS_LOOKED_AT).await?;
+    Ok(runs
+        .iter()
+        .map(|run| view_of(run, jobs.iter().find(|j| run_of(j) == Some(run.id))))
+        .collect())
+}
+
+/// One run by id with its newest job.
+pub async fn view(hub: &Hub, id: i64) -> Result<ServerRunView, AppError> {
+    let mut conn = hub.conn().await?;
+    let run = store::runs::by_id(&mut conn, id)
+        .await?
+        .ok_or_else(|| AppError::NotFound(format!("no model run {id}")))?;
+    let jobs = store::jobs::list(&mut conn, Some(JobKind::ModelRun), JOBS_LOOKED_AT).await?;
+    Ok(view_of(
+        &run,
+        jobs.iter().find(|j| run_of(j) == Some(run.id)),
+    ))
+}
+
+/// Pauses, resumes or cancels run `id`'s newest job (audited as the job's change).
+pub async fn control(
+    hub: &Hub,
+    actor: &Actor,
+    id: i64,
+    change: jobs::JobControl,
+) -> Result<ServerRunView, AppError> {
+    let shown = view(hub, id).await?;
+    let job = shown.job.ok_or_else(|| {
+        AppError::Conflict(format!(
+            "model run {id} was never started on the server: it has no job"
+        ))
+    })?;
+    jobs::control(hub, actor, JobId(job), change).await?;
+    view(hub, id).await
 }
