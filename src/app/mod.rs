@@ -101,11 +101,16 @@ pub fn describe_location(location: &Path) -> String {
 
 /// The code of every kind of job this version knows, as a serving instance's worker runs it
 /// (here, above both the job mechanism and the modules owning each kind, so neither uses the
-/// other both ways).
+/// other both ways). A model run's key comes from the hub's allowlist (`serve
+/// --endpoint-key`), so the hub it is handed is enough.
 pub fn job_handlers() -> jobs::JobHandlers {
-    jobs::JobHandlers::default().with(jobs::JobKind::Rescore, |hub, job| {
-        Box::pin(async move { rescore::work(&hub, &job).await })
-    })
+    jobs::JobHandlers::default()
+        .with(jobs::JobKind::Rescore, |hub, job| {
+            Box::pin(async move { rescore::work(&hub, &job).await })
+        })
+        .with(jobs::JobKind::ModelRun, |hub, job| {
+            Box::pin(async move { runs::work(&hub, &job).await })
+        })
 }
 
 /// What every use case works with: the store and the caches in front of it. Cheap to clone.
@@ -125,6 +130,8 @@ pub struct Hub {
     /// Changes other instances announced, for caches outside the app layer.
     changes: tokio::sync::broadcast::Sender<changes::Change>,
     quotas: Quotas,
+    /// The environment variables a server-side model run may take its API key from.
+    endpoint_keys: runs::EndpointKeys,
 }
 
 impl From<SqlitePool> for Hub {
@@ -153,6 +160,7 @@ impl Hub {
             frame_redirect: None,
             changes: tokio::sync::broadcast::channel(1024).0,
             quotas,
+            endpoint_keys: runs::EndpointKeys::default(),
         }
     }
 
@@ -244,6 +252,17 @@ impl Hub {
     pub fn with_quotas(mut self, quotas: Quotas) -> Hub {
         self.quotas = quotas;
         self
+    }
+
+    /// The hub whose model runs may take their API keys from `keys` (`serve --endpoint-key`).
+    pub fn with_endpoint_keys(mut self, keys: runs::EndpointKeys) -> Hub {
+        self.endpoint_keys = keys;
+        self
+    }
+
+    /// The environment variables a server-side model run may take its API key from.
+    pub fn endpoint_keys(&self) -> &runs::EndpointKeys {
+        &self.endpoint_keys
     }
 
     /// Folds the write-ahead log into the database and empties the log file, after work that

@@ -39,6 +39,16 @@ pub(super) struct ServeArgs {
         value_name = "ADDRESS[/BITS]"
     )]
     trusted_proxies: Vec<crate::web::forwarded::TrustedProxy>,
+    /// An environment variable a model run started on the server may take its API key from
+    /// (repeat, or separate with commas). Read once at start (it must be set); a run names
+    /// only the variable, and the server refuses any variable not given here.
+    #[arg(
+        long = "endpoint-key",
+        env = "ENACT_HUB_ENDPOINT_KEYS",
+        value_delimiter = ',',
+        value_name = "VAR"
+    )]
+    endpoint_keys: Vec<String>,
     /// Generate the built-in demo dataset at start and serve it (as dataset "demo").
     #[arg(long)]
     demo: bool,
@@ -105,7 +115,10 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
             daily: args.daily_quota,
             total: args.total_quota,
         })
-        .with_frame_store(frame_store, args.frame_redirect.map(Duration::from_secs));
+        .with_frame_store(frame_store, args.frame_redirect.map(Duration::from_secs))
+        .with_endpoint_keys(app::runs::EndpointKeys::from_env(
+            args.endpoint_keys.clone(),
+        )?);
     if args.demo {
         app::demo::load(&hub).await?;
     }

@@ -78,10 +78,11 @@ pub enum AuditAction {
     JobCancel,
     /// Stored results computed again under the current metric version.
     MetricRescore,
+    RunStart,
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 20] = [
+    pub const ALL: [AuditAction; 21] = [
         AuditAction::DatasetImport,
         AuditAction::DatasetAnswerVisibility,
         AuditAction::TokenIssue,
@@ -102,6 +103,7 @@ impl AuditAction {
         AuditAction::JobResume,
         AuditAction::JobCancel,
         AuditAction::MetricRescore,
+        AuditAction::RunStart,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -126,6 +128,7 @@ impl AuditAction {
             AuditAction::JobResume => "job.resume",
             AuditAction::JobCancel => "job.cancel",
             AuditAction::MetricRescore => "metric.rescore",
+            AuditAction::RunStart => "run.start",
         }
     }
 

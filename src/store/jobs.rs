@@ -294,3 +294,17 @@ pub async fn list(
         rows.iter().map(job_from_row).collect()
     })
 }
+
+/// The jobs of `kind` that have not ended (queued, running or paused), oldest first.
+pub async fn unfinished(conn: &mut Conn, kind: JobKind) -> Result<Vec<JobRow>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(&format!(
+            "SELECT {COLUMNS} FROM jobs WHERE kind = $1 \
+             AND state IN ('queued', 'running', 'paused') ORDER BY id"
+        ))
+        .bind(kind.as_str())
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(job_from_row).collect()
+    })
+}

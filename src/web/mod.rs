@@ -28,6 +28,7 @@ mod leaderboard;
 pub mod openapi;
 mod pages;
 mod rescore;
+mod runs;
 pub mod session;
 mod studies;
 mod submissions;
@@ -130,6 +131,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(error_analysis::routes());
     routes.extend(studies::routes());
     routes.extend(rescore::routes());
+    routes.extend(runs::routes());
     routes.push(
         openapi::ApiRoute::new(
             openapi::Verb::Get,

@@ -89,6 +89,13 @@ fn body_of(verb: Verb, path: &str, records: &[Value], n: usize) -> Option<(Strin
         (Verb::Post, "/admin/rescore") => {
             Some((json!({"dataset": "mini"}).to_string(), "application/json"))
         }
+        (Verb::Post, "/admin/runs") => Some((
+            json!({"dataset": "mini", "endpoint": "http://127.0.0.1:9/v1", "model": "m",
+                   "name": format!("made-{n}")})
+            .to_string(),
+            "application/json",
+        )),
+        (Verb::Post, "/admin/runs/{run}/{change}") => Some((String::new(), "text/plain")),
         (verb, path) => {
             panic!("the authorization matrix has no request for {verb:?} {path}: add it to body_of")
         }
@@ -202,6 +209,9 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                         format!("doomed-{n}")
                     }
                     "study" => "matrix".to_owned(),
+                    // A fresh queued run for every call, so that cancelling it succeeds.
+                    "run" => matrix_run(&server, n).await.to_string(),
+                    "change" => "cancel".to_owned(),
                     other => panic!(
                         "the authorization matrix cannot fill {{{other}}} in {}",
                         route.path
@@ -632,4 +642,24 @@ fn scopes_and_roles_are_checked_only_where_the_route_tables_say() {
         by_hand.join("\n")
     );
     assert!(sources.len() > 50, "{} source files", sources.len());
+}
+
+/// A model run queued on the server (never worked: its endpoint is closed), by id.
+async fn matrix_run(server: &TestServer, n: usize) -> i64 {
+    let hub = enact_hub::app::Hub::from(server.pool.clone());
+    let spec = enact_hub::app::runs::RunSpec {
+        dataset: "mini".to_owned(),
+        endpoint: "http://127.0.0.1:9/v1".to_owned(),
+        model: "m".to_owned(),
+        name: Some(format!("matrix-run-{n}")),
+        params: Default::default(),
+        limit: None,
+        retry_failed: false,
+        submit_as: None,
+        prices: Default::default(),
+    };
+    let (run, _) = enact_hub::app::runs::start(&hub, &tester(), &spec, &Default::default())
+        .await
+        .expect("a run started");
+    run.id
 }

@@ -32,6 +32,7 @@ mod pages;
 mod rescore;
 mod runs;
 mod score;
+mod server_runs;
 #[path = "../support/standin.rs"]
 mod standin;
 mod studies;

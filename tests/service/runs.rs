@@ -82,7 +82,7 @@ fn all_right(root: &Path, records: &[Value]) -> HashMap<String, (String, Vec<Ste
 }
 
 /// A stored submission, read from the database.
-async fn stored_submission(
+pub async fn stored_submission(
     pool: &enact_hub::store::Pool,
     id: i64,
 ) -> enact_hub::store::submissions::SubmissionRow {
@@ -93,7 +93,7 @@ async fn stored_submission(
         .expect("stored")
 }
 
-fn spec(standin: &StandIn, name: &str) -> RunSpec {
+pub fn spec(standin: &StandIn, name: &str) -> RunSpec {
     RunSpec {
         dataset: "mini".to_owned(),
         endpoint: standin.endpoint(),

@@ -12,6 +12,7 @@
 //! submission with a stamp of everything that made it.
 
 mod asker;
+mod server;
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -23,6 +24,7 @@ use sha2::{Digest, Sha256};
 use tokio::task::JoinSet;
 
 pub use asker::{ApiKey, CallSettings};
+pub use server::{EndpointKeys, RunCalls, ServerRunView, control, start, view, views, work};
 
 use super::submissions::{self, SubmissionRow, Submitted};
 use super::tokens::{self, Caller};
@@ -184,15 +186,23 @@ async fn run_caller(hub: &Hub, token: i64) -> Result<Caller, AppError> {
     })
 }
 
-/// The run `spec` names: found (its identity must match) or created.
-pub async fn open(hub: &Hub, actor: &Actor, spec: &RunSpec) -> Result<RunRow, AppError> {
+/// A run's identity as `spec` gives it, checked.
+struct Identity {
+    name: String,
+    dataset_id: i64,
+    dataset: String,
+    endpoint: String,
+    params: String,
+    prompt_hash: String,
+}
+
+async fn identity(hub: &Hub, spec: &RunSpec) -> Result<Identity, AppError> {
     let dataset = datasets::by_name(hub, &spec.dataset).await?;
     let endpoint = stored_endpoint(&endpoint_url(&spec.endpoint)?);
     if spec.model.trim().is_empty() {
         return Err(AppError::Invalid("the model name is empty".to_owned()));
     }
     let params = serde_json::to_string(&spec.params)?;
-    let prompt_hash = prompt_template_hash();
     let name = match &spec.name {
         Some(n) if n.trim().is_empty() || n.chars().count() > 200 => {
             return Err(AppError::Invalid(
@@ -202,51 +212,69 @@ pub async fn open(hub: &Hub, actor: &Actor, spec: &RunSpec) -> Result<RunRow, Ap
         Some(n) => n.trim().to_owned(),
         None => default_name(&dataset.name, &endpoint, &spec.model, &params),
     };
-    let mut conn = hub.conn().await?;
-    let found = store::runs::by_name(&mut conn, &name).await?;
-    drop(conn);
-    if let Some(run) = found {
-        let differs = [
-            ("dataset", run.dataset.as_str(), dataset.name.as_str()),
-            ("endpoint", &run.endpoint, &endpoint),
-            ("model", &run.model, &spec.model),
-            ("parameters", &run.params, &params),
-            ("prompt version", &run.prompt_version, PROMPT_VERSION),
-            ("prompt hash", &run.prompt_hash, &prompt_hash),
-        ]
-        .into_iter()
-        .find(|(_, stored, given)| stored != given);
-        return match differs {
-            None => Ok(run),
-            Some((what, stored, given)) => Err(AppError::Conflict(format!(
-                "run '{name}' exists with {what} {stored}, not {given}: \
-                 give another --run name to start a new run"
-            ))),
+    Ok(Identity {
+        name,
+        dataset_id: dataset.id,
+        dataset: dataset.name,
+        endpoint,
+        params,
+        prompt_hash: prompt_template_hash(),
+    })
+}
+
+/// The run `spec` names, found (its identity must match) or created on `tx`.
+async fn find_or_create(
+    tx: &mut store::Tx,
+    actor: &Actor,
+    spec: &RunSpec,
+    id: &Identity,
+) -> Result<RunRow, AppError> {
+    let name = &id.name;
+    if store::runs::by_name(&mut *tx, name).await?.is_none() {
+        let token = runs_token(tx).await?;
+        let new = store::runs::NewRun {
+            name,
+            dataset: id.dataset_id,
+            endpoint: &id.endpoint,
+            model: &spec.model,
+            params: &id.params,
+            prompt_version: PROMPT_VERSION,
+            prompt_hash: &id.prompt_hash,
+            token,
+            created_by: &actor.to_string(),
         };
+        // `None`: created meanwhile by another process; the identity check below applies.
+        store::runs::insert(&mut *tx, &new).await?;
     }
-    let mut tx = hub.begin().await?;
-    let token = runs_token(&mut tx).await?;
-    let new = store::runs::NewRun {
-        name: &name,
-        dataset: dataset.id,
-        endpoint: &endpoint,
-        model: &spec.model,
-        params: &params,
-        prompt_version: PROMPT_VERSION,
-        prompt_hash: &prompt_hash,
-        token,
-        created_by: &actor.to_string(),
-    };
-    let id = store::runs::insert(&mut tx, &new).await?;
-    tx.commit().await?;
-    if id.is_none() {
-        // Created meanwhile by another process: the identity check above applies to it.
-        return Box::pin(open(hub, actor, spec)).await;
-    }
-    let mut conn = hub.conn().await?;
-    store::runs::by_name(&mut conn, &name)
+    let run = store::runs::by_name(&mut *tx, name)
         .await?
-        .ok_or_else(|| AppError::internal(format!("run '{name}' vanished")))
+        .ok_or_else(|| AppError::internal(format!("run '{name}' vanished")))?;
+    let differs = [
+        ("dataset", run.dataset.as_str(), id.dataset.as_str()),
+        ("endpoint", &run.endpoint, &id.endpoint),
+        ("model", &run.model, &spec.model),
+        ("parameters", &run.params, &id.params),
+        ("prompt version", &run.prompt_version, PROMPT_VERSION),
+        ("prompt hash", &run.prompt_hash, &id.prompt_hash),
+    ]
+    .into_iter()
+    .find(|(_, stored, given)| stored != given);
+    match differs {
+        None => Ok(run),
+        Some((what, stored, given)) => Err(AppError::Conflict(format!(
+            "run '{name}' exists with {what} {stored}, not {given}: \
+             give another run name to start a new run"
+        ))),
+    }
+}
+
+/// The run `spec` names: found (its identity must match) or created.
+pub async fn open(hub: &Hub, actor: &Actor, spec: &RunSpec) -> Result<RunRow, AppError> {
+    let id = identity(hub, spec).await?;
+    let mut tx = hub.begin().await?;
+    let run = find_or_create(&mut tx, actor, spec, &id).await?;
+    tx.commit().await?;
+    Ok(run)
 }
 
 /// A run by name.
