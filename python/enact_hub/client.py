@@ -309,6 +309,10 @@ class Hub:
         binary from the environment variable ``api_key_env``. Other arguments map to the
         command's flags of the same name; ``extra_args`` are passed as they are.
 
+        Needs a binary whose ``run`` has the remote-hub mode (``--hub URL --token T``); until
+        issue 25 lands it, the command refuses ``--hub`` and this raises ``HubError`` with its
+        message. On the hub itself, ``POST /api/v1/admin/runs`` starts the same engine.
+
         Raises:
             HubError: when the command fails; its message is the command's error output.
         """

@@ -217,9 +217,13 @@ class FakeChat(BaseHTTPRequestHandler):
 
 
 def test_run_drives_the_binarys_run_command(demo: Server, submitter: Hub, tmp_path: Path) -> None:
-    has_run = subprocess.run([enact_hub.find_enact_hub_bin(), "run", "--help"], capture_output=True)
-    if has_run.returncode != 0:
-        pytest.skip("this enact-hub binary has no `run` command (issue 25)")
+    # `Hub.run` drives `enact-hub run --hub URL --token T`: the remote-hub mode of the command,
+    # which issue 25 has not landed yet (the command runs on a local database only).
+    has_run = subprocess.run(
+        [enact_hub.find_enact_hub_bin(), "run", "--help"], capture_output=True, text=True
+    )
+    if has_run.returncode != 0 or "--hub" not in has_run.stdout:
+        pytest.skip("this enact-hub binary's `run` has no --hub mode yet (issue 25)")
     fake = ThreadingHTTPServer(("127.0.0.1", 0), FakeChat)
     thread = threading.Thread(target=fake.serve_forever, daemon=True)
     thread.start()
