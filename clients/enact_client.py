@@ -73,16 +73,8 @@ def describe_failure(response):
     return response.text[:500]
 
 
-def retry_delay(response, attempt, base_delay):
-    """Seconds to wait before the next attempt: Retry-After when given, else exponential."""
-    if response is not None:
-        header = response.headers.get("Retry-After")
-        if header is not None:
-            try:
-                return min(float(header), 300.0)
-            except ValueError:
-                pass
-    return base_delay * (2 ** attempt)
+# The package's backoff: Retry-After when given, else exponential with jitter.
+retry_delay = enact_hub.client.retry_delay
 
 
 def request_with_retries(session, method, url, what, max_retries, base_delay, **kwargs):

@@ -402,7 +402,7 @@ class Hub:
                     raise failure
             if attempt == self.max_retries:
                 raise failure
-            time.sleep(_delay(response, attempt, self.retry_delay))
+            time.sleep(retry_delay(response, attempt, self.retry_delay))
         raise HubError(what + ": no attempt was made")
 
 
@@ -413,7 +413,7 @@ def _json(response: requests.Response, what: str) -> Any:
         raise HubError("{}: the answer is not JSON: {}".format(what, response.text[:300])) from error
 
 
-def _delay(response: Optional[requests.Response], attempt: int, base: float) -> float:
+def retry_delay(response: Optional[requests.Response], attempt: int, base: float) -> float:
     """Seconds before the next attempt: ``Retry-After`` when given, else exponential with
     jitter."""
     if response is not None:
