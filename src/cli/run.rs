@@ -13,7 +13,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::{DEFAULT_DB, open, operator, refused};
 use crate::app::runs::{
-    self, ApiKey, CallSettings, GenerationParams, Prices, RunProgress, RunReport, RunSpec,
+    self, ApiKey, CallSettings, GenerationParams, Prices, RemoteHub, RunProgress, RunReport,
+    RunSpec,
 };
 use crate::app::{self, AppError};
 
@@ -25,9 +26,21 @@ pub struct RunArgs {
     /// Answer the baseline and every variant dataset of this study, one run each.
     #[arg(long)]
     study: Option<String>,
-    /// SQLite database file, or a PostgreSQL URL (postgres://user:password@host/db).
+    /// SQLite database file, or a PostgreSQL URL (postgres://user:password@host/db). Not
+    /// used with --hub.
     #[arg(long, visible_alias = "database-url", env = "ENACT_HUB_DB", default_value = DEFAULT_DB)]
     db: PathBuf,
+    /// Run against a hub over its API instead of a database: items and frames are read from
+    /// it, replies kept in --cache, the answers submitted to it with --token.
+    #[arg(long, value_name = "URL", requires = "token")]
+    hub: Option<String>,
+    /// A token of the hub's with the submit scope (with --hub).
+    #[arg(long, env = "ENACT_HUB_TOKEN", hide_env_values = true)]
+    token: Option<String>,
+    /// The file that keeps a --hub run's replies (default: the run's name with
+    /// `.enact-run.jsonl`, in the working directory). Run again with the same file to go on.
+    #[arg(long, value_name = "FILE", requires = "hub")]
+    cache: Option<PathBuf>,
     /// The chat-completions server's base URL, e.g. http://127.0.0.1:8000/v1 (vLLM) or
     /// https://api.openai.com/v1; `/chat/completions` is appended. No key in it.
     #[arg(long)]
@@ -107,17 +120,35 @@ pub async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         backoff_base: seconds("--retry-delay", args.retry_delay)?,
         api_key,
     };
-    let hub = open(&args.db).await?;
-    let datasets = match (&args.dataset, &args.study) {
-        (Some(d), _) => vec![d.clone()],
-        (None, Some(study)) => match app::studies::get(&hub, study).await {
+    let place = match (&args.hub, &args.token) {
+        (Some(url), Some(token)) => Place::Remote(RemoteHub {
+            url: url.clone(),
+            token: token.clone(),
+        }),
+        (Some(_), None) => anyhow::bail!("--hub needs --token (or ENACT_HUB_TOKEN)"),
+        (None, _) => Place::Local(open(&args.db).await?),
+    };
+    let datasets = match (&args.dataset, &args.study, &place) {
+        (Some(d), _, _) => vec![d.clone()],
+        (None, Some(study), Place::Local(hub)) => match app::studies::get(hub, study).await {
             Ok(view) => std::iter::once(view.baseline)
                 .chain(view.variants.into_iter().map(|v| v.spec.dataset))
                 .collect(),
             Err(e) => return refused(e),
         },
-        (None, None) => anyhow::bail!("give a dataset or --study"),
+        (None, Some(study), Place::Remote(remote)) => {
+            match runs::study_datasets(remote, &settings, study).await {
+                Ok(datasets) => datasets,
+                Err(e) => return refused(e),
+            }
+        }
+        (None, None, _) => anyhow::bail!("give a dataset or --study"),
     };
+    if several_caches(&args, datasets.len()) {
+        anyhow::bail!(
+            "--cache names one file: a --study run keeps one cache per dataset by default"
+        );
+    }
     let several = datasets.len() > 1;
     let mut reports = Vec::new();
     for dataset in datasets {
@@ -159,7 +190,15 @@ pub async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
                 ));
             }
         };
-        let result = runs::execute(&hub, &operator(), &spec, &settings, &draw, &|| false).await;
+        let result = match &place {
+            Place::Local(hub) => {
+                runs::execute(hub, &operator(), &spec, &settings, &draw, &|| false).await
+            }
+            Place::Remote(remote) => {
+                let cache = args.cache.as_deref();
+                runs::execute_remote(remote, &spec, &settings, cache, &draw, &|| false).await
+            }
+        };
         if let Some(bar) = &bar {
             bar.finish_and_clear();
         }
@@ -167,6 +206,13 @@ pub async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
             Ok(report) => {
                 if !args.json {
                     print_report(&report);
+                    if let Place::Remote(_) = &place {
+                        let cache = args
+                            .cache
+                            .clone()
+                            .unwrap_or_else(|| runs::default_cache(&report.run));
+                        eprintln!("replies kept in {}", cache.display());
+                    }
                 }
                 reports.push(report);
             }
@@ -186,6 +232,17 @@ pub async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         println!("{out}");
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Where a run's items are and its replies go.
+enum Place {
+    Local(app::Hub),
+    Remote(RemoteHub),
+}
+
+/// Whether one --cache file was named for several runs.
+fn several_caches(args: &RunArgs, runs: usize) -> bool {
+    args.cache.is_some() && runs > 1
 }
 
 fn progress_bar(dataset: &str) -> Option<ProgressBar> {

@@ -12,6 +12,7 @@
 //! submission with a stamp of everything that made it.
 
 mod asker;
+mod remote;
 mod server;
 
 use std::collections::BTreeMap;
@@ -24,6 +25,7 @@ use sha2::{Digest, Sha256};
 use tokio::task::JoinSet;
 
 pub use asker::{ApiKey, CallSettings};
+pub use remote::{RemoteHub, default_cache, execute_remote, study_datasets};
 pub use server::{EndpointKeys, RunCalls, ServerRunView, control, start, view, views, work};
 
 use super::submissions::{self, SubmissionRow, Submitted};
@@ -86,7 +88,9 @@ pub struct RunProgress {
 #[derive(Debug, Clone, Serialize)]
 pub struct RunReport {
     pub run: String,
-    pub run_id: i64,
+    /// The run's row in the hub's database (none for a run against a remote hub).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub run_id: Option<i64>,
     pub dataset: String,
     pub progress: RunProgress,
     /// Failure reasons and how many items each failed.
@@ -300,95 +304,131 @@ pub async fn item_rows(hub: &Hub, run: &RunRow) -> Result<Vec<RunItemRow>, AppEr
 /// What a progress callback is handed, as often as an item finishes.
 pub type ProgressFn<'a> = &'a (dyn Fn(&RunProgress) + Send + Sync);
 
+/// Asked between items: whether to stop (what was done stays done).
+pub type StopFn<'a> = &'a (dyn Fn() -> bool + Send + Sync);
+
 /// How many failures progress keeps.
 const RECENT_ERRORS: usize = 5;
 
-/// Asks every item of the run that is not done yet, keeping each reply as it arrives, then
-/// (when every item is done and `spec.submit_as` is set) submits the answers. Stops between
-/// items when `stop` returns true; what was done stays done.
-pub async fn execute(
-    hub: &Hub,
-    actor: &Actor,
-    spec: &RunSpec,
-    settings: &CallSettings,
-    progress: ProgressFn<'_>,
-    stop: &(dyn Fn() -> bool + Send + Sync),
-) -> Result<RunReport, AppError> {
-    if settings.concurrency == 0 {
-        return Err(AppError::Invalid(
-            "concurrency must be at least 1".to_owned(),
-        ));
-    }
-    if spec.limit == Some(0) {
-        return Err(AppError::Invalid("limit must be at least 1".to_owned()));
-    }
-    let run = open(hub, actor, spec).await?;
-    let params: GenerationParams = serde_json::from_str(&run.params)?;
-    let asker =
-        Arc::new(asker::Asker::new(&run.endpoint, settings.clone()).map_err(AppError::internal)?);
-    let mut conn = hub.conn().await?;
-    let states = store::runs::item_states(
-        &mut conn,
-        run.id,
-        run.dataset_id,
-        spec.limit.map(|l| i64::try_from(l).unwrap_or(i64::MAX)),
-    )
-    .await?;
-    let rows = store::runs::items(&mut conn, run.id).await?;
-    drop(conn);
+/// An item still to ask.
+#[derive(Debug, Clone)]
+struct Pending {
+    /// Where the ledger finds the item (the item's row id; its place in a remote dataset).
+    key: i64,
+    item_id: String,
+    /// Whether it failed before (asked again with `retry_failed`).
+    failed_before: bool,
+}
 
-    let mut state = RunProgress {
-        total: states.len(),
-        ..RunProgress::default()
-    };
-    let counted: std::collections::HashSet<&str> =
-        states.iter().map(|s| s.item_id.as_str()).collect();
-    for row in rows.iter().filter(|r| counted.contains(r.item_id.as_str())) {
-        state.usage += Usage {
-            prompt_tokens: row.prompt_tokens.max(0) as u64,
-            completion_tokens: row.completion_tokens.max(0) as u64,
-        };
+/// Where a run finds its items and keeps its replies: the hub's own database, or (for a
+/// run against a remote hub) the hub's API and a cache file. The rest of a run is the same.
+trait Ledger: Send + Sync + 'static {
+    /// The chat-completions request for `item`.
+    fn body(
+        &self,
+        item: &Pending,
+        model: &str,
+        params: &GenerationParams,
+    ) -> impl Future<Output = Result<Bytes, AppError>> + Send;
+
+    /// Keeps `row` durably (committed or fsynced) before the item counts as done.
+    fn record(
+        &self,
+        item: &Pending,
+        row: &RunItemRow,
+    ) -> impl Future<Output = Result<(), AppError>> + Send;
+}
+
+/// The replies of a run's items that are stored already, counted.
+fn tally<'a>(rows: impl IntoIterator<Item = &'a RunItemRow>, prices: Prices) -> RunProgress {
+    let mut state = RunProgress::default();
+    for row in rows {
+        state.usage += row_usage(row);
         if row.answered {
             state.answered += 1;
         } else {
             state.failed += 1;
         }
     }
-    drop(rows);
     state.done = state.answered + state.failed;
-    state.cost_usd = spec.prices.cost(state.usage);
-    progress(&state);
+    state.cost_usd = prices.cost(state.usage);
+    state
+}
 
-    // (item row, item id, whether it failed before)
-    let pending: Vec<(i64, String, bool)> = states
+fn row_usage(row: &RunItemRow) -> Usage {
+    Usage {
+        prompt_tokens: row.prompt_tokens.max(0) as u64,
+        completion_tokens: row.completion_tokens.max(0) as u64,
+    }
+}
+
+/// Failure reasons of `rows` and how many items failed with each.
+fn failures<'a>(rows: impl IntoIterator<Item = &'a RunItemRow>) -> BTreeMap<String, usize> {
+    let mut failures = BTreeMap::new();
+    for row in rows.into_iter().filter(|r| !r.answered) {
+        *failures
+            .entry(failure_kind(row.error.as_deref()))
+            .or_insert(0) += 1;
+    }
+    failures
+}
+
+/// The pending items of a run whose stored states are `states` (`None`: not asked yet).
+fn pending<'a>(
+    states: impl IntoIterator<Item = (i64, &'a str, Option<bool>)>,
+    retry_failed: bool,
+) -> Vec<Pending> {
+    states
         .into_iter()
-        .filter_map(|s| match s.state.as_deref() {
-            None => Some((s.item_row, s.item_id, false)),
-            Some("failed") if spec.retry_failed => Some((s.item_row, s.item_id, true)),
+        .filter_map(|(key, item_id, answered)| match answered {
+            None => Some((key, item_id, false)),
+            Some(false) if retry_failed => Some((key, item_id, true)),
             Some(_) => None,
         })
-        .collect();
+        .map(|(key, item_id, failed_before)| Pending {
+            key,
+            item_id: item_id.to_owned(),
+            failed_before,
+        })
+        .collect()
+}
+
+/// Asks every pending item, at most `concurrency` at once, keeping each reply in `ledger`
+/// as it arrives and counting it into `state`. Returns whether it stopped before the end.
+#[allow(clippy::too_many_arguments)]
+async fn ask_pending<L: Ledger>(
+    ledger: Arc<L>,
+    asker: Arc<asker::Asker>,
+    model: &str,
+    params: &GenerationParams,
+    pending: Vec<Pending>,
+    state: &mut RunProgress,
+    prices: Prices,
+    concurrency: usize,
+    progress: ProgressFn<'_>,
+    stop: StopFn<'_>,
+) -> Result<bool, AppError> {
     let started = Instant::now();
     let mut tasks: JoinSet<Result<(RunItemRow, bool), AppError>> = JoinSet::new();
-    let mut queue = pending.into_iter();
+    let mut queue = pending.into_iter().peekable();
     let mut stopped = false;
     loop {
         // Items in hand are bounded by the concurrency: each holds one request's images.
-        while tasks.len() < settings.concurrency && !stopped {
+        while tasks.len() < concurrency && !stopped && queue.peek().is_some() {
             if stop() {
                 stopped = true;
                 break;
             }
-            let Some((item_row, item_id, failed_before)) = queue.next() else {
+            let Some(item) = queue.next() else {
                 break;
             };
-            let (hub, asker, dataset) = (hub.clone(), asker.clone(), run.dataset.clone());
-            let (model, params, run_id) = (run.model.clone(), params.clone(), run.id);
+            let (ledger, asker) = (ledger.clone(), asker.clone());
+            let (model, params) = (model.to_owned(), params.clone());
             tasks.spawn(async move {
-                let body = request_body(&hub, &dataset, &item_id, &model, &params).await?;
+                let body = ledger.body(&item, &model, &params).await?;
                 let asked = asker.ask(body).await;
                 let row = RunItemRow {
-                    item_id: item_id.clone(),
+                    item_id: item.item_id.clone(),
                     answered: asked.outcome.is_ok(),
                     response: asked.response,
                     finish_reason: asked.finish_reason,
@@ -400,10 +440,8 @@ pub async fn execute(
                     done_at: String::new(),
                 };
                 // Durable before it counts: a crash after this never asks the item again.
-                let mut tx = hub.begin().await?;
-                store::runs::record_item(&mut tx, run_id, item_row, &row).await?;
-                tx.commit().await?;
-                Ok((row, failed_before))
+                ledger.record(&item, &row).await?;
+                Ok((row, item.failed_before))
             });
         }
         let Some(joined) = tasks.join_next().await else {
@@ -427,36 +465,122 @@ pub async fn execute(
         }
         state.asked_now += 1;
         state.done = state.answered + state.failed;
-        state.usage += Usage {
-            prompt_tokens: row.prompt_tokens as u64,
-            completion_tokens: row.completion_tokens as u64,
-        };
-        state.cost_usd = spec.prices.cost(state.usage);
+        state.usage += row_usage(&row);
+        state.cost_usd = prices.cost(state.usage);
         state.in_flight = asker.in_flight();
         (state.requests, state.refused) = asker.requests();
         state.elapsed_s = started.elapsed().as_secs_f64();
-        progress(&state);
+        progress(state);
     }
-    stopped = stopped || queue.next().is_some();
     (state.requests, state.refused) = asker.requests();
     state.in_flight = 0;
     state.elapsed_s = started.elapsed().as_secs_f64();
+    Ok(stopped || queue.next().is_some())
+}
+
+/// A run kept in the hub's own database: items and frames from the store, one row per reply.
+struct StoreLedger {
+    hub: Hub,
+    dataset: String,
+    run: i64,
+}
+
+impl Ledger for StoreLedger {
+    async fn body(
+        &self,
+        item: &Pending,
+        model: &str,
+        params: &GenerationParams,
+    ) -> Result<Bytes, AppError> {
+        let stored = items::get(&self.hub, &self.dataset, &item.item_id).await?;
+        let mut pngs = Vec::with_capacity(stored.images.len());
+        for image in &stored.images {
+            pngs.push((image.label(), frames::png(&self.hub, &image.sha256).await?));
+        }
+        request_body(pngs, stored.question.clone(), model, params).await
+    }
+
+    async fn record(&self, item: &Pending, row: &RunItemRow) -> Result<(), AppError> {
+        let mut tx = self.hub.begin().await?;
+        store::runs::record_item(&mut tx, self.run, item.key, row).await?;
+        tx.commit().await?;
+        Ok(())
+    }
+}
+
+/// Asks every item of the run that is not done yet, keeping each reply as it arrives, then
+/// (when every item is done and `spec.submit_as` is set) submits the answers. Stops between
+/// items when `stop` returns true; what was done stays done.
+pub async fn execute(
+    hub: &Hub,
+    actor: &Actor,
+    spec: &RunSpec,
+    settings: &CallSettings,
+    progress: ProgressFn<'_>,
+    stop: StopFn<'_>,
+) -> Result<RunReport, AppError> {
+    check_settings(spec, settings)?;
+    let run = open(hub, actor, spec).await?;
+    let params: GenerationParams = serde_json::from_str(&run.params)?;
+    let asker =
+        Arc::new(asker::Asker::new(&run.endpoint, settings.clone()).map_err(AppError::internal)?);
+    let mut conn = hub.conn().await?;
+    let states = store::runs::item_states(
+        &mut conn,
+        run.id,
+        run.dataset_id,
+        spec.limit.map(|l| i64::try_from(l).unwrap_or(i64::MAX)),
+    )
+    .await?;
+    let rows = store::runs::items(&mut conn, run.id).await?;
+    drop(conn);
+
+    let counted: std::collections::HashSet<&str> =
+        states.iter().map(|s| s.item_id.as_str()).collect();
+    let mut state = tally(
+        rows.iter().filter(|r| counted.contains(r.item_id.as_str())),
+        spec.prices,
+    );
+    state.total = states.len();
+    drop(rows);
+    progress(&state);
+
+    let todo = pending(
+        states.iter().map(|s| {
+            let answered = s.state.as_deref().map(|state| state == "answered");
+            (s.item_row, s.item_id.as_str(), answered)
+        }),
+        spec.retry_failed,
+    );
+    drop(states);
+    let ledger = Arc::new(StoreLedger {
+        hub: hub.clone(),
+        dataset: run.dataset.clone(),
+        run: run.id,
+    });
+    let stopped = ask_pending(
+        ledger,
+        asker,
+        &run.model,
+        &params,
+        todo,
+        &mut state,
+        spec.prices,
+        settings.concurrency,
+        progress,
+        stop,
+    )
+    .await?;
 
     let mut conn = hub.conn().await?;
     let rows = store::runs::items(&mut conn, run.id).await?;
     drop(conn);
-    let mut failures = BTreeMap::new();
-    for row in rows.iter().filter(|r| !r.answered) {
-        *failures
-            .entry(failure_kind(row.error.as_deref()))
-            .or_insert(0) += 1;
-    }
     let mut report = RunReport {
         run: run.name.clone(),
-        run_id: run.id,
+        run_id: Some(run.id),
         dataset: run.dataset.clone(),
         progress: state,
-        failures,
+        failures: failures(&rows),
         submission: None,
         stopped,
     };
@@ -466,6 +590,19 @@ pub async fn execute(
     }
     progress(&report.progress);
     Ok(report)
+}
+
+/// What every run checks before it starts.
+fn check_settings(spec: &RunSpec, settings: &CallSettings) -> Result<(), AppError> {
+    if settings.concurrency == 0 {
+        return Err(AppError::Invalid(
+            "concurrency must be at least 1".to_owned(),
+        ));
+    }
+    if spec.limit == Some(0) {
+        return Err(AppError::Invalid("limit must be at least 1".to_owned()));
+    }
+    Ok(())
 }
 
 /// A failure's reason without the item-specific detail, for counting reasons.
@@ -482,21 +619,14 @@ fn failure_kind(error: Option<&str>) -> String {
     short
 }
 
-/// The request body for one item: its images read from the frame store, encoded, and
-/// dropped as soon as the body is written.
+/// The request body for one item from its images' labels and PNG bytes (dropped as soon as
+/// the body is written) and its question.
 async fn request_body(
-    hub: &Hub,
-    dataset: &str,
-    item_id: &str,
+    pngs: Vec<(String, Bytes)>,
+    question: String,
     model: &str,
     params: &GenerationParams,
 ) -> Result<Bytes, AppError> {
-    let item = items::get(hub, dataset, item_id).await?;
-    let mut pngs = Vec::with_capacity(item.images.len());
-    for image in &item.images {
-        pngs.push((image.label(), frames::png(hub, &image.sha256).await?));
-    }
-    let question = item.question.clone();
     let model = model.to_owned();
     let params = params.clone();
     // Base64 of up to ten 512×512 PNGs: off the async workers.
@@ -512,6 +642,104 @@ async fn request_body(
     .map_err(AppError::from)
 }
 
+/// The answers of `rows` as compact submission JSONL: failed items left out, so that they
+/// count as unanswered.
+fn answers_jsonl(rows: &[RunItemRow]) -> Result<String, AppError> {
+    let mut body = String::new();
+    for row in rows.iter().filter(|r| r.answered) {
+        let Some(answer) = &row.response else {
+            continue;
+        };
+        body.push_str(&serde_json::to_string(
+            &serde_json::json!({"id": row.item_id, "answer": answer}),
+        )?);
+        body.push('\n');
+    }
+    Ok(body)
+}
+
+/// An endpoint's host and port, as a stamp names it (never its path or a key).
+fn endpoint_host(endpoint: &str) -> String {
+    url::Url::parse(endpoint)
+        .ok()
+        .and_then(|u| {
+            u.host_str().map(|h| {
+                u.port()
+                    .map_or_else(|| h.to_owned(), |p| format!("{h}:{p}"))
+            })
+        })
+        .unwrap_or_default()
+}
+
+/// What a run's submission is stamped with, and its leaderboard metadata.
+struct Stamped {
+    stamp: String,
+    metadata: SubmissionMetadata,
+}
+
+/// The parts of a run that its stamp names.
+struct StampOf<'a> {
+    run: &'a str,
+    endpoint: &'a str,
+    model: &'a str,
+    params: &'a str,
+    prompt_version: &'a str,
+    prompt_hash: &'a str,
+}
+
+fn stamped(
+    of: &StampOf<'_>,
+    spec: &RunSpec,
+    settings: &CallSettings,
+    rows: &[RunItemRow],
+    report: &RunReport,
+    submit_as: &str,
+) -> Result<Stamped, AppError> {
+    let usage = tally(rows, spec.prices).usage;
+    let host = endpoint_host(of.endpoint);
+    let stamp = RunStamp {
+        run: of.run.to_owned(),
+        endpoint_host: host.clone(),
+        model: of.model.to_owned(),
+        params: serde_json::from_str(of.params)?,
+        limit: spec.limit,
+        concurrency: settings.concurrency,
+        max_retries: settings.max_retries,
+        timeout_s: settings.timeout.as_secs_f64(),
+        prompt_version: of.prompt_version.to_owned(),
+        prompt_hash: of.prompt_hash.to_owned(),
+        hub_version: env!("CARGO_PKG_VERSION").to_owned(),
+        usage,
+        prices: spec.prices,
+        cost_usd: spec.prices.cost(usage),
+        answered: report.progress.answered,
+        failed: report.progress.failed,
+    };
+    let stamp = serde_json::to_string(&stamp)?;
+    let metadata = SubmissionMetadata {
+        model: submit_as.to_owned(),
+        description: format!("model run '{}' of {} on {host}", of.run, of.model),
+        url: String::new(),
+        prompt_version: format!(
+            "{} ({})",
+            of.prompt_version,
+            of.prompt_hash.get(..12).unwrap_or(of.prompt_hash)
+        ),
+        notes: stamp.clone(),
+    };
+    Ok(Stamped { stamp, metadata })
+}
+
+/// The idempotency key of a run's submission (`run` names the run: its row id here, a hash
+/// of its name for a remote hub): the same answers of the same run submitted again find the
+/// first submission.
+fn submission_key(run: &str, body: &str) -> String {
+    format!(
+        "model-run-{run}-{}",
+        &hex::encode(Sha256::digest(body.as_bytes()))[..16]
+    )
+}
+
 /// Submits the run's answers (failed items left out, so they count as unanswered) and links
 /// the submission to the run. The same answers submitted again find the first submission.
 async fn submit(
@@ -523,64 +751,18 @@ async fn submit(
     report: &RunReport,
     model: &str,
 ) -> Result<SubmissionRow, AppError> {
-    let mut body = String::new();
-    for row in rows.iter().filter(|r| r.answered) {
-        let Some(answer) = &row.response else {
-            continue;
-        };
-        body.push_str(&serde_json::to_string(
-            &serde_json::json!({"id": row.item_id, "answer": answer}),
-        )?);
-        body.push('\n');
-    }
-    let usage = rows.iter().fold(Usage::default(), |mut u, r| {
-        u += Usage {
-            prompt_tokens: r.prompt_tokens.max(0) as u64,
-            completion_tokens: r.completion_tokens.max(0) as u64,
-        };
-        u
-    });
-    let host = url::Url::parse(&run.endpoint)
-        .ok()
-        .and_then(|u| {
-            u.host_str().map(|h| {
-                u.port()
-                    .map_or_else(|| h.to_owned(), |p| format!("{h}:{p}"))
-            })
-        })
-        .unwrap_or_default();
-    let stamp = RunStamp {
-        run: run.name.clone(),
-        endpoint_host: host.clone(),
-        model: run.model.clone(),
-        params: serde_json::from_str(&run.params)?,
-        limit: spec.limit,
-        concurrency: settings.concurrency,
-        max_retries: settings.max_retries,
-        timeout_s: settings.timeout.as_secs_f64(),
-        prompt_version: run.prompt_version.clone(),
-        prompt_hash: run.prompt_hash.clone(),
-        hub_version: env!("CARGO_PKG_VERSION").to_owned(),
-        usage,
-        prices: spec.prices,
-        cost_usd: spec.prices.cost(usage),
-        answered: report.progress.answered,
-        failed: report.progress.failed,
+    let body = answers_jsonl(rows)?;
+    let of = StampOf {
+        run: &run.name,
+        endpoint: &run.endpoint,
+        model: &run.model,
+        params: &run.params,
+        prompt_version: &run.prompt_version,
+        prompt_hash: &run.prompt_hash,
     };
-    let stamp_json = serde_json::to_string(&stamp)?;
-    let metadata = SubmissionMetadata {
-        model: model.to_owned(),
-        description: format!("model run '{}' of {} on {host}", run.name, run.model),
-        url: String::new(),
-        prompt_version: format!("{} ({})", run.prompt_version, &run.prompt_hash[..12]),
-        notes: stamp_json.clone(),
-    };
+    let Stamped { stamp, metadata } = stamped(&of, spec, settings, rows, report, model)?;
     let caller = run_caller(hub, run.token).await?;
-    let key = format!(
-        "model-run-{}-{}",
-        run.id,
-        &hex::encode(Sha256::digest(body.as_bytes()))[..16]
-    );
+    let key = submission_key(&run.id.to_string(), &body);
     let bytes = body.into_bytes();
     let submitted = submissions::submit(
         hub,
@@ -595,7 +777,7 @@ async fn submit(
         Submitted::Created(row) | Submitted::Repeated(row) => row,
     };
     let mut tx = hub.begin().await?;
-    store::runs::set_submission(&mut tx, run.id, row.id, &stamp_json).await?;
+    store::runs::set_submission(&mut tx, run.id, row.id, &stamp).await?;
     tx.commit().await?;
     Ok(row)
 }

@@ -1,0 +1,754 @@
+//! A run against a remote hub (`enact-hub run --hub URL --token T`): the same engine as a
+//! run in the hub's own database, with the items and frames read over the hub's API and
+//! every reply kept in a local cache file instead of a table. The answers are posted to the
+//! hub's submission API at the end, under the caller's token.
+//!
+//! The cache file is JSON lines: a header naming the run (hub, dataset, endpoint, model,
+//! parameters, prompt), then one line per reply, appended and fsynced before the item counts
+//! as done. Running the same command again reads it and asks only what it does not hold; a
+//! line cut short by a crash is dropped (its item was never counted). A failed item asked
+//! again gets a second line: the last line of an item says how it ended, and its tokens and
+//! attempts are summed over its lines, as the database does.
+
+use std::collections::HashMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, SystemTime};
+
+use bytes::Bytes;
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+use super::{
+    AppError, CallSettings, GenerationParams, Ledger, Pending, ProgressFn, RunItemRow, RunReport,
+    RunSpec, StampOf, Stamped, StopFn, answers_jsonl, ask_pending, asker, check_settings,
+    default_name, endpoint_url, failures, pending, request_body, stamped, stored_endpoint,
+    submission_key, tally,
+};
+use crate::core::model_run::{PROMPT_VERSION, backoff, prompt_template_hash, retry_after};
+
+/// The hub a remote run reads its items from and submits to.
+#[derive(Debug, Clone)]
+pub struct RemoteHub {
+    /// The hub's base URL (`http://host:port`, or with the path it is served under).
+    pub url: String,
+    /// A token with the submit scope; sent only to the hub, never stored.
+    pub token: String,
+}
+
+impl RemoteHub {
+    fn base(&self) -> Result<url::Url, AppError> {
+        let bad = |why: &str| AppError::Invalid(format!("--hub {:?}: {why}", self.url));
+        let url = url::Url::parse(self.url.trim()).map_err(|e| bad(&e.to_string()))?;
+        if !matches!(url.scheme(), "http" | "https") || url.host_str().is_none() {
+            return Err(bad("must be an http:// or https:// URL with a host"));
+        }
+        if url.query().is_some() || url.fragment().is_some() {
+            return Err(bad("must not have a query or fragment"));
+        }
+        Ok(url)
+    }
+}
+
+/// The cache file's first line: which run its replies belong to.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct CacheHeader {
+    enact_hub_run_cache: u32,
+    run: String,
+    hub: String,
+    dataset: String,
+    endpoint: String,
+    model: String,
+    params: String,
+    prompt_version: String,
+    prompt_hash: String,
+}
+
+/// The cache format's version, in its header.
+const CACHE_VERSION: u32 = 1;
+
+/// One reply as the cache file keeps it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct CacheLine {
+    item: String,
+    answered: bool,
+    response: Option<String>,
+    finish_reason: Option<String>,
+    prompt_tokens: i64,
+    completion_tokens: i64,
+    latency_ms: i64,
+    attempts: i64,
+    error: Option<String>,
+    done_at: String,
+}
+
+impl CacheLine {
+    fn of(row: &RunItemRow) -> CacheLine {
+        CacheLine {
+            item: row.item_id.clone(),
+            answered: row.answered,
+            response: row.response.clone(),
+            finish_reason: row.finish_reason.clone(),
+            prompt_tokens: row.prompt_tokens,
+            completion_tokens: row.completion_tokens,
+            latency_ms: row.latency_ms,
+            attempts: row.attempts,
+            error: row.error.clone(),
+            done_at: httpdate::fmt_http_date(SystemTime::now()),
+        }
+    }
+
+    fn into_row(self) -> RunItemRow {
+        RunItemRow {
+            item_id: self.item,
+            answered: self.answered,
+            response: self.response,
+            finish_reason: self.finish_reason,
+            prompt_tokens: self.prompt_tokens,
+            completion_tokens: self.completion_tokens,
+            latency_ms: self.latency_ms,
+            attempts: self.attempts,
+            error: self.error,
+            done_at: self.done_at,
+        }
+    }
+}
+
+/// The file name a run's cache gets by default: its name, with what a file name cannot
+/// hold replaced.
+pub fn default_cache(run: &str) -> PathBuf {
+    let safe: String = run
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_' | '@') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    PathBuf::from(format!("{safe}.enact-run.jsonl"))
+}
+
+/// A cache file's header and each item's reply.
+type Cached = (CacheHeader, HashMap<String, RunItemRow>);
+
+/// Reads a cache file: its header and each item's reply (the last line of an item, its
+/// tokens and attempts summed). A last line without its newline was cut by a crash: it is
+/// cut off the file. Any other unreadable line is an error naming it.
+fn read_cache(path: &Path) -> Result<Option<Cached>, AppError> {
+    let shown = path.display();
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => {
+            return Err(AppError::Invalid(format!(
+                "cannot read the cache {shown}: {e}"
+            )));
+        }
+    };
+    let complete = bytes
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |at| at + 1);
+    if complete < bytes.len() {
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .and_then(|f| f.set_len(complete as u64).and_then(|()| f.sync_data()));
+        file.map_err(|e| {
+            AppError::Invalid(format!(
+                "cannot cut the unfinished last line of {shown}: {e}"
+            ))
+        })?;
+        tracing::warn!(cache = %shown, "dropped a reply cut short by a crash");
+    }
+    let text = std::str::from_utf8(&bytes[..complete])
+        .map_err(|e| AppError::Invalid(format!("the cache {shown} is not UTF-8: {e}")))?;
+    let mut lines = text.lines().enumerate();
+    let Some((_, first)) = lines.next() else {
+        return Ok(None);
+    };
+    let header: CacheHeader = serde_json::from_str(first).map_err(|e| {
+        AppError::Invalid(format!(
+            "{shown} line 1: not an enact-hub run cache header: {e}"
+        ))
+    })?;
+    if header.enact_hub_run_cache != CACHE_VERSION {
+        return Err(AppError::Invalid(format!(
+            "{shown} line 1: cache format {} is not {CACHE_VERSION}",
+            header.enact_hub_run_cache
+        )));
+    }
+    let mut rows: HashMap<String, RunItemRow> = HashMap::new();
+    for (at, line) in lines {
+        let line: CacheLine = serde_json::from_str(line)
+            .map_err(|e| AppError::Invalid(format!("{shown} line {}: {e}", at + 1)))?;
+        let mut row = line.into_row();
+        if let Some(before) = rows.get(&row.item_id) {
+            row.prompt_tokens += before.prompt_tokens;
+            row.completion_tokens += before.completion_tokens;
+            row.attempts += before.attempts;
+        }
+        rows.insert(row.item_id.clone(), row);
+    }
+    Ok(Some((header, rows)))
+}
+
+/// Appends `line` to `file` and waits until it is on disk.
+fn append_line(file: &Mutex<std::fs::File>, line: &[u8]) -> std::io::Result<()> {
+    let mut file = file
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    file.write_all(line)?;
+    file.sync_data()
+}
+
+/// The hub's API as a run uses it, with retries for a busy or restarting hub.
+struct HubClient {
+    client: reqwest::Client,
+    /// The base URL without its trailing slash.
+    base: String,
+    token: String,
+    retries: u32,
+    backoff_base: Duration,
+}
+
+/// Statuses after which the same request is sent again: the hub busy, restarting or behind
+/// a proxy that lost it.
+fn retried(status: u16) -> bool {
+    matches!(status, 429 | 502 | 503 | 504)
+}
+
+impl HubClient {
+    fn new(hub: &RemoteHub, settings: &CallSettings) -> Result<HubClient, AppError> {
+        let base = hub.base()?;
+        let client = reqwest::Client::builder()
+            .timeout(settings.timeout.max(Duration::from_secs(60)))
+            .user_agent(concat!("enact-hub/", env!("CARGO_PKG_VERSION")))
+            .build()
+            .map_err(|e| AppError::internal(format!("cannot build the HTTP client: {e}")))?;
+        Ok(HubClient {
+            client,
+            base: base.as_str().trim_end_matches('/').to_owned(),
+            token: hub.token.clone(),
+            retries: settings.max_retries.max(3),
+            backoff_base: settings.backoff_base.max(Duration::from_millis(200)),
+        })
+    }
+
+    /// The URL of `segments` under the API, each segment escaped.
+    fn api_url(&self, segments: &[&str]) -> Result<url::Url, AppError> {
+        let mut url = url::Url::parse(&format!("{}/api/v1", self.base))
+            .map_err(|e| AppError::internal(format!("the hub URL: {e}")))?;
+        url.path_segments_mut()
+            .map_err(|()| AppError::internal("the hub URL cannot have a path"))?
+            .extend(segments);
+        Ok(url)
+    }
+
+    /// A path the hub gave (`/api/v1/…`) as a URL on this hub.
+    fn hub_path(&self, path: &str) -> String {
+        format!("{}{path}", self.base)
+    }
+
+    /// Sends the request `make` builds until the hub answers with something other than a
+    /// busy status, or the retries are spent; an error status becomes the matching error
+    /// with the hub's message.
+    async fn send(
+        &self,
+        what: &str,
+        make: impl Fn() -> reqwest::RequestBuilder,
+    ) -> Result<reqwest::Response, AppError> {
+        let mut attempt = 0;
+        loop {
+            attempt += 1;
+            let (why, wait) = match make().send().await {
+                Ok(reply) if reply.status().is_success() => return Ok(reply),
+                Ok(reply) if retried(reply.status().as_u16()) && attempt <= self.retries => {
+                    let wait = reply
+                        .headers()
+                        .get(reqwest::header::RETRY_AFTER)
+                        .and_then(|v| v.to_str().ok())
+                        .and_then(|v| retry_after(v, SystemTime::now()));
+                    (format!("HTTP {}", reply.status().as_u16()), wait)
+                }
+                Ok(reply) => return Err(hub_error(what, reply).await),
+                Err(e) if attempt <= self.retries && (e.is_connect() || e.is_timeout()) => {
+                    (e.to_string(), None)
+                }
+                Err(e) => {
+                    return Err(AppError::Unavailable(format!(
+                        "{what}: the hub at {} cannot be reached: {e}",
+                        self.base
+                    )));
+                }
+            };
+            let wait = wait.unwrap_or_else(|| {
+                backoff(
+                    attempt,
+                    self.backoff_base,
+                    Duration::from_secs(30),
+                    rand::random::<f64>(),
+                )
+            });
+            tracing::debug!(what, attempt, %why, ?wait, "the hub is busy; trying again");
+            tokio::time::sleep(wait.min(Duration::from_secs(120))).await;
+        }
+    }
+
+    async fn get_json<T: for<'de> Deserialize<'de>>(
+        &self,
+        what: &str,
+        url: &str,
+    ) -> Result<T, AppError> {
+        let reply = self.send(what, || self.client.get(url)).await?;
+        reply.json::<T>().await.map_err(|e| {
+            AppError::Unavailable(format!("{what}: the hub's reply is unreadable: {e}"))
+        })
+    }
+
+    /// The ids of `dataset`'s items in the hub's order.
+    async fn item_ids(&self, dataset: &str) -> Result<Vec<String>, AppError> {
+        #[derive(Deserialize)]
+        struct Entry {
+            id: String,
+        }
+        #[derive(Deserialize)]
+        struct Page {
+            items: Vec<Entry>,
+            next: Option<String>,
+        }
+        let mut url = self.api_url(&["datasets", dataset, "items"])?;
+        url.query_pairs_mut().append_pair("per_page", "500");
+        let mut next = Some(url.to_string());
+        let mut ids = Vec::new();
+        let what = format!("listing the items of '{dataset}'");
+        while let Some(url) = next {
+            let page: Page = self.get_json(&what, &url).await?;
+            ids.extend(page.items.into_iter().map(|e| e.id));
+            next = page.next.map(|path| self.hub_path(&path));
+        }
+        Ok(ids)
+    }
+
+    /// An item's question and its images' labels and PNG bytes.
+    async fn item(
+        &self,
+        dataset: &str,
+        item: &str,
+    ) -> Result<(String, Vec<(String, Bytes)>), AppError> {
+        #[derive(Deserialize)]
+        struct Image {
+            label: String,
+            url: String,
+        }
+        #[derive(Deserialize)]
+        struct Item {
+            question: String,
+            images: Vec<Image>,
+        }
+        let what = format!("reading item '{item}' of '{dataset}'");
+        let url = self.api_url(&["datasets", dataset, "items", item])?;
+        let shown: Item = self.get_json(&what, url.as_str()).await?;
+        let mut pngs = Vec::with_capacity(shown.images.len());
+        for image in shown.images {
+            let url = self.hub_path(&image.url);
+            let reply = self.send(&what, || self.client.get(&url)).await?;
+            let png = reply.bytes().await.map_err(|e| {
+                AppError::Unavailable(format!("{what}: reading frame {}: {e}", image.url))
+            })?;
+            pngs.push((image.label, png));
+        }
+        Ok((shown.question, pngs))
+    }
+
+    /// The datasets of a study: its baseline, then each variant's.
+    async fn study_datasets(&self, study: &str) -> Result<Vec<String>, AppError> {
+        #[derive(Deserialize)]
+        struct Variant {
+            dataset: String,
+        }
+        #[derive(Deserialize)]
+        struct Study {
+            baseline: String,
+            variants: Vec<Variant>,
+        }
+        let url = self.api_url(&["studies", study])?;
+        let view: Study = self
+            .get_json(&format!("reading study '{study}'"), url.as_str())
+            .await?;
+        Ok(std::iter::once(view.baseline)
+            .chain(view.variants.into_iter().map(|v| v.dataset))
+            .collect())
+    }
+
+    /// Posts a submission; returns its id.
+    async fn submit(
+        &self,
+        dataset: &str,
+        stamped: &Stamped,
+        key: &str,
+        body: String,
+    ) -> Result<i64, AppError> {
+        #[derive(Deserialize)]
+        struct Created {
+            id: i64,
+        }
+        let mut url = self.api_url(&["datasets", dataset, "submissions"])?;
+        let m = &stamped.metadata;
+        url.query_pairs_mut()
+            .append_pair("model", &m.model)
+            .append_pair("description", &m.description)
+            .append_pair("prompt_version", &m.prompt_version)
+            .append_pair("notes", &m.notes);
+        let body = Bytes::from(body);
+        let what = format!("submitting to '{dataset}'");
+        let reply = self
+            .send(&what, || {
+                self.client
+                    .post(url.clone())
+                    .bearer_auth(&self.token)
+                    .header("Idempotency-Key", key)
+                    .header(reqwest::header::CONTENT_TYPE, "application/x-ndjson")
+                    .body(body.clone())
+            })
+            .await?;
+        let created: Created = reply.json().await.map_err(|e| {
+            AppError::Unavailable(format!("{what}: the hub's reply is unreadable: {e}"))
+        })?;
+        Ok(created.id)
+    }
+}
+
+/// An error reply of the hub as the error of the same kind, with its message and problems.
+async fn hub_error(what: &str, reply: reqwest::Response) -> AppError {
+    let status = reply.status().as_u16();
+    let body: serde_json::Value = reply.json().await.unwrap_or(serde_json::Value::Null);
+    let mut message = body
+        .get("error")
+        .and_then(serde_json::Value::as_str)
+        .unwrap_or("(no message)")
+        .to_owned();
+    if let Some(problems) = body.get("problems").and_then(serde_json::Value::as_array) {
+        for problem in problems.iter().take(5) {
+            let line = problem.get("line").and_then(serde_json::Value::as_u64);
+            let said = problem.get("message").and_then(serde_json::Value::as_str);
+            if let (Some(line), Some(said)) = (line, said) {
+                message.push_str(&format!("; line {line}: {said}"));
+            }
+        }
+    }
+    let message = format!("{what}: the hub answered {status}: {message}");
+    match status {
+        401 => AppError::Unauthenticated(message),
+        403 => AppError::NotPermitted(message),
+        404 => AppError::NotFound(message),
+        409 => AppError::Conflict(message),
+        413 => AppError::TooLarge(message),
+        429 => AppError::LimitReached {
+            message,
+            retry_after: None,
+        },
+        400..=499 => AppError::Invalid(message),
+        _ => AppError::Unavailable(message),
+    }
+}
+
+/// A remote run's ledger: items and frames over the API, replies in the cache file.
+struct RemoteLedger {
+    hub: Arc<HubClient>,
+    dataset: String,
+    cache: Arc<Mutex<std::fs::File>>,
+    cache_path: PathBuf,
+}
+
+impl Ledger for RemoteLedger {
+    async fn body(
+        &self,
+        item: &Pending,
+        model: &str,
+        params: &GenerationParams,
+    ) -> Result<Bytes, AppError> {
+        let (question, pngs) = self.hub.item(&self.dataset, &item.item_id).await?;
+        request_body(pngs, question, model, params).await
+    }
+
+    async fn record(&self, _item: &Pending, row: &RunItemRow) -> Result<(), AppError> {
+        let mut line = serde_json::to_vec(&CacheLine::of(row))?;
+        line.push(b'\n');
+        let file = self.cache.clone();
+        tokio::task::spawn_blocking(move || append_line(&file, &line))
+            .await?
+            .map_err(|e| {
+                AppError::internal(format!(
+                    "writing the cache {}: {e}",
+                    self.cache_path.display()
+                ))
+            })
+    }
+}
+
+/// The datasets of `study` on the remote hub, baseline first.
+pub async fn study_datasets(
+    hub: &RemoteHub,
+    settings: &CallSettings,
+    study: &str,
+) -> Result<Vec<String>, AppError> {
+    HubClient::new(hub, settings)?.study_datasets(study).await
+}
+
+/// Runs `spec` against the remote hub: asks every item its cache file does not hold, keeps
+/// each reply there as it arrives, then (when every item is done and `spec.submit_as` is
+/// set) posts the answers. `cache` defaults to the run's name in the working directory.
+pub async fn execute_remote(
+    hub: &RemoteHub,
+    spec: &RunSpec,
+    settings: &CallSettings,
+    cache: Option<&Path>,
+    progress: ProgressFn<'_>,
+    stop: StopFn<'_>,
+) -> Result<RunReport, AppError> {
+    check_settings(spec, settings)?;
+    let client = Arc::new(HubClient::new(hub, settings)?);
+    let endpoint = stored_endpoint(&endpoint_url(&spec.endpoint)?);
+    if spec.model.trim().is_empty() {
+        return Err(AppError::Invalid("the model name is empty".to_owned()));
+    }
+    let params = serde_json::to_string(&spec.params)?;
+    let name = match &spec.name {
+        Some(n) if n.trim().is_empty() || n.chars().count() > 200 => {
+            return Err(AppError::Invalid(
+                "a run's name must be 1 to 200 characters".to_owned(),
+            ));
+        }
+        Some(n) => n.trim().to_owned(),
+        None => default_name(&spec.dataset, &endpoint, &spec.model, &params),
+    };
+    let header = CacheHeader {
+        enact_hub_run_cache: CACHE_VERSION,
+        run: name.clone(),
+        hub: client.base.clone(),
+        dataset: spec.dataset.clone(),
+        endpoint,
+        model: spec.model.clone(),
+        params,
+        prompt_version: PROMPT_VERSION.to_owned(),
+        prompt_hash: prompt_template_hash(),
+    };
+    let cache_path = cache.map_or_else(|| default_cache(&name), Path::to_path_buf);
+    let ids = client.item_ids(&spec.dataset).await?;
+    let ids = &ids[..spec.limit.map_or(ids.len(), |l| l.min(ids.len()))];
+    let stored = match read_cache(&cache_path)? {
+        Some((found, rows)) => {
+            if found != header {
+                return Err(AppError::Conflict(format!(
+                    "the cache {} holds run '{}' of '{}' with {} on {} ({}), not this run: give \
+                     another --cache (or --run) to start a new run",
+                    cache_path.display(),
+                    found.run,
+                    found.dataset,
+                    found.model,
+                    found.endpoint,
+                    found.hub
+                )));
+            }
+            rows
+        }
+        None => HashMap::new(),
+    };
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&cache_path)
+        .map_err(|e| {
+            AppError::Invalid(format!(
+                "cannot open the cache {}: {e}",
+                cache_path.display()
+            ))
+        })?;
+    let file = Arc::new(Mutex::new(file));
+    if file
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+        .metadata()
+        .map(|m| m.len() == 0)
+        .unwrap_or(false)
+    {
+        let mut line = serde_json::to_vec(&header)?;
+        line.push(b'\n');
+        append_line(&file, &line).map_err(|e| {
+            AppError::Invalid(format!(
+                "cannot write the cache {}: {e}",
+                cache_path.display()
+            ))
+        })?;
+    }
+
+    let mut state = tally(
+        ids.iter().filter_map(|id| stored.get(id.as_str())),
+        spec.prices,
+    );
+    state.total = ids.len();
+    progress(&state);
+    let todo = pending(
+        ids.iter().enumerate().map(|(at, id)| {
+            let answered = stored.get(id.as_str()).map(|row| row.answered);
+            (at as i64, id.as_str(), answered)
+        }),
+        spec.retry_failed,
+    );
+    drop(stored);
+    let asker = Arc::new(
+        asker::Asker::new(&header.endpoint, settings.clone()).map_err(AppError::internal)?,
+    );
+    let ledger = Arc::new(RemoteLedger {
+        hub: client.clone(),
+        dataset: spec.dataset.clone(),
+        cache: file,
+        cache_path: cache_path.clone(),
+    });
+    let stopped = ask_pending(
+        ledger,
+        asker,
+        &spec.model,
+        &spec.params,
+        todo,
+        &mut state,
+        spec.prices,
+        settings.concurrency,
+        progress,
+        stop,
+    )
+    .await?;
+
+    let rows = match read_cache(&cache_path)? {
+        Some((_, mut rows)) => ids.iter().filter_map(|id| rows.remove(id)).collect(),
+        None => Vec::new(),
+    };
+    let mut report = RunReport {
+        run: name.clone(),
+        run_id: None,
+        dataset: spec.dataset.clone(),
+        progress: state,
+        failures: failures(&rows),
+        submission: None,
+        stopped,
+    };
+    if !stopped && let Some(model) = &spec.submit_as {
+        let body = answers_jsonl(&rows)?;
+        let of = StampOf {
+            run: &name,
+            endpoint: &header.endpoint,
+            model: &header.model,
+            params: &header.params,
+            prompt_version: &header.prompt_version,
+            prompt_hash: &header.prompt_hash,
+        };
+        let stamped = stamped(&of, spec, settings, &rows, &report, model)?;
+        let run_key = &hex::encode(Sha256::digest(format!("{}\n{name}", header.hub)))[..16];
+        let key = submission_key(run_key, &body);
+        report.submission = Some(client.submit(&spec.dataset, &stamped, &key, body).await?);
+    }
+    progress(&report.progress);
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(item: &str, answered: bool, tokens: i64) -> RunItemRow {
+        RunItemRow {
+            item_id: item.to_owned(),
+            answered,
+            response: answered.then(|| "[1, 2]".to_owned()),
+            finish_reason: Some("stop".to_owned()),
+            prompt_tokens: tokens,
+            completion_tokens: 1,
+            latency_ms: 5,
+            attempts: 1,
+            error: (!answered).then(|| "HTTP 500: down".to_owned()),
+            done_at: String::new(),
+        }
+    }
+
+    fn header() -> CacheHeader {
+        CacheHeader {
+            enact_hub_run_cache: CACHE_VERSION,
+            run: "r".into(),
+            hub: "http://hub".into(),
+            dataset: "d".into(),
+            endpoint: "http://m/v1".into(),
+            model: "m".into(),
+            params: "{}".into(),
+            prompt_version: PROMPT_VERSION.into(),
+            prompt_hash: prompt_template_hash(),
+        }
+    }
+
+    fn line<T: Serialize>(value: &T) -> Vec<u8> {
+        let mut line = serde_json::to_vec(value).unwrap();
+        line.push(b'\n');
+        line
+    }
+
+    #[test]
+    fn a_cache_keeps_the_last_reply_of_an_item_and_sums_its_tokens() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.jsonl");
+        let mut bytes = line(&header());
+        bytes.extend(line(&CacheLine::of(&row("a", false, 10))));
+        bytes.extend(line(&CacheLine::of(&row("b", true, 7))));
+        bytes.extend(line(&CacheLine::of(&row("a", true, 20))));
+        std::fs::write(&path, &bytes).unwrap();
+        let (found, rows) = read_cache(&path).unwrap().unwrap();
+        assert_eq!(found, header());
+        assert_eq!(rows.len(), 2);
+        let a = &rows["a"];
+        assert!(a.answered);
+        assert_eq!(
+            (a.prompt_tokens, a.completion_tokens, a.attempts),
+            (30, 2, 2)
+        );
+        assert_eq!(rows["b"].prompt_tokens, 7);
+    }
+
+    #[test]
+    fn a_line_cut_by_a_crash_is_dropped_and_cut_off_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.jsonl");
+        let mut bytes = line(&header());
+        bytes.extend(line(&CacheLine::of(&row("a", true, 1))));
+        let whole = bytes.len();
+        bytes.extend(&line(&CacheLine::of(&row("b", true, 1)))[..20]);
+        std::fs::write(&path, &bytes).unwrap();
+        let (_, rows) = read_cache(&path).unwrap().unwrap();
+        assert_eq!(rows.keys().collect::<Vec<_>>(), ["a"]);
+        assert_eq!(std::fs::metadata(&path).unwrap().len() as usize, whole);
+    }
+
+    #[test]
+    fn a_bad_line_in_the_middle_is_an_error_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.jsonl");
+        let mut bytes = line(&header());
+        bytes.extend(b"{not json}\n");
+        bytes.extend(line(&CacheLine::of(&row("a", true, 1))));
+        std::fs::write(&path, &bytes).unwrap();
+        let e = read_cache(&path).unwrap_err().to_string();
+        assert!(e.contains("line 2"), "{e}");
+        std::fs::write(&path, b"{\"x\": 1}\n").unwrap();
+        let e = read_cache(&path).unwrap_err().to_string();
+        assert!(e.contains("line 1") && e.contains("header"), "{e}");
+    }
+
+    #[test]
+    fn default_cache_names_are_file_names() {
+        assert_eq!(
+            default_cache("Qwen/Qwen2.5-VL@enact-0123"),
+            PathBuf::from("Qwen_Qwen2.5-VL@enact-0123.enact-run.jsonl")
+        );
+    }
+}

@@ -1,0 +1,263 @@
+//! `enact-hub run --hub URL`: a model run against a hub over its API, its replies in a cache
+//! file, killed part-way and run again, and its answers submitted under the caller's token.
+
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use enact_hub::core::credentials::Role;
+use serde_json::Value;
+
+use crate::helpers::*;
+use crate::runs::{SECRET_KEY, answer_text, scripts, stored_submission};
+use crate::standin::{StandIn, StandInConfig, Step};
+
+/// A hub serving `mini` (`per_cell` items per direction × L in 3, 4, 5) and the records.
+async fn hub_with_release(per_cell: u32) -> (TestServer, Vec<Value>) {
+    let written = Arc::new(Mutex::new(Vec::new()));
+    let shared = written.clone();
+    let server = spawn_app_with(|pool, dir| async move {
+        let root = dir.join("release");
+        let records = write_balanced_release(&root, &[3, 4, 5], per_cell);
+        import(&pool, &root, &options("mini")).await;
+        *shared.lock().expect("lock") = records;
+    })
+    .await;
+    let records = written.lock().expect("lock").clone();
+    (server, records)
+}
+
+/// Complete lines of the cache file (the header included), 0 when it is not there yet.
+fn cache_lines(path: &std::path::Path) -> usize {
+    std::fs::read(path).map_or(0, |b| b.iter().filter(|&&c| c == b'\n').count())
+}
+
+/// Killed with SIGKILL part-way and run again: an item whose reply is in the cache is never
+/// asked again, every item ends up answered, and the submission (under the caller's token)
+/// scores what the stand-in answered. Neither the endpoint's key nor the hub's token is in
+/// the cache or the output.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_remote_run_keeps_replies_in_its_cache_and_goes_on_after_a_kill() {
+    let (server, records) = hub_with_release(5).await;
+    let root = server.dir().join("release");
+    let (_, token) = api_token(&server.pool, "team-remote", Role::Submitter, None, None).await;
+    let wrong = [0usize, 3, 8, 13, 21];
+    let standin = StandIn::start(StandInConfig {
+        scripts: scripts(&root, &records, |i, r| {
+            // One item fails once with a 500 before it is answered: retried, not failed.
+            let answer = Step::Answer(answer_text(r, !wrong.contains(&i)));
+            if i == 5 {
+                vec![Step::Status(500, "overloaded".into()), answer]
+            } else {
+                vec![answer]
+            }
+        }),
+        latency: Duration::from_millis(150),
+        tokens_per_image: 85,
+        ..StandInConfig::default()
+    })
+    .await;
+    let work = tempfile::tempdir().expect("tempdir");
+    let cache = work.path().join("replies.jsonl");
+    let hub_url = server.url("");
+    let command = || {
+        let mut c = enact_hub();
+        c.args(["run", "mini", "--hub", &hub_url, "--endpoint"])
+            .arg(standin.endpoint())
+            .args(["--model", "standin-vl", "--submit-as", "Remote VL"])
+            .args(["--concurrency", "2", "--retry-delay", "0.01"])
+            .args(["--api-key-env", "STANDIN_API_KEY", "--price-input", "1"])
+            .arg("--cache")
+            .arg(&cache)
+            .arg("--json")
+            .current_dir(work.path())
+            .env("STANDIN_API_KEY", SECRET_KEY)
+            .env("ENACT_HUB_TOKEN", &token)
+            .env("RUST_LOG", "debug")
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped());
+        c
+    };
+    let mut first = command().spawn().expect("start enact-hub run --hub");
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while cache_lines(&cache) < 1 + 8 {
+        assert!(Instant::now() < deadline, "the run made no progress");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    first.kill().expect("SIGKILL");
+    let killed = tokio::task::spawn_blocking(move || first.wait_with_output())
+        .await
+        .expect("joined")
+        .expect("the killed run");
+    let done_at_kill = cache_lines(&cache) - 1;
+    assert!(
+        done_at_kill < records.len(),
+        "killed too late to test resuming"
+    );
+    let calls_at_kill = standin.calls();
+    let cached_at_kill: Vec<String> = std::fs::read_to_string(&cache)
+        .expect("the cache")
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let line: Value = serde_json::from_str(l).expect("a cache line");
+            line["item"].as_str().expect("item").to_owned()
+        })
+        .collect();
+
+    let mut again = command();
+    let second = tokio::task::spawn_blocking(move || again.output())
+        .await
+        .expect("joined")
+        .expect("run again");
+    assert!(
+        second.status.success(),
+        "{}",
+        String::from_utf8_lossy(&second.stderr)
+    );
+    let report: Value = serde_json::from_slice(&second.stdout).expect("a JSON summary");
+    assert_eq!(report["progress"]["answered"], records.len(), "{report}");
+    assert_eq!(report["progress"]["failed"], 0);
+    assert_eq!(
+        report["progress"]["asked_now"],
+        records.len() - done_at_kill
+    );
+    assert!(report.get("run_id").is_none(), "a remote run has no row id");
+
+    let calls = standin.calls();
+    for id in &cached_at_kill {
+        assert_eq!(
+            calls[id].requests, calls_at_kill[id].requests,
+            "{id} asked again"
+        );
+    }
+    let twice = calls.values().filter(|c| c.answered > 1).count();
+    assert!(twice <= 2, "{twice} items answered twice");
+    // Usage is what the stand-in reported for the answers kept: every item's images, once.
+    let images: u64 = records
+        .iter()
+        .map(|r| r["images"].as_array().expect("images").len() as u64)
+        .sum();
+    let prompt_tokens = report["progress"]["usage"]["prompt_tokens"]
+        .as_u64()
+        .expect("prompt tokens");
+    assert!(
+        prompt_tokens >= images * 85,
+        "{prompt_tokens} < {}",
+        images * 85
+    );
+
+    // The submission is the caller's, stamped with the run, and scores 5 wrong of 30.
+    let submission = report["submission"].as_i64().expect("submitted");
+    let stored = stored_submission(&server.pool, submission).await;
+    assert_eq!(stored.model, "Remote VL");
+    assert_eq!(stored.account, "team-remote");
+    let expected = (records.len() - wrong.len()) as f64 / records.len() as f64;
+    let overall = stored.scores.report.overall.as_ref().expect("overall");
+    assert!((overall.totals.task_accuracy - expected).abs() < 1e-9);
+    assert_eq!(stored.scores.coverage.missing, 0);
+    let stamp: Value = serde_json::from_str(&stored.notes).expect("a JSON stamp");
+    assert_eq!(stamp["model"], "standin-vl");
+    assert_eq!(stamp["answered"], records.len());
+    assert!(stamp["prompt_hash"].as_str().is_some_and(|h| h.len() == 64));
+
+    // Run a third time: nothing is asked, the same submission is found.
+    let before = standin.total_requests();
+    let mut third = command();
+    let third = tokio::task::spawn_blocking(move || third.output())
+        .await
+        .expect("joined")
+        .expect("run a third time");
+    assert!(third.status.success());
+    let report3: Value = serde_json::from_slice(&third.stdout).expect("a JSON summary");
+    assert_eq!(report3["progress"]["asked_now"], 0);
+    assert_eq!(report3["submission"], submission);
+    assert_eq!(standin.total_requests(), before);
+
+    let kept = std::fs::read_to_string(&cache).expect("the cache");
+    for text in [
+        kept.as_str(),
+        &String::from_utf8_lossy(&killed.stdout),
+        &String::from_utf8_lossy(&killed.stderr),
+        &String::from_utf8_lossy(&second.stdout),
+        &String::from_utf8_lossy(&second.stderr),
+    ] {
+        assert!(!text.contains(SECRET_KEY), "the endpoint's key was written");
+        assert!(!text.contains(&token), "the hub's token was written");
+    }
+    server.stop().await;
+}
+
+/// A cache made by another run is refused, naming the file and the run it holds; a hub that
+/// does not have the dataset is a clear error; neither asks the endpoint anything.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_remote_run_refuses_another_runs_cache_and_an_unknown_dataset() {
+    let (server, records) = hub_with_release(1).await;
+    let root = server.dir().join("release");
+    let (_, token) = api_token(&server.pool, "team-remote", Role::Submitter, None, None).await;
+    let standin = StandIn::start(StandInConfig {
+        scripts: scripts(&root, &records, |_, r| {
+            vec![Step::Answer(answer_text(r, true))]
+        }),
+        ..StandInConfig::default()
+    })
+    .await;
+    let work = tempfile::tempdir().expect("tempdir");
+    let cache = work.path().join("replies.jsonl");
+    let hub_url = server.url("");
+    let run = |dataset: &str, model: &str| {
+        let mut c = enact_hub();
+        c.args([
+            "run",
+            dataset,
+            "--hub",
+            &hub_url,
+            "--token",
+            &token,
+            "--endpoint",
+        ])
+        .arg(standin.endpoint())
+        .args(["--model", model, "--no-submit", "--cache"])
+        .arg(&cache)
+        .current_dir(work.path());
+        c
+    };
+    let mut first = run("mini", "model-a");
+    let first = tokio::task::spawn_blocking(move || first.output())
+        .await
+        .expect("joined")
+        .expect("first run");
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    assert!(String::from_utf8_lossy(&first.stderr).contains("not submitted"));
+    let asked = standin.total_requests();
+    assert_eq!(asked, records.len());
+
+    let mut other = run("mini", "model-b");
+    let other = tokio::task::spawn_blocking(move || other.output())
+        .await
+        .expect("joined")
+        .expect("second run");
+    assert!(!other.status.success());
+    let said = String::from_utf8_lossy(&other.stderr);
+    assert!(
+        said.contains("replies.jsonl") && said.contains("model-a"),
+        "{said}"
+    );
+
+    let mut missing = run("no-such-dataset", "model-a");
+    let missing = tokio::task::spawn_blocking(move || missing.output())
+        .await
+        .expect("joined")
+        .expect("third run");
+    assert!(!missing.status.success());
+    let said = String::from_utf8_lossy(&missing.stderr);
+    assert!(
+        said.contains("no-such-dataset") && said.contains("404"),
+        "{said}"
+    );
+    assert_eq!(standin.total_requests(), asked);
+    server.stop().await;
+}
