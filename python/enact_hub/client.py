@@ -309,9 +309,13 @@ class Hub:
         binary from the environment variable ``api_key_env``. Other arguments map to the
         command's flags of the same name; ``extra_args`` are passed as they are.
 
-        Needs a binary whose ``run`` has the remote-hub mode (``--hub URL --token T``); until
-        issue 25 lands it, the command refuses ``--hub`` and this raises ``HubError`` with its
-        message. On the hub itself, ``POST /api/v1/admin/runs`` starts the same engine.
+        The command runs in its remote-hub mode (``--hub``): items and frames are read from
+        this hub, every reply is kept in the cache file ``cache`` (default: named after the
+        run, in the working directory) as it arrives, and the answers are submitted with this
+        client's token, which reaches the command through its environment (never its
+        arguments). Calling ``run`` again with the same arguments goes on where an interrupted
+        run stopped and never asks an answered item again. On the hub itself,
+        ``POST /api/v1/admin/runs`` starts the same engine.
 
         Raises:
             HubError: when the command fails; its message is the command's error output.
@@ -324,8 +328,6 @@ class Hub:
             dataset,
             "--hub",
             self.url,
-            "--token",
-            self.token,
             "--endpoint",
             endpoint,
             "--model",
@@ -351,7 +353,9 @@ class Hub:
         if not submit:
             args.append("--no-submit")
         args += list(extra_args)
-        finished = subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        # The token goes through the environment: arguments are visible to every user's `ps`.
+        env = dict(os.environ, ENACT_HUB_TOKEN=self.token)
+        finished = subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
         if finished.returncode != 0:
             message = finished.stderr.strip() or "exit status {}".format(finished.returncode)
             raise HubError("enact-hub run {}: {}".format(dataset, message))

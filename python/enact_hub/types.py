@@ -221,6 +221,8 @@ class Submission:
     visibility: str
     created_at: str
     scores: Scores
+    #: The enact-hub build that computed the scores (``version+commit``; empty when older).
+    scored_by: str
     #: Per-item verdicts, when the dataset's answers are public and you may read them.
     items: Optional[List[Dict[str, Any]]]
     raw: Dict[str, Any] = field(repr=False)
@@ -236,6 +238,7 @@ class Submission:
             visibility=body["visibility"],
             created_at=body["created_at"],
             scores=Scores.from_json(body["scores"]),
+            scored_by=body.get("scored_by", ""),
             items=body.get("items"),
             raw=body,
         )

@@ -217,30 +217,35 @@ class FakeChat(BaseHTTPRequestHandler):
 
 
 def test_run_drives_the_binarys_run_command(demo: Server, submitter: Hub, tmp_path: Path) -> None:
-    # `Hub.run` drives `enact-hub run --hub URL --token T`: the remote-hub mode of the command,
-    # which issue 25 has not landed yet (the command runs on a local database only).
-    has_run = subprocess.run(
-        [enact_hub.find_enact_hub_bin(), "run", "--help"], capture_output=True, text=True
-    )
-    if has_run.returncode != 0 or "--hub" not in has_run.stdout:
-        pytest.skip("this enact-hub binary's `run` has no --hub mode yet (issue 25)")
     fake = ThreadingHTTPServer(("127.0.0.1", 0), FakeChat)
     thread = threading.Thread(target=fake.serve_forever, daemon=True)
     thread.start()
+    cache = tmp_path / "run-cache.jsonl"
+    endpoint = "http://127.0.0.1:{}/v1".format(fake.server_address[1])
     try:
         result = submitter.run(
-            "demo",
-            endpoint="http://127.0.0.1:{}/v1".format(fake.server_address[1]),
-            model="fake-vlm",
-            limit=4,
-            concurrency=2,
-            submit_as="python-run",
-            cache=str(tmp_path / "run-cache"),
+            "demo", endpoint=endpoint, model="fake-vlm", limit=4, concurrency=2, submit_as="python-run", cache=str(cache)
+        )
+        # The same run again: everything is in the cache, nothing is asked, the same submission.
+        again = submitter.run(
+            "demo", endpoint=endpoint, model="fake-vlm", limit=4, concurrency=2, submit_as="python-run", cache=str(cache)
         )
     finally:
         fake.shutdown()
     assert FakeChat.requests_seen == 4
-    assert isinstance(result.report, dict) and result.report
+    progress = result.report["progress"]
+    assert (progress["total"], progress["answered"], progress["failed"]) == (4, 4, 0)
+    assert progress["usage"] == {"prompt_tokens": 40, "completion_tokens": 20}
+    assert again.report["progress"]["asked_now"] == 0
+    assert again.report["submission"] == result.report["submission"]
+    lines = cache.read_text().splitlines()
+    assert len(lines) == 1 + 4
+    assert json.loads(lines[0])["model"] == "fake-vlm"
+    assert submitter.token and submitter.token not in cache.read_text()
+    submission = submitter.submission(result.report["submission"])
+    assert submission.model == "python-run"
+    version = submitter.version()
+    assert submission.scored_by == "{}+{}".format(version["version"], version["commit"])
     board = submitter.leaderboard("demo", all=True, model="python-run")
     assert board["rows"], board
 

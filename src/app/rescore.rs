@@ -26,6 +26,7 @@ use crate::core::annotation::human_verdict;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::metric::METRIC_VERSION;
 use crate::core::submission::{StoredAnswer, SubmissionError, rescore_submission};
+use crate::core::version::BUILD;
 use crate::store;
 use crate::store::datasets::Dataset;
 
@@ -395,6 +396,7 @@ async fn rescore_one_submission(hub: &Hub, id: i64) -> Result<Unit, AppError> {
             id,
             &scored.scores,
             METRIC_VERSION,
+            BUILD,
             &targets.item_rows,
             &scored.items,
         )

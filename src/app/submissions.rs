@@ -18,6 +18,7 @@ use crate::core::scoring::{self, ScoringTarget};
 use crate::core::submission::{
     ScoredSubmission, SubmissionError, SubmissionMetadata, Visibility, score_submission,
 };
+use crate::core::version::BUILD;
 use crate::store;
 use crate::store::accounts::AttemptsMade;
 use crate::store::db::UniqueKey;
@@ -273,6 +274,7 @@ where
         metadata: &metadata,
         scores: &scored.scores,
         metric_version: METRIC_VERSION,
+        scored_by: BUILD,
     };
     let id = match store::submissions::insert(&mut tx, &new).await {
         Ok(id) => id,
@@ -462,6 +464,7 @@ pub async fn file_baseline(
         metadata: &metadata,
         scores: &scored.scores,
         metric_version: METRIC_VERSION,
+        scored_by: BUILD,
     };
     let id = store::submissions::insert(&mut tx, &new).await?;
     store::submissions::insert_items(&mut tx, id, &targets.item_rows, &scored.items).await?;

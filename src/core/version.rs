@@ -35,6 +35,9 @@ const fn decimal(text: &str) -> i64 {
     value
 }
 
+/// The build as results record it: the version with the commit as semver build metadata.
+pub const BUILD: &str = concat!(env!("CARGO_PKG_VERSION"), "+", env!("ENACT_HUB_COMMIT"));
+
 /// What `enact-hub --version` prints after the program's name.
 pub const VERSION_LINE: &str = concat!(
     env!("CARGO_PKG_VERSION"),

@@ -154,6 +154,7 @@ pub const TABLES: &[Table] = &[
             ("created_at", Text),
             ("error_analysis", Text),
             ("metric_version", Int),
+            ("scored_by", Text),
         ],
         true,
     ),

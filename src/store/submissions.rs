@@ -66,12 +66,14 @@ pub struct SubmissionRow {
     pub body_sha256: String,
     /// The metric version its scores, verdicts and kept error analysis were computed with.
     pub metric_version: u32,
+    /// The build that computed its scores (empty: before builds were recorded).
+    pub scored_by: String,
 }
 
 const SUBMISSION_COLUMNS: &str = "s.id, s.dataset, d.name AS dataset_name, s.account, \
     a.name AS account_name, s.model, s.description, s.url, s.prompt_version, s.notes, s.policy, \
     s.status, s.visibility, s.baseline, s.scores, s.created_at, s.body_sha256, \
-    s.metric_version FROM submissions s JOIN datasets d ON d.id = s.dataset JOIN accounts a ON a.id = s.account";
+    s.metric_version, s.scored_by FROM submissions s JOIN datasets d ON d.id = s.dataset JOIN accounts a ON a.id = s.account";
 
 fn submission_from_row(row: &impl Fields) -> Result<SubmissionRow, sqlx::Error> {
     let id: i64 = row.try_get("id")?;
@@ -101,6 +103,7 @@ fn submission_from_row(row: &impl Fields) -> Result<SubmissionRow, sqlx::Error> 
         created_at: row.try_get("created_at")?,
         body_sha256: row.try_get("body_sha256")?,
         metric_version: version_column(row, "metric_version")?,
+        scored_by: row.try_get("scored_by")?,
     })
 }
 
@@ -162,6 +165,8 @@ pub struct NewSubmission<'a> {
     pub scores: &'a SubmissionScores,
     /// The metric version `scores` were computed with.
     pub metric_version: u32,
+    /// The build computing them.
+    pub scored_by: &'a str,
 }
 
 /// Inserts the submission; call inside the transaction that also stores its items. An
@@ -173,8 +178,8 @@ pub async fn insert(conn: &mut Conn, new: &NewSubmission<'_>) -> Result<i64, sql
         let scores = serde_json::to_string(new.scores).map_err(|e| corrupt("scores", e))?;
         sqlx::query_scalar(
             "INSERT INTO submissions (dataset, account, token, idempotency_key, body_sha256, \
-             model, description, url, prompt_version, notes, scores, metric_version) \
-             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12) RETURNING id",
+             model, description, url, prompt_version, notes, scores, metric_version, scored_by) \
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13) RETURNING id",
         )
         .bind(new.dataset)
         .bind(new.account)
@@ -188,6 +193,7 @@ pub async fn insert(conn: &mut Conn, new: &NewSubmission<'_>) -> Result<i64, sql
         .bind(&new.metadata.notes)
         .bind(scores)
         .bind(i64::from(new.metric_version))
+        .bind(new.scored_by)
         .fetch_one(&mut *c)
         .await
     })
@@ -419,18 +425,20 @@ pub async fn replace_scores(
     submission: i64,
     scores: &SubmissionScores,
     version: u32,
+    scored_by: &str,
     item_rows: &[i64],
     verdicts: &[ItemVerdict],
 ) -> Result<bool, sqlx::Error> {
     let json = serde_json::to_string(scores).map_err(|e| corrupt("scores", e))?;
     let updated = on!(conn, |c| {
         sqlx::query(
-            "UPDATE submissions SET scores = $1, metric_version = $2, error_analysis = NULL \
-             WHERE id = $3 AND metric_version < $2",
+            "UPDATE submissions SET scores = $1, metric_version = $2, error_analysis = NULL, \
+             scored_by = $4 WHERE id = $3 AND metric_version < $2",
         )
         .bind(json)
         .bind(i64::from(version))
         .bind(submission)
+        .bind(scored_by)
         .execute(&mut *c)
         .await?
         .rows_affected()

@@ -218,6 +218,9 @@ struct SubmissionView {
     /// older than the server's (then they are not comparable with current rows until rescored).
     #[serde(flatten)]
     metric: MetricStamp,
+    /// The enact-hub build that computed `scores` (`version+commit`; empty for submissions
+    /// scored before builds were recorded).
+    scored_by: String,
     /// Per-item verdicts: only for the owner, and only if the dataset's answers are public.
     #[serde(skip_serializing_if = "Option::is_none")]
     items: Option<Vec<ItemVerdictView>>,
@@ -285,6 +288,7 @@ impl From<SubmissionRow> for SubmissionView {
             created_at: row.created_at,
             scores: row.scores,
             metric: MetricStamp::of(row.metric_version),
+            scored_by: row.scored_by.clone(),
             items: None,
             items_withheld: None,
         }

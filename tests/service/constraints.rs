@@ -61,6 +61,7 @@ async fn a_reused_idempotency_key_is_recognised_by_its_constraint() {
         metadata: &metadata,
         scores: &first.scores,
         metric_version: enact_hub::core::metric::METRIC_VERSION,
+        scored_by: enact_hub::core::version::BUILD,
     };
     let e = store::submissions::insert(&mut conn, &again)
         .await

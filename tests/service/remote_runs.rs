@@ -159,6 +159,19 @@ async fn a_remote_run_keeps_replies_in_its_cache_and_goes_on_after_a_kill() {
     assert_eq!(stamp["model"], "standin-vl");
     assert_eq!(stamp["answered"], records.len());
     assert!(stamp["prompt_hash"].as_str().is_some_and(|h| h.len() == 64));
+    // The build that ran the model and the one that scored it: here the same.
+    assert_eq!(stamp["hub_version"], enact_hub::core::version::BUILD);
+    assert_eq!(stored.scored_by, enact_hub::core::version::BUILD);
+    let view = server
+        .call(
+            reqwest::Method::GET,
+            &format!("/api/v1/submissions/{submission}"),
+        )
+        .bearer(&token)
+        .expect(200)
+        .await
+        .json();
+    assert_eq!(view["scored_by"], enact_hub::core::version::BUILD, "{view}");
 
     // Run a third time: nothing is asked, the same submission is found.
     let before = standin.total_requests();

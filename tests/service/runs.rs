@@ -524,5 +524,12 @@ async fn a_run_killed_part_way_goes_on_where_it_stopped() {
             "the key was printed"
         );
     }
+    // Each start at the command line is audited, by the operator.
+    let starts = count(
+        &pool,
+        "SELECT count(*) FROM audit_log WHERE action = 'run.start' AND actor_kind = 'operator'",
+    )
+    .await;
+    assert_eq!(starts, 2);
     assert_key_stored_nowhere(&Hub::from(pool.clone()), dir.path()).await;
 }

@@ -31,7 +31,7 @@ pub use server::{EndpointKeys, RunCalls, ServerRunView, control, start, view, vi
 use super::submissions::{self, SubmissionRow, Submitted};
 use super::tokens::{self, Caller};
 use super::{AppError, Hub, datasets, frames, items};
-use crate::core::audit::Actor;
+use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{NewToken, Role};
 pub use crate::core::model_run::{GenerationParams, Prices, Usage};
 use crate::core::model_run::{
@@ -520,7 +520,26 @@ pub async fn execute(
     stop: StopFn<'_>,
 ) -> Result<RunReport, AppError> {
     check_settings(spec, settings)?;
-    let run = open(hub, actor, spec).await?;
+    let run = {
+        let id = identity(hub, spec).await?;
+        let mut tx = hub.begin().await?;
+        let run = find_or_create(&mut tx, actor, spec, &id).await?;
+        // A server's run was audited when it was started (`server::start`); one started at
+        // the command line is audited each time it is started or resumed.
+        if *actor != Actor::Server {
+            super::audit::record(
+                &mut tx,
+                actor,
+                AuditAction::RunStart,
+                format!("run {}", run.name),
+                Some(&run.dataset),
+                format!("command line: {} at {}", run.model, run.endpoint),
+            )
+            .await?;
+        }
+        tx.commit().await?;
+        run
+    };
     let params: GenerationParams = serde_json::from_str(&run.params)?;
     let asker =
         Arc::new(asker::Asker::new(&run.endpoint, settings.clone()).map_err(AppError::internal)?);
@@ -708,7 +727,7 @@ fn stamped(
         timeout_s: settings.timeout.as_secs_f64(),
         prompt_version: of.prompt_version.to_owned(),
         prompt_hash: of.prompt_hash.to_owned(),
-        hub_version: env!("CARGO_PKG_VERSION").to_owned(),
+        hub_version: crate::core::version::BUILD.to_owned(),
         usage,
         prices: spec.prices,
         cost_usd: spec.prices.cost(usage),
