@@ -321,7 +321,9 @@ pub async fn answer(
         Some(draft),
         Outcome::Answered(answer),
     )
-    .await
+    .await?;
+    hub.metrics.annotator_answered();
+    Ok(())
 }
 
 /// Records a finished item with its telemetry and drops its draft, in one transaction; `save`

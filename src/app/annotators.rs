@@ -4,6 +4,7 @@
 use std::time::Duration;
 
 use super::changes::Change;
+use super::metrics::LoginFailure;
 use super::{AppError, Hub, audit};
 use crate::core::annotation::Session;
 use crate::core::audit::{Actor, AuditAction};
@@ -163,13 +164,17 @@ pub async fn check_password(
     let stored = store::annotations::credentials(&mut conn, name).await?;
     drop(conn);
     let Some((id, hash)) = stored else {
+        hub.metrics.login_failed(LoginFailure::Password);
         return Ok(None);
     };
     let password = password.to_owned();
-    Ok(
+    let found =
         tokio::task::spawn_blocking(move || verify_password(&password, &hash).then_some(id))
-            .await?,
-    )
+            .await?;
+    if found.is_none() {
+        hub.metrics.login_failed(LoginFailure::Password);
+    }
+    Ok(found)
 }
 
 /// Starts a session for `annotator`; returns its secret token (for the cookie).

@@ -44,6 +44,7 @@ pub mod import;
 pub mod items;
 pub mod jobs;
 pub mod leaderboard;
+pub mod metrics;
 pub mod migrate_db;
 pub mod pipeline;
 pub mod rescore;
@@ -132,6 +133,7 @@ pub struct Hub {
     quotas: Quotas,
     /// The environment variables a server-side model run may take its API key from.
     endpoint_keys: runs::EndpointKeys,
+    metrics: Arc<metrics::Metrics>,
 }
 
 impl From<SqlitePool> for Hub {
@@ -161,6 +163,7 @@ impl Hub {
             changes: tokio::sync::broadcast::channel(1024).0,
             quotas,
             endpoint_keys: runs::EndpointKeys::default(),
+            metrics: Arc::default(),
         }
     }
 
@@ -338,12 +341,23 @@ impl Hub {
     }
 
     async fn conn(&self) -> Result<store::PooledConn, AppError> {
-        Ok(self.pool.acquire().await?)
+        let asked = std::time::Instant::now();
+        let conn = self.pool.acquire().await?;
+        self.metrics.connection_waited(asked.elapsed());
+        Ok(conn)
     }
 
     /// A write transaction, serialised with every other writer of the database
     /// ([`Pool::begin`]).
     async fn begin(&self) -> Result<store::Tx, AppError> {
-        Ok(self.pool.begin().await?)
+        let asked = std::time::Instant::now();
+        let tx = self.pool.begin().await?;
+        self.metrics.write_waited(asked.elapsed());
+        Ok(tx)
+    }
+
+    /// This instance's metrics ([`metrics::exposition`] writes them).
+    pub fn metrics(&self) -> &metrics::Metrics {
+        &self.metrics
     }
 }

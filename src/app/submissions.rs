@@ -308,6 +308,7 @@ where
     hub.publish(&mut tx, &Change::Boards).await?;
     tx.commit().await?;
     hub.boards.changed();
+    hub.metrics.submission_scored();
     tracing::info!(
         submission = id,
         dataset = %dataset.name,

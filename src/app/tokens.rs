@@ -5,6 +5,7 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::audit;
+use super::metrics::LoginFailure;
 use super::{AppError, Hub};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{self, NewToken, Role, Scope};
@@ -49,7 +50,11 @@ impl Caller {
 /// unauthorized when the token is unknown or revoked, as forbidden when it lacks the scope.
 /// The web checks every route's scope here, once, before the route's handler runs.
 pub async fn authorize(hub: &Hub, presented: &str, scope: Scope) -> Result<Caller, AppError> {
-    let caller = authenticate(hub, presented).await?;
+    let caller = authenticate(hub, presented).await.inspect_err(|e| {
+        if matches!(e, AppError::Unauthenticated(_)) {
+            hub.metrics.login_failed(LoginFailure::Token);
+        }
+    })?;
     caller.require(scope)?;
     Ok(caller)
 }

@@ -49,6 +49,15 @@ pub(super) struct ServeArgs {
         value_name = "VAR"
     )]
     endpoint_keys: Vec<String>,
+    /// A bearer token that `GET /metrics` accepts besides admin tokens: give it to the
+    /// Prometheus scraper (`authorization: {credentials: ...}`).
+    #[arg(
+        long,
+        env = "ENACT_HUB_METRICS_TOKEN",
+        hide_env_values = true,
+        value_name = "TOKEN"
+    )]
+    metrics_token: Option<String>,
     /// Generate the built-in demo dataset at start and serve it (as dataset "demo").
     #[arg(long)]
     demo: bool,
@@ -128,6 +137,7 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         request_timeout: Duration::from_secs(args.request_timeout),
         submission_body_limit: args.submission_body_limit,
         trusted_proxies: args.trusted_proxies.clone(),
+        metrics_token: args.metrics_token.clone().filter(|t| !t.trim().is_empty()),
     };
     let server = Server::bind(args.addr, hub.clone(), &config)
         .await

@@ -308,3 +308,26 @@ pub async fn unfinished(conn: &mut Conn, kind: JobKind) -> Result<Vec<JobRow>, s
         rows.iter().map(job_from_row).collect()
     })
 }
+
+/// How many jobs there are of each kind in each state.
+pub async fn counts(conn: &mut Conn) -> Result<Vec<(String, String, i64)>, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_as(
+            "SELECT kind, state, count(*) FROM jobs GROUP BY kind, state ORDER BY kind, state",
+        )
+        .fetch_all(&mut *c)
+        .await
+    })
+}
+
+/// The running jobs, oldest first.
+pub async fn running(conn: &mut Conn) -> Result<Vec<JobRow>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(&format!(
+            "SELECT {COLUMNS} FROM jobs WHERE state = 'running' ORDER BY id"
+        ))
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(job_from_row).collect()
+    })
+}

@@ -34,7 +34,7 @@ pub(super) async fn require_scope(
 }
 
 /// The token of an `Authorization: Bearer TOKEN` header.
-fn bearer_token(headers: &HeaderMap) -> Result<&str, AppError> {
+pub(super) fn bearer_token(headers: &HeaderMap) -> Result<&str, AppError> {
     let header = headers
         .get(header::AUTHORIZATION)
         .ok_or_else(|| {

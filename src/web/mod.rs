@@ -25,6 +25,7 @@ mod error_analysis;
 mod extract;
 pub mod forwarded;
 mod leaderboard;
+mod metrics;
 pub mod openapi;
 mod pages;
 mod rescore;
@@ -42,6 +43,7 @@ use axum::Router;
 use axum::extract::{DefaultBodyLimit, MatchedPath, Request};
 use axum::http::{HeaderValue, StatusCode};
 use tokio::net::TcpListener;
+use tower_http::request_id::{MakeRequestUuid, PropagateRequestIdLayer, SetRequestIdLayer};
 use tower_http::timeout::TimeoutLayer;
 use tower_http::trace::TraceLayer;
 
@@ -60,6 +62,8 @@ pub struct WebConfig {
     pub submission_body_limit: usize,
     /// Reverse proxies whose `X-Forwarded-For` names the client (none by default).
     pub trusted_proxies: Vec<forwarded::TrustedProxy>,
+    /// A bearer token `GET /metrics` accepts besides admin tokens (for a Prometheus scraper).
+    pub metrics_token: Option<String>,
 }
 
 impl Default for WebConfig {
@@ -70,6 +74,7 @@ impl Default for WebConfig {
             // A full ENACT-format file (8,972 QA records with answers) is about 27 MB.
             submission_body_limit: 64 * 1024 * 1024,
             trusted_proxies: Vec::new(),
+            metrics_token: None,
         }
     }
 }
@@ -82,6 +87,7 @@ pub struct AppState {
     logins: Arc<session::LoginLimiter>,
     sessions: Arc<session::SessionCache>,
     trusted_proxies: Arc<[forwarded::TrustedProxy]>,
+    metrics_token: Option<Arc<str>>,
 }
 
 impl AppState {
@@ -92,6 +98,7 @@ impl AppState {
             logins: Arc::new(session::LoginLimiter::default()),
             sessions: Arc::new(session::SessionCache::default()),
             trusted_proxies: config.trusted_proxies.clone().into(),
+            metrics_token: config.metrics_token.as_deref().map(Arc::from),
         }
     }
 }
@@ -227,7 +234,20 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
             .get::<MatchedPath>()
             .map(MatchedPath::as_str)
             .unwrap_or("unmatched");
-        tracing::info_span!("request", method = %request.method(), route, uri = %request.uri())
+        // Set by the request-id layer outside this one (or by a proxy in front), echoed in
+        // the response: a log line can be found from the id a user reports.
+        let request_id = request
+            .headers()
+            .get("x-request-id")
+            .and_then(|v| v.to_str().ok())
+            .unwrap_or("");
+        tracing::info_span!(
+            "request",
+            method = %request.method(),
+            route,
+            uri = %request.uri(),
+            request_id
+        )
     });
     Router::new()
         .route("/healthz", axum::routing::get(healthz))
@@ -240,10 +260,16 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(studies::page_router())
         .merge(assets::router())
         .merge(openapi::page_router())
+        .merge(metrics::router(&state))
         .nest(
             openapi::API_PREFIX,
             openapi::api_router(api_routes(), &state),
         )
+        // Inside the router, so the route's pattern is known when it counts.
+        .route_layer(axum::middleware::from_fn_with_state(
+            state.clone(),
+            metrics::count_requests,
+        ))
         .with_state(state)
         .layer(axum::middleware::map_response(move |response| {
             security_headers(policy.clone(), response)
@@ -254,6 +280,8 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
             config.request_timeout,
         ))
         .layer(trace)
+        .layer(PropagateRequestIdLayer::x_request_id())
+        .layer(SetRequestIdLayer::x_request_id(MakeRequestUuid))
 }
 
 /// A bound server, ready to run. Binding is separate from running so tests can ask for port 0

@@ -26,6 +26,7 @@ mod import;
 mod instances;
 mod jobs;
 mod leaderboard;
+mod metrics;
 mod migrate_db;
 mod openapi;
 mod pages;

@@ -1,0 +1,116 @@
+//! `GET /metrics` (Prometheus' text format, [`crate::app::metrics`]) and the middleware that
+//! counts every request by its route's pattern and status.
+//!
+//! The page is not public: it answers a scraper that presents the token the server was
+//! started with (`serve --metrics-token`, or `ENACT_HUB_METRICS_TOKEN`) and any admin API
+//! token; anyone else gets 401.
+
+use std::time::Instant;
+
+use axum::Router;
+use axum::extract::{MatchedPath, Request, State};
+use axum::http::{HeaderValue, header};
+use axum::middleware::Next;
+use axum::response::{IntoResponse, Response};
+use sha2::{Digest, Sha256};
+
+use super::{AppError, AppState, auth};
+use crate::app;
+use crate::core::credentials::Scope;
+
+/// The content type of Prometheus' text format as `prometheus-client` writes it (OpenMetrics).
+const CONTENT_TYPE: &str = "application/openmetrics-text; version=1.0.0; charset=utf-8";
+
+pub(super) fn router(state: &AppState) -> Router<AppState> {
+    Router::new()
+        .route("/metrics", axum::routing::get(metrics))
+        .route_layer(axum::middleware::from_fn_with_state(
+            state.clone(),
+            scraper_only,
+        ))
+}
+
+async fn metrics(State(state): State<AppState>) -> Result<Response, AppError> {
+    let text = app::metrics::exposition(&state.hub).await?;
+    let mut response = text.into_response();
+    response
+        .headers_mut()
+        .insert(header::CONTENT_TYPE, HeaderValue::from_static(CONTENT_TYPE));
+    Ok(response)
+}
+
+/// Lets through the metrics token or an admin token; 401 or 403 otherwise.
+async fn scraper_only(
+    State(state): State<AppState>,
+    request: Request,
+    next: Next,
+) -> Result<Response, AppError> {
+    let presented = auth::bearer_token(request.headers())?;
+    let is_metrics_token = state
+        .metrics_token
+        .as_deref()
+        .is_some_and(|expected| same_secret(presented, expected));
+    if !is_metrics_token {
+        app::tokens::authorize(&state.hub, presented, Scope::Admin).await?;
+    }
+    Ok(next.run(request).await)
+}
+
+/// Compares two secrets by their SHA-256 in constant time, so the comparison's duration says
+/// nothing about how much of the token was right.
+fn same_secret(presented: &str, expected: &str) -> bool {
+    let (a, b) = (
+        Sha256::digest(presented.as_bytes()),
+        Sha256::digest(expected.as_bytes()),
+    );
+    a.iter().zip(b.iter()).fold(0u8, |d, (x, y)| d | (x ^ y)) == 0
+}
+
+/// Counts the request under its route's pattern (`unmatched` for a path no route has), its
+/// method and the status answered, with the time taken.
+pub(super) async fn count_requests(
+    State(state): State<AppState>,
+    request: Request,
+    next: Next,
+) -> Response {
+    let started = Instant::now();
+    let method = request.method().as_str().to_owned();
+    let route = request
+        .extensions()
+        .get::<MatchedPath>()
+        .map_or_else(|| "unmatched".to_owned(), |p| route_label(p.as_str()));
+    let response = next.run(request).await;
+    state.hub.metrics().request(
+        &method,
+        &route,
+        response.status().as_u16(),
+        started.elapsed(),
+    );
+    response
+}
+
+/// A route's pattern as a label value: `{name}` written `:name`, since braces inside label
+/// values trip some text-format parsers.
+fn route_label(pattern: &str) -> String {
+    pattern.replace('{', ":").replace('}', "")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{route_label, same_secret};
+
+    #[test]
+    fn route_labels_name_parameters_with_colons() {
+        assert_eq!(
+            route_label("/api/v1/datasets/{dataset}/items/{item_id}"),
+            "/api/v1/datasets/:dataset/items/:item_id"
+        );
+    }
+
+    #[test]
+    fn secrets_match_only_whole() {
+        assert!(same_secret("m-7f3a", "m-7f3a"));
+        assert!(!same_secret("m-7f3", "m-7f3a"));
+        assert!(!same_secret("", "m-7f3a"));
+    }
+}
