@@ -11,10 +11,11 @@
 #
 #   scripts/bench-runs.sh [RELEASE_DIR]
 #
-# Items come from ENACT's parity release (../shared/fixtures/enact-parity) when present, else
-# from a world release generated here; they are replicated in SQL (scripts/lib/
-# replicate_items.py) up to each size. Needs python3 (with `requests`) and /usr/bin/time;
-# loopback only.
+# Items come from RELEASE_DIR when given, else from a world release generated here with 512 ×
+# 512 frames (the size of ENACT's; the parity fixture's frames are 2 KB stand-ins, too small to
+# load a run like real images); they are replicated in SQL (scripts/lib/replicate_items.py)
+# up to each size. ENACT_HUB_BIN: a built binary to measure instead of building one. Needs
+# python3 (with `requests`) and /usr/bin/time; loopback only.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -22,16 +23,23 @@ LATENCY_MS=${LATENCY_MS:-200}
 PORT=${PORT:-18095}
 OUT=bench-out/runs
 mkdir -p "$OUT"
-cargo build --release --locked --bin enact-hub >&2
-BIN=${CARGO_TARGET_DIR:-target}/release/enact-hub
-
-release=${1:-../shared/fixtures/enact-parity}
-if [ ! -d "$release" ]; then
-  release="$OUT/world"
-  rm -rf "$OUT/replay" "$release"
-  "$BIN" simulate --seed 3 --activity all --out "$OUT/replay" >&2
-  "$BIN" generate "$OUT/replay" --out "$release" >&2
+if [ -n "${ENACT_HUB_BIN:-}" ]; then
+  BIN=$ENACT_HUB_BIN
+else
+  cargo build --release --locked --bin enact-hub >&2
+  BIN=${CARGO_TARGET_DIR:-target}/release/enact-hub
 fi
+
+release=${1:-}
+if [ -z "$release" ]; then
+  release="$OUT/world"
+  if [ ! -f "$release/QA/enact_ordering.jsonl" ]; then
+    rm -rf "$OUT/replay" "$release"
+    "$BIN" simulate --seed 3 --activity all --out "$OUT/replay" >&2
+    "$BIN" generate "$OUT/replay" --out "$release" >&2
+  fi
+fi
+echo "frames: $(find "$release" -name '*.png' | wc -l) PNGs, $(du -sh "$release" | cut -f1) in all"
 
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; }

@@ -353,6 +353,8 @@ enum Page {
     Session,
     /// A logged-in admin.
     Admin,
+    /// A metrics scraper: an admin API token (or the server's metrics token), not a session.
+    Scraper,
 }
 
 /// Every page route: (method, path, who it is for). The source is scanned for `.route("…")`
@@ -360,6 +362,7 @@ enum Page {
 const PAGES: &[(&str, &str, Page)] = &[
     ("GET", "/", Page::Public),
     ("GET", "/healthz", Page::Public),
+    ("GET", "/metrics", Page::Scraper),
     ("GET", "/datasets/{dataset}", Page::Public),
     ("GET", "/datasets/{dataset}/items/{item_id}", Page::Public),
     ("GET", "/leaderboard/{dataset}", Page::Public),
@@ -523,6 +526,9 @@ async fn every_page_route_answers_every_caller_as_the_matrix_says() {
             assert!(status < 500, "{what}");
             match (page, caller) {
                 (Page::Public, _) => assert!(status < 400, "{what}"),
+                (Page::Scraper, "admin token") => assert_eq!(status, 200, "{what}"),
+                (Page::Scraper, "submitter token") => assert_eq!(status, 403, "{what}"),
+                (Page::Scraper, _) => assert_eq!(status, 401, "{what}"),
                 (Page::Link, _) => assert_eq!(status, 404, "{what}"),
                 // Refused: the form's own CSRF is missing (403), or the invite is unknown (404).
                 (Page::Form, _) => assert!(status == 403 || status == 404, "{what}"),
@@ -565,6 +571,7 @@ async fn page_callers_without_the_right_are_refused_before_any_form_is_read() {
         let refused: &[(&str, u16)] = match page {
             Page::Session => &[("anonymous", 401)],
             Page::Admin => &[("anonymous", 401), ("annotator", 403)],
+            Page::Scraper => &[("anonymous", 401), ("annotator", 401)],
             Page::Public | Page::Link | Page::Form => continue,
         };
         let path = pattern
