@@ -15,6 +15,7 @@ use crate::core::annotation::{
     next_in_queue,
 };
 use crate::core::audit::{Actor, AuditAction};
+use crate::core::gold::{self, GoldRate, QueuedEntry};
 use crate::store;
 use crate::store::annotations::StoredAnnotation;
 use crate::store::items::StoredItem;
@@ -105,6 +106,8 @@ pub async fn assign(
     drop(conn);
     let mut tx = hub.begin().await?;
     let added = store::annotations::assign(&mut tx, &pairs).await?;
+    // More ordinary items may call for more gold ones.
+    let gold = super::gold::after_assignment(&mut tx, dataset.id, chosen).await?;
     let named: Vec<&str> = chosen.iter().map(|a| names[a].as_str()).collect();
     let how = match how {
         Assignment::Split(_) => "balanced split of the unassigned items",
@@ -116,7 +119,15 @@ pub async fn assign(
         AuditAction::AssignmentChange,
         format!("annotators {}", named.join(", ")),
         Some(&dataset.name),
-        format!("{how}: {} asked, {added} new to the queues", pairs.len()),
+        format!(
+            "{how}: {} asked, {added} new to the queues{}",
+            pairs.len(),
+            if gold > 0 {
+                format!(", and {gold} gold items mixed in")
+            } else {
+                String::new()
+            }
+        ),
     )
     .await?;
     tx.commit().await?;
@@ -126,20 +137,33 @@ pub async fn assign(
     })
 }
 
-/// An annotator's assigned items in queue order, with where each stands.
+/// An annotator's assigned items in queue order, with where each stands: the gold mix's order
+/// ([`gold::mix`]), in which nothing tells a gold item from another.
 pub async fn queue(hub: &Hub, annotator: i64) -> Result<Vec<QueueEntry>, AppError> {
     let mut conn = hub.conn().await?;
     let rows = store::annotations::queue(&mut conn, annotator).await?;
-    Ok(rows
+    let queued = rows
         .into_iter()
-        .map(|r| QueueEntry {
-            dataset: r.dataset,
-            item_id: r.item_id,
-            direction: r.direction,
-            step_length: r.step_length,
-            status: QueueStatus::of(r.finished, r.started),
+        .map(|r| {
+            let gold_rate = r
+                .gold_rate
+                .map(GoldRate::new)
+                .transpose()
+                .map_err(AppError::internal)?;
+            Ok(QueuedEntry {
+                dataset: r.dataset.clone(),
+                gold_rate,
+                entry: QueueEntry {
+                    dataset: r.dataset,
+                    item_id: r.item_id,
+                    direction: r.direction,
+                    step_length: r.step_length,
+                    status: QueueStatus::of(r.finished, r.started),
+                },
+            })
         })
-        .collect())
+        .collect::<Result<Vec<_>, AppError>>()?;
+    Ok(gold::mix(queued))
 }
 
 /// The item an annotator should work on next: one already started, else the first to do.
