@@ -12,7 +12,8 @@
 //! - [`tokens`]: API tokens and the accounts behind them; [`annotators`]: annotator accounts,
 //!   invites and login sessions.
 //! - [`annotation`]: assignments, the queue, drafts, answers, skips and flags; [`gold`]: gold
-//!   items mixed into the queues, and annotators excluded from the Human row.
+//!   items mixed into the queues, and annotators excluded from the Human row; [`quality`]:
+//!   each annotator's figures on a dataset.
 //! - [`agreement`]: the cross-annotation protocol, agreement statistics and the report.
 //! - [`error_analysis`]: the paper's error taxonomy of a submission, the Human row, a file, or
 //!   a whole leaderboard.
@@ -48,6 +49,7 @@ pub mod jobs;
 pub mod leaderboard;
 pub mod migrate_db;
 pub mod pipeline;
+pub mod quality;
 pub mod rescore;
 pub mod runs;
 pub mod scoring;

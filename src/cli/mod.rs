@@ -23,6 +23,7 @@ mod frames;
 mod generate;
 mod gold;
 mod import;
+mod quality;
 mod rescore;
 mod run;
 mod scoring;

@@ -896,3 +896,61 @@ pub async fn count_below_version(
         .await
     })
 }
+
+/// One finished item of a dataset as the quality figures read it.
+#[derive(Debug, Clone)]
+pub struct QualityRow {
+    pub annotator: i64,
+    pub name: String,
+    pub item: i64,
+    pub gold: bool,
+    pub outcome: OutcomeKind,
+    /// With what judging it needs, when answered.
+    pub answer: Option<HumanAnswer>,
+    pub verdict: Option<HumanVerdict>,
+    pub time_on_item_ms: i64,
+}
+
+/// Every finished item of a dataset (answered, skipped or flagged), gold or not, by annotator
+/// name then item.
+pub async fn quality_rows(
+    conn: &mut Conn,
+    dataset_id: i64,
+) -> Result<Vec<QualityRow>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT n.annotator, a.name, n.item, (g.item IS NOT NULL) AS gold, n.outcome, \
+             n.answer, n.time_on_item_ms, i.item_id, i.direction, i.step_length, i.gt_answer, \
+             s.signatures, n.exact_match, n.semantic_match, n.task_accuracy, \
+             n.pairwise_accuracy, n.metric_version \
+             FROM annotations n JOIN annotators a ON a.id = n.annotator \
+             JOIN items i ON i.id = n.item \
+             LEFT JOIN item_signatures s ON s.item = i.id \
+             LEFT JOIN gold_items g ON g.item = n.item \
+             WHERE i.dataset_id = $1 ORDER BY a.name, n.item",
+        )
+        .bind(dataset_id)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter()
+            .map(|r| {
+                let outcome: OutcomeKind = r.try_get("outcome")?;
+                let answered = outcome == OutcomeKind::Answered;
+                Ok(QualityRow {
+                    annotator: r.try_get("annotator")?,
+                    name: r.try_get("name")?,
+                    item: r.try_get("item")?,
+                    gold: r.try_get("gold")?,
+                    outcome,
+                    answer: if answered {
+                        Some(human_answer_from_row(r)?)
+                    } else {
+                        None
+                    },
+                    verdict: stored_verdict(r)?.map(|(verdict, _)| verdict),
+                    time_on_item_ms: r.try_get("time_on_item_ms")?,
+                })
+            })
+            .collect()
+    })
+}

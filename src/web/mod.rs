@@ -27,6 +27,7 @@ pub mod forwarded;
 mod leaderboard;
 pub mod openapi;
 mod pages;
+mod quality;
 mod rescore;
 mod runs;
 pub mod session;
@@ -132,6 +133,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(studies::routes());
     routes.extend(rescore::routes());
     routes.extend(runs::routes());
+    routes.extend(quality::routes());
     routes.push(
         openapi::ApiRoute::new(
             openapi::Verb::Get,
@@ -211,6 +213,7 @@ fn admin_pages(state: &AppState) -> Router<AppState> {
         .merge(admin_audit::router())
         .merge(studies::admin_router())
         .merge(rescore::router())
+        .merge(quality::router())
         .route_layer(axum::middleware::from_fn_with_state(
             state.clone(),
             session::admin_only,
