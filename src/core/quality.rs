@@ -12,6 +12,7 @@ use super::agreement::{
     AnnotatedOrdering, OrderingAnnotations, PAPER_COMPARABLE_ENCODING, pairwise_alphas, percentile,
 };
 use super::annotation::{HumanAnswer, HumanVerdict, OutcomeKind, human_verdict};
+pub use super::leaderboard::Interval;
 
 /// The z of a two-sided 95% interval.
 const Z_95: f64 = 1.959_963_984_540_054;
@@ -40,13 +41,6 @@ pub struct AnnotatorWork {
     /// Excluded from the dataset's Human row and agreement report.
     pub excluded: bool,
     pub items: Vec<FinishedItem>,
-}
-
-/// A 95% interval.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
-pub struct Interval {
-    pub low: f64,
-    pub high: f64,
 }
 
 /// Wilson's score interval at 95% for `successes` out of `n` (a mean of values in [0, 1] is

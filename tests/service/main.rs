@@ -29,6 +29,7 @@ mod leaderboard;
 mod migrate_db;
 mod openapi;
 mod pages;
+mod quality;
 mod rescore;
 mod runs;
 mod score;
