@@ -169,18 +169,29 @@ pub async fn set(
     ))
 }
 
+/// What clearing a gold set did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, schemars::JsonSchema)]
+pub struct GoldCleared {
+    /// False when the dataset had no gold set (nothing changed, nothing audited).
+    pub cleared: bool,
+    /// Unfinished gold items taken out of queues.
+    pub removed: u64,
+}
+
 /// Removes the dataset's gold set: its unfinished gold items leave the queues; answers given
-/// stay, and (their items no longer gold) count in the Human row again. 404 when the dataset
-/// has no gold set.
-pub async fn clear(hub: &Hub, actor: &Actor, dataset: &str) -> Result<GoldQueues, AppError> {
+/// stay, and (their items no longer gold) count in the Human row again. A dataset without a
+/// gold set is left as it is.
+pub async fn clear(hub: &Hub, actor: &Actor, dataset: &str) -> Result<GoldCleared, AppError> {
     let dataset = datasets::by_name(hub, dataset).await?;
     let mut tx = hub.begin().await?;
     let removed = store::gold::drop_unfinished_gold_assignments(&mut tx, dataset.id).await?;
     if !store::gold::clear(&mut tx, dataset.id).await? {
-        return Err(AppError::NotFound(format!(
-            "dataset '{}' has no gold set",
-            dataset.name
-        )));
+        // Without a gold set no assignment is the gold mix's to remove.
+        tx.rollback().await?;
+        return Ok(GoldCleared {
+            cleared: false,
+            removed: 0,
+        });
     }
     audit::record(
         &mut tx,
@@ -197,8 +208,8 @@ pub async fn clear(hub: &Hub, actor: &Actor, dataset: &str) -> Result<GoldQueues
     announce(hub, &mut tx, &removed).await?;
     tx.commit().await?;
     forget(hub, &removed);
-    Ok(GoldQueues {
-        added: 0,
+    Ok(GoldCleared {
+        cleared: true,
         removed: removed.len() as u64,
     })
 }
@@ -265,23 +276,25 @@ pub(super) async fn after_assignment(
 }
 
 /// Keeps `annotator`'s answers on `dataset` out of its Human row and agreement report (they
-/// stay stored; [`include`] counts them again), audited. 409 when already excluded.
+/// stay stored; [`include`] counts them again), audited. Returns whether it changed anything
+/// (false when already excluded: nothing is audited then).
 pub async fn exclude(
     hub: &Hub,
     actor: &Actor,
     dataset: &str,
     annotator: &str,
-) -> Result<(), AppError> {
+) -> Result<bool, AppError> {
     change_exclusion(hub, actor, dataset, annotator, true).await
 }
 
-/// Counts an excluded annotator's answers on `dataset` again, audited. 409 when not excluded.
+/// Counts an excluded annotator's answers on `dataset` again, audited. Returns whether it
+/// changed anything (false when the annotator was not excluded).
 pub async fn include(
     hub: &Hub,
     actor: &Actor,
     dataset: &str,
     annotator: &str,
-) -> Result<(), AppError> {
+) -> Result<bool, AppError> {
     change_exclusion(hub, actor, dataset, annotator, false).await
 }
 
@@ -291,7 +304,7 @@ async fn change_exclusion(
     dataset: &str,
     annotator: &str,
     exclude: bool,
-) -> Result<(), AppError> {
+) -> Result<bool, AppError> {
     let dataset = datasets::by_name(hub, dataset).await?;
     let mut conn = hub.conn().await?;
     let account = store::annotations::annotators(&mut conn)
@@ -307,11 +320,8 @@ async fn change_exclusion(
         store::gold::include(&mut tx, dataset.id, account.id).await?
     };
     if !changed {
-        return Err(AppError::Conflict(format!(
-            "annotator '{annotator}' is {} on dataset '{}' already",
-            if exclude { "excluded" } else { "included" },
-            dataset.name
-        )));
+        tx.rollback().await?;
+        return Ok(false);
     }
     let (action, detail) = if exclude {
         (
@@ -336,7 +346,7 @@ async fn change_exclusion(
     hub.publish(&mut tx, &Change::Boards).await?;
     tx.commit().await?;
     hub.boards.changed();
-    Ok(())
+    Ok(true)
 }
 
 /// The annotators excluded from a dataset's Human row, by name.

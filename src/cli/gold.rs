@@ -140,10 +140,17 @@ async fn clear(args: DatasetArgs) -> anyhow::Result<ExitCode> {
     let hub = open(&args.db.db).await?;
     let result = app::gold::clear(&hub, &operator(), &args.dataset).await;
     hub.close().await;
-    let queues = in_database(result, &args.db.db)?;
-    println!(
-        "dataset '{}': gold set cleared; {} unfinished gold items taken out of queues",
-        args.dataset, queues.removed
-    );
+    let cleared = in_database(result, &args.db.db)?;
+    if cleared.cleared {
+        println!(
+            "dataset '{}': gold set cleared; {} unfinished gold items taken out of queues",
+            args.dataset, cleared.removed
+        );
+    } else {
+        println!(
+            "dataset '{}' had no gold set; nothing changed",
+            args.dataset
+        );
+    }
     Ok(ExitCode::SUCCESS)
 }

@@ -147,8 +147,14 @@ async fn change(args: ExclusionArgs, exclude: bool) -> anyhow::Result<ExitCode> 
         app::gold::include(&hub, &actor, &args.dataset, &args.name).await
     };
     hub.close().await;
-    in_database(result, &args.db.db)?;
-    if exclude {
+    if !in_database(result, &args.db.db)? {
+        println!(
+            "annotator '{}' is {} on dataset '{}' already; nothing changed",
+            args.name,
+            if exclude { "excluded" } else { "included" },
+            args.dataset
+        );
+    } else if exclude {
         println!(
             "annotator '{}': answers on dataset '{}' left out of the Human row and the \
              agreement report (kept; `annotator include` counts them again)",

@@ -16,7 +16,7 @@ use super::extract::{Json, Path, Query};
 use super::openapi::{ApiRoute, Verb};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
-use crate::app::gold::{GoldQueues, GoldSet};
+use crate::app::gold::{GoldCleared, GoldQueues, GoldSet};
 use crate::app::quality::QualityReport;
 use crate::app::tokens::Caller;
 use crate::app::{datasets, gold, quality};
@@ -56,9 +56,11 @@ pub fn routes() -> Vec<ApiRoute> {
             gold_api,
             "A dataset's gold set",
         )
-        .describe("How the gold items were chosen, the rate they are mixed in at, and their ids.")
+        .describe(
+            "How the gold items were chosen, the rate they are mixed in at, and their ids;              `gold` is null when the dataset has no gold set.",
+        )
         .bearer(Scope::Admin)
-        .responds_json::<GoldSet>(200, "The gold set.")
+        .responds_json::<GoldOfDataset>(200, "The gold set, or null.")
         .errors(&[401, 403, 404]),
         ApiRoute::new(
             Verb::Put,
@@ -88,10 +90,11 @@ pub fn routes() -> Vec<ApiRoute> {
         )
         .describe(
             "Unfinished gold items leave the queues; answers given stay, and count in the Human \
-             row again. Audited (`gold.clear`).",
+             row again. Audited (`gold.clear`). A dataset without a gold set is left as it is \
+             (`cleared` false).",
         )
         .bearer(Scope::Admin)
-        .responds_json::<GoldQueues>(200, "What changed in queues.")
+        .responds_json::<GoldCleared>(200, "Whether there was a gold set, and what left queues.")
         .errors(&[401, 403, 404]),
         ApiRoute::new(
             Verb::Put,
@@ -102,21 +105,24 @@ pub fn routes() -> Vec<ApiRoute> {
         .describe(
             "The annotator's answers on the dataset leave its Human row and agreement report; \
              they stay stored, and DELETE on the same path counts them again. Audited \
-             (`annotator.exclude`); 409 when already excluded.",
+             (`annotator.exclude`) when it changes anything (`changed`).",
         )
         .bearer(Scope::Admin)
         .responds_json::<ExclusionChanged>(200, "The annotator is excluded.")
-        .errors(&[401, 403, 404, 409]),
+        .errors(&[401, 403, 404]),
         ApiRoute::new(
             Verb::Delete,
             "/admin/datasets/{dataset}/exclusions/{annotator}",
             include_api,
             "Count an excluded annotator's answers again",
         )
-        .describe("Audited (`annotator.include`); 409 when the annotator is not excluded.")
+        .describe(
+            "Audited (`annotator.include`) when it changes anything (`changed`: false when the \
+             annotator was not excluded).",
+        )
         .bearer(Scope::Admin)
         .responds_json::<ExclusionChanged>(200, "The annotator is included.")
-        .errors(&[401, 403, 404, 409]),
+        .errors(&[401, 403, 404]),
     ]
 }
 
@@ -147,14 +153,19 @@ async fn quality_api(
     ))
 }
 
+/// A dataset's gold set, if it has one.
+#[derive(Serialize, JsonSchema)]
+struct GoldOfDataset {
+    dataset: String,
+    gold: Option<GoldSet>,
+}
+
 async fn gold_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-) -> Result<axum::Json<GoldSet>, AppError> {
-    gold::show(&state.hub, &dataset)
-        .await?
-        .map(axum::Json)
-        .ok_or_else(|| AppError::NotFound(format!("dataset '{dataset}' has no gold set")))
+) -> Result<axum::Json<GoldOfDataset>, AppError> {
+    let gold = gold::show(&state.hub, &dataset).await?;
+    Ok(axum::Json(GoldOfDataset { dataset, gold }))
 }
 
 /// A gold set to choose: `rate` and either `share` (and `seed`) or `items`.
@@ -222,7 +233,7 @@ async fn clear_gold_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
     caller: Caller,
-) -> Result<axum::Json<GoldQueues>, AppError> {
+) -> Result<axum::Json<GoldCleared>, AppError> {
     Ok(axum::Json(
         gold::clear(&state.hub, &caller.actor(), &dataset).await?,
     ))
@@ -233,6 +244,8 @@ struct ExclusionChanged {
     dataset: String,
     annotator: String,
     excluded: bool,
+    /// False when it was so already.
+    changed: bool,
 }
 
 async fn exclude_api(
@@ -240,11 +253,12 @@ async fn exclude_api(
     Path((dataset, annotator)): Path<(String, String)>,
     caller: Caller,
 ) -> Result<axum::Json<ExclusionChanged>, AppError> {
-    gold::exclude(&state.hub, &caller.actor(), &dataset, &annotator).await?;
+    let changed = gold::exclude(&state.hub, &caller.actor(), &dataset, &annotator).await?;
     Ok(axum::Json(ExclusionChanged {
         dataset,
         annotator,
         excluded: true,
+        changed,
     }))
 }
 
@@ -253,11 +267,12 @@ async fn include_api(
     Path((dataset, annotator)): Path<(String, String)>,
     caller: Caller,
 ) -> Result<axum::Json<ExclusionChanged>, AppError> {
-    gold::include(&state.hub, &caller.actor(), &dataset, &annotator).await?;
+    let changed = gold::include(&state.hub, &caller.actor(), &dataset, &annotator).await?;
     Ok(axum::Json(ExclusionChanged {
         dataset,
         annotator,
         excluded: false,
+        changed,
     }))
 }
 
@@ -608,11 +623,15 @@ async fn clear_gold_page(
     State(state): State<AppState>,
     request: Protected<DatasetForm>,
 ) -> Result<Html<String>, PageError> {
-    let queues = gold::clear(&state.hub, &request.session.actor(), &request.body.dataset).await?;
-    let notice = format!(
-        "Gold set of '{}' cleared; {} unfinished gold items taken out of queues.",
-        request.body.dataset, queues.removed
-    );
+    let cleared = gold::clear(&state.hub, &request.session.actor(), &request.body.dataset).await?;
+    let notice = if cleared.cleared {
+        format!(
+            "Gold set of '{}' cleared; {} unfinished gold items taken out of queues.",
+            request.body.dataset, cleared.removed
+        )
+    } else {
+        format!("Dataset '{}' had no gold set.", request.body.dataset)
+    };
     let query = PageQuery {
         dataset: request.body.dataset,
         ..PageQuery::default()
@@ -634,9 +653,14 @@ async fn exclusion_page(
 ) -> Result<Response, PageError> {
     let form = request.body;
     let actor = request.session.actor();
+    // Already so (another admin, another tab): the page shows it as it is either way.
     match form.action.as_str() {
-        "exclude" => gold::exclude(&state.hub, &actor, &form.dataset, &form.annotator).await?,
-        "include" => gold::include(&state.hub, &actor, &form.dataset, &form.annotator).await?,
+        "exclude" => {
+            gold::exclude(&state.hub, &actor, &form.dataset, &form.annotator).await?;
+        }
+        "include" => {
+            gold::include(&state.hub, &actor, &form.dataset, &form.annotator).await?;
+        }
         other => {
             return Err(AppError::Invalid(format!(
                 "form field `action` is {other:?}; expected \"exclude\" or \"include\""

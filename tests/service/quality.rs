@@ -339,14 +339,19 @@ async fn gold_items_tell_a_careful_annotator_from_a_careless_one_and_exclusion_c
         .bearer(&admin)
         .expect(200)
         .await;
-    server
+    let again = server
         .call(
             Method::PUT,
             "/api/v1/admin/datasets/mini/exclusions/careless",
         )
         .bearer(&admin)
-        .expect(409)
-        .await;
+        .expect(200)
+        .await
+        .json();
+    assert_eq!(
+        again["changed"], false,
+        "excluding twice changes nothing: {again}"
+    );
     let board = server
         .call(Method::GET, "/api/v1/datasets/mini/leaderboard")
         .expect(200)
@@ -476,11 +481,13 @@ async fn gold_sets_refuse_bad_input_by_field_and_clearing_takes_unfinished_gold_
             .await;
         assert!(r.error().contains(says), "{body}: {}", r.error());
     }
-    server
+    let none = server
         .call(Method::GET, gold_path)
         .bearer(&admin)
-        .expect(404)
-        .await;
+        .expect(200)
+        .await
+        .json();
+    assert_eq!(none["gold"], Value::Null);
     server.call(Method::PUT, gold_path).expect(401).await;
     let (_, submitter) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
     server
@@ -536,8 +543,15 @@ async fn gold_sets_refuse_bad_input_by_field_and_clearing_takes_unfinished_gold_
     assert_eq!(cleared["removed"], 6);
     let queue = annotation::queue(&hub, who).await.expect("queue");
     assert_eq!(queue.len(), 18);
-    server
+    let again = server
         .call(Method::DELETE, gold_path)
+        .bearer(&admin)
+        .expect(200)
+        .await
+        .json();
+    assert_eq!(again["cleared"], false);
+    server
+        .call(Method::GET, "/api/v1/admin/datasets/nope/gold")
         .bearer(&admin)
         .expect(404)
         .await;
