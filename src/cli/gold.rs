@@ -8,7 +8,7 @@ use clap::{Args, Subcommand};
 
 use super::{DbArg, in_database, is_missing_file, open, operator};
 use crate::app;
-use crate::core::gold::{GoldChoice, GoldRate, parse_item_list};
+use crate::core::gold::{GoldChoice, GoldRate};
 
 #[derive(Subcommand)]
 pub(super) enum GoldCommand {
@@ -76,9 +76,9 @@ async fn set(args: SetArgs) -> anyhow::Result<ExitCode> {
             GoldChoice::share(share, args.seed).map_err(|p| format!("--share: {p}"))
         }
         (None, Some(path)) => match std::fs::read_to_string(path) {
-            Ok(text) => parse_item_list(&text)
-                .map(GoldChoice::List)
-                .map_err(|p| format!("--items {}: {p}", path.display())),
+            Ok(text) => {
+                GoldChoice::list(&text).map_err(|p| format!("--items {}: {p}", path.display()))
+            }
             Err(e) => Err(format!("--items: cannot read {}: {e}", path.display())),
         },
         (None, None) => Err("give --share F or --items FILE".to_owned()),

@@ -68,6 +68,11 @@ impl GoldChoice {
         }
     }
 
+    /// The items a list file names ([`parse_item_list`]).
+    pub fn list(text: &str) -> Result<GoldChoice, String> {
+        parse_item_list(text).map(GoldChoice::List)
+    }
+
     /// The stored name of the way items were chosen.
     pub fn kind(&self) -> &'static str {
         match self {

@@ -184,23 +184,25 @@ fn one(
     })
 }
 
+/// Each answered item (by store id): every annotator's labels on it, in `work`'s order.
+type AnswersByItem = BTreeMap<i64, Vec<Option<Vec<u8>>>>;
+
 /// Per annotator (in `work`'s order): items shared with someone, mean pairwise alpha with the
 /// others and exact agreement with them.
 fn agreement_with_others(work: &[AnnotatorWork]) -> Vec<(usize, Option<f64>, Option<f64>)> {
     // Every answered item: each annotator's labels on it.
-    let mut by_item: BTreeMap<i64, (String, Vec<Option<Vec<u8>>>)> = BTreeMap::new();
+    let mut by_item: AnswersByItem = BTreeMap::new();
     for (index, annotator) in work.iter().enumerate() {
         for item in &annotator.items {
             let Some(answer) = &item.answer else { continue };
             let entry = by_item
                 .entry(item.item)
-                .or_insert_with(|| (answer.item_id.clone(), vec![None; work.len()]));
-            entry.1[index] = Some(answer.answer.labels().to_vec());
+                .or_insert_with(|| vec![None; work.len()]);
+            entry[index] = Some(answer.answer.labels().to_vec());
         }
     }
     let shared: Vec<&Vec<Option<Vec<u8>>>> = by_item
         .values()
-        .map(|(_, answers)| answers)
         .filter(|answers| answers.iter().flatten().count() >= 2)
         .collect();
     let mut result = Vec::with_capacity(work.len());
@@ -235,10 +237,7 @@ fn agreement_with_others(work: &[AnnotatorWork]) -> Vec<(usize, Option<f64>, Opt
 }
 
 /// Each annotator's mean of the defined pairwise alphas with the others, on whole answers.
-fn pairwise_alpha_means(
-    work: &[AnnotatorWork],
-    by_item: &BTreeMap<i64, (String, Vec<Option<Vec<u8>>>)>,
-) -> Vec<Option<f64>> {
+fn pairwise_alpha_means(work: &[AnnotatorWork], by_item: &AnswersByItem) -> Vec<Option<f64>> {
     let none = vec![None; work.len()];
     if work.len() < 2 {
         return none;
@@ -247,7 +246,7 @@ fn pairwise_alpha_means(
     // Keyed by store id, so two items sharing a display id never collide.
     let items: Vec<AnnotatedOrdering> = by_item
         .iter()
-        .map(|(item, (_, answers))| AnnotatedOrdering {
+        .map(|(item, answers)| AnnotatedOrdering {
             item_id: item.to_string(),
             answers: answers.clone(),
         })

@@ -22,7 +22,7 @@ use crate::app::tokens::Caller;
 use crate::app::{datasets, gold, quality};
 use crate::core::annotation::Session;
 use crate::core::credentials::Scope;
-use crate::core::gold::{GoldChoice, GoldRate, parse_item_list};
+use crate::core::gold::{GoldChoice, GoldRate};
 use crate::core::quality::{AnnotatorQuality, Interval};
 
 pub fn routes() -> Vec<ApiRoute> {
@@ -198,8 +198,7 @@ impl GoldRequest {
                         "`seed` goes with `share`, not with `items`".to_owned(),
                     ));
                 }
-                parse_item_list(&items.join("\n"))
-                    .map(GoldChoice::List)
+                GoldChoice::list(&items.join("\n"))
                     .map_err(|e| AppError::Invalid(format!("`items`: {e}")))?
             }
             _ => {

@@ -618,3 +618,134 @@ async fn a_gold_item_s_page_has_the_markup_of_any_other_item_of_its_kind() {
     }
     server.stop().await;
 }
+
+/// Runs `enact-hub` with `args`: success, standard output, standard error.
+fn run(args: &[&str]) -> (bool, String, String) {
+    let out = enact_hub().args(args).output().expect("enact-hub runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[tokio::test]
+async fn the_command_line_sets_shows_and_clears_gold_and_excludes_annotators() {
+    let (server, records, _) = server_with_items().await;
+    let db = server.db_path();
+    let db = db.to_str().expect("utf-8 path");
+    let list = server.dir().join("gold.txt");
+    std::fs::write(
+        &list,
+        format!(
+            "# two gold items\n{}\n\n{}\n",
+            id(&records[0]),
+            id(&records[7])
+        ),
+    )
+    .expect("list written");
+    let list = list.to_str().expect("utf-8 path");
+
+    let (ok, _, err) = run(&[
+        "gold", "set", "mini", "--db", db, "--share", "1.5", "--rate", "5",
+    ]);
+    assert!(!ok && err.contains("--share"), "{err}");
+    let (ok, _, err) = run(&[
+        "gold", "set", "mini", "--db", db, "--items", list, "--rate", "1",
+    ]);
+    assert!(!ok && err.contains("--rate"), "{err}");
+    let (ok, out, err) = run(&[
+        "gold", "set", "mini", "--db", db, "--items", list, "--rate", "5",
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("2 gold items, one in every 5"), "{out}");
+    let (ok, out, _) = run(&["gold", "show", "mini", "--db", db]);
+    assert!(
+        ok && out.contains(&id(&records[7])) && out.contains("a list of items"),
+        "{out}"
+    );
+
+    let (ok, _, err) = run(&[
+        "annotator",
+        "exclude",
+        "nobody",
+        "--db",
+        db,
+        "--dataset",
+        "mini",
+    ]);
+    assert!(!ok && err.contains("no annotator named 'nobody'"), "{err}");
+    annotator(&server, "ann", false).await;
+    let (ok, out, err) = run(&[
+        "annotator",
+        "exclude",
+        "ann",
+        "--db",
+        db,
+        "--dataset",
+        "mini",
+    ]);
+    assert!(
+        ok && out.contains("left out of the Human row"),
+        "{out}{err}"
+    );
+    let (ok, out, _) = run(&[
+        "annotator",
+        "exclude",
+        "ann",
+        "--db",
+        db,
+        "--dataset",
+        "mini",
+    ]);
+    assert!(ok && out.contains("already"), "{out}");
+    let (ok, out, err) = run(&[
+        "annotator",
+        "quality",
+        "--db",
+        db,
+        "--dataset",
+        "mini",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let report: Value = serde_json::from_str(&out).expect("JSON");
+    assert_eq!(report["exclusions"][0]["annotator"], "ann", "{report}");
+    assert_eq!(report["gold_items"], 2);
+    let (ok, out, _) = run(&["annotator", "quality", "--db", db, "--dataset", "mini"]);
+    assert!(ok && out.contains("excluded: ann"), "{out}");
+    let (ok, _, err) = run(&[
+        "annotator",
+        "include",
+        "ann",
+        "--db",
+        db,
+        "--dataset",
+        "mini",
+    ]);
+    assert!(ok, "{err}");
+
+    let (ok, out, _) = run(&["gold", "clear", "mini", "--db", db]);
+    assert!(ok && out.contains("gold set cleared"), "{out}");
+    let (ok, out, _) = run(&["gold", "show", "mini", "--db", db]);
+    assert!(ok && out.contains("has no gold set"), "{out}");
+    let actions: Vec<String> = db!(
+        server.pool,
+        fetch_all,
+        sqlx::query_scalar::<_, String>(
+            "SELECT action FROM audit_log WHERE action LIKE 'gold.%' OR action LIKE 'annotator.%' \
+             ORDER BY id"
+        )
+    )
+    .expect("audit");
+    assert_eq!(
+        actions,
+        [
+            "gold.set",
+            "annotator.exclude",
+            "annotator.include",
+            "gold.clear"
+        ]
+    );
+    server.stop().await;
+}
