@@ -413,6 +413,13 @@ async fn gold_items_tell_a_careful_annotator_from_a_careless_one_and_exclusion_c
     );
     let (_, html) = lead.text("/admin/quality?dataset=mini").await;
     assert!(html.contains("Include careless"), "{html}");
+    let (status, report) = lead.text("/admin/datasets/mini/report").await;
+    assert_eq!(status, 200, "{report}");
+    assert!(
+        report.contains("answers on the 4 gold items")
+            && report.contains("every answer of careless"),
+        "the agreement report says what it leaves out: {report}"
+    );
     let entries = enact_hub::app::audit::list(
         &hub,
         AuditFilter {
