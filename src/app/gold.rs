@@ -89,21 +89,7 @@ pub async fn set(
     let items = match choice {
         GoldChoice::Share { share, seed } => gold::draw_share(&all, *share, *seed),
         GoldChoice::List(ids) => {
-            let rows = store::annotations::item_rowids(&mut conn, dataset.id, ids).await?;
-            let missing: Vec<&str> = ids
-                .iter()
-                .zip(&rows)
-                .filter(|(_, row)| row.is_none())
-                .map(|(id, _)| id.as_str())
-                .collect();
-            if !missing.is_empty() {
-                return Err(AppError::Invalid(format!(
-                    "items: not in dataset '{}': {}",
-                    dataset.name,
-                    missing.join(", ")
-                )));
-            }
-            let mut rows: Vec<i64> = rows.into_iter().flatten().collect();
+            let mut rows = super::annotation::listed_items(&mut conn, &dataset, ids).await?;
             rows.sort_unstable();
             rows.dedup();
             if rows.len() >= all.len() {

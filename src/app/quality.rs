@@ -6,7 +6,7 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::{AppError, Hub, datasets};
-use crate::core::quality::{self, AnnotatorQuality, AnnotatorWork, FinishedItem};
+use crate::core::quality::{self, AnnotatorQuality, AnnotatorWork};
 use crate::store;
 use crate::store::gold::Exclusion;
 
@@ -76,14 +76,7 @@ pub async fn report(
             });
         }
         if let Some(annotator) = work.last_mut() {
-            annotator.items.push(FinishedItem {
-                item: row.item,
-                gold: row.gold,
-                outcome: row.outcome,
-                answer: row.answer,
-                verdict: row.verdict,
-                time_on_item_ms: row.time_on_item_ms,
-            });
+            annotator.items.push(row.finished);
         }
     }
     for e in &exclusions {

@@ -10,6 +10,7 @@ use crate::core::annotation::{
     OutcomeKind, Session, SplitItem, StoredDraft, Telemetry,
 };
 use crate::core::dataset::{Direction, StepLength};
+use crate::core::quality::FinishedItem;
 use crate::core::verifier::Permutation;
 
 #[derive(Debug, Clone)]
@@ -897,18 +898,12 @@ pub async fn count_below_version(
     })
 }
 
-/// One finished item of a dataset as the quality figures read it.
+/// One finished item of a dataset as the quality figures read it, with its annotator.
 #[derive(Debug, Clone)]
 pub struct QualityRow {
     pub annotator: i64,
     pub name: String,
-    pub item: i64,
-    pub gold: bool,
-    pub outcome: OutcomeKind,
-    /// With what judging it needs, when answered.
-    pub answer: Option<HumanAnswer>,
-    pub verdict: Option<HumanVerdict>,
-    pub time_on_item_ms: i64,
+    pub finished: FinishedItem,
 }
 
 /// Every finished item of a dataset (answered, skipped or flagged), gold or not, by annotator
@@ -939,16 +934,18 @@ pub async fn quality_rows(
                 Ok(QualityRow {
                     annotator: r.try_get("annotator")?,
                     name: r.try_get("name")?,
-                    item: r.try_get("item")?,
-                    gold: r.try_get("gold")?,
-                    outcome,
-                    answer: if answered {
-                        Some(human_answer_from_row(r)?)
-                    } else {
-                        None
+                    finished: FinishedItem {
+                        item: r.try_get("item")?,
+                        gold: r.try_get("gold")?,
+                        outcome,
+                        answer: if answered {
+                            Some(human_answer_from_row(r)?)
+                        } else {
+                            None
+                        },
+                        verdict: stored_verdict(r)?.map(|(verdict, _)| verdict),
+                        time_on_item_ms: r.try_get("time_on_item_ms")?,
                     },
-                    verdict: stored_verdict(r)?.map(|(verdict, _)| verdict),
-                    time_on_item_ms: r.try_get("time_on_item_ms")?,
                 })
             })
             .collect()

@@ -18,6 +18,9 @@ use crate::helpers::*;
 /// Seconds the careless annotator spends on an item.
 const CARELESS_SECONDS: i64 = 2;
 
+/// The quality figures of "mini".
+const QUALITY: &str = "/api/v1/admin/annotators/quality?dataset=mini";
+
 /// Items per direction × L (L = 3 and 4): 24 items.
 const PER_CELL: u32 = 6;
 
@@ -174,7 +177,43 @@ fn expected(
     }
 }
 
-fn human_row(board: &Value) -> Value {
+/// The audit entries of `action` (or of its noun alone), newest first.
+async fn audit_of(hub: &Hub, action: &str) -> Vec<enact_hub::core::audit::AuditEntry> {
+    enact_hub::app::audit::list(
+        hub,
+        AuditFilter {
+            action: Some(action.to_owned()),
+            limit: 10,
+            ..AuditFilter::default()
+        },
+    )
+    .await
+    .expect("audit")
+}
+
+/// Appends the listed items of "mini" to an annotator's queue, as an admin would (the gold mix
+/// follows).
+async fn assign_listed(hub: &Hub, annotator: i64, item_ids: &[String]) {
+    annotation::assign(
+        hub,
+        &tester(),
+        "mini",
+        &Assignment::List {
+            annotator,
+            item_ids: item_ids.to_vec(),
+        },
+    )
+    .await
+    .expect("assigned");
+}
+
+/// The Human row of "mini"'s leaderboard.
+async fn human_row(server: &TestServer) -> Value {
+    let board = server
+        .call(Method::GET, "/api/v1/datasets/mini/leaderboard")
+        .expect(200)
+        .await
+        .json();
     board["rows"]
         .as_array()
         .expect("rows")
@@ -182,6 +221,16 @@ fn human_row(board: &Value) -> Value {
         .find(|r| r["source"] == "human")
         .unwrap_or_else(|| panic!("no Human row: {board}"))
         .clone()
+}
+
+/// `method path` with the admin token and no body, answered 200: its JSON.
+async fn as_admin(server: &TestServer, admin: &str, method: Method, path: &str) -> Value {
+    server
+        .call(method, path)
+        .bearer(admin)
+        .expect(200)
+        .await
+        .json()
 }
 
 #[tokio::test]
@@ -218,17 +267,7 @@ async fn gold_items_tell_a_careful_annotator_from_a_careless_one_and_exclusion_c
     let careful = annotator(&server, "careful", false).await;
     let careless = annotator(&server, "careless", false).await;
     for who in [careful, careless] {
-        annotation::assign(
-            &hub,
-            &tester(),
-            "mini",
-            &Assignment::List {
-                annotator: who,
-                item_ids: ordinary.clone(),
-            },
-        )
-        .await
-        .expect("assigned");
+        assign_listed(&hub, who, &ordinary).await;
         let queue = annotation::queue(&hub, who).await.expect("queue");
         assert_eq!(queue.len(), 20);
         for (i, entry) in queue.iter().enumerate() {
@@ -261,12 +300,7 @@ async fn gold_items_tell_a_careful_annotator_from_a_careless_one_and_exclusion_c
 
     // The API's figures against the ones computed here from the stored rows.
     let rows = stored_answers(&server).await;
-    let quality = server
-        .call(Method::GET, "/api/v1/admin/annotators/quality?dataset=mini")
-        .bearer(&admin)
-        .expect(200)
-        .await
-        .json();
+    let quality = as_admin(&server, &admin, Method::GET, QUALITY).await;
     let annotators = quality["annotators"].as_array().expect("annotators");
     assert_eq!(annotators.len(), 2, "{quality}");
     for a in annotators {
@@ -319,45 +353,21 @@ async fn gold_items_tell_a_careful_annotator_from_a_careless_one_and_exclusion_c
     assert!(html.contains("100.0%"), "careful's gold TA shown: {html}");
 
     // Gold answers never count in the Human row: 16 + 16 ordinary answers, 20 coverable items.
-    let board = server
-        .call(Method::GET, "/api/v1/datasets/mini/leaderboard")
-        .expect(200)
-        .await
-        .json();
-    let human = human_row(&board);
+    let human = human_row(&server).await;
     assert_eq!(human["human"]["answers"], 32, "{human}");
     assert_eq!(human["human"]["dataset_items"], 20, "{human}");
     assert_eq!(human["human"]["gold_items"], 4, "{human}");
     assert_eq!(human["human"]["annotators"], 2, "{human}");
 
     // Excluding the careless annotator leaves exactly the careful one's figures.
-    server
-        .call(
-            Method::PUT,
-            "/api/v1/admin/datasets/mini/exclusions/careless",
-        )
-        .bearer(&admin)
-        .expect(200)
-        .await;
-    let again = server
-        .call(
-            Method::PUT,
-            "/api/v1/admin/datasets/mini/exclusions/careless",
-        )
-        .bearer(&admin)
-        .expect(200)
-        .await
-        .json();
+    let exclusion = "/api/v1/admin/datasets/mini/exclusions/careless";
+    as_admin(&server, &admin, Method::PUT, exclusion).await;
+    let again = as_admin(&server, &admin, Method::PUT, exclusion).await;
     assert_eq!(
         again["changed"], false,
         "excluding twice changes nothing: {again}"
     );
-    let board = server
-        .call(Method::GET, "/api/v1/datasets/mini/leaderboard")
-        .expect(200)
-        .await
-        .json();
-    let human = human_row(&board);
+    let human = human_row(&server).await;
     assert_eq!(human["human"]["answers"], 16, "{human}");
     assert_eq!(human["human"]["annotators"], 1, "{human}");
     assert_eq!(human["human"]["excluded_annotators"], 1, "{human}");
@@ -401,12 +411,7 @@ async fn gold_items_tell_a_careful_annotator_from_a_careless_one_and_exclusion_c
     assert_eq!(human["overall"]["count"], 16);
 
     // The quality page and API say who is excluded; the audit log has the entries.
-    let quality = server
-        .call(Method::GET, "/api/v1/admin/annotators/quality?dataset=mini")
-        .bearer(&admin)
-        .expect(200)
-        .await
-        .json();
+    let quality = as_admin(&server, &admin, Method::GET, QUALITY).await;
     assert_eq!(
         quality["exclusions"][0]["annotator"], "careless",
         "{quality}"
@@ -420,49 +425,19 @@ async fn gold_items_tell_a_careful_annotator_from_a_careless_one_and_exclusion_c
             && report.contains("every answer of careless"),
         "the agreement report says what it leaves out: {report}"
     );
-    let entries = enact_hub::app::audit::list(
-        &hub,
-        AuditFilter {
-            action: Some("annotator".to_owned()),
-            limit: 10,
-            ..AuditFilter::default()
-        },
-    )
-    .await
-    .expect("audit");
+    let entries = audit_of(&hub, "annotator").await;
     assert!(
         entries
             .iter()
             .any(|e| e.action == "annotator.exclude" && e.target == "annotator careless"),
         "{entries:?}"
     );
-    let gold_entries = enact_hub::app::audit::list(
-        &hub,
-        AuditFilter {
-            action: Some("gold.set".to_owned()),
-            limit: 10,
-            ..AuditFilter::default()
-        },
-    )
-    .await
-    .expect("audit");
+    let gold_entries = audit_of(&hub, "gold.set").await;
     assert_eq!(gold_entries.len(), 1, "{gold_entries:?}");
 
     // Including them again brings their answers back, reversibly.
-    server
-        .call(
-            Method::DELETE,
-            "/api/v1/admin/datasets/mini/exclusions/careless",
-        )
-        .bearer(&admin)
-        .expect(200)
-        .await;
-    let board = server
-        .call(Method::GET, "/api/v1/datasets/mini/leaderboard")
-        .expect(200)
-        .await
-        .json();
-    assert_eq!(human_row(&board)["human"]["answers"], 32);
+    as_admin(&server, &admin, Method::DELETE, exclusion).await;
+    assert_eq!(human_row(&server).await["human"]["answers"], 32);
     server.stop().await;
 }
 
@@ -488,12 +463,7 @@ async fn gold_sets_refuse_bad_input_by_field_and_clearing_takes_unfinished_gold_
             .await;
         assert!(r.error().contains(says), "{body}: {}", r.error());
     }
-    let none = server
-        .call(Method::GET, gold_path)
-        .bearer(&admin)
-        .expect(200)
-        .await
-        .json();
+    let none = as_admin(&server, &admin, Method::GET, gold_path).await;
     assert_eq!(none["gold"], Value::Null);
     server.call(Method::PUT, gold_path).expect(401).await;
     let (_, submitter) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
@@ -504,21 +474,20 @@ async fn gold_sets_refuse_bad_input_by_field_and_clearing_takes_unfinished_gold_
         .await;
 
     // A seeded share: the same seed draws the same items.
-    let first = server
-        .call(Method::PUT, gold_path)
-        .bearer(&admin)
-        .json(&json!({"rate": 3, "share": 0.25, "seed": 11}))
-        .expect(200)
-        .await
-        .json();
-    let again = server
-        .call(Method::PUT, gold_path)
-        .bearer(&admin)
-        .json(&json!({"rate": 3, "share": 0.25, "seed": 11}))
-        .expect(200)
-        .await
-        .json();
-    assert_eq!(first["gold"]["items"], again["gold"]["items"]);
+    let mut drawn = Vec::new();
+    for _ in 0..2 {
+        drawn.push(
+            server
+                .call(Method::PUT, gold_path)
+                .bearer(&admin)
+                .json(&json!({"rate": 3, "share": 0.25, "seed": 11}))
+                .expect(200)
+                .await
+                .json(),
+        );
+    }
+    let first = &drawn[0];
+    assert_eq!(first["gold"]["items"], drawn[1]["gold"]["items"]);
     assert_eq!(first["gold"]["items"].as_array().expect("items").len(), 6);
     let gold: HashSet<String> = first["gold"]["items"]
         .as_array()
@@ -541,21 +510,11 @@ async fn gold_sets_refuse_bad_input_by_field_and_clearing_takes_unfinished_gold_
         "18 ordinary items call for 9 gold ones; there are 6"
     );
 
-    let cleared = server
-        .call(Method::DELETE, gold_path)
-        .bearer(&admin)
-        .expect(200)
-        .await
-        .json();
+    let cleared = as_admin(&server, &admin, Method::DELETE, gold_path).await;
     assert_eq!(cleared["removed"], 6);
     let queue = annotation::queue(&hub, who).await.expect("queue");
     assert_eq!(queue.len(), 18);
-    let again = server
-        .call(Method::DELETE, gold_path)
-        .bearer(&admin)
-        .expect(200)
-        .await
-        .json();
+    let again = as_admin(&server, &admin, Method::DELETE, gold_path).await;
     assert_eq!(again["cleared"], false);
     server
         .call(Method::GET, "/api/v1/admin/datasets/nope/gold")
@@ -599,17 +558,7 @@ async fn a_gold_item_s_page_has_the_markup_of_any_other_item_of_its_kind() {
         .await;
     let who = annotator(&server, "ann", false).await;
     let hub = Hub::from(server.pool.clone());
-    annotation::assign(
-        &hub,
-        &tester(),
-        "mini",
-        &Assignment::List {
-            annotator: who,
-            item_ids: vec![plain_item.clone()],
-        },
-    )
-    .await
-    .expect("assigned");
+    assign_listed(&hub, who, std::slice::from_ref(&plain_item)).await;
     let (mut ann, _) = logged_in_on(&server, "ann", "/annotate").await;
     let (_, queue) = ann.text("/annotate").await;
     assert!(
@@ -672,39 +621,18 @@ async fn the_command_line_sets_shows_and_clears_gold_and_excludes_annotators() {
         "{out}"
     );
 
-    let (ok, _, err) = run(&[
-        "annotator",
-        "exclude",
-        "nobody",
-        "--db",
-        db,
-        "--dataset",
-        "mini",
-    ]);
+    // `annotator VERB NAME` on "mini".
+    let on_mini =
+        |verb: &str, name: &str| run(&["annotator", verb, name, "--db", db, "--dataset", "mini"]);
+    let (ok, _, err) = on_mini("exclude", "nobody");
     assert!(!ok && err.contains("no annotator named 'nobody'"), "{err}");
     annotator(&server, "ann", false).await;
-    let (ok, out, err) = run(&[
-        "annotator",
-        "exclude",
-        "ann",
-        "--db",
-        db,
-        "--dataset",
-        "mini",
-    ]);
+    let (ok, out, err) = on_mini("exclude", "ann");
     assert!(
         ok && out.contains("left out of the Human row"),
         "{out}{err}"
     );
-    let (ok, out, _) = run(&[
-        "annotator",
-        "exclude",
-        "ann",
-        "--db",
-        db,
-        "--dataset",
-        "mini",
-    ]);
+    let (ok, out, _) = on_mini("exclude", "ann");
     assert!(ok && out.contains("already"), "{out}");
     let (ok, out, err) = run(&[
         "annotator",
@@ -721,15 +649,7 @@ async fn the_command_line_sets_shows_and_clears_gold_and_excludes_annotators() {
     assert_eq!(report["gold_items"], 2);
     let (ok, out, _) = run(&["annotator", "quality", "--db", db, "--dataset", "mini"]);
     assert!(ok && out.contains("excluded: ann"), "{out}");
-    let (ok, _, err) = run(&[
-        "annotator",
-        "include",
-        "ann",
-        "--db",
-        db,
-        "--dataset",
-        "mini",
-    ]);
+    let (ok, _, err) = on_mini("include", "ann");
     assert!(ok, "{err}");
 
     let (ok, out, _) = run(&["gold", "clear", "mini", "--db", db]);
