@@ -15,6 +15,7 @@ use crate::core::annotation::{
     next_in_queue,
 };
 use crate::core::audit::{Actor, AuditAction};
+use crate::core::gold::{self, GoldRate, QueuedEntry};
 use crate::store;
 use crate::store::annotations::StoredAnnotation;
 use crate::store::items::StoredItem;
@@ -82,22 +83,9 @@ pub async fn assign(
                     "items: give at least one item id".to_owned(),
                 ));
             }
-            let rows = store::annotations::item_rowids(&mut conn, dataset.id, item_ids).await?;
-            let missing: Vec<&str> = item_ids
-                .iter()
-                .zip(&rows)
-                .filter(|(_, row)| row.is_none())
-                .map(|(id, _)| id.as_str())
-                .collect();
-            if !missing.is_empty() {
-                return Err(AppError::Invalid(format!(
-                    "items: not in dataset '{}': {}",
-                    dataset.name,
-                    missing.join(", ")
-                )));
-            }
-            rows.into_iter()
-                .flatten()
+            listed_items(&mut conn, &dataset, item_ids)
+                .await?
+                .into_iter()
                 .map(|r| (*annotator, r))
                 .collect()
         }
@@ -105,6 +93,8 @@ pub async fn assign(
     drop(conn);
     let mut tx = hub.begin().await?;
     let added = store::annotations::assign(&mut tx, &pairs).await?;
+    // More ordinary items may call for more gold ones.
+    let gold = super::gold::after_assignment(&mut tx, dataset.id, chosen).await?;
     let named: Vec<&str> = chosen.iter().map(|a| names[a].as_str()).collect();
     let how = match how {
         Assignment::Split(_) => "balanced split of the unassigned items",
@@ -116,7 +106,15 @@ pub async fn assign(
         AuditAction::AssignmentChange,
         format!("annotators {}", named.join(", ")),
         Some(&dataset.name),
-        format!("{how}: {} asked, {added} new to the queues", pairs.len()),
+        format!(
+            "{how}: {} asked, {added} new to the queues{}",
+            pairs.len(),
+            if gold > 0 {
+                format!(", and {gold} gold items mixed in")
+            } else {
+                String::new()
+            }
+        ),
     )
     .await?;
     tx.commit().await?;
@@ -126,20 +124,57 @@ pub async fn assign(
     })
 }
 
-/// An annotator's assigned items in queue order, with where each stands.
+/// Store ids of the listed item ids of `dataset`, in the same order; every id not in the
+/// dataset is named in one refusal.
+pub(super) async fn listed_items(
+    conn: &mut store::Conn,
+    dataset: &store::datasets::Dataset,
+    item_ids: &[String],
+) -> Result<Vec<i64>, AppError> {
+    let rows = store::annotations::item_rowids(conn, dataset.id, item_ids).await?;
+    let missing: Vec<&str> = item_ids
+        .iter()
+        .zip(&rows)
+        .filter(|(_, row)| row.is_none())
+        .map(|(id, _)| id.as_str())
+        .collect();
+    if !missing.is_empty() {
+        return Err(AppError::Invalid(format!(
+            "items: not in dataset '{}': {}",
+            dataset.name,
+            missing.join(", ")
+        )));
+    }
+    Ok(rows.into_iter().flatten().collect())
+}
+
+/// An annotator's assigned items in queue order, with where each stands: the gold mix's order
+/// ([`gold::mix`]), in which nothing tells a gold item from another.
 pub async fn queue(hub: &Hub, annotator: i64) -> Result<Vec<QueueEntry>, AppError> {
     let mut conn = hub.conn().await?;
     let rows = store::annotations::queue(&mut conn, annotator).await?;
-    Ok(rows
+    let queued = rows
         .into_iter()
-        .map(|r| QueueEntry {
-            dataset: r.dataset,
-            item_id: r.item_id,
-            direction: r.direction,
-            step_length: r.step_length,
-            status: QueueStatus::of(r.finished, r.started),
+        .map(|r| {
+            let gold_rate = r
+                .gold_rate
+                .map(GoldRate::new)
+                .transpose()
+                .map_err(AppError::internal)?;
+            Ok(QueuedEntry {
+                dataset: r.dataset.clone(),
+                gold_rate,
+                entry: QueueEntry {
+                    dataset: r.dataset,
+                    item_id: r.item_id,
+                    direction: r.direction,
+                    step_length: r.step_length,
+                    status: QueueStatus::of(r.finished, r.started),
+                },
+            })
         })
-        .collect())
+        .collect::<Result<Vec<_>, AppError>>()?;
+    Ok(gold::mix(queued))
 }
 
 /// The item an annotator should work on next: one already started, else the first to do.

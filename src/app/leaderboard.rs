@@ -40,7 +40,8 @@ pub fn submission_row(s: &SubmissionRow) -> LeaderboardRow {
 /// The Human row's figures on a dataset: every submitted answer's verdict, stored when the
 /// answer was finished and scored as model answers are (the item's stored signatures, exact
 /// match where there are none), by direction and step length, with the answers, items and
-/// annotators it rests on, all read in one query. Answers finished before verdicts were stored
+/// annotators it rests on, all read in one query. Answers on gold items and of excluded
+/// annotators are left out ([`super::gold`]), and the coverage says how many of each. Answers finished before verdicts were stored
 /// are judged here until a rescore stores theirs. `None` when nobody has answered an item yet.
 /// Skipped and flagged items are not answers; an item answered by several annotators counts
 /// once per answer.
@@ -51,13 +52,20 @@ pub async fn human_figures(
 ) -> Result<Option<HumanFigures>, AppError> {
     let mut conn = hub.conn().await?;
     let answers = store::annotations::counted_answers(&mut conn, dataset.id).await?;
+    let gold_items = store::gold::gold_count(&mut conn, dataset.id).await?;
+    let excluded = store::gold::exclusions(&mut conn, dataset.id).await?.len();
     drop(conn);
-    annotation::human_figures(&answers, dataset_items).map_err(|e| {
+    let figures = annotation::human_figures(&answers, dataset_items).map_err(|e| {
         AppError::internal(format!(
             "dataset '{}': stored annotations: {e}",
             dataset.name
         ))
-    })
+    })?;
+    let gold_items = usize::try_from(gold_items).unwrap_or(0);
+    Ok(figures.map(|f| HumanFigures {
+        coverage: f.coverage.leaving_out(gold_items, excluded),
+        ..f
+    }))
 }
 
 /// Human performance on a dataset (see [`human_figures`]), `None` before the first answer.

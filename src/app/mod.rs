@@ -11,7 +11,9 @@
 //!   the rows, the Human row included, and keeps each dataset's board in memory.
 //! - [`tokens`]: API tokens and the accounts behind them; [`annotators`]: annotator accounts,
 //!   invites and login sessions.
-//! - [`annotation`]: assignments, the queue, drafts, answers, skips and flags.
+//! - [`annotation`]: assignments, the queue, drafts, answers, skips and flags; [`gold`]: gold
+//!   items mixed into the queues, and annotators excluded from the Human row; [`quality`]:
+//!   each annotator's figures on a dataset.
 //! - [`agreement`]: the cross-annotation protocol, agreement statistics and the report.
 //! - [`error_analysis`]: the paper's error taxonomy of a submission, the Human row, a file, or
 //!   a whole leaderboard.
@@ -40,6 +42,7 @@ pub mod demo;
 mod error;
 pub mod error_analysis;
 pub mod frames;
+pub mod gold;
 pub mod import;
 pub mod items;
 pub mod jobs;
@@ -47,6 +50,7 @@ pub mod leaderboard;
 pub mod metrics;
 pub mod migrate_db;
 pub mod pipeline;
+pub mod quality;
 pub mod rescore;
 pub mod runs;
 pub mod scoring;

@@ -13,6 +13,14 @@ use crate::core::credentials::Role;
 pub(super) enum AnnotatorCommand {
     /// Create an annotator and print their single-use invite link (on the last line).
     Create(CreateAnnotatorArgs),
+    /// Each annotator's figures on a dataset: gold accuracy with intervals, agreement with the
+    /// others, time per item, fast answers, skip and flag rates.
+    Quality(super::quality::QualityArgs),
+    /// Leave an annotator's answers on a dataset out of its Human row and agreement report
+    /// (kept, not deleted; audited).
+    Exclude(super::quality::ExclusionArgs),
+    /// Count an excluded annotator's answers on a dataset again (audited).
+    Include(super::quality::ExclusionArgs),
 }
 
 #[derive(Args)]
@@ -169,6 +177,9 @@ async fn revoke_token(db: &Path, token: &str) -> anyhow::Result<ExitCode> {
 pub(super) async fn annotator(command: AnnotatorCommand) -> anyhow::Result<ExitCode> {
     match command {
         AnnotatorCommand::Create(args) => create_annotator(args).await,
+        AnnotatorCommand::Quality(args) => super::quality::quality(args).await,
+        AnnotatorCommand::Exclude(args) => super::quality::exclude(args).await,
+        AnnotatorCommand::Include(args) => super::quality::include(args).await,
     }
 }
 

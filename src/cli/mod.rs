@@ -21,7 +21,9 @@ mod audit;
 mod database;
 mod frames;
 mod generate;
+mod gold;
 mod import;
+mod quality;
 mod rescore;
 mod run;
 mod scoring;
@@ -96,6 +98,10 @@ enum Command {
     /// Compute stored submissions' scores and human answers' verdicts again under the current
     /// metric version (those already current are skipped, so a stopped run resumes).
     Rescore(rescore::RescoreArgs),
+    /// Gold items: a share (or a list) of a dataset's items with a known answer, mixed into
+    /// every annotator's queue to check their work.
+    #[command(subcommand)]
+    Gold(gold::GoldCommand),
 }
 
 #[derive(Args)]
@@ -166,6 +172,7 @@ pub fn main() -> ExitCode {
             Command::Frames(command) => frames::frames(command).await,
             Command::MigrateDb(args) => database::migrate_db(args).await,
             Command::Rescore(args) => rescore::rescore(args).await,
+            Command::Gold(command) => gold::gold(command).await,
         }
     });
     match result {

@@ -79,10 +79,16 @@ pub enum AuditAction {
     /// Stored results computed again under the current metric version.
     MetricRescore,
     RunStart,
+    /// A dataset's gold set chosen (or replaced), with its rate.
+    GoldSet,
+    GoldClear,
+    /// An annotator's answers kept out of a dataset's Human row and agreement report.
+    AnnotatorExclude,
+    AnnotatorInclude,
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 21] = [
+    pub const ALL: [AuditAction; 25] = [
         AuditAction::DatasetImport,
         AuditAction::DatasetAnswerVisibility,
         AuditAction::TokenIssue,
@@ -104,6 +110,10 @@ impl AuditAction {
         AuditAction::JobCancel,
         AuditAction::MetricRescore,
         AuditAction::RunStart,
+        AuditAction::GoldSet,
+        AuditAction::GoldClear,
+        AuditAction::AnnotatorExclude,
+        AuditAction::AnnotatorInclude,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -129,6 +139,10 @@ impl AuditAction {
             AuditAction::JobCancel => "job.cancel",
             AuditAction::MetricRescore => "metric.rescore",
             AuditAction::RunStart => "run.start",
+            AuditAction::GoldSet => "gold.set",
+            AuditAction::GoldClear => "gold.clear",
+            AuditAction::AnnotatorExclude => "annotator.exclude",
+            AuditAction::AnnotatorInclude => "annotator.include",
         }
     }
 

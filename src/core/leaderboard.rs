@@ -29,7 +29,14 @@ pub struct HumanCoverage {
     pub answers: usize,
     pub items: usize,
     pub annotators: usize,
+    /// The dataset's items the Human row can cover (its gold items aside).
     pub dataset_items: usize,
+    /// Gold items, whose answers judge annotators and never count here.
+    #[serde(default)]
+    pub gold_items: usize,
+    /// Annotators an admin excluded, whose answers do not count here.
+    #[serde(default)]
+    pub excluded_annotators: usize,
 }
 
 impl HumanCoverage {
@@ -51,6 +58,19 @@ impl HumanCoverage {
             items: items.len(),
             annotators: annotators.len(),
             dataset_items,
+            gold_items: 0,
+            excluded_annotators: 0,
+        }
+    }
+
+    /// The same coverage, saying what was left out: `gold_items` (not counted in
+    /// `dataset_items` either) and `excluded_annotators`.
+    pub fn leaving_out(self, gold_items: usize, excluded_annotators: usize) -> HumanCoverage {
+        HumanCoverage {
+            dataset_items: self.dataset_items.saturating_sub(gold_items),
+            gold_items,
+            excluded_annotators,
+            ..self
         }
     }
 }

@@ -22,6 +22,9 @@
 //!   cross-annotation [`agreement::protocol`] and the agreement [`agreement::report`].
 //! - [`annotation`]: human annotation without I/O: the balanced split, drafts, queue
 //!   standing, telemetry, and human answers scored like model answers.
+//! - [`gold`]: gold items: choosing a dataset's gold set and mixing it into every queue.
+//! - [`quality`]: each annotator's figures: gold accuracy, agreement with the others, time
+//!   per item, skip and flag rates.
 //! - [`audit`]: the audit log's actors, actions, entries and filters.
 //! - [`bundle`]: the files a report downloads as: stamps, CSV, LaTeX escaping, tar archives.
 //! - [`credentials`]: API tokens, session and invite tokens, passwords, roles, scopes and the
@@ -41,11 +44,13 @@ pub mod credentials;
 pub mod dataset;
 pub mod demo;
 pub mod error_analysis;
+pub mod gold;
 pub mod heatmap;
 pub mod leaderboard;
 pub mod metric;
 pub mod model_run;
 pub mod pipeline;
+pub mod quality;
 pub mod release;
 pub mod scene_graph;
 pub mod scoring;

@@ -12,6 +12,7 @@ use crate::core::agreement::report::AnnotatorAnswer;
 
 /// Every answered item of a dataset, per annotator, with the item's ground truth and
 /// signatures and the kind of assignment it was answered under; by item, then annotator.
+/// Answers on gold items and of annotators excluded from the dataset are left out.
 pub async fn annotator_answers(
     conn: &mut Conn,
     dataset_id: i64,
@@ -25,6 +26,9 @@ pub async fn annotator_answers(
          LEFT JOIN assignments g ON g.annotator = n.annotator AND g.item = n.item \
          LEFT JOIN item_signatures s ON s.item = i.id \
          WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
+         AND NOT EXISTS (SELECT 1 FROM gold_items gi WHERE gi.item = n.item) \
+         AND NOT EXISTS (SELECT 1 FROM annotator_exclusions x \
+             WHERE x.dataset = i.dataset_id AND x.annotator = n.annotator) \
          ORDER BY i.item_id, n.annotator",
         )
         .bind(dataset_id)
@@ -44,7 +48,8 @@ pub async fn annotator_answers(
     })
 }
 
-/// Completed (answered) primary items of a dataset: what the protocol draws from.
+/// Completed (answered) primary items of a dataset, gold items aside: what the protocol draws
+/// from.
 pub async fn primary_answers(
     conn: &mut Conn,
     dataset_id: i64,
@@ -55,7 +60,9 @@ pub async fn primary_answers(
          JOIN items i ON i.id = n.item \
          LEFT JOIN assignments g ON g.annotator = n.annotator AND g.item = n.item \
          WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
-         AND coalesce(g.kind, 'primary') = 'primary' ORDER BY n.item, n.annotator",
+         AND coalesce(g.kind, 'primary') = 'primary' \
+         AND NOT EXISTS (SELECT 1 FROM gold_items gi WHERE gi.item = n.item) \
+         ORDER BY n.item, n.annotator",
         )
         .bind(dataset_id)
         .fetch_all(&mut *c)

@@ -10,6 +10,7 @@ use crate::core::annotation::{
     OutcomeKind, Session, SplitItem, StoredDraft, Telemetry,
 };
 use crate::core::dataset::{Direction, StepLength};
+use crate::core::quality::FinishedItem;
 use crate::core::verifier::Permutation;
 
 #[derive(Debug, Clone)]
@@ -199,7 +200,6 @@ pub async fn delete_session(
     })
 }
 
-/// Store ids and kinds of a dataset's items that no annotator has yet, in import order.
 /// Every item of a dataset with its kind, in id order.
 pub async fn dataset_items(
     conn: &mut Conn,
@@ -225,6 +225,8 @@ fn split_item_from_row(r: &impl Fields) -> Result<SplitItem, sqlx::Error> {
     })
 }
 
+/// Store ids and kinds of a dataset's items that no annotator has yet and that are not gold
+/// (the gold mix hands those out), in import order.
 pub async fn unassigned_items(
     conn: &mut Conn,
     dataset_id: i64,
@@ -232,7 +234,8 @@ pub async fn unassigned_items(
     on!(conn, |c| {
         let rows = sqlx::query(
             "SELECT i.id, i.direction, i.step_length FROM items i WHERE i.dataset_id = $1 \
-         AND NOT EXISTS (SELECT 1 FROM assignments a WHERE a.item = i.id) ORDER BY i.id",
+         AND NOT EXISTS (SELECT 1 FROM assignments a WHERE a.item = i.id) \
+         AND NOT EXISTS (SELECT 1 FROM gold_items g WHERE g.item = i.id) ORDER BY i.id",
         )
         .bind(dataset_id)
         .fetch_all(&mut *c)
@@ -294,6 +297,8 @@ pub struct QueuedItem {
     pub step_length: StepLength,
     pub finished: Option<OutcomeKind>,
     pub started: bool,
+    /// The gold set's rate when the gold mix put this gold item in the queue.
+    pub gold_rate: Option<i64>,
 }
 
 /// An annotator's assigned items in queue order.
@@ -301,13 +306,17 @@ pub async fn queue(conn: &mut Conn, annotator: i64) -> Result<Vec<QueuedItem>, s
     on!(conn, |c| {
         let rows = sqlx::query(
             "SELECT d.name AS dataset, i.item_id, i.direction, i.step_length, n.outcome, \
-         (dr.item IS NOT NULL) AS started \
+         (dr.item IS NOT NULL) AS started, \
+         CASE WHEN a.gold = $2 THEN gs.rate END AS gold_rate \
          FROM assignments a JOIN items i ON i.id = a.item JOIN datasets d ON d.id = i.dataset_id \
          LEFT JOIN annotations n ON n.annotator = a.annotator AND n.item = a.item \
          LEFT JOIN drafts dr ON dr.annotator = a.annotator AND dr.item = a.item \
+         LEFT JOIN gold_items gi ON gi.item = a.item \
+         LEFT JOIN gold_sets gs ON gs.dataset = gi.dataset \
          WHERE a.annotator = $1 ORDER BY a.position",
         )
         .bind(annotator)
+        .bind(true)
         .fetch_all(&mut *c)
         .await?;
         rows.iter()
@@ -320,6 +329,7 @@ pub async fn queue(conn: &mut Conn, annotator: i64) -> Result<Vec<QueuedItem>, s
                     step_length,
                     finished: r.try_get("outcome")?,
                     started: r.try_get("started")?,
+                    gold_rate: r.try_get("gold_rate")?,
                 })
             })
             .collect()
@@ -572,7 +582,8 @@ pub async fn flags(conn: &mut Conn) -> Result<Vec<StoredAnnotation>, sqlx::Error
     })
 }
 
-/// Answered items of a dataset with what scoring needs, in the order they were finished.
+/// Answered items of a dataset with what scoring needs, in the order they were finished, as
+/// the Human row counts them (see [`human_answers_of`]).
 pub async fn human_answers(
     conn: &mut Conn,
     dataset_id: i64,
@@ -582,7 +593,9 @@ pub async fn human_answers(
     })
 }
 
-/// The submitted answers on a dataset, of one annotator when `annotator` names one.
+/// The submitted answers on a dataset as the Human row counts them (none on gold items, none
+/// of excluded annotators), or of one annotator when `annotator` names one (gold items still
+/// left out).
 pub async fn human_answers_of(
     conn: &mut Conn,
     dataset_id: i64,
@@ -595,9 +608,13 @@ pub async fn human_answers_of(
          LEFT JOIN item_signatures s ON s.item = i.id \
          WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
          AND ($2 IS NULL OR n.annotator = $3) \
+         AND NOT EXISTS (SELECT 1 FROM gold_items g WHERE g.item = n.item) \
+         AND ($4 IS NOT NULL OR NOT EXISTS (SELECT 1 FROM annotator_exclusions x \
+             WHERE x.dataset = i.dataset_id AND x.annotator = n.annotator)) \
          ORDER BY n.finished_at, i.id, n.annotator",
         )
         .bind(dataset_id)
+        .bind(annotator)
         .bind(annotator)
         .bind(annotator)
         .fetch_all(&mut *c)
@@ -679,7 +696,8 @@ pub async fn take_login_link(conn: &mut Conn, hash: &str) -> Result<Option<i64>,
     })
 }
 
-/// Every submitted answer on a dataset as the Human row counts it, in one query (one
+/// Every submitted answer on a dataset as the Human row counts it (none on a gold item, none
+/// of an annotator excluded from the dataset), in one query (one
 /// snapshot: the figures and the coverage drawn from them agree), in the order answers were
 /// finished. An answer with a stored verdict comes with it and its metric version; one without
 /// comes with what judging it needs (its item's ground truth and signatures, read only then).
@@ -698,6 +716,9 @@ pub async fn counted_answers(
              FROM annotations n JOIN items i ON i.id = n.item \
              LEFT JOIN item_signatures s ON s.item = i.id \
              WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
+             AND NOT EXISTS (SELECT 1 FROM gold_items g WHERE g.item = n.item) \
+             AND NOT EXISTS (SELECT 1 FROM annotator_exclusions x \
+                 WHERE x.dataset = i.dataset_id AND x.annotator = n.annotator) \
              ORDER BY n.finished_at, i.id, n.annotator",
         )
         .bind(dataset_id)
@@ -874,5 +895,59 @@ pub async fn count_below_version(
         .bind(i64::from(version))
         .fetch_one(&mut *c)
         .await
+    })
+}
+
+/// One finished item of a dataset as the quality figures read it, with its annotator.
+#[derive(Debug, Clone)]
+pub struct QualityRow {
+    pub annotator: i64,
+    pub name: String,
+    pub finished: FinishedItem,
+}
+
+/// Every finished item of a dataset (answered, skipped or flagged), gold or not, by annotator
+/// name then item.
+pub async fn quality_rows(
+    conn: &mut Conn,
+    dataset_id: i64,
+) -> Result<Vec<QualityRow>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT n.annotator, a.name, n.item, (g.item IS NOT NULL) AS gold, n.outcome, \
+             n.answer, n.time_on_item_ms, i.item_id, i.direction, i.step_length, i.gt_answer, \
+             s.signatures, n.exact_match, n.semantic_match, n.task_accuracy, \
+             n.pairwise_accuracy, n.metric_version \
+             FROM annotations n JOIN annotators a ON a.id = n.annotator \
+             JOIN items i ON i.id = n.item \
+             LEFT JOIN item_signatures s ON s.item = i.id \
+             LEFT JOIN gold_items g ON g.item = n.item \
+             WHERE i.dataset_id = $1 ORDER BY a.name, n.item",
+        )
+        .bind(dataset_id)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter()
+            .map(|r| {
+                let outcome: OutcomeKind = r.try_get("outcome")?;
+                let answered = outcome == OutcomeKind::Answered;
+                Ok(QualityRow {
+                    annotator: r.try_get("annotator")?,
+                    name: r.try_get("name")?,
+                    finished: FinishedItem {
+                        item: r.try_get("item")?,
+                        gold: r.try_get("gold")?,
+                        outcome,
+                        answer: if answered {
+                            Some(human_answer_from_row(r)?)
+                        } else {
+                            None
+                        },
+                        verdict: stored_verdict(r)?.map(|(verdict, _)| verdict),
+                        time_on_item_ms: r.try_get("time_on_item_ms")?,
+                    },
+                })
+            })
+            .collect()
     })
 }

@@ -13,6 +13,7 @@ pub mod copy;
 pub mod datasets;
 pub mod db;
 pub mod frames;
+pub mod gold;
 pub mod items;
 pub mod jobs;
 pub mod runs;

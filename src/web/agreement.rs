@@ -315,6 +315,8 @@ struct ReportPage {
     encodings: Vec<(&'static str, bool)>,
     seed: u64,
     bootstrap: usize,
+    /// What the report leaves out: answers on gold items, annotators an admin excluded.
+    left_out: Vec<String>,
 }
 
 /// A figure with `decimals` places, or a dash where there is none.
@@ -387,7 +389,19 @@ async fn report_page(
     RawQuery(raw): RawQuery,
 ) -> Result<Html<String>, PageError> {
     let (report, settings) = dataset_report(&state, &name, raw.as_deref()).await?;
-    let page = ReportPage::new(&report, &settings, raw.as_deref().unwrap_or_default());
+    let mut page = ReportPage::new(&report, &settings, raw.as_deref().unwrap_or_default());
+    if let Some(gold) = crate::app::gold::show(&state.hub, &name).await? {
+        page.left_out.push(format!(
+            "answers on the {} gold items (they judge annotators: see Annotator quality)",
+            gold.items.len()
+        ));
+    }
+    for e in crate::app::gold::exclusions(&state.hub, &name).await? {
+        page.left_out.push(format!(
+            "every answer of {}, excluded by {} at {}",
+            e.annotator, e.excluded_by, e.excluded_at
+        ));
+    }
     Ok(Html(page.render()?))
 }
 
@@ -466,6 +480,7 @@ impl ReportPage {
             agreement,
             agreement_unavailable: report.agreement_unavailable.clone(),
             step_lengths: StepLength::all().map(StepLength::get).collect(),
+            left_out: Vec::new(),
             tables: vec![
                 (
                     "Pairwise accuracy (%), Table 1 layout",

@@ -511,15 +511,31 @@ fn row_text(r: &LeaderboardRow, history: Option<String>, drawn: &[i64]) -> RowTe
     let human = r.source == RowSource::Human;
     RowText {
         human_note: r.human.map(|h| {
-            format!(
-                "{} of {} items, {} annotator{}, {} answer{}; not ranked",
+            let mut note = format!(
+                "{} of {} items, {} annotator{}, {} answer{}",
                 h.items,
                 h.dataset_items,
                 h.annotators,
                 if h.annotators == 1 { "" } else { "s" },
                 h.answers,
                 if h.answers == 1 { "" } else { "s" }
-            )
+            );
+            if h.gold_items > 0 {
+                note.push_str(&format!(
+                    "; answers on the {} gold item{} left out",
+                    h.gold_items,
+                    if h.gold_items == 1 { "" } else { "s" }
+                ));
+            }
+            if h.excluded_annotators > 0 {
+                note.push_str(&format!(
+                    "; {} annotator{} excluded by an admin",
+                    h.excluded_annotators,
+                    if h.excluded_annotators == 1 { "" } else { "s" }
+                ));
+            }
+            note.push_str("; not ranked");
+            note
         }),
         rank: r.rank.map_or_else(|| "–".to_owned(), |k| k.to_string()),
         model: r.model.clone(),

@@ -28,6 +28,7 @@ mod leaderboard;
 mod metrics;
 pub mod openapi;
 mod pages;
+mod quality;
 mod rescore;
 mod runs;
 pub mod session;
@@ -139,6 +140,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(studies::routes());
     routes.extend(rescore::routes());
     routes.extend(runs::routes());
+    routes.extend(quality::routes());
     routes.push(
         openapi::ApiRoute::new(
             openapi::Verb::Get,
@@ -218,6 +220,7 @@ fn admin_pages(state: &AppState) -> Router<AppState> {
         .merge(admin_audit::router())
         .merge(studies::admin_router())
         .merge(rescore::router())
+        .merge(quality::router())
         .route_layer(axum::middleware::from_fn_with_state(
             state.clone(),
             session::admin_only,

@@ -96,6 +96,15 @@ fn body_of(verb: Verb, path: &str, records: &[Value], n: usize) -> Option<(Strin
             "application/json",
         )),
         (Verb::Post, "/admin/runs/{run}/{change}") => Some((String::new(), "text/plain")),
+        (Verb::Put, "/admin/datasets/{dataset}/gold") => Some((
+            json!({"rate": 5, "share": 0.25, "seed": n}).to_string(),
+            "application/json",
+        )),
+        (Verb::Delete, "/admin/datasets/{dataset}/gold")
+        | (
+            Verb::Put | Verb::Delete,
+            "/admin/datasets/{dataset}/exclusions/{annotator}",
+        ) => Some((String::new(), "text/plain")),
         (verb, path) => {
             panic!("the authorization matrix has no request for {verb:?} {path}: add it to body_of")
         }
@@ -212,6 +221,8 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                     // A fresh queued run for every call, so that cancelling it succeeds.
                     "run" => matrix_run(&server, n).await.to_string(),
                     "change" => "cancel".to_owned(),
+                    // The annotator behind the callers' session.
+                    "annotator" => "ann".to_owned(),
                     other => panic!(
                         "the authorization matrix cannot fill {{{other}}} in {}",
                         route.path
@@ -219,7 +230,11 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                 };
                 path = path.replace(&format!("{{{param}}}"), &value);
             }
-            // The required query parameters among the routes: a submission's model, a report's.
+            // The required query parameters among the routes: a submission's model, a report's,
+            // the quality figures' dataset.
+            if route.path == "/admin/annotators/quality" {
+                path.push_str("?dataset=mini");
+            }
             if route.path == "/datasets/{dataset}/submissions" {
                 path.push_str("?model=matrix");
             }
@@ -411,6 +426,10 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("GET", "/admin/studies", Page::Admin),
     ("POST", "/admin/studies", Page::Admin),
     ("POST", "/admin/studies/delete", Page::Admin),
+    ("GET", "/admin/quality", Page::Admin),
+    ("POST", "/admin/quality/gold", Page::Admin),
+    ("POST", "/admin/quality/gold/clear", Page::Admin),
+    ("POST", "/admin/quality/exclusion", Page::Admin),
 ];
 
 /// The literal paths of every `.route(` in the web adapter's source.

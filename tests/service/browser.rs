@@ -361,3 +361,78 @@ async fn a_study_of_three_families_draws_every_label_whole() {
     assert_eq!(found["heatmap"]["overlapping"], json!([]), "{found}");
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_gold_item_renders_in_chromium_exactly_like_any_other_item_apart_from_its_id() {
+    if !browser_available() {
+        return;
+    }
+    let records = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let shared = records.clone();
+    let server = spawn_app_with(|pool, dir| async move {
+        let root = dir.join("release");
+        // Two forward and two inverse items of L = 3 and of L = 4.
+        let written = write_balanced_release(&root, &[3, 4], 2);
+        import(&pool, &root, &options("mini")).await;
+        *shared.lock().expect("lock") = written;
+    })
+    .await;
+    let records: Vec<Value> = records.lock().expect("lock").clone();
+    let id = |i: usize| records[i]["id"].as_str().expect("id").to_owned();
+    let hub = enact_hub::app::Hub::from(server.pool.clone());
+    // Items 0 and 1 are both forward L = 3; 2 and 3 inverse L = 3: one gold item of each.
+    let choice = enact_hub::core::gold::GoldChoice::List(vec![id(0), id(2)]);
+    let rate = enact_hub::core::gold::GoldRate::new(2).expect("rate");
+    enact_hub::app::gold::set(&hub, &tester(), "mini", &choice, rate)
+        .await
+        .expect("gold set");
+    let token = new_token();
+    let annotator = {
+        let mut conn = server.pool.acquire().await.expect("conn");
+        store::annotations::create_annotator(&mut conn, "gus", false, &token_hash(&token))
+            .await
+            .expect("insert")
+    };
+    let ordinary = [id(1), id(3)];
+    enact_hub::app::annotation::assign(
+        &hub,
+        &tester(),
+        "mini",
+        &enact_hub::app::annotation::Assignment::List {
+            annotator,
+            item_ids: ordinary.to_vec(),
+        },
+    )
+    .await
+    .expect("assigned");
+    // The invite is single use: one browser session opens all four pages.
+    let pages = [id(0), id(1), id(2), id(3)];
+    let found = run_node(
+        "gold.mjs",
+        json!({
+            "base": server.url(""),
+            "invite": format!("/invite/{token}"),
+            "items": pages,
+            "chromium": CHROMIUM,
+        }),
+    )
+    .await;
+    assert_eq!(found["console_errors"], 0, "{found}");
+    let shapes = found["shapes"].as_array().expect("shapes");
+    // The comparison sees markup: a forward and an inverse page differ.
+    assert_ne!(shapes[0], shapes[2]);
+    for pair in [0, 2] {
+        assert!(
+            shapes[pair].as_array().expect("elements").len() > 20,
+            "{found}"
+        );
+        assert_eq!(
+            shapes[pair],
+            shapes[pair + 1],
+            "gold {} and ordinary {} differ",
+            pages[pair],
+            pages[pair + 1]
+        );
+    }
+    server.stop().await;
+}

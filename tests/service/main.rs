@@ -30,6 +30,7 @@ mod metrics;
 mod migrate_db;
 mod openapi;
 mod pages;
+mod quality;
 mod remote_runs;
 mod rescore;
 mod runs;

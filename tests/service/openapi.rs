@@ -70,6 +70,7 @@ async fn every_api_route_is_documented_and_every_documented_route_answers() {
     );
     assert!(documented.len() >= 15, "{documented:?}");
 
+    crate::annotate::annotator(&server, "matrix-annotator", false).await;
     mini_study(&server, "kept").await;
     mini_study(&server, "doomed").await;
     // DELETE is tried first (the paths are sorted by method): it gets a study of its own.
@@ -81,6 +82,7 @@ async fn every_api_route_is_documented_and_every_documented_route_answers() {
             .replace("{sha256}", &sha256)
             .replace("{id}", &submission)
             .replace("{token_id_or_prefix}", &throwaway.to_string())
+            .replace("{annotator}", "matrix-annotator")
     };
     for (method, path) in &documented {
         let url = server.url(&fill(method, path));
