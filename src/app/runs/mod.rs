@@ -200,8 +200,15 @@ struct Identity {
     prompt_hash: String,
 }
 
-async fn identity(hub: &Hub, spec: &RunSpec) -> Result<Identity, AppError> {
-    let dataset = datasets::by_name(hub, &spec.dataset).await?;
+/// What identifies a run of `dataset` besides the dataset, checked: the endpoint as stored,
+/// the parameters as JSON, and the run's name (given, or made from the rest).
+struct Named {
+    endpoint: String,
+    params: String,
+    name: String,
+}
+
+fn named(dataset: &str, spec: &RunSpec) -> Result<Named, AppError> {
     let endpoint = stored_endpoint(&endpoint_url(&spec.endpoint)?);
     if spec.model.trim().is_empty() {
         return Err(AppError::Invalid("the model name is empty".to_owned()));
@@ -214,8 +221,22 @@ async fn identity(hub: &Hub, spec: &RunSpec) -> Result<Identity, AppError> {
             ));
         }
         Some(n) => n.trim().to_owned(),
-        None => default_name(&dataset.name, &endpoint, &spec.model, &params),
+        None => default_name(dataset, &endpoint, &spec.model, &params),
     };
+    Ok(Named {
+        endpoint,
+        params,
+        name,
+    })
+}
+
+async fn identity(hub: &Hub, spec: &RunSpec) -> Result<Identity, AppError> {
+    let dataset = datasets::by_name(hub, &spec.dataset).await?;
+    let Named {
+        endpoint,
+        params,
+        name,
+    } = named(&dataset.name, spec)?;
     Ok(Identity {
         name,
         dataset_id: dataset.id,

@@ -21,10 +21,9 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use super::{
-    AppError, CallSettings, GenerationParams, Ledger, Pending, ProgressFn, RunItemRow, RunReport,
-    RunSpec, StampOf, Stamped, StopFn, answers_jsonl, ask_pending, asker, check_settings,
-    default_name, endpoint_url, failures, pending, request_body, stamped, stored_endpoint,
-    submission_key, tally,
+    AppError, CallSettings, GenerationParams, Ledger, Named, Pending, ProgressFn, RunItemRow,
+    RunReport, RunSpec, StampOf, Stamped, StopFn, answers_jsonl, ask_pending, asker,
+    check_settings, failures, named, pending, request_body, stamped, submission_key, tally,
 };
 use crate::core::model_run::{PROMPT_VERSION, backoff, prompt_template_hash, retry_after};
 
@@ -512,20 +511,11 @@ pub async fn execute_remote(
 ) -> Result<RunReport, AppError> {
     check_settings(spec, settings)?;
     let client = Arc::new(HubClient::new(hub, settings)?);
-    let endpoint = stored_endpoint(&endpoint_url(&spec.endpoint)?);
-    if spec.model.trim().is_empty() {
-        return Err(AppError::Invalid("the model name is empty".to_owned()));
-    }
-    let params = serde_json::to_string(&spec.params)?;
-    let name = match &spec.name {
-        Some(n) if n.trim().is_empty() || n.chars().count() > 200 => {
-            return Err(AppError::Invalid(
-                "a run's name must be 1 to 200 characters".to_owned(),
-            ));
-        }
-        Some(n) => n.trim().to_owned(),
-        None => default_name(&spec.dataset, &endpoint, &spec.model, &params),
-    };
+    let Named {
+        endpoint,
+        params,
+        name,
+    } = named(&spec.dataset, spec)?;
     let header = CacheHeader {
         enact_hub_run_cache: CACHE_VERSION,
         run: name.clone(),
