@@ -9,7 +9,8 @@
 //! `router()`; they are merged once in [`router`], the admin pages behind one gate
 //! ([`admin_pages`]). The JSON routes are one table instead ([`api_routes`]): the `/api/v1`
 //! router, its authorization and the OpenAPI document (`openapi`) are all built from it.
-//! `extract` holds the extractors whose rejections are the JSON error body.
+//! `extract` holds the extractors whose rejections are the JSON error body; `i18n` the pages'
+//! languages (message catalogues, the request's locale, the language switch).
 
 mod admin;
 mod admin_audit;
@@ -24,6 +25,7 @@ pub mod error;
 mod error_analysis;
 mod extract;
 pub mod forwarded;
+pub mod i18n;
 mod leaderboard;
 pub mod openapi;
 mod pages;
@@ -240,11 +242,13 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(studies::page_router())
         .merge(assets::router())
         .merge(openapi::page_router())
+        .merge(i18n::router())
         .nest(
             openapi::API_PREFIX,
             openapi::api_router(api_routes(), &state),
         )
         .with_state(state)
+        .layer(axum::middleware::from_fn(error::localize_error_pages))
         .layer(axum::middleware::map_response(move |response| {
             security_headers(policy.clone(), response)
         }))

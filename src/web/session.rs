@@ -22,12 +22,13 @@ use axum::body::Bytes;
 use axum::extract::{ConnectInfo, FromRequest, FromRequestParts, Path, Request, State};
 use axum::http::request::Parts;
 use axum::http::{HeaderMap, HeaderValue, Method, header};
-use axum::response::{Html, IntoResponse, Redirect, Response};
+use axum::response::{AppendHeaders, Html, IntoResponse, Redirect, Response};
 use axum::routing::{get, post};
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
 use super::error::PageError;
+use super::i18n::{Locale, Tr, locale_cookie};
 use super::{AppError, AppState};
 use crate::app::annotators::{self, SESSION_LIFETIME, now_ms};
 use crate::app::cache::BoundedCache;
@@ -394,6 +395,7 @@ impl<T: DeserializeOwned + Send> FromRequest<AppState> for Protected<T> {
 #[derive(Template)]
 #[template(path = "login.html")]
 struct LoginPage {
+    tr: Tr,
     csrf: String,
     name: String,
     error: Option<String>,
@@ -401,6 +403,7 @@ struct LoginPage {
 
 /// A login-form page with a fresh double-submit token in a cookie and in the form.
 fn login_form(
+    tr: Tr,
     headers: &HeaderMap,
     status: axum::http::StatusCode,
     name: String,
@@ -408,6 +411,7 @@ fn login_form(
 ) -> Result<Response, PageError> {
     let csrf = random_token();
     let page = LoginPage {
+        tr,
         csrf: csrf.clone(),
         name,
         error,
@@ -416,8 +420,14 @@ fn login_form(
     Ok((status, [(header::SET_COOKIE, cookie)], Html(page.render()?)).into_response())
 }
 
-async fn login_page(headers: HeaderMap) -> Result<Response, PageError> {
-    login_form(&headers, axum::http::StatusCode::OK, String::new(), None)
+async fn login_page(tr: Tr, headers: HeaderMap) -> Result<Response, PageError> {
+    login_form(
+        tr,
+        &headers,
+        axum::http::StatusCode::OK,
+        String::new(),
+        None,
+    )
 }
 
 #[derive(Deserialize)]
@@ -444,45 +454,53 @@ async fn start_session(
 ) -> Result<Response, AppError> {
     let token = annotators::start_session(&state.hub, annotator).await?;
     let cookie = set_cookie(headers, SESSION_COOKIE, &token, SESSION_LIFETIME);
-    Ok(([(header::SET_COOKIE, cookie)], Redirect::to(to)).into_response())
+    let mut cookies = vec![(header::SET_COOKIE, cookie)];
+    // The annotator's saved language follows them to this browser.
+    let saved = annotators::saved_locale(&state.hub, annotator).await?;
+    if let Some(locale) = saved.as_deref().and_then(Locale::from_tag) {
+        cookies.push((header::SET_COOKIE, locale_cookie(locale)));
+    }
+    Ok((AppendHeaders(cookies), Redirect::to(to)).into_response())
 }
 
 async fn login(
     State(state): State<AppState>,
     ClientAddress(address): ClientAddress,
+    tr: Tr,
     headers: HeaderMap,
     axum::Form(form): axum::Form<LoginForm>,
 ) -> Result<Response, PageError> {
     use axum::http::StatusCode;
     if !login_csrf_ok(&headers, &form.csrf) {
-        return login_form(
-            &headers,
-            StatusCode::FORBIDDEN,
-            form.name,
-            Some("the login form expired or lacks its CSRF token: please try again".to_owned()),
-        );
+        let error = tr.t("login-error-expired");
+        return login_form(tr, &headers, StatusCode::FORBIDDEN, form.name, Some(error));
     }
     let name = form.name.trim().to_owned();
     if name.is_empty() || form.password.is_empty() {
-        return login_form(
-            &headers,
-            StatusCode::BAD_REQUEST,
-            name,
-            Some("give your name and your password".to_owned()),
-        );
+        let error = tr.t("login-error-missing");
+        return login_form(tr, &headers, StatusCode::BAD_REQUEST, name, Some(error));
     }
     if let Err(e) = state.logins.check(&name, address) {
-        return login_form(&headers, e.status(), name, Some(e.to_string()));
+        let error = match &e {
+            AppError::LimitReached {
+                retry_after: Some(seconds),
+                ..
+            } => tr.t_ns(
+                "login-error-limited",
+                "minutes",
+                seconds.div_ceil(60).max(1),
+                "detail",
+                e.to_string(),
+            ),
+            _ => e.to_string(),
+        };
+        return login_form(tr, &headers, e.status(), name, Some(error));
     }
     let matched = annotators::check_password(&state.hub, &name, &form.password).await?;
     let Some(annotator) = matched else {
         state.logins.record_failure(&name, address);
-        return login_form(
-            &headers,
-            StatusCode::UNAUTHORIZED,
-            name,
-            Some("unknown name or wrong password".to_owned()),
-        );
+        let error = tr.t("login-error-wrong");
+        return login_form(tr, &headers, StatusCode::UNAUTHORIZED, name, Some(error));
     };
     state.logins.record_success(&name);
     Ok(start_session(&state, &headers, annotator, "/annotate").await?)

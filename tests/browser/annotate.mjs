@@ -75,7 +75,7 @@ async function e2e(page) {
   // Forward L = 3 by drag-and-drop.
   await Promise.all([page.waitForURL(`${base}/annotate/mini/${params.forward}`), page.click("#continue")]);
   check((await page.$$(".slot")).length === 2, "forward L=3 has two slots");
-  check(await page.isVisible("figure.current img[alt='Current State']"), "current state is shown");
+  check(await page.isVisible("figure.current img[alt$='(Current State)']"), "current state is shown");
   await page.dragAndDrop('.card[data-label="2"]', '.slot[data-slot="1"]');
   await waitSaved(page);
   // The inspector shows the slot's image large, beside the state before it.
