@@ -175,3 +175,160 @@ item-alt-image = Image at position { $position } of the item ({ $name })
 item-actions = Actions
 item-actions-forward = (in order)
 item-question = Full question text, as given to models
+
+## The leaderboard
+leaderboard-title = Leaderboard: { $dataset }
+leaderboard-heading = Leaderboard:
+leaderboard-policy = Strict policy: every item of the dataset counts; a missing or unreadable answer scores 0.
+leaderboard-metrics = TA = task accuracy, PA = pairwise accuracy, in percent. The interval is a 95% percentile bootstrap over items (1,000 resamples).
+leaderboard-metric-version = Metric version { $version }; a row computed with an older one is marked
+leaderboard-older-metric = older metric
+leaderboard-error-analysis = Error analysis
+leaderboard-empty = No submission has been published for this dataset yet.
+leaderboard-how-to-submit = Submit ENACT model-output JSONL with an API token:
+leaderboard-ranked-by = Ranked by
+leaderboard-ranking-help = (click a column's TA or PA to rank by it); equal values as shown share a rank.
+leaderboard-every-listed = Every published submission is listed.
+leaderboard-one-per-model = One row per model
+leaderboard-latest-listed = One row per account and model: its latest published submission.
+leaderboard-every-submission = Every submission
+leaderboard-all-models = all models
+leaderboard-only-model = Only model { $model }
+leaderboard-only-account = Only account { $account }
+leaderboard-only-model-of-account = Only model { $model } of account { $account }
+leaderboard-caption = Overall, forward and inverse world modeling; per step length L (number of images)
+leaderboard-draw = Draw in the chart
+leaderboard-draw-model = draw { $model } in the chart
+leaderboard-model = Model
+leaderboard-overall = Overall
+leaderboard-forward = Forward world modeling
+leaderboard-inverse = Inverse world modeling
+leaderboard-coverage = Coverage
+leaderboard-parse-failures = Parse failures
+leaderboard-submitted = Submitted
+leaderboard-ta-ci = TA 95% CI
+leaderboard-pa-ci = PA 95% CI
+leaderboard-baseline = baseline
+leaderboard-attempts = { $count ->
+    [one] { $count } attempt
+   *[other] { $count } attempts
+  }
+leaderboard-few-answers = only { $count ->
+    [one] { $count } answer
+   *[other] { $count } answers
+  }: fewer than { $minimum }
+leaderboard-outdated = computed with metric version { $version } (current: { $current }); not comparable with the other rows until an admin rescores it
+leaderboard-human-items = { $items } of { $total } items
+leaderboard-human-annotators = { $count ->
+    [one] { $count } annotator
+   *[other] { $count } annotators
+  }
+leaderboard-human-answers = { $count ->
+    [one] { $count } answer
+   *[other] { $count } answers
+  }; not ranked
+leaderboard-human-note = The Human row is a reference, never ranked among models; a figure marked † rests on fewer than five human answers.
+leaderboard-page-of = page { $page } of { $pages }
+leaderboard-ranked-rows = { $count ->
+    [one] { $count } ranked row
+   *[other] { $count } ranked rows
+  }
+leaderboard-chart-heading = Task accuracy against step length
+leaderboard-chart-checked = The models checked in the table, with the Human row and baselines.
+leaderboard-chart-best = The best ten by { $sort }, with the Human row and baselines.
+leaderboard-chart-draw = Draw the checked models
+leaderboard-chart-label = Task accuracy (%) against step length L, one line per model; forward and inverse panels
+leaderboard-axis-step = Step length L
+leaderboard-axis-ta = TA (%)
+leaderboard-group-overall = overall
+leaderboard-group-forward = forward
+leaderboard-group-inverse = inverse
+leaderboard-sort = { $group } { $metric }
+leaderboard-sort-step = { $group } { $metric } at L={ $step }
+
+## Error analysis
+errors-heading = Error analysis: { $dataset }
+errors-leaderboard = Leaderboard
+errors-explanation = Each answer of the right length is compared step by step with the truth: true and predicted state changes are matched, and the rest classed as in the ENACT paper (polarity inversion, predicate substitution, entity substitution, omission, hallucination) and by what they are about. Hand figures count grasping changes of each gripper; mixing is the share of a hand's true changes given to the other hand.
+errors-empty = No published submission and no human answer yet.
+errors-row = row
+errors-overall = overall
+errors-structural = Structural errors
+errors-semantic = Semantic errors
+errors-hands = Hands
+errors-structural-caption = Share of each row's errors by structural class
+errors-semantic-caption = Share of each row's errors by semantic category
+errors-hands-caption = Left- and right-hand precision, recall and mixing; whiskers are one standard error
+errors-of = Errors of { $row }
+errors-all-rows = All rows of { $dataset }
+errors-row-structural-caption = Share of errors by structural class, forward and inverse
+errors-row-semantic-caption = Share of errors by semantic category, forward and inverse
+errors-row-hands-caption = Left- and right-hand precision, recall and mixing, forward and inverse; whiskers are one standard error
+errors-examples = Examples
+errors-none = No errors to show.
+errors-class = class
+errors-step = step
+errors-true-change = true change
+errors-predicted-change = predicted change
+errors-analysed = analysed
+errors-not-analysed = not analysed
+errors-errors = errors
+errors-structural-share = structural (share of errors)
+errors-semantic-share = semantic (share of errors)
+errors-hands-se = hands (± SE)
+errors-accepted-incomplete = accepted but incomplete
+errors-answers = answers
+errors-steps = steps
+errors-polarity-inversion = Polarity inversion
+errors-predicate-substitution = Predicate substitution
+errors-entity-substitution = Entity substitution
+errors-omission = Omission
+errors-hallucination = Hallucination
+errors-spatial-relations = Spatial relations
+errors-functional-states = Functional states
+errors-material-states = Material states
+errors-agent-interaction = Agent interaction
+errors-hand-left = left
+errors-hand-right = right
+errors-precision = precision
+errors-recall = recall
+errors-mixing = mixing
+
+## Ablation studies
+studies-title = Ablation studies
+studies-explanation = A study asks a baseline dataset's questions again with other images (image realism, camera, robot appearance) and reports, for a model or the Human row, how pairwise accuracy changes on each variant: Δ with the paper's Welch test, and paired tests on the same items.
+studies-empty = No study yet. An admin creates one with enact-hub study create or at
+studies-study = Study
+studies-baseline = Baseline
+studies-variants = Variants
+studies-created = Created
+studies-created-by = created { $date } by { $who }
+study-title = Study: { $name }
+study-items = { $count ->
+    [one] { $count } item
+   *[other] { $count } items
+  }
+study-all = all studies
+study-variants-caption = Variants and how their items align with the baseline's
+study-family = Family
+study-variant = Variant
+study-aligned = Aligned
+study-by-id = by id
+study-by-key-frames = by task, type and key frames
+study-unaligned = unaligned (baseline / variant)
+study-judged-differently = judged differently
+study-not-computed = not computed
+study-judged-warning = { $count } aligned items are judged by other rules than the baseline's (another ground truth or another signature table), so their scores differ for reasons other than the images. Import a variant with the baseline's scene graphs:
+study-compare = Compare
+study-choose = choose a model…
+study-human = Human (annotators)
+study-per-step = per step length
+study-show = Show report
+study-report-heading = { $row } on each variant against the baseline
+study-delta-explained = Δ = mean pairwise accuracy on the variant − on the baseline, over the aligned items. Colour: the band of the two-tailed Welch p-value (the paper's test); darker red is more significant. Downloads:
+study-all-files = all files (tar)
+study-cells-caption = Welch (unpaired, as in the paper) and paired tests per variant and direction
+study-n = n (baseline / variant)
+study-signs = signs (↑ ↓ =)
+study-handedness = Handedness (the paper's panel C.2)
+study-handedness-explained = Left- and right-hand precision, recall and mixing (the share of one hand's true changes given to the other hand), ± standard error, on the baseline and each variant.

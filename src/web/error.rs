@@ -163,13 +163,26 @@ impl IntoResponse for PageError {
     }
 }
 
-/// Renders the error pages of the routes it wraps in the request's language.
+/// Renders the error pages of the routes it wraps in the request's language, and marks every
+/// page as varying with what chooses the language.
 pub(super) async fn localize_error_pages(
     request: axum::extract::Request,
     next: axum::middleware::Next,
 ) -> Response {
     let tr = Tr::of_request(request.headers(), request.uri());
-    let response = next.run(request).await;
+    let mut response = next.run(request).await;
+    let html = response
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|v| v.starts_with("text/html"));
+    if html {
+        // A page's language follows these headers: caches must keep one copy per value.
+        response.headers_mut().append(
+            header::VARY,
+            HeaderValue::from_static("accept-language, cookie"),
+        );
+    }
     match response.extensions().get::<ErrorPageParts>() {
         Some(parts) => {
             let mut localized = parts.render(tr);

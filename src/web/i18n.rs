@@ -151,6 +151,8 @@ static CATALOGUES: LazyLock<Vec<(Locale, FluentBundle<FluentResource>)>> = LazyL
             // No Unicode isolation marks around variables: the pages set `dir` themselves,
             // and the marks would end up in attribute values and copied text.
             bundle.set_use_isolating(false);
+            // Numbers in messages get the locale's grouping, not Fluent's bare digits.
+            bundle.set_formatter(Some(format_fluent_number));
             if let Err(errors) = bundle.add_resource(resource) {
                 tracing::error!(
                     locale = locale.tag(),
@@ -193,6 +195,61 @@ fn format(locale: Locale, key: &str, args: Option<&FluentArgs>) -> String {
     text.into_owned()
 }
 
+/// Fluent's hook for numbers in messages: grouped, with the fraction digits the value has
+/// (at most 3), as [`decimal`] writes them.
+fn format_fluent_number<M>(value: &FluentValue, _memoizer: &M) -> Option<String> {
+    match value {
+        FluentValue::Number(n) => {
+            let digits = n
+                .options
+                .minimum_fraction_digits
+                .unwrap_or(if n.value.fract() == 0.0 { 0 } else { 3 });
+            let text = decimal(n.value, digits.min(3));
+            // "2.500" from a float: drop the zeros no one asked for.
+            Some(
+                if n.options.minimum_fraction_digits.is_none() && text.contains('.') {
+                    text.trim_end_matches('0').trim_end_matches('.').to_owned()
+                } else {
+                    text
+                },
+            )
+        }
+        _ => None,
+    }
+}
+
+/// `value` with `fraction_digits` decimals and thousands grouped: "8,972", "12.5", "-0.3".
+///
+/// Our own formatter rather than ICU4X's `icu_decimal`: both locales we serve write numbers
+/// the same way (CLDR: decimal point ".", group separator "," every three digits, percent
+/// "12.5%" with no space, for `en` and for `zh-Hans`), so this is all the CLDR data the pages
+/// need; ICU4X would add its compiled data and a dozen crates to the build for it. A locale
+/// with other symbols (`de`: "1.234,5") needs a branch here, which the tests below pin.
+pub fn decimal(value: f64, fraction_digits: usize) -> String {
+    if !value.is_finite() {
+        return "–".to_owned();
+    }
+    let text = format!("{:.*}", fraction_digits, value.abs());
+    let (whole, fraction) = match text.split_once('.') {
+        Some((w, f)) => (w, Some(f)),
+        None => (text.as_str(), None),
+    };
+    let mut grouped = String::with_capacity(whole.len() + whole.len() / 3);
+    for (i, c) in whole.chars().enumerate() {
+        if i > 0 && (whole.len() - i) % 3 == 0 {
+            grouped.push(',');
+        }
+        grouped.push(c);
+    }
+    // No "-0.0": a value that rounds to zero has no sign.
+    let negative = value < 0.0 && text.chars().any(|c| c.is_ascii_digit() && c != '0');
+    let sign = if negative { "-" } else { "" };
+    match fraction {
+        Some(f) => format!("{sign}{grouped}.{f}"),
+        None => format!("{sign}{grouped}"),
+    }
+}
+
 /// The message keys of a catalogue source, in file order (for the catalogue test).
 pub fn catalogue_keys(source: &str) -> Result<Vec<String>, String> {
     let resource =
@@ -219,15 +276,16 @@ macro_rules! count_from {
                 *self as f64
             }
         }
-        impl Count for &$t {
-            #[allow(clippy::cast_precision_loss)]
-            fn as_f64(&self) -> f64 {
-                **self as f64
-            }
-        }
     )*};
 }
 count_from!(u8, u32, u64, usize, i32, i64, f64);
+
+// Templates pass fields by reference, sometimes twice over.
+impl<T: Count + ?Sized> Count for &T {
+    fn as_f64(&self) -> f64 {
+        (**self).as_f64()
+    }
+}
 
 /// Names a message key outside a direct lookup, so the catalogue check sees it.
 pub const fn msg(key: &'static str) -> &'static str {
@@ -310,6 +368,18 @@ impl Tr {
         format(self.locale, key, Some(&args))
     }
 
+    /// A message with two text variables.
+    pub fn t_ss(
+        &self,
+        key: &str,
+        a: &str,
+        x: impl AsRef<str>,
+        b: &str,
+        y: impl AsRef<str>,
+    ) -> String {
+        self.t_args(key, &[(a, x.as_ref()), (b, y.as_ref())])
+    }
+
     /// A message with two number variables.
     pub fn t_nn(&self, key: &str, a: &str, x: impl Count, b: &str, y: impl Count) -> String {
         let mut args = FluentArgs::new();
@@ -344,6 +414,41 @@ impl Tr {
             args.set((*name).to_owned(), FluentValue::from((*value).to_owned()));
         }
         format(self.locale, key, Some(&args))
+    }
+
+    /// A share (0–1) as a percentage with one decimal, without the sign: "12.5"; a dash when
+    /// there is none.
+    pub fn percent_figure(&self, share: Option<f64>) -> String {
+        share.map_or_else(|| "–".to_owned(), |v| decimal(v * 100.0, 1))
+    }
+
+    /// A share (0–1) as a percentage with one decimal and the sign: "12.5%".
+    pub fn percent(&self, share: f64) -> String {
+        format!("{}%", decimal(share * 100.0, 1))
+    }
+
+    /// The day of an ISO 8601 timestamp ("2026-11-26T10:00:00Z") as the locale writes dates:
+    /// "2026-11-26" in English (ISO, as the hub always showed it), "2026年11月26日" in Chinese.
+    /// Anything that is not such a timestamp is shown as it is.
+    pub fn date(&self, timestamp: &str) -> String {
+        let day = timestamp.get(..10).unwrap_or(timestamp);
+        let mut parts = day.split('-');
+        let parsed = match (parts.next(), parts.next(), parts.next()) {
+            (Some(y), Some(m), Some(d)) if y.len() == 4 => {
+                match (y.parse::<u32>(), m.parse::<u32>(), d.parse::<u32>()) {
+                    (Ok(y), Ok(m), Ok(d)) if (1..=12).contains(&m) && (1..=31).contains(&d) => {
+                        Some((y, m, d))
+                    }
+                    _ => None,
+                }
+            }
+            _ => None,
+        };
+        match (self.locale, parsed) {
+            (_, None) => timestamp.to_owned(),
+            (Locale::English, Some(_)) => day.to_owned(),
+            (Locale::SimplifiedChinese, Some((y, m, d))) => format!("{y}年{m}月{d}日"),
+        }
     }
 
     /// The other locales, for the switch: (tag, native name).
@@ -516,6 +621,46 @@ mod tests {
         headers.insert(header::COOKIE, HeaderValue::from_static("enact_lang=xx"));
         assert_eq!(Locale::of_request(&headers), Locale::SimplifiedChinese);
         assert_eq!(Locale::of_request(&HeaderMap::new()), Locale::English);
+    }
+
+    #[test]
+    fn decimals_are_grouped_and_rounded() {
+        assert_eq!(decimal(8972.0, 0), "8,972");
+        assert_eq!(decimal(1_234_567.25, 1), "1,234,567.2");
+        assert_eq!(decimal(12.345, 1), "12.3");
+        assert_eq!(decimal(999.96, 1), "1,000.0");
+        assert_eq!(decimal(-0.04, 1), "0.0");
+        assert_eq!(decimal(-1234.5, 1), "-1,234.5");
+        assert_eq!(decimal(0.0, 0), "0");
+        assert_eq!(decimal(f64::NAN, 1), "–");
+        let zh = Tr::new(Locale::SimplifiedChinese);
+        assert_eq!(zh.percent(0.125), "12.5%");
+        assert_eq!(zh.percent_figure(Some(1.0)), "100.0");
+        assert_eq!(zh.percent_figure(None), "–");
+    }
+
+    #[test]
+    fn dates_follow_the_locale() {
+        let en = Tr::new(Locale::English);
+        let zh = Tr::new(Locale::SimplifiedChinese);
+        assert_eq!(en.date("2026-11-06T10:00:00Z"), "2026-11-06");
+        assert_eq!(zh.date("2026-11-06T10:00:00Z"), "2026年11月6日");
+        assert_eq!(zh.date("2026-13-06"), "2026-13-06");
+        assert_eq!(zh.date("yesterday"), "yesterday");
+    }
+
+    #[test]
+    fn numbers_in_messages_are_grouped() {
+        let zh = Tr::new(Locale::SimplifiedChinese);
+        assert_eq!(
+            zh.t_nn("home-items-from-tasks", "items", 8972, "tasks", 29),
+            "8,972 个条目，来自 29 个任务"
+        );
+        let en = Tr::new(Locale::English);
+        assert_eq!(
+            en.t_nnn("dataset-shown", "first", 1001, "last", 1050, "total", 12000),
+            "Items 1,001–1,050 of 12,000"
+        );
     }
 
     #[test]
