@@ -332,3 +332,10 @@ study-n = n (baseline / variant)
 study-signs = signs (↑ ↓ =)
 study-handedness = Handedness (the paper's panel C.2)
 study-handedness-explained = Left- and right-hand precision, recall and mixing (the share of one hand's true changes given to the other hand), ± standard error, on the baseline and each variant.
+
+## Accepting an invite
+invite-title = Set your password
+invite-welcome = Welcome, { $name }
+invite-choose = Choose a password (at least { $count } characters). This link works once.
+invite-repeat = Repeat it
+invite-submit = Set password and start

@@ -306,3 +306,10 @@ study-n = n（基线 / 变体）
 study-signs = 符号（↑ ↓ =）
 study-handedness = 左右手（论文的 C.2 面板）
 study-handedness-explained = 基线和各变体上左手和右手的精确率、召回率和混淆率（某只手的真实变化被归给另一只手的比例），± 标准误。
+
+## 接受邀请
+invite-title = 设置密码
+invite-welcome = 欢迎，{ $name }
+invite-choose = 请设置密码（至少 { $count } 个字符）。此链接只能使用一次。
+invite-repeat = 再次输入
+invite-submit = 设置密码并开始

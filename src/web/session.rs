@@ -536,6 +536,7 @@ async fn logout(
 #[derive(Template)]
 #[template(path = "invite.html")]
 struct InvitePage {
+    tr: Tr,
     csrf: String,
     name: String,
     token: String,
@@ -544,6 +545,7 @@ struct InvitePage {
 }
 
 async fn invite_form(
+    tr: Tr,
     state: &AppState,
     headers: &HeaderMap,
     token: String,
@@ -553,6 +555,7 @@ async fn invite_form(
     let annotator = annotators::invited(&state.hub, &token).await?;
     let csrf = random_token();
     let page = InvitePage {
+        tr,
         csrf: csrf.clone(),
         name: annotator.name,
         token,
@@ -565,10 +568,19 @@ async fn invite_form(
 
 async fn invite_page(
     State(state): State<AppState>,
+    tr: Tr,
     headers: HeaderMap,
     Path(token): Path<String>,
 ) -> Result<Response, PageError> {
-    invite_form(&state, &headers, token, axum::http::StatusCode::OK, None).await
+    invite_form(
+        tr,
+        &state,
+        &headers,
+        token,
+        axum::http::StatusCode::OK,
+        None,
+    )
+    .await
 }
 
 #[derive(Deserialize)]
@@ -583,14 +595,16 @@ struct InviteForm {
 
 async fn accept_invite(
     State(state): State<AppState>,
+    tr: Tr,
     headers: HeaderMap,
     Path(token): Path<String>,
     axum::Form(form): axum::Form<InviteForm>,
 ) -> Result<Response, PageError> {
     use axum::http::StatusCode;
     if !login_csrf_ok(&headers, &form.csrf) {
-        let message = "the form expired or lacks its CSRF token: please try again".to_owned();
+        let message = tr.t("login-error-expired");
         return invite_form(
+            tr,
             &state,
             &headers,
             token,
@@ -604,6 +618,7 @@ async fn accept_invite(
         // A password the rules refuse: the form again, saying why.
         Err(AppError::Invalid(message)) => {
             invite_form(
+                tr,
                 &state,
                 &headers,
                 token,

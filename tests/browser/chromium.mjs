@@ -17,7 +17,8 @@ const FLAGS = [
   "--disable-sync",
 ];
 
-/// Launches Chromium (`params.chromium`, else /usr/bin/chromium) and opens one page.
+/// Launches Chromium (`params.chromium`, else /usr/bin/chromium) and opens one page; with
+/// `params.locale` the browser asks for that language (Accept-Language, navigator.language).
 export async function openPage(params, timeout = 15000) {
   const userDataDir = mkdtempSync(join(tmpdir(), "enact-hub-chromium-"));
   const context = await chromium.launchPersistentContext(userDataDir, {
@@ -25,6 +26,7 @@ export async function openPage(params, timeout = 15000) {
     headless: true,
     args: FLAGS,
     viewport: { width: 1280, height: 800 },
+    ...(params.locale ? { locale: params.locale } : {}),
   });
   const page = context.pages()[0] || (await context.newPage());
   page.setDefaultTimeout(timeout);

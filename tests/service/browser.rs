@@ -361,3 +361,65 @@ async fn a_study_of_three_families_draws_every_label_whole() {
     assert_eq!(found["heatmap"]["overlapping"], json!([]), "{found}");
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_annotator_reading_chinese_finishes_both_directions_by_keyboard() {
+    if !browser_available() {
+        return;
+    }
+    let (server, records) = spawn_app_with_release().await;
+    let id = |i: usize| records[i]["id"].as_str().expect("id").to_owned();
+    // write_release: forward then inverse for each L; 0 = forward 3, 1 = inverse 3.
+    let (forward, inverse) = (id(0), id(1));
+    let token = new_token();
+    let annotator = {
+        let mut conn = server.pool.acquire().await.expect("conn");
+        store::annotations::create_annotator(&mut conn, "li", false, &token_hash(&token))
+            .await
+            .expect("insert")
+    };
+    assign(&server, annotator, &[&forward, &inverse]).await;
+    let params = json!({
+        "base": server.url(""),
+        "invite": format!("/invite/{token}"),
+        "forward": forward,
+        "inverse": inverse,
+        "forward_slots": 2,
+        "inverse_slots": 2,
+        "chromium": CHROMIUM,
+        "failure_dir": env!("CARGO_TARGET_TMPDIR"),
+    });
+    let found = run_node("locale.mjs", params).await;
+    // What the live region said, as the accessibility tree holds it, after each move.
+    let announced = |k: &str| -> Vec<String> {
+        found[k]
+            .as_array()
+            .expect("announcements")
+            .iter()
+            .map(|v| v.as_str().expect("text").to_owned())
+            .collect()
+    };
+    let forward_said = announced("forward_announced");
+    assert!(
+        forward_said[0].contains("Next State 1 已放入槽位 1。"),
+        "{forward_said:?}"
+    );
+    let inverse_said = announced("inverse_announced");
+    assert!(
+        inverse_said[1].contains("Action 2 已放入槽位 2。"),
+        "{inverse_said:?}"
+    );
+    assert_eq!(found["console_errors"], 0);
+    // Both answers are stored, as placed.
+    let answered: i64 = db!(
+        server.pool,
+        fetch_one,
+        sqlx::query_scalar(
+            "SELECT COUNT(*) FROM annotations WHERE annotator = $1 AND answer IS NOT NULL"
+        )
+        .bind(annotator)
+    )
+    .expect("count");
+    assert_eq!(answered, 2);
+    server.stop().await;
+}
