@@ -339,3 +339,5 @@ invite-welcome = Welcome, { $name }
 invite-choose = Choose a password (at least { $count } characters). This link works once.
 invite-repeat = Repeat it
 invite-submit = Set password and start
+errors-figures-table = Error figures per row
+errors-examples-of = Examples: { $category }

@@ -313,3 +313,5 @@ invite-welcome = 欢迎，{ $name }
 invite-choose = 请设置密码（至少 { $count } 个字符）。此链接只能使用一次。
 invite-repeat = 再次输入
 invite-submit = 设置密码并开始
+errors-figures-table = 各行的错误数据
+errors-examples-of = 示例：{ $category }
