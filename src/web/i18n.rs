@@ -287,6 +287,14 @@ impl<T: Count + ?Sized> Count for &T {
     }
 }
 
+fn number<'a>(n: impl Count) -> FluentValue<'a> {
+    FluentValue::from(n.as_f64())
+}
+
+fn text<'a>(value: impl AsRef<str>) -> FluentValue<'a> {
+    FluentValue::from(value.as_ref().to_owned())
+}
+
 /// Names a message key outside a direct lookup, so the catalogue check sees it.
 pub const fn msg(key: &'static str) -> &'static str {
     key
@@ -333,21 +341,27 @@ impl Tr {
         format(self.locale, key, None)
     }
 
+    /// The message `key` with `vars` as its variables.
+    fn with<'a>(
+        &self,
+        key: &str,
+        vars: impl IntoIterator<Item = (&'a str, FluentValue<'a>)>,
+    ) -> String {
+        let mut args = FluentArgs::new();
+        for (name, value) in vars {
+            args.set(name.to_owned(), value);
+        }
+        format(self.locale, key, Some(&args))
+    }
+
     /// A message with one number variable (plural rules apply to it).
     pub fn t_n(&self, key: &str, name: &str, n: impl Count) -> String {
-        let mut args = FluentArgs::new();
-        args.set(name.to_owned(), FluentValue::from(n.as_f64()));
-        format(self.locale, key, Some(&args))
+        self.with(key, [(name, number(n))])
     }
 
     /// A message with one text variable.
     pub fn t_s(&self, key: &str, name: &str, value: impl AsRef<str>) -> String {
-        let mut args = FluentArgs::new();
-        args.set(
-            name.to_owned(),
-            FluentValue::from(value.as_ref().to_owned()),
-        );
-        format(self.locale, key, Some(&args))
+        self.with(key, [(name, text(value))])
     }
 
     /// A message with a number and a text variable.
@@ -359,13 +373,7 @@ impl Tr {
         s_name: &str,
         value: impl AsRef<str>,
     ) -> String {
-        let mut args = FluentArgs::new();
-        args.set(n_name.to_owned(), FluentValue::from(n.as_f64()));
-        args.set(
-            s_name.to_owned(),
-            FluentValue::from(value.as_ref().to_owned()),
-        );
-        format(self.locale, key, Some(&args))
+        self.with(key, [(n_name, number(n)), (s_name, text(value))])
     }
 
     /// A message with two text variables.
@@ -377,15 +385,12 @@ impl Tr {
         b: &str,
         y: impl AsRef<str>,
     ) -> String {
-        self.t_args(key, &[(a, x.as_ref()), (b, y.as_ref())])
+        self.with(key, [(a, text(x)), (b, text(y))])
     }
 
     /// A message with two number variables.
     pub fn t_nn(&self, key: &str, a: &str, x: impl Count, b: &str, y: impl Count) -> String {
-        let mut args = FluentArgs::new();
-        args.set(a.to_owned(), FluentValue::from(x.as_f64()));
-        args.set(b.to_owned(), FluentValue::from(y.as_f64()));
-        format(self.locale, key, Some(&args))
+        self.with(key, [(a, number(x)), (b, number(y))])
     }
 
     /// A message with three number variables.
@@ -400,20 +405,12 @@ impl Tr {
         c: &str,
         z: impl Count,
     ) -> String {
-        let mut args = FluentArgs::new();
-        for (name, n) in [(a, x.as_f64()), (b, y.as_f64()), (c, z.as_f64())] {
-            args.set(name.to_owned(), FluentValue::from(n));
-        }
-        format(self.locale, key, Some(&args))
+        self.with(key, [(a, number(x)), (b, number(y)), (c, number(z))])
     }
 
-    /// A message with several variables, text or numbers as the caller formatted them.
+    /// A message with several text variables, as the caller formatted them.
     pub fn t_args(&self, key: &str, vars: &[(&str, &str)]) -> String {
-        let mut args = FluentArgs::new();
-        for (name, value) in vars {
-            args.set((*name).to_owned(), FluentValue::from((*value).to_owned()));
-        }
-        format(self.locale, key, Some(&args))
+        self.with(key, vars.iter().map(|(name, value)| (*name, text(value))))
     }
 
     /// A share (0–1) as a percentage with one decimal, without the sign: "12.5"; a dash when

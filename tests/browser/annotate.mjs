@@ -5,23 +5,10 @@
 import { mkdirSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
-import { openPage } from "./chromium.mjs";
+import { check, openPage, tabTo } from "./chromium.mjs";
 
 const params = JSON.parse(process.argv[2]);
 const { base, mode } = params;
-
-function check(condition, message) {
-  if (!condition) throw new Error(message);
-}
-
-// Presses Tab until the focused element matches `selector`: keyboard only, no clicks.
-async function tabTo(page, selector) {
-  for (let i = 0; i < 200; i++) {
-    if (await page.evaluate((s) => document.activeElement?.matches(s) ?? false, selector)) return;
-    await page.keyboard.press("Tab");
-  }
-  throw new Error(`Tab never reached ${selector}`);
-}
 
 async function waitSaved(page) {
   await page.waitForFunction(() => document.getElementById("save-status")?.textContent === "Saved");

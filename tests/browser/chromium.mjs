@@ -35,3 +35,17 @@ export async function openPage(params, timeout = 15000) {
   page.on("pageerror", (e) => consoleErrors.push(`${page.url()}: ${e.message}`));
   return { context, page, consoleErrors };
 }
+
+/// Throws `message` unless `condition` holds.
+export function check(condition, message) {
+  if (!condition) throw new Error(message);
+}
+
+/// Presses Tab until the focused element matches `selector`: keyboard only, no clicks.
+export async function tabTo(page, selector, presses = 300) {
+  for (let i = 0; i < presses; i++) {
+    if (await page.evaluate((s) => document.activeElement?.matches(s) ?? false, selector)) return;
+    await page.keyboard.press("Tab");
+  }
+  throw new Error(`Tab never reached ${selector}`);
+}

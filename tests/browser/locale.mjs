@@ -5,23 +5,10 @@
 // of findings on success; on failure saves a screenshot and exits 1.
 import { tmpdir } from "node:os";
 import { join } from "node:path";
-import { openPage } from "./chromium.mjs";
+import { check, openPage, tabTo } from "./chromium.mjs";
 
 const params = JSON.parse(process.argv[2]);
 const { base } = params;
-
-function check(condition, message) {
-  if (!condition) throw new Error(message);
-}
-
-// Presses Tab until the focused element matches `selector`: keyboard only, no clicks.
-async function tabTo(page, selector) {
-  for (let i = 0; i < 200; i++) {
-    if (await page.evaluate((s) => document.activeElement?.matches(s) ?? false, selector)) return;
-    await page.keyboard.press("Tab");
-  }
-  throw new Error(`Tab never reached ${selector}`);
-}
 
 // The live region as assistive technology reads it: its node in the accessibility tree.
 async function liveRegion(page) {
