@@ -1,5 +1,6 @@
 //! The pages' languages: the message catalogues (Project Fluent, one `.ftl` file per locale
-//! under `locales/`, compiled into the binary), choosing a request's locale, and the switch.
+//! under `locales/`, compiled into the binary), choosing a request's locale, and writing
+//! numbers and dates for it.
 //!
 //! A request's locale is the `enact_lang` cookie if it names a locale we have (the switch sets
 //! it, and logging in sets it from the annotator's saved preference), else the best match of
@@ -14,21 +15,14 @@
 use std::sync::LazyLock;
 use std::time::Duration;
 
-use axum::Router;
-use axum::extract::{FromRequestParts, State};
+use axum::extract::FromRequestParts;
 use axum::http::request::Parts;
 use axum::http::{HeaderMap, HeaderValue, header};
-use axum::response::{IntoResponse, Redirect, Response};
-use axum::routing::post;
 use fluent_bundle::concurrent::FluentBundle;
 use fluent_bundle::{FluentArgs, FluentResource, FluentValue};
-use serde::Deserialize;
 
 use super::AppState;
-use super::error::PageError;
-use super::session::{SESSION_COOKIE, cookie};
-use crate::app::annotators;
-use crate::core::credentials::token_hash;
+use super::cookies::cookie;
 
 /// The cookie holding the locale a browser chose with the switch.
 pub const LOCALE_COOKIE: &str = "enact_lang";
@@ -520,19 +514,6 @@ impl FromRequestParts<AppState> for Tr {
     }
 }
 
-pub fn router() -> Router<AppState> {
-    Router::new().route("/locale", post(switch))
-}
-
-#[derive(Deserialize)]
-struct SwitchForm {
-    #[serde(default)]
-    locale: String,
-    /// The page to go back to: a path on this site.
-    #[serde(default)]
-    back: String,
-}
-
 /// A `Set-Cookie` value keeping the chosen locale for a year.
 pub fn locale_cookie(locale: Locale) -> HeaderValue {
     let cookie = format!(
@@ -542,41 +523,6 @@ pub fn locale_cookie(locale: Locale) -> HeaderValue {
     );
     // Tags are constants of the form [a-zA-Z-]+: always a valid header value.
     HeaderValue::from_str(&cookie).unwrap_or_else(|_| HeaderValue::from_static(""))
-}
-
-/// The switch: remembers the locale in a cookie and, for a signed-in annotator, as their
-/// preference; then back to the page it was used on.
-///
-/// No CSRF token: the session cookie is `SameSite=Strict`, so a request from another site
-/// never carries it and can at most set this browser's language cookie, which changes nothing
-/// stored.
-async fn switch(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    axum::Form(form): axum::Form<SwitchForm>,
-) -> Result<Response, PageError> {
-    let Some(locale) = Locale::from_tag(&form.locale) else {
-        let known: Vec<&str> = Locale::ALL.iter().map(|l| l.tag()).collect();
-        return Err(PageError(crate::app::AppError::Invalid(format!(
-            "form field `locale`: '{}' is not a locale of this hub (one of: {})",
-            form.locale,
-            known.join(", ")
-        ))));
-    };
-    if let Some(token) = cookie(&headers, SESSION_COOKIE) {
-        annotators::save_locale(&state.hub, &token_hash(&token), locale.tag()).await?;
-    }
-    // Only a path on this site, never `//host` or a scheme: no open redirect.
-    let back = if form.back.starts_with('/') && !form.back.starts_with("//") {
-        form.back.as_str()
-    } else {
-        "/"
-    };
-    Ok((
-        [(header::SET_COOKIE, locale_cookie(locale))],
-        Redirect::to(back),
-    )
-        .into_response())
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@
 //! ([`admin_pages`]). The JSON routes are one table instead ([`api_routes`]): the `/api/v1`
 //! router, its authorization and the OpenAPI document (`openapi`) are all built from it.
 //! `extract` holds the extractors whose rejections are the JSON error body; `i18n` the pages'
-//! languages (message catalogues, the request's locale, the language switch).
+//! languages (message catalogues, the request's locale), `locale_switch` the switch.
 
 mod admin;
 mod admin_audit;
@@ -21,12 +21,14 @@ mod api;
 mod archive;
 mod assets;
 mod auth;
+mod cookies;
 pub mod error;
 mod error_analysis;
 mod extract;
 pub mod forwarded;
 pub mod i18n;
 mod leaderboard;
+mod locale_switch;
 pub mod openapi;
 mod pages;
 mod rescore;
@@ -242,7 +244,7 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(studies::page_router())
         .merge(assets::router())
         .merge(openapi::page_router())
-        .merge(i18n::router())
+        .merge(locale_switch::router())
         .nest(
             openapi::API_PREFIX,
             openapi::api_router(api_routes(), &state),

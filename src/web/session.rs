@@ -27,6 +27,7 @@ use axum::routing::{get, post};
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
+use super::cookies::cookie;
 use super::error::PageError;
 use super::i18n::{Locale, Tr, locale_cookie};
 use super::{AppError, AppState};
@@ -181,18 +182,6 @@ impl SessionCache {
             }
         }
     }
-}
-
-/// The value of cookie `name` in the request's `Cookie` headers.
-pub fn cookie(headers: &HeaderMap, name: &str) -> Option<String> {
-    headers
-        .get_all(header::COOKIE)
-        .iter()
-        .filter_map(|v| v.to_str().ok())
-        .flat_map(|v| v.split(';'))
-        .filter_map(|pair| pair.trim().split_once('='))
-        .find(|(k, _)| *k == name)
-        .map(|(_, v)| v.to_owned())
 }
 
 /// Whether the client reached us over TLS, as a TLS-terminating proxy reports it.
