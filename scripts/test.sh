@@ -18,8 +18,8 @@ if ! command -v node >/dev/null 2>&1; then
   echo "== installing nodejs and npm (Debian packages)"
   apt-get update && apt-get install -y nodejs npm
 fi
-if [ ! -d tests/browser/node_modules/playwright-core ]; then
-  echo "== npm ci (tests/browser: playwright-core, which downloads no browser)"
+if [ ! -d tests/browser/node_modules/playwright-core ] || [ ! -d tests/browser/node_modules/axe-core ]; then
+  echo "== npm ci (tests/browser: playwright-core, which downloads no browser, and axe-core)"
   (cd tests/browser && npm ci --no-audit --no-fund)
 fi
 

@@ -24,6 +24,12 @@
   let selected = null;
 
   const nameOf = (label) => cardByLabel.get(label).dataset.name;
+  // The page's messages in its language, from the same catalogue as the page (see
+  // SCRIPT_MESSAGES in src/web/i18n.rs); `{name}` marks where a value goes.
+  const messages = JSON.parse(root.dataset.messages || "{}");
+  const m = (key, values) =>
+    (messages[key] || key).replace(/\{(\w+)\}/g, (whole, name) =>
+      values && name in values ? String(values[name]) : whole);
   const announce = (text) => {
     announcer.textContent = text;
   };
@@ -36,7 +42,7 @@
       button.classList.toggle("filled", label !== null);
       button.draggable = label !== null;
       if (label === null) {
-        button.setAttribute("aria-label", `Slot ${i + 1}: empty`);
+        button.setAttribute("aria-label", m("js-slot-empty", { slot: i + 1 }));
         return;
       }
       const card = cardByLabel.get(label);
@@ -44,14 +50,14 @@
         if (child.classList.contains("card-used")) continue;
         content.appendChild(child.cloneNode(true));
       }
-      button.setAttribute("aria-label", `Slot ${i + 1}: ${card.dataset.name}`);
+      button.setAttribute("aria-label", m("js-slot-filled", { slot: i + 1, name: card.dataset.name }));
     });
     for (const [label, card] of cardByLabel) {
       const at = slots.indexOf(label);
       card.classList.toggle("used", at >= 0);
       card.classList.toggle("selected", selected === label);
       card.setAttribute("aria-pressed", selected === label ? "true" : "false");
-      card.querySelector(".card-used").textContent = at >= 0 ? `in slot ${at + 1}` : "";
+      card.querySelector(".card-used").textContent = at >= 0 ? m("js-card-in-slot", { slot: at + 1 }) : "";
     }
     submitButton.disabled = slots.some((s) => s === null);
     undoButton.disabled = history.length === 0;
@@ -61,7 +67,7 @@
   function save() {
     const body = JSON.stringify({ slots, counts, history });
     saving = saving.then(async () => {
-      saveStatus.textContent = "Saving…";
+      saveStatus.textContent = m("js-saving");
       try {
         const response = await fetch(`${base}/draft`, {
           method: "POST",
@@ -71,12 +77,12 @@
         });
         if (!response.ok) {
           const error = await response.json().catch(() => ({ error: response.statusText }));
-          saveStatus.textContent = `Not saved: ${error.error}`;
+          saveStatus.textContent = m("js-not-saved", { error: error.error });
           return;
         }
-        saveStatus.textContent = "Saved";
+        saveStatus.textContent = m("js-saved");
       } catch (e) {
-        saveStatus.textContent = `Not saved: ${e.message}`;
+        saveStatus.textContent = m("js-not-saved", { error: e.message });
       }
     });
     return saving;
@@ -103,12 +109,12 @@
     if (from >= 0) slots[from] = occupant;
     slots[index] = label;
     counts.placements += 1;
-    let message = `${nameOf(label)} placed in slot ${index + 1}.`;
+    let message = m("js-placed", { name: nameOf(label), slot: index + 1 });
     if (occupant !== null) {
       counts.swaps += 1;
       message += from >= 0
-        ? ` ${nameOf(occupant)} moved to slot ${from + 1}.`
-        : ` ${nameOf(occupant)} returned to the library.`;
+        ? " " + m("js-swapped-moved", { name: nameOf(occupant), slot: from + 1 })
+        : " " + m("js-swapped-returned", { name: nameOf(occupant) });
     }
     changed(message);
   }
@@ -119,17 +125,17 @@
     const label = slots[index];
     slots[index] = null;
     counts.clears += 1;
-    changed(`Slot ${index + 1} cleared; ${nameOf(label)} returned to the library.`);
+    changed(m("js-cleared", { slot: index + 1, name: nameOf(label) }));
   }
 
   function undo() {
     if (history.length === 0) {
-      announce("Nothing to undo.");
+      announce(m("js-nothing-to-undo"));
       return;
     }
     slots = history.pop();
     counts.undos += 1;
-    changed("Undone.");
+    changed(m("js-undone"));
   }
 
   // Click: a card, then a slot.
@@ -138,7 +144,7 @@
     card.addEventListener("click", () => {
       selected = selected === label ? null : label;
       render();
-      if (selected !== null) announce(`${nameOf(label)} selected: choose a slot.`);
+      if (selected !== null) announce(m("js-card-selected", { name: nameOf(label) }));
     });
     card.addEventListener("keydown", (event) => {
       if (event.ctrlKey || event.metaKey || event.altKey) return;
@@ -146,7 +152,7 @@
         event.preventDefault();
         const index = Number(event.key) - 1;
         if (index >= slots.length) {
-          announce(`There is no slot ${event.key}; slots go from 1 to ${slots.length}.`);
+          announce(m("js-no-such-slot", { key: event.key, count: slots.length }));
           return;
         }
         place(label, index);
@@ -170,7 +176,7 @@
       } else if (slots[index] !== null) {
         selected = slots[index];
         render();
-        announce(`${nameOf(selected)} selected: choose another slot to move it.`);
+        announce(m("js-slot-selected", { name: nameOf(selected) }));
       }
     });
     button.addEventListener("keydown", (event) => {
@@ -228,10 +234,10 @@
     });
     const reply = await response.json().catch(() => ({ error: response.statusText }));
     if (response.ok) {
-      announce("Answer submitted.");
+      announce(m("js-submitted"));
       window.location.assign(reply.next);
     } else {
-      saveStatus.textContent = `Not submitted: ${reply.error}`;
+      saveStatus.textContent = m("js-not-submitted", { error: reply.error });
       submitButton.disabled = false;
     }
   });
@@ -281,12 +287,12 @@
   function beforeSlot(index) {
     if (index === 0) {
       const name = current ? current.dataset.name : "";
-      return [current && current.dataset.src, `before: ${name}`, name];
+      return [current && current.dataset.src, m("js-before-start", { name }), name];
     }
     const label = slots[index - 1];
     return label === null
-      ? [null, `before: slot ${index} is empty`, ""]
-      : [srcOf(label), `before: slot ${index}, ${nameOf(label)}`, nameOf(label)];
+      ? [null, m("js-before-empty", { slot: index }), ""]
+      : [srcOf(label), m("js-before-slot", { slot: index, name: nameOf(label) }), nameOf(label)];
   }
 
   function inspectSlot(index) {
@@ -296,13 +302,13 @@
       show("before", beforeSrc, beforeCaption, beforeName);
       const label = slots[index];
       const name = label === null ? "" : nameOf(label);
-      show("focus", srcOf(label), label === null ? `slot ${index + 1}: empty` : `slot ${index + 1}: ${name}`, name);
+      show("focus", srcOf(label), label === null ? m("js-focus-slot-empty", { slot: index + 1 }) : m("js-focus-slot", { slot: index + 1, name }), name);
       slotButtons[index].closest("li").classList.add("inspected");
     } else {
       const t = transitions[index];
       const [from, to] = t.querySelectorAll(".frame");
-      show("before", from.dataset.src, `transition ${index + 1}, before: ${from.dataset.name}`, from.dataset.name);
-      show("focus", to.dataset.src, `transition ${index + 1}, after: ${to.dataset.name}`, to.dataset.name);
+      show("before", from.dataset.src, m("js-transition-before", { index: index + 1, name: from.dataset.name }), from.dataset.name);
+      show("focus", to.dataset.src, m("js-transition-after", { index: index + 1, name: to.dataset.name }), to.dataset.name);
       t.classList.add("inspected");
     }
     inspected = { slot: index };
@@ -317,8 +323,8 @@
     if (forward) {
       root.querySelectorAll(".inspected").forEach((e) => e.classList.remove("inspected"));
       const name = current ? current.dataset.name : "";
-      show("before", current && current.dataset.src, `before: ${name}`, name);
-      show("focus", srcOf(label), `${nameOf(label)} (not placed)`, nameOf(label));
+      show("before", current && current.dataset.src, m("js-before-start", { name }), name);
+      show("focus", srcOf(label), m("js-not-placed", { name: nameOf(label) }), nameOf(label));
       inspected = { card: label };
     }
   }

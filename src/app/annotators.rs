@@ -206,6 +206,20 @@ pub async fn end_session(hub: &Hub, token_hash: &str) -> Result<(), AppError> {
         .await
 }
 
+/// Saves `locale` (a tag the pages serve) as the preference of the annotator whose session
+/// hashes to `token_hash`; nothing when the session is unknown or expired.
+pub async fn save_locale(hub: &Hub, token_hash: &str, locale: &str) -> Result<(), AppError> {
+    let mut conn = hub.conn().await?;
+    store::annotations::set_locale_by_session(&mut conn, token_hash, locale, now_ms()).await?;
+    Ok(())
+}
+
+/// The locale `annotator` saved with the language switch, if any.
+pub async fn saved_locale(hub: &Hub, annotator: i64) -> Result<Option<String>, AppError> {
+    let mut conn = hub.conn().await?;
+    Ok(store::annotations::locale(&mut conn, annotator).await?)
+}
+
 /// An annotator with their progress, as the admin page lists them.
 pub struct AnnotatorProgress {
     pub annotator: Annotator,

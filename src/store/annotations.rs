@@ -200,6 +200,42 @@ pub async fn delete_session(
     })
 }
 
+/// Saves the locale of the annotator whose unexpired session hashes to `token_hash`; false
+/// when there is no such session.
+pub async fn set_locale_by_session(
+    conn: &mut Conn,
+    token_hash: &str,
+    locale: &str,
+    now_ms: i64,
+) -> Result<bool, sqlx::Error> {
+    on!(conn, |c| {
+        let done = sqlx::query(
+            "UPDATE annotators SET locale = $1 WHERE id = \
+             (SELECT annotator FROM sessions WHERE token_hash = $2 AND expires_at_ms > $3)",
+        )
+        .bind(locale)
+        .bind(token_hash)
+        .bind(now_ms)
+        .execute(&mut *c)
+        .await?;
+        Ok(done.rows_affected() > 0)
+    })
+}
+
+/// The locale an annotator saved, if any.
+pub async fn locale(conn: &mut Conn, annotator: i64) -> Result<Option<String>, sqlx::Error> {
+    on!(conn, |c| {
+        let row = sqlx::query("SELECT locale FROM annotators WHERE id = $1")
+            .bind(annotator)
+            .fetch_optional(&mut *c)
+            .await?;
+        Ok(row
+            .map(|r| r.try_get::<Option<String>>("locale"))
+            .transpose()?
+            .flatten())
+    })
+}
+
 /// Every item of a dataset with its kind, in id order.
 pub async fn dataset_items(
     conn: &mut Conn,

@@ -184,6 +184,7 @@ pub const TABLES: &[Table] = &[
             ("password_hash", Text),
             ("invite_hash", Text),
             ("created_at", Text),
+            ("locale", Text),
         ],
         true,
     ),

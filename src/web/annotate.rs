@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 use super::api::frame_url;
 use super::error::PageError;
 use super::extract::{Json, Path};
+use super::i18n::{Tr, msg};
 use super::session::{LoggedIn, Protected};
 use super::{AppError, AppState};
 use crate::app::annotation::{self, AssignedItem};
@@ -32,6 +33,25 @@ pub fn router() -> Router<AppState> {
         .route("/annotate/{dataset}/{item_id}/answer", get(own_answer))
 }
 
+/// The message key naming a direction.
+pub(super) fn direction_key(direction: Direction) -> &'static str {
+    match direction {
+        Direction::Forward => msg("direction-forward"),
+        Direction::Inverse => msg("direction-inverse"),
+    }
+}
+
+/// The message key naming where an item of the queue stands.
+fn status_key(status: QueueStatus) -> &'static str {
+    match status {
+        QueueStatus::Todo => msg("status-todo"),
+        QueueStatus::Started => msg("status-started"),
+        QueueStatus::Answered => msg("status-answered"),
+        QueueStatus::Skipped => msg("status-skipped"),
+        QueueStatus::Flagged => msg("status-flagged"),
+    }
+}
+
 fn item_href(dataset: &str, item_id: &str) -> String {
     format!("/annotate/{dataset}/{item_id}")
 }
@@ -42,7 +62,7 @@ struct ProgressCell {
 }
 
 struct ProgressRow {
-    direction: &'static str,
+    direction: String,
     cells: Vec<ProgressCell>,
 }
 
@@ -50,15 +70,16 @@ struct QueueRow {
     href: String,
     dataset: String,
     item_id: String,
-    direction: &'static str,
+    direction: String,
     step_length: u8,
-    status: &'static str,
+    status: String,
     done: bool,
 }
 
 #[derive(Template)]
 #[template(path = "queue.html")]
 struct QueuePage {
+    tr: Tr,
     name: String,
     is_admin: bool,
     csrf: String,
@@ -74,6 +95,7 @@ struct QueuePage {
 async fn queue_page(
     State(state): State<AppState>,
     LoggedIn(session): LoggedIn,
+    tr: Tr,
 ) -> Result<Html<String>, PageError> {
     let queue = annotation::queue(&state.hub, session.annotator).await?;
     let lengths: Vec<StepLength> = StepLength::all()
@@ -82,7 +104,7 @@ async fn queue_page(
     let progress = Direction::ALL
         .into_iter()
         .map(|d| ProgressRow {
-            direction: d.as_str(),
+            direction: tr.t(direction_key(d)),
             cells: lengths
                 .iter()
                 .map(|l| {
@@ -99,6 +121,7 @@ async fn queue_page(
         .collect();
     let next = next_in_queue(&queue);
     let page = QueuePage {
+        tr: tr.clone(),
         name: session.name,
         is_admin: session.is_admin,
         csrf: session.csrf_token,
@@ -114,9 +137,9 @@ async fn queue_page(
                 href: item_href(&e.dataset, &e.item_id),
                 dataset: e.dataset.clone(),
                 item_id: e.item_id.clone(),
-                direction: e.direction.as_str(),
+                direction: tr.t(direction_key(e.direction)),
                 step_length: e.step_length.get(),
-                status: e.status.as_str(),
+                status: tr.t(status_key(e.status)),
                 done: e.status.is_done(),
             })
             .collect(),
@@ -158,6 +181,7 @@ struct Transition {
 #[derive(Template)]
 #[template(path = "annotate_item.html")]
 struct ItemPage {
+    tr: Tr,
     csrf: String,
     dataset: String,
     item_id: String,
@@ -182,9 +206,10 @@ async fn item_page(
     State(state): State<AppState>,
     LoggedIn(session): LoggedIn,
     Path((dataset, item_id)): Path<(String, String)>,
+    tr: Tr,
 ) -> Result<Html<String>, PageError> {
     let opened = annotation::open(&state.hub, &session, &dataset, &item_id).await?;
-    let page = ItemPage::new(&opened, session.csrf_token, dataset)?;
+    let page = ItemPage::new(tr, &opened, session.csrf_token, dataset)?;
     Ok(Html(page.render()?))
 }
 
@@ -224,7 +249,12 @@ fn library(item: &StoredItem) -> Vec<Card> {
 }
 
 impl ItemPage {
-    fn new(opened: &AssignedItem, csrf: String, dataset: String) -> Result<ItemPage, AppError> {
+    fn new(
+        tr: Tr,
+        opened: &AssignedItem,
+        csrf: String,
+        dataset: String,
+    ) -> Result<ItemPage, AppError> {
         let item = &opened.item;
         let step_length = item.summary.step_length;
         let forward = item.summary.direction == Direction::Forward;
@@ -245,6 +275,7 @@ impl ItemPage {
                 .collect()
         };
         Ok(ItemPage {
+            tr,
             csrf,
             base: item_href(&dataset, &item.summary.item_id),
             dataset,

@@ -10,6 +10,8 @@ use serde::Serialize;
 
 pub use crate::app::AppError;
 
+use super::i18n::{Locale, Tr, msg};
+
 impl AppError {
     pub fn status(&self) -> StatusCode {
         match self {
@@ -94,24 +96,105 @@ impl<E: Into<AppError>> From<E> for PageError {
 #[derive(Template)]
 #[template(path = "error.html")]
 struct ErrorPage<'a> {
+    tr: Tr,
     status: u16,
-    reason: &'a str,
+    reason: String,
+    /// What the status means, in the page's language.
+    explanation: String,
+    /// The error's own message, in English as the use case wrote it (shown as a detail).
+    message: &'a str,
+}
+
+/// An error page waiting for its language: [`PageError`] leaves this on the response, and
+/// [`localize_error_pages`], which sees the request, renders it.
+#[derive(Clone)]
+struct ErrorPageParts {
+    status: StatusCode,
     message: String,
+}
+
+impl ErrorPageParts {
+    fn render(&self, tr: Tr) -> Response {
+        let (reason, explanation) = status_keys(self.status);
+        let page = ErrorPage {
+            status: self.status.as_u16(),
+            reason: tr.t(reason),
+            explanation: tr.t(explanation),
+            message: &self.message,
+            tr,
+        };
+        match page.render() {
+            Ok(html) => (self.status, Html(html)).into_response(),
+            Err(_) => (self.status, self.message.clone()).into_response(),
+        }
+    }
+}
+
+/// The message keys of a page error's heading and explanation, for its status. Written out
+/// (not built from the number) so that the catalogue check sees every key.
+fn status_keys(status: StatusCode) -> (&'static str, &'static str) {
+    match status.as_u16() {
+        400 => (msg("error-reason-400"), msg("error-explain-400")),
+        401 => (msg("error-reason-401"), msg("error-explain-401")),
+        403 => (msg("error-reason-403"), msg("error-explain-403")),
+        404 => (msg("error-reason-404"), msg("error-explain-404")),
+        409 => (msg("error-reason-409"), msg("error-explain-409")),
+        413 => (msg("error-reason-413"), msg("error-explain-413")),
+        415 => (msg("error-reason-415"), msg("error-explain-415")),
+        422 => (msg("error-reason-422"), msg("error-explain-422")),
+        429 => (msg("error-reason-429"), msg("error-explain-429")),
+        503 => (msg("error-reason-503"), msg("error-explain-503")),
+        _ => (msg("error-reason-500"), msg("error-explain-500")),
+    }
 }
 
 impl IntoResponse for PageError {
     fn into_response(self) -> Response {
         let error = self.0;
         error.log_if_internal();
-        let status = error.status();
-        let page = ErrorPage {
-            status: status.as_u16(),
-            reason: status.canonical_reason().unwrap_or("Error"),
+        let parts = ErrorPageParts {
+            status: error.status(),
             message: error.to_string(),
         };
-        match page.render() {
-            Ok(html) => (status, Html(html)).into_response(),
-            Err(_) => (status, error.to_string()).into_response(),
+        // English until `localize_error_pages` renders it in the request's language.
+        let mut response = parts.render(Tr::new(Locale::English));
+        response.extensions_mut().insert(parts);
+        response
+    }
+}
+
+/// Renders the error pages of the routes it wraps in the request's language, and marks every
+/// page as varying with what chooses the language.
+pub(super) async fn localize_error_pages(
+    request: axum::extract::Request,
+    next: axum::middleware::Next,
+) -> Response {
+    let tr = Tr::of_request(request.headers(), request.uri());
+    let mut response = next.run(request).await;
+    let html = response
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|v| v.starts_with("text/html"));
+    if html {
+        // A page's language follows these headers: caches must keep one copy per value.
+        response.headers_mut().append(
+            header::VARY,
+            HeaderValue::from_static("accept-language, cookie"),
+        );
+    }
+    match response.extensions().get::<ErrorPageParts>() {
+        Some(parts) => {
+            let mut localized = parts.render(tr);
+            // Keep the headers the handler set (Retry-After, cookies), not its body.
+            let (head, _) = response.into_parts();
+            for (name, value) in &head.headers {
+                if name != header::CONTENT_TYPE && name != header::CONTENT_LENGTH {
+                    localized.headers_mut().append(name, value.clone());
+                }
+            }
+            localized
         }
+        _ => response,
     }
 }

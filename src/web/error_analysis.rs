@@ -16,6 +16,7 @@ use serde_json::json;
 
 use super::error::PageError;
 use super::extract::{Json, Path, Query};
+use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
 use super::session::LoggedIn;
 use super::{AppError, AppState};
@@ -295,31 +296,76 @@ fn figures(analysed: &Analysed, direction: Option<Direction>) -> &ErrorFigures {
 
 /// Column headings shared by both pages.
 struct Headings {
-    structural: Vec<&'static str>,
-    semantic: Vec<&'static str>,
+    structural: Vec<String>,
+    semantic: Vec<String>,
     hands: Vec<String>,
 }
 
-fn headings() -> Headings {
+/// The message key of a structural class (the paper's taxonomy).
+fn structural_key(class: StructuralClass) -> &'static str {
+    match class {
+        StructuralClass::PolarityInversion => msg("errors-polarity-inversion"),
+        StructuralClass::PredicateSubstitution => msg("errors-predicate-substitution"),
+        StructuralClass::EntitySubstitution => msg("errors-entity-substitution"),
+        StructuralClass::Omission => msg("errors-omission"),
+        StructuralClass::Hallucination => msg("errors-hallucination"),
+    }
+}
+
+/// The message key of a semantic category.
+fn semantic_key(category: SemanticCategory) -> &'static str {
+    match category {
+        SemanticCategory::SpatialRelations => msg("errors-spatial-relations"),
+        SemanticCategory::FunctionalStates => msg("errors-functional-states"),
+        SemanticCategory::MaterialStates => msg("errors-material-states"),
+        SemanticCategory::AgentInteraction => msg("errors-agent-interaction"),
+    }
+}
+
+fn headings(tr: &Tr) -> Headings {
     let mut hands = Vec::new();
     for h in Hand::BOTH {
-        for m in ["precision", "recall", "mixing"] {
-            hands.push(format!("{} {m}", h.as_str()));
+        let hand = tr.t(match h {
+            Hand::Left => msg("errors-hand-left"),
+            Hand::Right => msg("errors-hand-right"),
+        });
+        for m in [
+            msg("errors-precision"),
+            msg("errors-recall"),
+            msg("errors-mixing"),
+        ] {
+            hands.push(format!("{hand} {}", tr.t(m)));
         }
     }
     Headings {
-        structural: StructuralClass::ALL.iter().map(|c| c.label()).collect(),
-        semantic: SemanticCategory::ALL.iter().map(|c| c.label()).collect(),
+        structural: StructuralClass::ALL
+            .iter()
+            .map(|c| tr.t(structural_key(*c)))
+            .collect(),
+        semantic: SemanticCategory::ALL
+            .iter()
+            .map(|c| tr.t(semantic_key(*c)))
+            .collect(),
         hands,
+    }
+}
+
+/// The message key of a direction link, or of the rows of all directions.
+fn direction_link_key(direction: &str) -> &'static str {
+    match direction {
+        "forward" => msg("direction-forward"),
+        "inverse" => msg("direction-inverse"),
+        _ => msg("errors-overall"),
     }
 }
 
 #[derive(Template)]
 #[template(path = "errors.html")]
 struct ComparisonPage {
+    tr: Tr,
     dataset: String,
-    direction: &'static str,
-    links: Vec<(&'static str, String, bool)>,
+    direction: String,
+    links: Vec<(String, String, bool)>,
     headings: Headings,
     rows: Vec<FigureRow>,
     structural: BarChart,
@@ -337,6 +383,7 @@ async fn comparison_page(
     Path(name): Path<String>,
     Query(query): Query<CompareQuery>,
     ReaderIsAdmin(admin): ReaderIsAdmin,
+    tr: Tr,
 ) -> Result<Html<String>, PageError> {
     let direction = query.direction()?;
     let (dataset, rows) =
@@ -369,12 +416,18 @@ async fn comparison_page(
     };
     let page = ComparisonPage {
         dataset: dataset.name.clone(),
-        direction: direction_name(direction),
+        direction: tr.t(direction_link_key(direction_name(direction))),
         links: ["overall", "forward", "inverse"]
             .into_iter()
-            .map(|d| (d, keep(d), d == direction_name(direction)))
+            .map(|d| {
+                (
+                    tr.t(direction_link_key(d)),
+                    keep(d),
+                    d == direction_name(direction),
+                )
+            })
             .collect(),
-        headings: headings(),
+        headings: headings(&tr),
         rows: rows
             .iter()
             .zip(&labels)
@@ -390,21 +443,22 @@ async fn comparison_page(
         semantic: chart::semantic_chart(&drawn),
         hands: chart::hand_chart(&drawn),
         withheld: rows.iter().find_map(|r| r.analysis.withheld.clone()),
+        tr,
     };
     Ok(Html(page.render()?))
 }
 
 /// Examples of one semantic category, per structural class.
 struct ExampleGroup {
-    category: &'static str,
+    category: String,
     examples: Vec<ExampleLine>,
 }
 
 struct ExampleLine {
-    class: &'static str,
+    class: String,
     item: String,
     href: String,
-    direction: &'static str,
+    direction: String,
     step: usize,
     truth: String,
     predicted: String,
@@ -413,6 +467,7 @@ struct ExampleLine {
 #[derive(Template)]
 #[template(path = "errors_row.html")]
 struct RowPage {
+    tr: Tr,
     dataset: String,
     label: String,
     headings: Headings,
@@ -424,21 +479,21 @@ struct RowPage {
     withheld: Option<String>,
 }
 
-fn example_groups(dataset: &str, examples: &[ErrorExample]) -> Vec<ExampleGroup> {
+fn example_groups(tr: &Tr, dataset: &str, examples: &[ErrorExample]) -> Vec<ExampleGroup> {
     let mut groups: Vec<ExampleGroup> = SemanticCategory::ALL
         .iter()
         .map(|c| ExampleGroup {
-            category: c.label(),
+            category: tr.t(semantic_key(*c)),
             examples: Vec::new(),
         })
         .collect();
     for e in examples {
         let Some(category) = e.category else { continue };
         groups[category.index()].examples.push(ExampleLine {
-            class: e.class.label(),
+            class: tr.t(structural_key(e.class)),
             item: e.item.clone(),
             href: format!("/datasets/{dataset}/items/{}", e.item),
-            direction: e.direction.as_str(),
+            direction: tr.t(super::annotate::direction_key(e.direction)),
             step: e.step,
             truth: e
                 .truth
@@ -458,6 +513,7 @@ async fn row_page(
     State(state): State<AppState>,
     Path((name, entry)): Path<(String, String)>,
     ReaderIsAdmin(admin): ReaderIsAdmin,
+    tr: Tr,
 ) -> Result<Html<String>, PageError> {
     let picked: Vec<i64> = match entry.as_str() {
         "human" => Vec::new(),
@@ -501,16 +557,17 @@ async fn row_page(
     let page = RowPage {
         dataset: dataset.name.clone(),
         label,
-        headings: headings(),
+        headings: headings(&tr),
         rows: groups
             .iter()
-            .map(|(g, f)| figure_row((*g).to_owned(), None, f))
+            .map(|(g, f)| figure_row(tr.t(direction_link_key(g)), None, f))
             .collect(),
         structural: chart::structural_chart(&drawn),
         semantic: chart::semantic_chart(&drawn),
         hands: chart::hand_chart(&drawn),
-        examples: example_groups(&dataset.name, &a.examples),
+        examples: example_groups(&tr, &dataset.name, &a.examples),
         withheld: row.analysis.withheld.clone(),
+        tr,
     };
     Ok(Html(page.render()?))
 }

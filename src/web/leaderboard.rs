@@ -18,6 +18,7 @@ use serde::Serialize;
 use super::api::matches_etag;
 use super::error::PageError;
 use super::extract::Path;
+use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
 use crate::app::leaderboard::{self, Board};
@@ -337,30 +338,53 @@ struct CellText {
     few: Option<String>,
 }
 
-fn percent(v: Option<f64>) -> String {
-    v.map_or_else(|| "–".to_owned(), |v| format!("{:.1}", v * 100.0))
-}
-
 /// A cell's text; Human cells with fewer than [`MIN_HUMAN_ANSWERS`] answers are marked.
-fn cell_text(c: &AccuracyCell, human: bool) -> CellText {
+fn cell_text(tr: &Tr, c: &AccuracyCell, human: bool) -> CellText {
     let few = (human && c.count > 0 && c.count < MIN_HUMAN_ANSWERS).then(|| {
-        format!(
-            "only {} answer{}: fewer than {MIN_HUMAN_ANSWERS}",
+        tr.t_nn(
+            "leaderboard-few-answers",
+            "count",
             c.count,
-            if c.count == 1 { "" } else { "s" }
+            "minimum",
+            MIN_HUMAN_ANSWERS,
         )
     });
     CellText {
         few,
-        ta: percent(c.task_accuracy),
-        pa: percent(c.pairwise_accuracy),
+        ta: tr.percent_figure(c.task_accuracy),
+        pa: tr.percent_figure(c.pairwise_accuracy),
     }
 }
 
-fn interval_text(i: Option<Interval>) -> String {
+fn interval_text(tr: &Tr, i: Option<Interval>) -> String {
     i.map_or_else(String::new, |i| {
-        format!("{:.1}–{:.1}", i.low * 100.0, i.high * 100.0)
+        format!(
+            "{}–{}",
+            tr.percent_figure(Some(i.low)),
+            tr.percent_figure(Some(i.high))
+        )
     })
+}
+
+/// A sort column as the page names it: "overall TA", "forward PA at L=5".
+fn sort_label(tr: &Tr, key: &SortKey) -> String {
+    let group = tr.t(match key.group {
+        ColumnGroup::Overall => msg("leaderboard-group-overall"),
+        ColumnGroup::Forward => msg("leaderboard-group-forward"),
+        ColumnGroup::Inverse => msg("leaderboard-group-inverse"),
+    });
+    let metric = if key.pairwise { "PA" } else { "TA" };
+    match key.step {
+        None => tr.t_args("leaderboard-sort", &[("group", &group), ("metric", metric)]),
+        Some(l) => tr.t_args(
+            "leaderboard-sort-step",
+            &[
+                ("group", &group),
+                ("metric", metric),
+                ("step", &l.to_string()),
+            ],
+        ),
+    }
 }
 
 struct RowText {
@@ -406,6 +430,7 @@ struct SortPair {
 #[derive(Template)]
 #[template(path = "leaderboard.html")]
 struct LeaderboardPage {
+    tr: Tr,
     dataset: String,
     metric_version: u32,
     step_lengths: Vec<u8>,
@@ -432,7 +457,7 @@ struct LeaderboardPage {
 }
 
 impl LeaderboardPage {
-    fn new(board: &Board, request: &BoardRequest) -> LeaderboardPage {
+    fn new(tr: Tr, board: &Board, request: &BoardRequest) -> LeaderboardPage {
         let name = &board.dataset.name;
         let path = format!("/leaderboard/{name}");
         let query = &request.query;
@@ -462,11 +487,11 @@ impl LeaderboardPage {
         let (prev, next) = neighbours(request, &path, &page);
         let filter = match (&query.model, &query.account) {
             (None, None) => None,
-            (m, a) => Some(format!(
-                "Only{}{}",
-                m.as_ref().map_or(String::new(), |m| format!(" model {m}")),
-                a.as_ref()
-                    .map_or(String::new(), |a| format!(" of account {a}"))
+            (Some(m), None) => Some(tr.t_s("leaderboard-only-model", "model", m)),
+            (None, Some(a)) => Some(tr.t_s("leaderboard-only-account", "account", a)),
+            (Some(m), Some(a)) => Some(tr.t_args(
+                "leaderboard-only-model-of-account",
+                &[("model", m), ("account", a)],
             )),
         };
         LeaderboardPage {
@@ -476,11 +501,11 @@ impl LeaderboardPage {
             rows: page
                 .rows
                 .iter()
-                .map(|r| row_text(r, history(&path, r), &drawn_ids))
+                .map(|r| row_text(&tr, r, history(&path, r), &drawn_ids))
                 .collect(),
             chart: AccuracyChart::task_accuracy_by_step_length(&drawn),
             picked: request.chart.is_some(),
-            sort_label: query.sort.label(),
+            sort_label: sort_label(&tr, &query.sort),
             overall: pair(ColumnGroup::Overall, None),
             forward: pair(ColumnGroup::Forward, None),
             inverse: pair(ColumnGroup::Inverse, None),
@@ -503,38 +528,38 @@ impl LeaderboardPage {
             prev,
             next,
             hidden: serde_urlencoded::from_str(&query_string(query)).unwrap_or_default(),
+            tr,
         }
     }
 }
 
-fn row_text(r: &LeaderboardRow, history: Option<String>, drawn: &[i64]) -> RowText {
+fn row_text(tr: &Tr, r: &LeaderboardRow, history: Option<String>, drawn: &[i64]) -> RowText {
     let human = r.source == RowSource::Human;
     RowText {
         human_note: r.human.map(|h| {
             let mut note = format!(
-                "{} of {} items, {} annotator{}, {} answer{}",
-                h.items,
-                h.dataset_items,
-                h.annotators,
-                if h.annotators == 1 { "" } else { "s" },
-                h.answers,
-                if h.answers == 1 { "" } else { "s" }
+                "{}, {}, {}",
+                tr.t_nn(
+                    "leaderboard-human-items",
+                    "items",
+                    h.items,
+                    "total",
+                    h.dataset_items
+                ),
+                tr.t_n("leaderboard-human-annotators", "count", h.annotators),
+                tr.t_n("leaderboard-human-answers", "count", h.answers),
             );
             if h.gold_items > 0 {
-                note.push_str(&format!(
-                    "; answers on the {} gold item{} left out",
-                    h.gold_items,
-                    if h.gold_items == 1 { "" } else { "s" }
-                ));
+                note.push_str(&tr.t_n("leaderboard-human-gold", "count", h.gold_items));
             }
             if h.excluded_annotators > 0 {
-                note.push_str(&format!(
-                    "; {} annotator{} excluded by an admin",
+                note.push_str(&tr.t_n(
+                    "leaderboard-human-excluded",
+                    "count",
                     h.excluded_annotators,
-                    if h.excluded_annotators == 1 { "" } else { "s" }
                 ));
             }
-            note.push_str("; not ranked");
+            note.push_str(&tr.t("leaderboard-human-unranked"));
             note
         }),
         rank: r.rank.map_or_else(|| "–".to_owned(), |k| k.to_string()),
@@ -546,35 +571,33 @@ fn row_text(r: &LeaderboardRow, history: Option<String>, drawn: &[i64]) -> RowTe
         history,
         submission: r.submission,
         drawn: r.submission.is_some_and(|id| drawn.contains(&id)),
-        submitted_on: r
-            .submitted_at
-            .get(..10)
-            .unwrap_or(&r.submitted_at)
-            .to_owned(),
-        overall: cell_text(&r.overall, human),
-        ta_ci: interval_text(r.overall_task_accuracy_ci),
-        pa_ci: interval_text(r.overall_pairwise_accuracy_ci),
-        forward: cell_text(&r.forward.total, human),
-        inverse: cell_text(&r.inverse.total, human),
+        submitted_on: tr.date(&r.submitted_at),
+        overall: cell_text(tr, &r.overall, human),
+        ta_ci: interval_text(tr, r.overall_task_accuracy_ci),
+        pa_ci: interval_text(tr, r.overall_pairwise_accuracy_ci),
+        forward: cell_text(tr, &r.forward.total, human),
+        inverse: cell_text(tr, &r.inverse.total, human),
         forward_steps: r
             .forward
             .per_step
             .iter()
-            .map(|(_, c)| cell_text(c, human))
+            .map(|(_, c)| cell_text(tr, c, human))
             .collect(),
         inverse_steps: r
             .inverse
             .per_step
             .iter()
-            .map(|(_, c)| cell_text(c, human))
+            .map(|(_, c)| cell_text(tr, c, human))
             .collect(),
-        coverage: format!("{:.1}%", r.coverage * 100.0),
-        parse_failures: format!("{:.1}%", r.parse_failure_rate * 100.0),
+        coverage: tr.percent(r.coverage),
+        parse_failures: tr.percent(r.parse_failure_rate),
         outdated: r.metric.outdated.then(|| {
-            format!(
-                "computed with metric version {} (current: {METRIC_VERSION}); not comparable \
-                 with the other rows until an admin rescores it",
-                r.metric.metric_version
+            tr.t_nn(
+                "leaderboard-outdated",
+                "version",
+                r.metric.metric_version,
+                "current",
+                METRIC_VERSION,
             )
         }),
     }
@@ -585,15 +608,18 @@ async fn leaderboard_page(
     Path(name): Path<String>,
     RawQuery(raw): RawQuery,
     headers: HeaderMap,
+    tr: Tr,
 ) -> Result<Response, PageError> {
     let request = BoardRequest::parse(raw.as_deref())?;
     let board = leaderboard::board(&state.hub, &name).await?;
-    let etag = request.etag(&board, "page");
+    // One rendering per language; the switch's return path is the request's own.
+    let kind = format!("page.{}.{}", tr.lang(), tr.here());
+    let etag = request.etag(&board, &kind);
     if matches_etag(&headers, &etag) {
         return Ok(with_etag(&headers, &etag, ()));
     }
-    let html = request.view(&board, "page", || {
-        Ok(LeaderboardPage::new(&board, &request)
+    let html = request.view(&board, &kind, || {
+        Ok(LeaderboardPage::new(tr, &board, &request)
             .render()?
             .into_bytes())
     })?;

@@ -9,7 +9,8 @@
 //! `router()`; they are merged once in [`router`], the admin pages behind one gate
 //! ([`admin_pages`]). The JSON routes are one table instead ([`api_routes`]): the `/api/v1`
 //! router, its authorization and the OpenAPI document (`openapi`) are all built from it.
-//! `extract` holds the extractors whose rejections are the JSON error body.
+//! `extract` holds the extractors whose rejections are the JSON error body; `i18n` the pages'
+//! languages (message catalogues, the request's locale), `locale_switch` the switch.
 
 mod admin;
 mod admin_audit;
@@ -20,12 +21,15 @@ mod api;
 mod archive;
 mod assets;
 mod auth;
+mod cookies;
 pub mod error;
 mod error_analysis;
 mod extract;
 pub mod forwarded;
+pub mod i18n;
 mod leaderboard;
 mod metrics;
+mod locale_switch;
 pub mod openapi;
 mod pages;
 mod quality;
@@ -264,6 +268,7 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(assets::router())
         .merge(openapi::page_router())
         .merge(metrics::router(&state))
+        .merge(locale_switch::router())
         .nest(
             openapi::API_PREFIX,
             openapi::api_router(api_routes(), &state),
@@ -274,6 +279,7 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
             metrics::count_requests,
         ))
         .with_state(state)
+        .layer(axum::middleware::from_fn(error::localize_error_pages))
         .layer(axum::middleware::map_response(move |response| {
             security_headers(policy.clone(), response)
         }))

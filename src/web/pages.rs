@@ -7,9 +7,11 @@ use axum::response::Html;
 use axum::routing::get;
 
 use super::AppState;
+use super::annotate::direction_key;
 use super::api::{ItemQuery, frame_url};
 use super::error::PageError;
 use super::extract::{Path, Query};
+use super::i18n::Tr;
 use crate::app::datasets;
 use crate::app::items::{self, StoredItem};
 use crate::core::dataset::{Direction, StepLength};
@@ -28,7 +30,7 @@ struct CountCell {
 }
 
 struct CountRow {
-    direction: &'static str,
+    direction: String,
     cells: Vec<CountCell>,
     total: i64,
     href: String,
@@ -46,11 +48,12 @@ struct DatasetCard {
 #[derive(Template)]
 #[template(path = "home.html")]
 struct HomePage {
+    tr: Tr,
     datasets: Vec<DatasetCard>,
     step_lengths: Vec<u8>,
 }
 
-async fn home(State(state): State<AppState>) -> Result<Html<String>, PageError> {
+async fn home(State(state): State<AppState>, tr: Tr) -> Result<Html<String>, PageError> {
     let overview = datasets::overview(&state.hub).await?;
     let datasets = overview
         .into_iter()
@@ -59,7 +62,7 @@ async fn home(State(state): State<AppState>) -> Result<Html<String>, PageError> 
             let rows = Direction::ALL
                 .into_iter()
                 .map(|d| CountRow {
-                    direction: d.as_str(),
+                    direction: tr.t(direction_key(d)),
                     cells: StepLength::all()
                         .map(|l| CountCell {
                             count: o.items.get(d, l),
@@ -84,6 +87,7 @@ async fn home(State(state): State<AppState>) -> Result<Html<String>, PageError> 
         })
         .collect();
     let page = HomePage {
+        tr,
         datasets,
         step_lengths: StepLength::all().map(StepLength::get).collect(),
     };
@@ -92,7 +96,7 @@ async fn home(State(state): State<AppState>) -> Result<Html<String>, PageError> 
 
 struct ItemRow {
     id: String,
-    direction: &'static str,
+    direction: String,
     step_length: u8,
     task_name: String,
     href: String,
@@ -100,12 +104,15 @@ struct ItemRow {
 
 struct Choice {
     value: String,
+    /// What the option shows (the value unless it is translated).
+    label: String,
     selected: bool,
 }
 
 #[derive(Template)]
 #[template(path = "dataset.html")]
 struct BrowsePage {
+    tr: Tr,
     dataset: String,
     items: Vec<ItemRow>,
     total: i64,
@@ -122,6 +129,7 @@ async fn browse(
     State(state): State<AppState>,
     Path(name): Path<String>,
     Query(query): Query<ItemQuery>,
+    tr: Tr,
 ) -> Result<Html<String>, PageError> {
     let selection = query.selection()?;
     let (items, total) = selection.fetch(&state, &name).await?;
@@ -132,12 +140,13 @@ async fn browse(
     let page_href = |page: u32| format!("/datasets/{name}?{}", selection.query_string(page));
     let shown_to = i64::from(offset) + items.len() as i64;
     let page = BrowsePage {
+        tr: tr.clone(),
         items: items
             .into_iter()
             .map(|i| ItemRow {
                 href: format!("/datasets/{name}/items/{}", i.item_id),
                 id: i.item_id,
-                direction: i.direction.as_str(),
+                direction: tr.t(direction_key(i.direction)),
                 step_length: i.step_length.get(),
                 task_name: i.task_name,
             })
@@ -152,12 +161,14 @@ async fn browse(
         directions: Direction::ALL
             .into_iter()
             .map(|d| Choice {
+                label: tr.t(direction_key(d)),
                 value: d.as_str().to_owned(),
                 selected: filter.direction == Some(d),
             })
             .collect(),
         step_lengths: StepLength::all()
             .map(|l| Choice {
+                label: l.to_string(),
                 value: l.to_string(),
                 selected: filter.step_length == Some(l),
             })
@@ -166,6 +177,7 @@ async fn browse(
             .into_iter()
             .map(|t| Choice {
                 selected: filter.task.as_deref() == Some(t.as_str()),
+                label: t.clone(),
                 value: t,
             })
             .collect(),
@@ -189,6 +201,8 @@ struct ActionLine {
 #[derive(Template)]
 #[template(path = "item.html")]
 struct ItemPage {
+    tr: Tr,
+    direction_name: String,
     dataset: String,
     id: String,
     item_type: String,
@@ -204,9 +218,12 @@ struct ItemPage {
 async fn item(
     State(state): State<AppState>,
     Path((name, item_id)): Path<(String, String)>,
+    tr: Tr,
 ) -> Result<Html<String>, PageError> {
     let item = StoredItem::clone(&*items::get(&state.hub, &name, &item_id).await?);
     let page = ItemPage {
+        direction_name: tr.t(direction_key(item.summary.direction)),
+        tr,
         dataset_href: format!(
             "/datasets/{name}?direction={}&step_length={}",
             item.summary.direction, item.summary.step_length

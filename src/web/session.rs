@@ -22,12 +22,14 @@ use axum::body::Bytes;
 use axum::extract::{ConnectInfo, FromRequest, FromRequestParts, Path, Request, State};
 use axum::http::request::Parts;
 use axum::http::{HeaderMap, HeaderValue, Method, header};
-use axum::response::{Html, IntoResponse, Redirect, Response};
+use axum::response::{AppendHeaders, Html, IntoResponse, Redirect, Response};
 use axum::routing::{get, post};
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
+use super::cookies::cookie;
 use super::error::PageError;
+use super::i18n::{Locale, Tr, locale_cookie};
 use super::{AppError, AppState};
 use crate::app::annotators::{self, SESSION_LIFETIME, now_ms};
 use crate::app::cache::BoundedCache;
@@ -180,18 +182,6 @@ impl SessionCache {
             }
         }
     }
-}
-
-/// The value of cookie `name` in the request's `Cookie` headers.
-pub fn cookie(headers: &HeaderMap, name: &str) -> Option<String> {
-    headers
-        .get_all(header::COOKIE)
-        .iter()
-        .filter_map(|v| v.to_str().ok())
-        .flat_map(|v| v.split(';'))
-        .filter_map(|pair| pair.trim().split_once('='))
-        .find(|(k, _)| *k == name)
-        .map(|(_, v)| v.to_owned())
 }
 
 /// Whether the client reached us over TLS, as a TLS-terminating proxy reports it.
@@ -394,6 +384,7 @@ impl<T: DeserializeOwned + Send> FromRequest<AppState> for Protected<T> {
 #[derive(Template)]
 #[template(path = "login.html")]
 struct LoginPage {
+    tr: Tr,
     csrf: String,
     name: String,
     error: Option<String>,
@@ -401,6 +392,7 @@ struct LoginPage {
 
 /// A login-form page with a fresh double-submit token in a cookie and in the form.
 fn login_form(
+    tr: Tr,
     headers: &HeaderMap,
     status: axum::http::StatusCode,
     name: String,
@@ -408,6 +400,7 @@ fn login_form(
 ) -> Result<Response, PageError> {
     let csrf = random_token();
     let page = LoginPage {
+        tr,
         csrf: csrf.clone(),
         name,
         error,
@@ -416,8 +409,14 @@ fn login_form(
     Ok((status, [(header::SET_COOKIE, cookie)], Html(page.render()?)).into_response())
 }
 
-async fn login_page(headers: HeaderMap) -> Result<Response, PageError> {
-    login_form(&headers, axum::http::StatusCode::OK, String::new(), None)
+async fn login_page(tr: Tr, headers: HeaderMap) -> Result<Response, PageError> {
+    login_form(
+        tr,
+        &headers,
+        axum::http::StatusCode::OK,
+        String::new(),
+        None,
+    )
 }
 
 #[derive(Deserialize)]
@@ -444,45 +443,53 @@ async fn start_session(
 ) -> Result<Response, AppError> {
     let token = annotators::start_session(&state.hub, annotator).await?;
     let cookie = set_cookie(headers, SESSION_COOKIE, &token, SESSION_LIFETIME);
-    Ok(([(header::SET_COOKIE, cookie)], Redirect::to(to)).into_response())
+    let mut cookies = vec![(header::SET_COOKIE, cookie)];
+    // The annotator's saved language follows them to this browser.
+    let saved = annotators::saved_locale(&state.hub, annotator).await?;
+    if let Some(locale) = saved.as_deref().and_then(Locale::from_tag) {
+        cookies.push((header::SET_COOKIE, locale_cookie(locale)));
+    }
+    Ok((AppendHeaders(cookies), Redirect::to(to)).into_response())
 }
 
 async fn login(
     State(state): State<AppState>,
     ClientAddress(address): ClientAddress,
+    tr: Tr,
     headers: HeaderMap,
     axum::Form(form): axum::Form<LoginForm>,
 ) -> Result<Response, PageError> {
     use axum::http::StatusCode;
     if !login_csrf_ok(&headers, &form.csrf) {
-        return login_form(
-            &headers,
-            StatusCode::FORBIDDEN,
-            form.name,
-            Some("the login form expired or lacks its CSRF token: please try again".to_owned()),
-        );
+        let error = tr.t("login-error-expired");
+        return login_form(tr, &headers, StatusCode::FORBIDDEN, form.name, Some(error));
     }
     let name = form.name.trim().to_owned();
     if name.is_empty() || form.password.is_empty() {
-        return login_form(
-            &headers,
-            StatusCode::BAD_REQUEST,
-            name,
-            Some("give your name and your password".to_owned()),
-        );
+        let error = tr.t("login-error-missing");
+        return login_form(tr, &headers, StatusCode::BAD_REQUEST, name, Some(error));
     }
     if let Err(e) = state.logins.check(&name, address) {
-        return login_form(&headers, e.status(), name, Some(e.to_string()));
+        let error = match &e {
+            AppError::LimitReached {
+                retry_after: Some(seconds),
+                ..
+            } => tr.t_ns(
+                "login-error-limited",
+                "minutes",
+                seconds.div_ceil(60).max(1),
+                "detail",
+                e.to_string(),
+            ),
+            _ => e.to_string(),
+        };
+        return login_form(tr, &headers, e.status(), name, Some(error));
     }
     let matched = annotators::check_password(&state.hub, &name, &form.password).await?;
     let Some(annotator) = matched else {
         state.logins.record_failure(&name, address);
-        return login_form(
-            &headers,
-            StatusCode::UNAUTHORIZED,
-            name,
-            Some("unknown name or wrong password".to_owned()),
-        );
+        let error = tr.t("login-error-wrong");
+        return login_form(tr, &headers, StatusCode::UNAUTHORIZED, name, Some(error));
     };
     state.logins.record_success(&name);
     Ok(start_session(&state, &headers, annotator, "/annotate").await?)
@@ -518,6 +525,7 @@ async fn logout(
 #[derive(Template)]
 #[template(path = "invite.html")]
 struct InvitePage {
+    tr: Tr,
     csrf: String,
     name: String,
     token: String,
@@ -526,6 +534,7 @@ struct InvitePage {
 }
 
 async fn invite_form(
+    tr: Tr,
     state: &AppState,
     headers: &HeaderMap,
     token: String,
@@ -535,6 +544,7 @@ async fn invite_form(
     let annotator = annotators::invited(&state.hub, &token).await?;
     let csrf = random_token();
     let page = InvitePage {
+        tr,
         csrf: csrf.clone(),
         name: annotator.name,
         token,
@@ -547,10 +557,19 @@ async fn invite_form(
 
 async fn invite_page(
     State(state): State<AppState>,
+    tr: Tr,
     headers: HeaderMap,
     Path(token): Path<String>,
 ) -> Result<Response, PageError> {
-    invite_form(&state, &headers, token, axum::http::StatusCode::OK, None).await
+    invite_form(
+        tr,
+        &state,
+        &headers,
+        token,
+        axum::http::StatusCode::OK,
+        None,
+    )
+    .await
 }
 
 #[derive(Deserialize)]
@@ -565,14 +584,16 @@ struct InviteForm {
 
 async fn accept_invite(
     State(state): State<AppState>,
+    tr: Tr,
     headers: HeaderMap,
     Path(token): Path<String>,
     axum::Form(form): axum::Form<InviteForm>,
 ) -> Result<Response, PageError> {
     use axum::http::StatusCode;
     if !login_csrf_ok(&headers, &form.csrf) {
-        let message = "the form expired or lacks its CSRF token: please try again".to_owned();
+        let message = tr.t("login-error-expired");
         return invite_form(
+            tr,
             &state,
             &headers,
             token,
@@ -586,6 +607,7 @@ async fn accept_invite(
         // A password the rules refuse: the form again, saying why.
         Err(AppError::Invalid(message)) => {
             invite_form(
+                tr,
                 &state,
                 &headers,
                 token,

@@ -16,6 +16,7 @@ use serde_json::json;
 use super::agreement::fixed;
 use super::error::PageError;
 use super::extract::{Json, Path, Query};
+use super::i18n::Tr;
 use super::openapi::{ApiRoute, Verb};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
@@ -342,11 +343,13 @@ async fn study_report(
 #[derive(Template)]
 #[template(path = "studies.html")]
 struct StudiesPage {
+    tr: Tr,
     studies: Vec<StudyView>,
 }
 
-async fn studies_page(State(state): State<AppState>) -> Result<Html<String>, PageError> {
+async fn studies_page(State(state): State<AppState>, tr: Tr) -> Result<Html<String>, PageError> {
     let page = StudiesPage {
+        tr,
         studies: studies::list(&state.hub).await?,
     };
     Ok(Html(page.render()?))
@@ -429,6 +432,7 @@ struct ReportView {
 #[derive(Template)]
 #[template(path = "study.html")]
 struct StudyPage {
+    tr: Tr,
     study: StudyView,
     models: Vec<String>,
     /// The picker's current value: `human`, `model:NAME`, or empty.
@@ -450,6 +454,7 @@ async fn study_page(
     State(state): State<AppState>,
     Path(name): Path<String>,
     Query(query): Query<PageQuery>,
+    tr: Tr,
 ) -> Result<Html<String>, PageError> {
     let models = studies::models(&state.hub, &name).await?;
     let chosen = query.row.clone().unwrap_or_default();
@@ -523,6 +528,7 @@ async fn study_page(
         view
     });
     let page = StudyPage {
+        tr,
         study,
         models,
         chosen,

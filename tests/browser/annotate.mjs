@@ -5,23 +5,10 @@
 import { mkdirSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
-import { openPage } from "./chromium.mjs";
+import { check, openPage, tabTo } from "./chromium.mjs";
 
 const params = JSON.parse(process.argv[2]);
 const { base, mode } = params;
-
-function check(condition, message) {
-  if (!condition) throw new Error(message);
-}
-
-// Presses Tab until the focused element matches `selector`: keyboard only, no clicks.
-async function tabTo(page, selector) {
-  for (let i = 0; i < 200; i++) {
-    if (await page.evaluate((s) => document.activeElement?.matches(s) ?? false, selector)) return;
-    await page.keyboard.press("Tab");
-  }
-  throw new Error(`Tab never reached ${selector}`);
-}
 
 async function waitSaved(page) {
   await page.waitForFunction(() => document.getElementById("save-status")?.textContent === "Saved");
@@ -75,7 +62,7 @@ async function e2e(page) {
   // Forward L = 3 by drag-and-drop.
   await Promise.all([page.waitForURL(`${base}/annotate/mini/${params.forward}`), page.click("#continue")]);
   check((await page.$$(".slot")).length === 2, "forward L=3 has two slots");
-  check(await page.isVisible("figure.current img[alt='Current State']"), "current state is shown");
+  check(await page.isVisible("figure.current img[alt$='(Current State)']"), "current state is shown");
   await page.dragAndDrop('.card[data-label="2"]', '.slot[data-slot="1"]');
   await waitSaved(page);
   // The inspector shows the slot's image large, beside the state before it.

@@ -17,7 +17,8 @@ const FLAGS = [
   "--disable-sync",
 ];
 
-/// Launches Chromium (`params.chromium`, else /usr/bin/chromium) and opens one page.
+/// Launches Chromium (`params.chromium`, else /usr/bin/chromium) and opens one page; with
+/// `params.locale` the browser asks for that language (Accept-Language, navigator.language).
 export async function openPage(params, timeout = 15000) {
   const userDataDir = mkdtempSync(join(tmpdir(), "enact-hub-chromium-"));
   const context = await chromium.launchPersistentContext(userDataDir, {
@@ -25,6 +26,7 @@ export async function openPage(params, timeout = 15000) {
     headless: true,
     args: FLAGS,
     viewport: { width: 1280, height: 800 },
+    ...(params.locale ? { locale: params.locale } : {}),
   });
   const page = context.pages()[0] || (await context.newPage());
   page.setDefaultTimeout(timeout);
@@ -32,4 +34,18 @@ export async function openPage(params, timeout = 15000) {
   page.on("console", (m) => m.type() === "error" && consoleErrors.push(`${page.url()}: ${m.text()}`));
   page.on("pageerror", (e) => consoleErrors.push(`${page.url()}: ${e.message}`));
   return { context, page, consoleErrors };
+}
+
+/// Throws `message` unless `condition` holds.
+export function check(condition, message) {
+  if (!condition) throw new Error(message);
+}
+
+/// Presses Tab until the focused element matches `selector`: keyboard only, no clicks.
+export async function tabTo(page, selector, presses = 300) {
+  for (let i = 0; i < presses; i++) {
+    if (await page.evaluate((s) => document.activeElement?.matches(s) ?? false, selector)) return;
+    await page.keyboard.press("Tab");
+  }
+  throw new Error(`Tab never reached ${selector}`);
 }

@@ -4,22 +4,10 @@
 // argument. Prints one JSON line of findings; on failure saves a screenshot and exits 1.
 import { tmpdir } from "node:os";
 import { join } from "node:path";
-import { openPage } from "./chromium.mjs";
+import { check, openPage, tabTo } from "./chromium.mjs";
 
 const params = JSON.parse(process.argv[2]);
 const base = new URL(params.link).origin;
-
-function check(condition, message) {
-  if (!condition) throw new Error(message);
-}
-
-async function tabTo(page, selector) {
-  for (let i = 0; i < 300; i++) {
-    if (await page.evaluate((s) => document.activeElement?.matches(s) ?? false, selector)) return;
-    await page.keyboard.press("Tab");
-  }
-  throw new Error(`Tab never reached ${selector}`);
-}
 
 async function waitSaved(page) {
   await page.waitForFunction(() => document.getElementById("save-status")?.textContent === "Saved");

@@ -359,6 +359,9 @@ async fn callers_without_the_right_are_refused_before_any_body_is_read() {
 enum Page {
     /// Anyone.
     Public,
+    /// A form anyone may post without a session or CSRF token (the language switch): a bad
+    /// form is 400, never 401 or 403.
+    PublicForm,
     /// Anyone, with a secret in the path (a bogus one is 404 for everyone).
     Link,
     /// A public form guarded by its own CSRF cookie (login, invite): refused without it (or,
@@ -390,6 +393,7 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("GET", "/favicon.ico", Page::Public),
     ("GET", "/login", Page::Public),
     ("POST", "/login", Page::Form),
+    ("POST", "/locale", Page::PublicForm),
     ("GET", "/invite/{token}", Page::Link),
     ("POST", "/invite/{token}", Page::Form),
     ("GET", "/login/link/{token}", Page::Link),
@@ -548,6 +552,7 @@ async fn every_page_route_answers_every_caller_as_the_matrix_says() {
                 (Page::Scraper, "admin token") => assert_eq!(status, 200, "{what}"),
                 (Page::Scraper, "submitter token") => assert_eq!(status, 403, "{what}"),
                 (Page::Scraper, _) => assert_eq!(status, 401, "{what}"),
+                (Page::PublicForm, _) => assert!(status != 401 && status != 403, "{what}"),
                 (Page::Link, _) => assert_eq!(status, 404, "{what}"),
                 // Refused: the form's own CSRF is missing (403), or the invite is unknown (404).
                 (Page::Form, _) => assert!(status == 403 || status == 404, "{what}"),
@@ -591,7 +596,7 @@ async fn page_callers_without_the_right_are_refused_before_any_form_is_read() {
             Page::Session => &[("anonymous", 401)],
             Page::Admin => &[("anonymous", 401), ("annotator", 403)],
             Page::Scraper => &[("anonymous", 401), ("annotator", 401)],
-            Page::Public | Page::Link | Page::Form => continue,
+            Page::Public | Page::PublicForm | Page::Link | Page::Form => continue,
         };
         let path = pattern
             .replace("{dataset}", "%ZZnot-stored")

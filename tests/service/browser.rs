@@ -436,3 +436,144 @@ async fn a_gold_item_renders_in_chromium_exactly_like_any_other_item_apart_from_
     }
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_annotator_reading_chinese_finishes_both_directions_by_keyboard() {
+    if !browser_available() {
+        return;
+    }
+    let (server, records) = spawn_app_with_release().await;
+    let id = |i: usize| records[i]["id"].as_str().expect("id").to_owned();
+    // write_release: forward then inverse for each L; 0 = forward 3, 1 = inverse 3.
+    let (forward, inverse) = (id(0), id(1));
+    let token = new_token();
+    let annotator = {
+        let mut conn = server.pool.acquire().await.expect("conn");
+        store::annotations::create_annotator(&mut conn, "li", false, &token_hash(&token))
+            .await
+            .expect("insert")
+    };
+    assign(&server, annotator, &[&forward, &inverse]).await;
+    let params = json!({
+        "base": server.url(""),
+        "invite": format!("/invite/{token}"),
+        "forward": forward,
+        "inverse": inverse,
+        "forward_slots": 2,
+        "inverse_slots": 2,
+        "chromium": CHROMIUM,
+        "failure_dir": env!("CARGO_TARGET_TMPDIR"),
+    });
+    let found = run_node("locale.mjs", params).await;
+    // What the live region said, as the accessibility tree holds it, after each move.
+    let announced = |k: &str| -> Vec<String> {
+        found[k]
+            .as_array()
+            .expect("announcements")
+            .iter()
+            .map(|v| v.as_str().expect("text").to_owned())
+            .collect()
+    };
+    let forward_said = announced("forward_announced");
+    assert!(
+        forward_said[0].contains("Next State 1 已放入槽位 1。"),
+        "{forward_said:?}"
+    );
+    let inverse_said = announced("inverse_announced");
+    assert!(
+        inverse_said[1].contains("Action 2 已放入槽位 2。"),
+        "{inverse_said:?}"
+    );
+    assert_eq!(found["console_errors"], 0);
+    // Both answers are stored, as placed.
+    let answered: i64 = db!(
+        server.pool,
+        fetch_one,
+        sqlx::query_scalar(
+            "SELECT COUNT(*) FROM annotations WHERE annotator = $1 AND answer IS NOT NULL"
+        )
+        .bind(annotator)
+    )
+    .expect("count");
+    assert_eq!(answered, 2);
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn axe_finds_no_wcag_violation_on_the_pages_in_either_language() {
+    if !browser_available() {
+        return;
+    }
+    assert!(
+        browser_dir().join("node_modules/axe-core").is_dir(),
+        "tests/browser/node_modules/axe-core is missing: run `npm ci` in tests/browser \
+         (scripts/test.sh does)"
+    );
+    let (server, records) = spawn_app_with_release().await;
+    let id = |i: usize| records[i]["id"].as_str().expect("id").to_owned();
+    // One annotator per language: an invite works once.
+    let mut invites = Vec::new();
+    for name in ["ana", "bo"] {
+        let token = new_token();
+        let annotator = {
+            let mut conn = server.pool.acquire().await.expect("conn");
+            store::annotations::create_annotator(&mut conn, name, false, &token_hash(&token))
+                .await
+                .expect("insert")
+        };
+        assign(&server, annotator, &[&id(0), &id(1)]).await;
+        invites.push(format!("/invite/{token}"));
+    }
+    // Rows on the leaderboard and in the error analysis: a perfect model and a wrong one.
+    let (_, submitter) = api_token(
+        &server.pool,
+        "lab",
+        enact_hub::core::credentials::Role::Submitter,
+        None,
+        None,
+    )
+    .await;
+    let mut submissions = Vec::new();
+    for (model, wrong) in [("exact", vec![]), ("reversed", vec![0, 1, 2, 3])] {
+        let body = answers(&records, &wrong);
+        let reply = submit_to(&server, "mini", &format!("model={model}"), &submitter, body).await;
+        assert_eq!(reply.status, 201, "{}", reply.text);
+        submissions.push(reply.id());
+    }
+    let pages = [
+        "/".to_owned(),
+        "/datasets/mini".to_owned(),
+        format!("/datasets/mini/items/{}", id(0)),
+        format!("/datasets/mini/items/{}", id(1)),
+        "/leaderboard/mini".to_owned(),
+        "/leaderboard/mini/errors".to_owned(),
+        format!("/leaderboard/mini/errors/{}", submissions[1]),
+        "/studies".to_owned(),
+        "/annotate".to_owned(),
+        format!("/annotate/mini/{}", id(0)),
+        format!("/annotate/mini/{}", id(1)),
+        "/login".to_owned(),
+        "/datasets/no-such-dataset".to_owned(),
+    ];
+    let params = json!({
+        "base": server.url(""),
+        "invites": invites,
+        "pages": pages,
+        "locales": ["en-US", "zh-CN"],
+        "chromium": CHROMIUM,
+    });
+    let found = run_node("axe.mjs", params).await;
+    assert_eq!(found["checked"], 2 * (pages.len() + 1), "{found}");
+    let violations = found["violations"].as_array().expect("violations");
+    assert!(
+        violations.is_empty(),
+        "axe-core found {} violations:\n{}",
+        violations.len(),
+        violations
+            .iter()
+            .map(Value::to_string)
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+    server.stop().await;
+}

@@ -22,6 +22,7 @@ mod fixtures;
 mod frames;
 mod helpers;
 mod hostile;
+mod i18n;
 mod import;
 mod instances;
 mod jobs;

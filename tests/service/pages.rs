@@ -23,7 +23,7 @@ async fn home_lists_datasets_with_counts_and_links() {
         html.contains("href=\"/datasets/mini?direction=inverse&#38;step_length=4\""),
         "{html}"
     );
-    assert!(html.contains("4 items from 1 tasks"));
+    assert!(html.contains("4 items from 1 task ·"));
     server.stop().await;
 }
 
@@ -64,10 +64,10 @@ async fn item_page_shows_images_in_order_actions_and_question() {
         .await
         .expect("body");
     let positions: Vec<usize> = [
-        "alt=\"Current State\"",
-        "alt=\"Next State 1\"",
-        "alt=\"Next State 2\"",
-        "alt=\"Next State 3\"",
+        "alt=\"Image at position 1 of the item (Current State)\"",
+        "alt=\"Image at position 2 of the item (Next State 1)\"",
+        "alt=\"Image at position 3 of the item (Next State 2)\"",
+        "alt=\"Image at position 4 of the item (Next State 3)\"",
     ]
     .iter()
     .map(|needle| {

@@ -1,0 +1,352 @@
+# enact-hub pages, English (the reference locale: every other locale has each of these keys).
+# How to add a locale: README.md, "Languages of the pages".
+
+## The frame of every page
+nav-label = Site
+nav-datasets = Datasets
+nav-studies = Studies
+nav-annotate = Annotate
+footer = enact-hub · evaluation for the ENACT embodied world-modeling benchmark
+
+## Error pages: the status, what it means, the use case's own message (in English)
+error-detail = Details (as the hub reports them, in English):
+error-back = Back to the datasets
+error-reason-400 = Bad Request
+error-explain-400 = The request was not understood: something in it is missing or malformed.
+error-reason-401 = Unauthorized
+error-explain-401 = You are not logged in, or your session has expired.
+error-reason-403 = Forbidden
+error-explain-403 = You are not allowed to do this.
+error-reason-404 = Not Found
+error-explain-404 = There is nothing here: the page, dataset or item does not exist.
+error-reason-409 = Conflict
+error-explain-409 = This conflicts with what is already stored.
+error-reason-413 = Payload Too Large
+error-explain-413 = What was sent is larger than this hub accepts.
+error-reason-415 = Unsupported Media Type
+error-explain-415 = What was sent is not in a format this hub reads.
+error-reason-422 = Unprocessable Entity
+error-explain-422 = What was sent was read, but some of it is not valid.
+error-reason-429 = Too Many Requests
+error-explain-429 = Too many attempts: please wait a little and try again.
+error-reason-500 = Internal Server Error
+error-explain-500 = Something went wrong on the hub's side. It has been logged.
+error-reason-503 = Service Unavailable
+error-explain-503 = The hub cannot do this right now: please try again later.
+
+## Logging in
+login-title = Log in
+login-heading = Log in to annotate
+login-name = Name
+login-password = Password
+login-submit = Log in
+login-no-account = No account yet? An admin creates one and sends you a single-use invite link.
+login-error-expired = the login form expired or lacks its CSRF token: please try again
+login-error-missing = give your name and your password
+login-error-wrong = unknown name or wrong password
+# The limiter's own message says whose logins are blocked and for how long.
+login-error-limited = { $detail }
+
+## The annotator's queue
+queue-title = Your queue
+queue-logged-in-as = Logged in as
+queue-admin = Admin
+queue-log-out = Log out
+queue-finished = { $done } of { $total } items finished.
+queue-resume = Resume where you left off
+queue-continue = Continue
+queue-all-done = Every item assigned to you is finished. Thank you!
+queue-empty = No item is assigned to you yet.
+queue-progress-caption = Finished / assigned, by direction and step length (L = number of images)
+
+## Table headings and the benchmark's words
+col-direction = Direction
+col-item = Item
+col-dataset = Dataset
+col-status = Status
+direction-forward = forward
+direction-inverse = inverse
+status-todo = to do
+status-started = in progress
+status-answered = answered
+status-skipped = skipped
+status-flagged = flagged
+
+## The annotation pages (forward and inverse)
+annotate-title-forward = Forward item
+annotate-title-inverse = Inverse item
+annotate-task-forward = Forward world modeling: put the future images in the order the actions produce them
+annotate-task-inverse = Inverse world modeling: give each state transition the action that caused it
+annotate-instructions = Instructions (the question the models get)
+annotate-untranslated = The question is shown exactly as the models get it, in English, and is never translated: it is part of the benchmark.
+annotate-untranslated-actions = The action descriptions are part of the benchmark and are shown exactly as the dataset holds them, untranslated.
+annotate-finished = You have finished this item.
+annotate-next = Continue with the next one
+annotate-answer = Answer
+annotate-steps = Steps: action k leads to image k
+annotate-transitions = State transitions, in order
+annotate-enlarge = Enlarge { $name }
+annotate-alt-current = Current state, where the actions start ({ $name })
+annotate-current-caption = { $name }: where the actions start
+annotate-alt-before = Transition { $index }, state before ({ $name })
+annotate-alt-after = Transition { $index }, state after ({ $name })
+annotate-alt-candidate = Candidate { $name }
+annotate-undo = Undo
+annotate-submit = Submit answer
+annotate-candidate-images = Candidate images
+annotate-candidate-actions = Candidate actions
+annotate-shuffled = (shuffled)
+annotate-keyboard-help = Drag a card onto a slot, or click a card and then a slot. Keyboard: arrow keys move between slots and cards (the inspector follows); on a card press the slot number; Backspace on a slot or a placed card clears it; a card put on a filled slot swaps; Ctrl+Z or the Undo button undoes.
+annotate-inspector = Inspector: the image under focus, large
+annotate-inspector-hint = Point at or focus an image to see it here, large.
+annotate-skip-summary = Skip or flag this item
+annotate-reason = Reason
+annotate-skip = Skip
+annotate-flag = Flag a problem
+annotate-lightbox = Enlarged image
+annotate-close = Close
+
+## What the annotation page's script says (live region, status, labels)
+js-slot-empty = Slot { $slot }: empty
+js-slot-filled = Slot { $slot }: { $name }
+js-card-in-slot = in slot { $slot }
+js-saving = Saving…
+js-saved = Saved
+js-not-saved = Not saved: { $error }
+js-placed = { $name } placed in slot { $slot }.
+js-swapped-moved = { $name } moved to slot { $slot }.
+js-swapped-returned = { $name } returned to the library.
+js-cleared = Slot { $slot } cleared; { $name } returned to the library.
+js-nothing-to-undo = Nothing to undo.
+js-undone = Undone.
+js-card-selected = { $name } selected: choose a slot.
+js-no-such-slot = There is no slot { $key }; slots go from 1 to { $count }.
+js-slot-selected = { $name } selected: choose another slot to move it.
+js-submitted = Answer submitted.
+js-not-submitted = Not submitted: { $error }
+js-before-start = before: { $name }
+js-before-empty = before: slot { $slot } is empty
+js-before-slot = before: slot { $slot }, { $name }
+js-focus-slot-empty = slot { $slot }: empty
+js-focus-slot = slot { $slot }: { $name }
+js-transition-before = transition { $index }, before: { $name }
+js-transition-after = transition { $index }, after: { $name }
+js-not-placed = { $name } (not placed)
+
+## Home page: the datasets
+home-submitting = Submitting a model? See the
+home-api-docs = API documentation.
+home-empty = There is no dataset in this database yet.
+home-import = Import an ENACT release (a folder holding QA/enact_ordering.jsonl and its images):
+home-demo = or start the service on the built-in demo dataset:
+home-items-from-tasks = { $items ->
+    [one] { $items } item
+   *[other] { $items } items
+  } from { $tasks ->
+    [one] { $tasks } task
+   *[other] { $tasks } tasks
+  }
+home-imported = imported { $date }
+home-leaderboard = leaderboard
+home-counts-caption = Items by direction and step length (L = number of images)
+col-all = All
+col-step-length = Step length
+col-task = Task
+
+## A dataset's items
+dataset-download = Download every item as an ENACT release archive (tar)
+dataset-download-what = — QA/enact_ordering.jsonl and the images. Answers are included only if the dataset's answers are public.
+dataset-any = any
+dataset-show = Show
+dataset-no-match = No item matches these filters.
+dataset-shown = Items { $first }–{ $last } of { $total }
+pager-label = pages
+pager-previous = Previous
+pager-next = Next
+
+## One item, read-only
+item-crumb = item
+item-counts = { $images } images, { $actions } actions
+item-type = Type
+item-images = Images
+item-images-forward = (current state, then the future states as shuffled in the item)
+item-images-inverse = (in chronological order)
+item-alt-image = Image at position { $position } of the item ({ $name })
+item-actions = Actions
+item-actions-forward = (in order)
+item-question = Full question text, as given to models
+
+## The leaderboard
+leaderboard-title = Leaderboard: { $dataset }
+leaderboard-heading = Leaderboard:
+leaderboard-policy = Strict policy: every item of the dataset counts; a missing or unreadable answer scores 0.
+leaderboard-metrics = TA = task accuracy, PA = pairwise accuracy, in percent. The interval is a 95% percentile bootstrap over items (1,000 resamples).
+leaderboard-metric-version = Metric version { $version }; a row computed with an older one is marked
+leaderboard-older-metric = older metric
+leaderboard-error-analysis = Error analysis
+leaderboard-empty = No submission has been published for this dataset yet.
+leaderboard-how-to-submit = Submit ENACT model-output JSONL with an API token:
+leaderboard-ranked-by = Ranked by
+leaderboard-ranking-help = (click a column's TA or PA to rank by it); equal values as shown share a rank.
+leaderboard-every-listed = Every published submission is listed.
+leaderboard-one-per-model = One row per model
+leaderboard-latest-listed = One row per account and model: its latest published submission.
+leaderboard-every-submission = Every submission
+leaderboard-all-models = all models
+leaderboard-only-model = Only model { $model }
+leaderboard-only-account = Only account { $account }
+leaderboard-only-model-of-account = Only model { $model } of account { $account }
+leaderboard-caption = Overall, forward and inverse world modeling; per step length L (number of images)
+leaderboard-draw = Draw in the chart
+leaderboard-draw-model = draw { $model } in the chart
+leaderboard-model = Model
+leaderboard-overall = Overall
+leaderboard-forward = Forward world modeling
+leaderboard-inverse = Inverse world modeling
+leaderboard-coverage = Coverage
+leaderboard-parse-failures = Parse failures
+leaderboard-submitted = Submitted
+leaderboard-ta-ci = TA 95% CI
+leaderboard-pa-ci = PA 95% CI
+leaderboard-baseline = baseline
+leaderboard-attempts = { $count ->
+    [one] { $count } attempt
+   *[other] { $count } attempts
+  }
+leaderboard-few-answers = only { $count ->
+    [one] { $count } answer
+   *[other] { $count } answers
+  }: fewer than { $minimum }
+leaderboard-outdated = computed with metric version { $version } (current: { $current }); not comparable with the other rows until an admin rescores it
+leaderboard-human-items = { $items } of { $total } items
+leaderboard-human-annotators = { $count ->
+    [one] { $count } annotator
+   *[other] { $count } annotators
+  }
+leaderboard-human-answers = { $count ->
+    [one] { $count } answer
+   *[other] { $count } answers
+  }
+leaderboard-human-gold = ; answers on { $count ->
+    [one] the { $count } gold item
+   *[other] the { $count } gold items
+  } left out
+leaderboard-human-excluded = ; { $count ->
+    [one] { $count } annotator
+   *[other] { $count } annotators
+  } excluded by an admin
+leaderboard-human-unranked = ; not ranked
+leaderboard-human-note = The Human row is a reference, never ranked among models; a figure marked † rests on fewer than five human answers. Answers on gold items (items with a known answer mixed into annotators' queues to check their work) never count in it, nor do the answers of annotators an admin excluded.
+leaderboard-page-of = page { $page } of { $pages }
+leaderboard-ranked-rows = { $count ->
+    [one] { $count } ranked row
+   *[other] { $count } ranked rows
+  }
+leaderboard-chart-heading = Task accuracy against step length
+leaderboard-chart-checked = The models checked in the table, with the Human row and baselines.
+leaderboard-chart-best = The best ten by { $sort }, with the Human row and baselines.
+leaderboard-chart-draw = Draw the checked models
+leaderboard-chart-label = Task accuracy (%) against step length L, one line per model; forward and inverse panels
+leaderboard-axis-step = Step length L
+leaderboard-axis-ta = TA (%)
+leaderboard-group-overall = overall
+leaderboard-group-forward = forward
+leaderboard-group-inverse = inverse
+leaderboard-sort = { $group } { $metric }
+leaderboard-sort-step = { $group } { $metric } at L={ $step }
+
+## Error analysis
+errors-heading = Error analysis: { $dataset }
+errors-leaderboard = Leaderboard
+errors-explanation = Each answer of the right length is compared step by step with the truth: true and predicted state changes are matched, and the rest classed as in the ENACT paper (polarity inversion, predicate substitution, entity substitution, omission, hallucination) and by what they are about. Hand figures count grasping changes of each gripper; mixing is the share of a hand's true changes given to the other hand.
+errors-empty = No published submission and no human answer yet.
+errors-row = row
+errors-overall = overall
+errors-structural = Structural errors
+errors-semantic = Semantic errors
+errors-hands = Hands
+errors-structural-caption = Share of each row's errors by structural class
+errors-semantic-caption = Share of each row's errors by semantic category
+errors-hands-caption = Left- and right-hand precision, recall and mixing; whiskers are one standard error
+errors-of = Errors of { $row }
+errors-all-rows = All rows of { $dataset }
+errors-row-structural-caption = Share of errors by structural class, forward and inverse
+errors-row-semantic-caption = Share of errors by semantic category, forward and inverse
+errors-row-hands-caption = Left- and right-hand precision, recall and mixing, forward and inverse; whiskers are one standard error
+errors-examples = Examples
+errors-none = No errors to show.
+errors-class = class
+errors-step = step
+errors-true-change = true change
+errors-predicted-change = predicted change
+errors-analysed = analysed
+errors-not-analysed = not analysed
+errors-errors = errors
+errors-structural-share = structural (share of errors)
+errors-semantic-share = semantic (share of errors)
+errors-hands-se = hands (± SE)
+errors-accepted-incomplete = accepted but incomplete
+errors-answers = answers
+errors-steps = steps
+errors-polarity-inversion = Polarity inversion
+errors-predicate-substitution = Predicate substitution
+errors-entity-substitution = Entity substitution
+errors-omission = Omission
+errors-hallucination = Hallucination
+errors-spatial-relations = Spatial relations
+errors-functional-states = Functional states
+errors-material-states = Material states
+errors-agent-interaction = Agent interaction
+errors-hand-left = left
+errors-hand-right = right
+errors-precision = precision
+errors-recall = recall
+errors-mixing = mixing
+
+## Ablation studies
+studies-title = Ablation studies
+studies-explanation = A study asks a baseline dataset's questions again with other images (image realism, camera, robot appearance) and reports, for a model or the Human row, how pairwise accuracy changes on each variant: Δ with the paper's Welch test, and paired tests on the same items.
+studies-empty = No study yet. An admin creates one with enact-hub study create or at
+studies-study = Study
+studies-baseline = Baseline
+studies-variants = Variants
+studies-created = Created
+studies-created-by = created { $date } by { $who }
+study-title = Study: { $name }
+study-items = { $count ->
+    [one] { $count } item
+   *[other] { $count } items
+  }
+study-all = all studies
+study-variants-caption = Variants and how their items align with the baseline's
+study-family = Family
+study-variant = Variant
+study-aligned = Aligned
+study-by-id = by id
+study-by-key-frames = by task, type and key frames
+study-unaligned = unaligned (baseline / variant)
+study-judged-differently = judged differently
+study-not-computed = not computed
+study-judged-warning = { $count } aligned items are judged by other rules than the baseline's (another ground truth or another signature table), so their scores differ for reasons other than the images. Import a variant with the baseline's scene graphs:
+study-compare = Compare
+study-choose = choose a model…
+study-human = Human (annotators)
+study-per-step = per step length
+study-show = Show report
+study-report-heading = { $row } on each variant against the baseline
+study-delta-explained = Δ = mean pairwise accuracy on the variant − on the baseline, over the aligned items. Colour: the band of the two-tailed Welch p-value (the paper's test); darker red is more significant. Downloads:
+study-all-files = all files (tar)
+study-cells-caption = Welch (unpaired, as in the paper) and paired tests per variant and direction
+study-n = n (baseline / variant)
+study-signs = signs (↑ ↓ =)
+study-handedness = Handedness (the paper's panel C.2)
+study-handedness-explained = Left- and right-hand precision, recall and mixing (the share of one hand's true changes given to the other hand), ± standard error, on the baseline and each variant.
+
+## Accepting an invite
+invite-title = Set your password
+invite-welcome = Welcome, { $name }
+invite-choose = Choose a password (at least { $count } characters). This link works once.
+invite-repeat = Repeat it
+invite-submit = Set password and start
+errors-figures-table = Error figures per row
+errors-examples-of = Examples: { $category }

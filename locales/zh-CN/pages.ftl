@@ -1,0 +1,320 @@
+# enact-hub 页面，简体中文。每个键都必须与 locales/en/pages.ftl 一一对应。
+
+## 每个页面的框架
+nav-label = 站点
+nav-datasets = 数据集
+nav-studies = 研究
+nav-annotate = 标注
+footer = enact-hub · ENACT 具身世界建模基准的评测服务
+
+## 错误页面
+error-detail = 详细信息（系统原文，英文）：
+error-back = 返回数据集
+error-reason-400 = 请求有误
+error-explain-400 = 无法理解该请求：其中有内容缺失或格式不正确。
+error-reason-401 = 未登录
+error-explain-401 = 您尚未登录，或会话已过期。
+error-reason-403 = 禁止访问
+error-explain-403 = 您无权执行此操作。
+error-reason-404 = 未找到
+error-explain-404 = 此处没有内容：该页面、数据集或条目不存在。
+error-reason-409 = 冲突
+error-explain-409 = 该操作与已保存的内容冲突。
+error-reason-413 = 内容过大
+error-explain-413 = 发送的内容超出了本服务接受的大小。
+error-reason-415 = 不支持的格式
+error-explain-415 = 发送的内容不是本服务能读取的格式。
+error-reason-422 = 内容无效
+error-explain-422 = 发送的内容已读取，但其中部分内容无效。
+error-reason-429 = 请求过多
+error-explain-429 = 尝试次数过多：请稍候再试。
+error-reason-500 = 服务器内部错误
+error-explain-500 = 服务端出现问题，已记录在日志中。
+error-reason-503 = 服务暂不可用
+error-explain-503 = 本服务暂时无法完成此操作：请稍后再试。
+
+## 登录
+login-title = 登录
+login-heading = 登录以进行标注
+login-name = 用户名
+login-password = 密码
+login-submit = 登录
+login-no-account = 还没有账号？请由管理员创建账号，并向您发送一次性邀请链接。
+login-error-expired = 登录表单已过期或缺少 CSRF 令牌：请重试
+login-error-missing = 请填写用户名和密码
+login-error-wrong = 用户名不存在或密码错误
+login-error-limited = 登录失败次数过多：请在 { $minutes } 分钟后重试
+
+## 标注队列
+queue-title = 我的队列
+queue-logged-in-as = 当前登录：
+queue-admin = 管理
+queue-log-out = 退出登录
+queue-finished = 已完成 { $done } / { $total } 个条目。
+queue-resume = 从上次中断处继续
+queue-continue = 继续
+queue-all-done = 分配给您的条目已全部完成，谢谢！
+queue-empty = 目前还没有分配给您的条目。
+queue-progress-caption = 已完成 / 已分配，按方向和步长统计（L = 图像数量）
+
+## 表头与基准术语
+col-direction = 方向
+col-item = 条目
+col-dataset = 数据集
+col-status = 状态
+direction-forward = 正向
+direction-inverse = 逆向
+status-todo = 待完成
+status-started = 进行中
+status-answered = 已作答
+status-skipped = 已跳过
+status-flagged = 已标记问题
+
+## 标注页面（正向与逆向）
+annotate-title-forward = 正向条目
+annotate-title-inverse = 逆向条目
+annotate-task-forward = 正向世界建模：按动作产生的顺序排列未来图像
+annotate-task-inverse = 逆向世界建模：为每个状态转变选出导致它的动作
+annotate-instructions = 说明（模型收到的题目原文）
+annotate-untranslated = 题目按模型收到的原样以英文显示，不做翻译：它是基准的一部分。
+annotate-untranslated-actions = 动作描述是基准的一部分，按数据集中的原文显示，不做翻译。
+annotate-finished = 您已完成此条目。
+annotate-next = 继续下一个
+annotate-answer = 答案
+annotate-steps = 步骤：第 k 个动作得到第 k 张图像
+annotate-transitions = 状态转变（按顺序）
+annotate-enlarge = 放大 { $name }
+annotate-alt-current = 当前状态，动作由此开始（{ $name }）
+annotate-current-caption = { $name }：动作由此开始
+annotate-alt-before = 第 { $index } 个转变，之前的状态（{ $name }）
+annotate-alt-after = 第 { $index } 个转变，之后的状态（{ $name }）
+annotate-alt-candidate = 候选 { $name }
+annotate-undo = 撤销
+annotate-submit = 提交答案
+annotate-candidate-images = 候选图像
+annotate-candidate-actions = 候选动作
+annotate-shuffled = （已打乱）
+annotate-keyboard-help = 将卡片拖到槽位上，或先点击卡片再点击槽位。键盘操作：方向键在槽位和卡片之间移动（检视区随之更新）；在卡片上按槽位编号即可放入；在槽位或已放置的卡片上按 Backspace 清除；把卡片放到已占用的槽位会交换位置；Ctrl+Z 或“撤销”按钮可撤销。
+annotate-inspector = 检视区：放大显示当前焦点所在的图像
+annotate-inspector-hint = 将指针移到图像上或让图像获得焦点，即可在此放大查看。
+annotate-skip-summary = 跳过此条目或报告问题
+annotate-reason = 原因
+annotate-skip = 跳过
+annotate-flag = 报告问题
+annotate-lightbox = 放大的图像
+annotate-close = 关闭
+
+## 标注页面脚本的提示（实时播报区、状态、标签）
+js-slot-empty = 槽位 { $slot }：空
+js-slot-filled = 槽位 { $slot }：{ $name }
+js-card-in-slot = 在槽位 { $slot }
+js-saving = 正在保存…
+js-saved = 已保存
+js-not-saved = 未保存：{ $error }
+js-placed = { $name } 已放入槽位 { $slot }。
+js-swapped-moved = { $name } 已移到槽位 { $slot }。
+js-swapped-returned = { $name } 已放回候选区。
+js-cleared = 槽位 { $slot } 已清空；{ $name } 已放回候选区。
+js-nothing-to-undo = 没有可撤销的操作。
+js-undone = 已撤销。
+js-card-selected = 已选中 { $name }：请选择槽位。
+js-no-such-slot = 没有槽位 { $key }；槽位编号为 1 到 { $count }。
+js-slot-selected = 已选中 { $name }：请选择另一个槽位以移动它。
+js-submitted = 答案已提交。
+js-not-submitted = 未提交：{ $error }
+js-before-start = 之前：{ $name }
+js-before-empty = 之前：槽位 { $slot } 为空
+js-before-slot = 之前：槽位 { $slot }，{ $name }
+js-focus-slot-empty = 槽位 { $slot }：空
+js-focus-slot = 槽位 { $slot }：{ $name }
+js-transition-before = 第 { $index } 个转变，之前：{ $name }
+js-transition-after = 第 { $index } 个转变，之后：{ $name }
+js-not-placed = { $name }（未放置）
+
+## 首页：数据集
+home-submitting = 要提交模型结果？请参阅
+home-api-docs = API 文档。
+home-empty = 此数据库中还没有数据集。
+home-import = 导入一个 ENACT 发布版本（包含 QA/enact_ordering.jsonl 及其图像的文件夹）：
+home-demo = 或者使用内置的演示数据集启动服务：
+home-items-from-tasks = { $items } 个条目，来自 { $tasks } 个任务
+home-imported = 导入于 { $date }
+home-leaderboard = 排行榜
+home-counts-caption = 按方向和步长统计的条目数（L = 图像数量）
+col-all = 全部
+col-step-length = 步长
+col-task = 任务
+
+## 数据集的条目
+dataset-download = 以 ENACT 发布归档（tar）下载全部条目
+dataset-download-what = — 包括 QA/enact_ordering.jsonl 和图像。仅当该数据集的答案公开时才包含答案。
+dataset-any = 任意
+dataset-show = 显示
+dataset-no-match = 没有符合这些筛选条件的条目。
+dataset-shown = 第 { $first }–{ $last } 项，共 { $total } 项
+pager-label = 分页
+pager-previous = 上一页
+pager-next = 下一页
+
+## 单个条目（只读）
+item-crumb = 条目
+item-counts = { $images } 张图像，{ $actions } 个动作
+item-type = 类型
+item-images = 图像
+item-images-forward = （先是当前状态，然后是条目中打乱顺序的未来状态）
+item-images-inverse = （按时间顺序）
+item-alt-image = 条目中位置 { $position } 的图像（{ $name }）
+item-actions = 动作
+item-actions-forward = （按顺序）
+item-question = 完整题目文本（与模型收到的相同）
+
+## 排行榜
+leaderboard-title = 排行榜：{ $dataset }
+leaderboard-heading = 排行榜：
+leaderboard-policy = 严格计分：数据集中的每个条目都计入；缺失或无法读取的答案记 0 分。
+leaderboard-metrics = TA = 任务准确率，PA = 成对准确率，单位为百分比。区间为对条目做 95% 百分位自助法（1,000 次重采样）得到的置信区间。
+leaderboard-metric-version = 指标版本 { $version }；用旧版本计算的行会被标记为
+leaderboard-older-metric = 旧版指标
+leaderboard-error-analysis = 错误分析
+leaderboard-empty = 该数据集还没有已发布的提交。
+leaderboard-how-to-submit = 使用 API 令牌提交 ENACT 模型输出 JSONL：
+leaderboard-ranked-by = 排序依据：
+leaderboard-ranking-help = （点击某列的 TA 或 PA 可按该列排序）；显示值相同者名次相同。
+leaderboard-every-listed = 列出了所有已发布的提交。
+leaderboard-one-per-model = 每个模型一行
+leaderboard-latest-listed = 每个账号和模型一行：显示其最新发布的提交。
+leaderboard-every-submission = 全部提交
+leaderboard-all-models = 全部模型
+leaderboard-only-model = 仅模型 { $model }
+leaderboard-only-account = 仅账号 { $account }
+leaderboard-only-model-of-account = 仅账号 { $account } 的模型 { $model }
+leaderboard-caption = 总体、正向和逆向世界建模；按步长 L（图像数量）细分
+leaderboard-draw = 在图表中绘制
+leaderboard-draw-model = 在图表中绘制 { $model }
+leaderboard-model = 模型
+leaderboard-overall = 总体
+leaderboard-forward = 正向世界建模
+leaderboard-inverse = 逆向世界建模
+leaderboard-coverage = 覆盖率
+leaderboard-parse-failures = 解析失败
+leaderboard-submitted = 提交日期
+leaderboard-ta-ci = TA 95% 置信区间
+leaderboard-pa-ci = PA 95% 置信区间
+leaderboard-baseline = 基线
+leaderboard-attempts = { $count } 次尝试
+leaderboard-few-answers = 仅 { $count } 个答案：少于 { $minimum } 个
+leaderboard-outdated = 使用指标版本 { $version } 计算（当前版本：{ $current }）；在管理员重新计分之前，不能与其他行比较
+leaderboard-human-items = { $items } / { $total } 个条目
+leaderboard-human-annotators = { $count } 名标注者
+leaderboard-human-answers = { $count } 个答案
+leaderboard-human-gold = ；{ $count } 个金标条目上的答案不计入
+leaderboard-human-excluded = ；{ $count } 名标注者被管理员排除
+leaderboard-human-unranked = ；不参与排名
+leaderboard-human-note = “人类”行仅作参照，从不与模型一起排名；标有 † 的数值所依据的人类答案少于五个。金标条目（混入标注者队列、答案已知、用于检查其工作的条目）上的答案从不计入此行，被管理员排除的标注者的答案也不计入。
+leaderboard-page-of = 第 { $page } 页，共 { $pages } 页
+leaderboard-ranked-rows = { $count } 个排名行
+leaderboard-chart-heading = 任务准确率随步长的变化
+leaderboard-chart-checked = 表中勾选的模型，以及“人类”行和基线。
+leaderboard-chart-best = 按 { $sort } 排名前十的模型，以及“人类”行和基线。
+leaderboard-chart-draw = 绘制勾选的模型
+leaderboard-chart-label = 任务准确率（%）随步长 L 的变化，每个模型一条线；分为正向和逆向两个面板
+leaderboard-axis-step = 步长 L
+leaderboard-axis-ta = TA（%）
+leaderboard-group-overall = 总体
+leaderboard-group-forward = 正向
+leaderboard-group-inverse = 逆向
+leaderboard-sort = { $group } { $metric }
+leaderboard-sort-step = { $group } { $metric }（L={ $step }）
+
+## 错误分析
+errors-heading = 错误分析：{ $dataset }
+errors-leaderboard = 排行榜
+errors-explanation = 每个长度正确的答案都会与真实答案逐步比较：匹配真实的和预测的状态变化，其余按 ENACT 论文的分类（极性反转、谓词替换、实体替换、遗漏、幻觉）以及所涉及的内容归类。手部数据统计每个夹爪的抓取变化；“混淆”指某只手的真实变化被归给另一只手的比例。
+errors-empty = 还没有已发布的提交，也没有人类答案。
+errors-row = 行
+errors-overall = 总体
+errors-structural = 结构性错误
+errors-semantic = 语义错误
+errors-hands = 手部
+errors-structural-caption = 各行错误按结构类别的占比
+errors-semantic-caption = 各行错误按语义类别的占比
+errors-hands-caption = 左手和右手的精确率、召回率和混淆率；误差线为一个标准误
+errors-of = { $row } 的错误
+errors-all-rows = { $dataset } 的所有行
+errors-row-structural-caption = 错误按结构类别的占比，正向和逆向
+errors-row-semantic-caption = 错误按语义类别的占比，正向和逆向
+errors-row-hands-caption = 左手和右手的精确率、召回率和混淆率，正向和逆向；误差线为一个标准误
+errors-examples = 示例
+errors-none = 没有可显示的错误。
+errors-class = 类别
+errors-step = 步骤
+errors-true-change = 真实变化
+errors-predicted-change = 预测变化
+errors-analysed = 已分析
+errors-not-analysed = 未分析
+errors-errors = 错误数
+errors-structural-share = 结构性（占错误的比例）
+errors-semantic-share = 语义（占错误的比例）
+errors-hands-se = 手部（± 标准误）
+errors-accepted-incomplete = 被接受但不完整
+errors-answers = 答案
+errors-steps = 步骤
+errors-polarity-inversion = 极性反转
+errors-predicate-substitution = 谓词替换
+errors-entity-substitution = 实体替换
+errors-omission = 遗漏
+errors-hallucination = 幻觉
+errors-spatial-relations = 空间关系
+errors-functional-states = 功能状态
+errors-material-states = 材料状态
+errors-agent-interaction = 智能体交互
+errors-hand-left = 左手
+errors-hand-right = 右手
+errors-precision = 精确率
+errors-recall = 召回率
+errors-mixing = 混淆率
+
+## 消融研究
+studies-title = 消融研究
+studies-explanation = 一项研究会用其他图像（图像真实感、相机、机器人外观）重新提出基线数据集的问题，并针对某个模型或“人类”行，报告成对准确率在每个变体上的变化：Δ 及论文中的 Welch 检验，以及在相同条目上的配对检验。
+studies-empty = 还没有研究。管理员可以用 enact-hub study create 创建，或在此页面创建：
+studies-study = 研究
+studies-baseline = 基线
+studies-variants = 变体
+studies-created = 创建
+studies-created-by = 由 { $who } 创建于 { $date }
+study-title = 研究：{ $name }
+study-items = { $count } 个条目
+study-all = 全部研究
+study-variants-caption = 各变体及其条目与基线条目的对齐情况
+study-family = 类别
+study-variant = 变体
+study-aligned = 已对齐
+study-by-id = 按 id
+study-by-key-frames = 按任务、类型和关键帧
+study-unaligned = 未对齐（基线 / 变体）
+study-judged-differently = 判定规则不同
+study-not-computed = 未计算
+study-judged-warning = 有 { $count } 个已对齐条目的判定规则与基线不同（真实答案或签名表不同），因此其得分差异并非仅由图像造成。请使用基线的场景图导入变体：
+study-compare = 比较
+study-choose = 选择模型…
+study-human = 人类（标注者）
+study-per-step = 按步长
+study-show = 显示报告
+study-report-heading = { $row } 在各变体上相对基线的表现
+study-delta-explained = Δ = 在已对齐条目上，变体的平均成对准确率 − 基线的平均成对准确率。颜色：双尾 Welch 检验 p 值（论文使用的检验）所在区间；红色越深越显著。下载：
+study-all-files = 全部文件（tar）
+study-cells-caption = 按变体和方向的 Welch 检验（非配对，同论文）和配对检验
+study-n = n（基线 / 变体）
+study-signs = 符号（↑ ↓ =）
+study-handedness = 左右手（论文的 C.2 面板）
+study-handedness-explained = 基线和各变体上左手和右手的精确率、召回率和混淆率（某只手的真实变化被归给另一只手的比例），± 标准误。
+
+## 接受邀请
+invite-title = 设置密码
+invite-welcome = 欢迎，{ $name }
+invite-choose = 请设置密码（至少 { $count } 个字符）。此链接只能使用一次。
+invite-repeat = 再次输入
+invite-submit = 设置密码并开始
+errors-figures-table = 各行的错误数据
+errors-examples-of = 示例：{ $category }
