@@ -28,6 +28,7 @@ mod leaderboard;
 pub mod openapi;
 mod pages;
 mod rescore;
+mod run_pages;
 mod runs;
 pub mod session;
 mod studies;
@@ -211,6 +212,7 @@ fn admin_pages(state: &AppState) -> Router<AppState> {
         .merge(admin_audit::router())
         .merge(studies::admin_router())
         .merge(rescore::router())
+        .merge(run_pages::admin_router())
         .route_layer(axum::middleware::from_fn_with_state(
             state.clone(),
             session::admin_only,
@@ -238,6 +240,7 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(annotate::router())
         .merge(admin_pages(&state))
         .merge(studies::page_router())
+        .merge(run_pages::page_router())
         .merge(assets::router())
         .merge(openapi::page_router())
         .nest(

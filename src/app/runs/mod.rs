@@ -12,6 +12,7 @@
 //! submission with a stamp of everything that made it.
 
 mod asker;
+mod responses;
 mod server;
 
 use std::collections::BTreeMap;
@@ -24,6 +25,9 @@ use sha2::{Digest, Sha256};
 use tokio::task::JoinSet;
 
 pub use asker::{ApiKey, CallSettings};
+pub use responses::{
+    Audience, RESPONSES_PER_PAGE, ResponsePage, RunOutput, output, response_page, visible_run,
+};
 pub use server::{EndpointKeys, RunCalls, ServerRunView, control, start, view, views, work};
 
 use super::submissions::{self, SubmissionRow, Submitted};
