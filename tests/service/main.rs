@@ -30,6 +30,7 @@ mod migrate_db;
 mod openapi;
 mod pages;
 mod rescore;
+mod run_instances;
 mod runs;
 mod score;
 mod server_runs;
