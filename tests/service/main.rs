@@ -31,6 +31,7 @@ mod openapi;
 mod pages;
 mod rescore;
 mod run_instances;
+mod run_pages;
 mod runs;
 mod score;
 mod server_runs;

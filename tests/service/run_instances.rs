@@ -18,7 +18,7 @@ use crate::instances::Instance;
 use crate::runs::{SECRET_KEY, answer_text, run_fixture_located, scripts, stored_submission};
 use crate::standin::{ItemCalls, StandIn, StandInConfig, Step};
 
-const KEY_VARIABLE: &str = "STANDIN_API_KEY";
+use crate::server_runs::KEY_VARIABLE;
 
 /// Items answered wrong by the stand-in (by index), so the scores are not all right.
 const WRONG: [usize; 3] = [1, 5, 9];
