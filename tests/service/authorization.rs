@@ -209,8 +209,15 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                         format!("doomed-{n}")
                     }
                     "study" => "matrix".to_owned(),
-                    // A fresh queued run for every call, so that cancelling it succeeds.
-                    "run" => matrix_run(&server, n).await.to_string(),
+                    // A fresh queued run for every call, so that cancelling it succeeds; a
+                    // run's public route needs its dataset's answers public (another route
+                    // of the matrix hides them).
+                    "run" => {
+                        if route.path.starts_with("/runs/") {
+                            set_public(&server).await;
+                        }
+                        matrix_run(&server, n).await.to_string()
+                    }
                     "change" => "cancel".to_owned(),
                     other => panic!(
                         "the authorization matrix cannot fill {{{other}}} in {}",
@@ -408,6 +415,16 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("GET", "/admin/studies", Page::Admin),
     ("POST", "/admin/studies", Page::Admin),
     ("POST", "/admin/studies/delete", Page::Admin),
+    ("GET", "/admin/runs", Page::Admin),
+    ("POST", "/admin/runs", Page::Admin),
+    ("GET", "/admin/runs/{run}", Page::Admin),
+    ("GET", "/admin/runs/{run}/progress", Page::Admin),
+    ("POST", "/admin/runs/{run}/control", Page::Admin),
+    ("GET", "/admin/runs/{run}/responses.jsonl", Page::Admin),
+    // Public for a dataset with public answers (the matrix makes `mini`'s public).
+    ("GET", "/runs/{run}", Page::Public),
+    ("GET", "/runs/{run}/responses.jsonl", Page::Public),
+    ("GET", "/static/run_progress.js", Page::Public),
 ];
 
 /// The literal paths of every `.route(` in the web adapter's source.
@@ -457,10 +474,13 @@ async fn every_page_route_answers_every_caller_as_the_matrix_says() {
     )
     .await
     .id();
+    set_public(&server).await;
+    let run = matrix_run(&server, 0).await;
 
     let mut cells = 0;
     for &(verb, pattern, page) in PAGES {
         let path = pattern
+            .replace("{run}", &run.to_string())
             .replace("{dataset}", "mini")
             .replace("{item_id}", &item)
             .replace("{entry}", &submission.to_string())
@@ -570,7 +590,8 @@ async fn page_callers_without_the_right_are_refused_before_any_form_is_read() {
         let path = pattern
             .replace("{dataset}", "%ZZnot-stored")
             .replace("{item_id}", "%ZZnot-stored")
-            .replace("{study}", "%ZZnot-stored");
+            .replace("{study}", "%ZZnot-stored")
+            .replace("{run}", "%ZZnot-stored");
         for &(caller, want) in refused {
             for (content_type, body, what) in malformed_bodies() {
                 let method = if verb == "POST" {
@@ -642,6 +663,22 @@ fn scopes_and_roles_are_checked_only_where_the_route_tables_say() {
         by_hand.join("\n")
     );
     assert!(sources.len() > 50, "{} source files", sources.len());
+}
+
+/// Makes `mini`'s answers public, as a model run's public pages need.
+async fn set_public(server: &TestServer) {
+    let mut conn = server.pool.acquire().await.expect("conn");
+    let dataset = enact_hub::store::datasets::by_name(&mut conn, "mini")
+        .await
+        .expect("query")
+        .expect("mini");
+    enact_hub::store::submissions::set_answer_visibility(
+        &mut conn,
+        dataset.id,
+        enact_hub::core::dataset::AnswerVisibility::Public,
+    )
+    .await
+    .expect("answers made public");
 }
 
 /// A model run queued on the server (never worked: its endpoint is closed), by id.
