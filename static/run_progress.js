@@ -31,7 +31,7 @@
   const show = (run) => {
     const p = run.progress || {};
     const state = run.state;
-    set("stage", state ? (p.stage ? state + " (" + p.stage + ")" : state) : "not started on the server");
+    set("stage", state ? (p.stage && p.stage !== state ? state + " (" + p.stage + ")" : state) : "not started on the server");
     set("done", count(p, "done") + " of " + count(p, "total"));
     set("answered", String(count(p, "answered")));
     set("failed", String(count(p, "failed")));

@@ -97,8 +97,8 @@ fn progress_shown(view: &ServerRunView) -> ProgressShown {
     let total = count(p, "total");
     ProgressShown {
         stage: match (&view.state, p.get("stage").and_then(Value::as_str)) {
-            (Some(state), Some(stage)) => format!("{state} ({stage})"),
-            (Some(state), None) => state.clone(),
+            (Some(state), Some(stage)) if stage != state => format!("{state} ({stage})"),
+            (Some(state), _) => state.clone(),
             (None, _) => "not started on the server".to_owned(),
         },
         done: format!("{} of {total}", count(p, "done")),
