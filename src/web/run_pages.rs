@@ -82,6 +82,10 @@ fn count(progress: &Value, field: &str) -> u64 {
     progress.get(field).and_then(Value::as_u64).unwrap_or(0)
 }
 
+fn number(progress: &Value, field: &str) -> f64 {
+    progress.get(field).and_then(Value::as_f64).unwrap_or(0.0)
+}
+
 /// Seconds as "1 h 02 min", "3 min 05 s" or "12 s".
 fn duration(seconds: f64) -> String {
     let s = seconds.max(0.0).round() as u64;
@@ -105,10 +109,7 @@ fn progress_shown(view: &ServerRunView) -> ProgressShown {
         answered: count(p, "answered").to_string(),
         failed: count(p, "failed").to_string(),
         in_flight: count(p, "in_flight").to_string(),
-        items_per_s: format!(
-            "{:.2}",
-            p.get("items_per_s").and_then(Value::as_f64).unwrap_or(0.0)
-        ),
+        items_per_s: format!("{:.2}", number(p, "items_per_s")),
         eta: p
             .get("eta_s")
             .and_then(Value::as_f64)
@@ -118,10 +119,7 @@ fn progress_shown(view: &ServerRunView) -> ProgressShown {
             count(p, "prompt_tokens"),
             count(p, "completion_tokens")
         ),
-        cost: format!(
-            "${:.4}",
-            p.get("cost_usd").and_then(Value::as_f64).unwrap_or(0.0)
-        ),
+        cost: format!("${:.4}", number(p, "cost_usd")),
         recent_errors: p
             .get("recent_errors")
             .and_then(Value::as_array)

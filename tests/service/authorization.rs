@@ -214,7 +214,11 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                     // of the matrix hides them).
                     "run" => {
                         if route.path.starts_with("/runs/") {
-                            set_public(&server).await;
+                            set_mini_answers(
+                                &server.pool,
+                                enact_hub::core::dataset::AnswerVisibility::Public,
+                            )
+                            .await;
                         }
                         matrix_run(&server, n).await.to_string()
                     }
@@ -474,7 +478,11 @@ async fn every_page_route_answers_every_caller_as_the_matrix_says() {
     )
     .await
     .id();
-    set_public(&server).await;
+    set_mini_answers(
+        &server.pool,
+        enact_hub::core::dataset::AnswerVisibility::Public,
+    )
+    .await;
     let run = matrix_run(&server, 0).await;
 
     let mut cells = 0;
@@ -663,22 +671,6 @@ fn scopes_and_roles_are_checked_only_where_the_route_tables_say() {
         by_hand.join("\n")
     );
     assert!(sources.len() > 50, "{} source files", sources.len());
-}
-
-/// Makes `mini`'s answers public, as a model run's public pages need.
-async fn set_public(server: &TestServer) {
-    let mut conn = server.pool.acquire().await.expect("conn");
-    let dataset = enact_hub::store::datasets::by_name(&mut conn, "mini")
-        .await
-        .expect("query")
-        .expect("mini");
-    enact_hub::store::submissions::set_answer_visibility(
-        &mut conn,
-        dataset.id,
-        enact_hub::core::dataset::AnswerVisibility::Public,
-    )
-    .await
-    .expect("answers made public");
 }
 
 /// A model run queued on the server (never worked: its endpoint is closed), by id.

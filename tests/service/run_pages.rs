@@ -9,7 +9,6 @@ use enact_hub::app::jobs::Worker;
 use enact_hub::app::runs;
 use enact_hub::core::credentials::Role;
 use enact_hub::core::dataset::AnswerVisibility;
-use enact_hub::store;
 use reqwest::{Method, StatusCode};
 use serde_json::Value;
 
@@ -18,17 +17,6 @@ use crate::helpers::*;
 use crate::runs::{SECRET_KEY, answer_text, run_fixture, scripts};
 use crate::server_runs::{KEY_VARIABLE, fast, keyed};
 use crate::standin::{StandIn, StandInConfig, Step};
-
-async fn set_answers(pool: &store::Pool, answers: AnswerVisibility) {
-    let mut conn = pool.acquire().await.expect("conn");
-    let dataset = store::datasets::by_name(&mut conn, "mini")
-        .await
-        .expect("query")
-        .expect("mini");
-    store::submissions::set_answer_visibility(&mut conn, dataset.id, answers)
-        .await
-        .expect("set answers");
-}
 
 fn form<'a>(csrf: &'a str, standin: &'a str, temperature: &'a str) -> Vec<(&'a str, &'a str)> {
     vec![
@@ -218,7 +206,7 @@ async fn an_admin_starts_a_run_from_the_page_controls_it_and_reads_its_responses
         .call(Method::GET, &format!("/api/v1/runs/{}/responses", run.id))
         .expect(404)
         .await;
-    set_answers(&pool, AnswerVisibility::Public).await;
+    set_mini_answers(&pool, AnswerVisibility::Public).await;
     let (status, page) = stranger.text(&public).await;
     assert_eq!(status, StatusCode::OK);
     assert!(page.contains("image too large for this model"), "{page}");
