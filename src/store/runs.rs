@@ -141,6 +141,19 @@ pub async fn list(conn: &mut Conn) -> Result<Vec<RunRow>, sqlx::Error> {
     })
 }
 
+/// The runs of one dataset, newest first.
+pub async fn of_dataset(conn: &mut Conn, dataset: i64) -> Result<Vec<RunRow>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(&format!(
+            "SELECT {RUN_COLUMNS} WHERE r.dataset = $1 ORDER BY r.id DESC"
+        ))
+        .bind(dataset)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(run_from_row).collect()
+    })
+}
+
 /// An item of the run's dataset in import order, with the state of its row when it has one.
 #[derive(Debug, Clone)]
 pub struct RunItemState {

@@ -206,7 +206,15 @@ async fn an_admin_starts_a_run_from_the_page_controls_it_and_reads_its_responses
         .call(Method::GET, &format!("/api/v1/runs/{}/responses", run.id))
         .expect(404)
         .await;
+    let link = format!("href=\"/runs/{}\"", run.id);
+    let (_, dataset_page) = stranger.text("/datasets/mini").await;
+    assert!(!dataset_page.contains(&link), "{dataset_page}");
     set_mini_answers(&pool, AnswerVisibility::Public).await;
+    let (_, dataset_page) = stranger.text("/datasets/mini").await;
+    assert!(
+        dataset_page.contains(&link),
+        "the dataset page links the run"
+    );
     let (status, page) = stranger.text(&public).await;
     assert_eq!(status, StatusCode::OK);
     assert!(page.contains("image too large for this model"), "{page}");

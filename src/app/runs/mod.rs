@@ -26,7 +26,8 @@ use tokio::task::JoinSet;
 
 pub use asker::{ApiKey, CallSettings};
 pub use responses::{
-    Audience, RESPONSES_PER_PAGE, ResponsePage, RunOutput, output, response_page, visible_run,
+    Audience, RESPONSES_PER_PAGE, ResponsePage, RunOutput, output, public_runs, response_page,
+    visible_run,
 };
 pub use server::{EndpointKeys, RunCalls, ServerRunView, control, start, view, views, work};
 

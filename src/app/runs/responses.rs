@@ -11,6 +11,7 @@ use crate::app::{AppError, Hub};
 use crate::core::dataset::AnswerVisibility;
 use crate::core::release::model_output_line;
 use crate::store;
+use crate::store::datasets::Dataset;
 use crate::store::runs::RunItemRow;
 
 /// Who is reading a run's responses.
@@ -59,6 +60,18 @@ pub async fn visible_run(hub: &Hub, id: i64, audience: Audience) -> Result<RunRo
              when its dataset's answers are)"
         )),
     })
+}
+
+/// The runs of `dataset` anyone may read the responses of: all of them when its answers are
+/// public, none otherwise. Newest first.
+pub async fn public_runs(hub: &Hub, dataset: &Dataset) -> Result<Vec<RunRow>, AppError> {
+    let mut conn = hub.conn().await?;
+    if store::submissions::answer_visibility(&mut conn, dataset.id).await?
+        != AnswerVisibility::Public
+    {
+        return Ok(Vec::new());
+    }
+    Ok(store::runs::of_dataset(&mut conn, dataset.id).await?)
 }
 
 /// Page `page` (1-based) of run `id`'s responses, in dataset order.
