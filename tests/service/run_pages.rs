@@ -168,6 +168,9 @@ async fn an_admin_starts_a_run_from_the_page_controls_it_and_reads_its_responses
     assert!(page.contains("Page 1 of 1"), "{page}");
     let (status, _) = browser.text(&format!("{location}?page=0")).await;
     assert_eq!(status, StatusCode::BAD_REQUEST);
+    let (status, past) = browser.text(&format!("{location}?page=2")).await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
+    assert!(past.contains("1 page(s)"), "{past}");
     pages.push(page);
 
     // The answers as model-output JSONL: answered items only, from the page and the API.

@@ -90,6 +90,11 @@ pub async fn response_page(
     let mut conn = hub.conn().await?;
     let total = store::runs::count_items(&mut conn, run.id).await?;
     let pages = (total + RESPONSES_PER_PAGE - 1).max(RESPONSES_PER_PAGE) / RESPONSES_PER_PAGE;
+    if page > pages {
+        return Err(AppError::NotFound(format!(
+            "run {id} has {pages} page(s) of responses, not {page}"
+        )));
+    }
     let offset = (page - 1).saturating_mul(RESPONSES_PER_PAGE);
     let rows = store::runs::item_page(&mut conn, run.id, offset, RESPONSES_PER_PAGE).await?;
     Ok(ResponsePage {
