@@ -58,6 +58,10 @@ pub(super) struct ServeArgs {
         value_name = "TOKEN"
     )]
     metrics_token: Option<String>,
+    /// Seconds a job's lease (a model run, a rescore) lasts unless renewed: when an instance
+    /// dies, another (or this one restarted) takes its jobs over this long after.
+    #[arg(long, env = "ENACT_HUB_JOB_LEASE", default_value_t = app::jobs::JobSettings::default().lease.as_secs_f64(), value_name = "SECONDS", value_parser = lease_seconds)]
+    job_lease: f64,
     /// Generate the built-in demo dataset at start and serve it (as dataset "demo").
     #[arg(long)]
     demo: bool,
@@ -163,7 +167,10 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     let worker = app::jobs::Worker::spawn(
         hub.clone(),
         app::job_handlers(),
-        app::jobs::JobSettings::default(),
+        app::jobs::JobSettings {
+            lease: Duration::from_secs_f64(args.job_lease),
+            ..app::jobs::JobSettings::default()
+        },
     );
     let served = server.run(shutdown_signal()).await;
     // Jobs in progress let go of their leases, to be resumed at the next start (or at once by
@@ -172,6 +179,21 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     served?;
     hub.close().await;
     Ok(ExitCode::SUCCESS)
+}
+
+/// A job lease in seconds: from 1 s (renewals must fit in it) to a day.
+fn lease_seconds(text: &str) -> Result<f64, String> {
+    let seconds: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number of seconds"))?;
+    if (1.0..=86_400.0).contains(&seconds) {
+        Ok(seconds)
+    } else {
+        Err(format!(
+            "a job lease must be 1 to 86400 seconds, not {seconds}"
+        ))
+    }
 }
 
 /// The admin token: ENACT_HUB_ADMIN_TOKEN if set (stored hashed on first sight), otherwise one

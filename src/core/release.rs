@@ -56,6 +56,40 @@ pub fn release_line(item: &ReleaseItem, with_truth: bool) -> String {
     serde_json::to_string(&line).unwrap_or_default()
 }
 
+/// One line of ENACT's model-output JSONL (what `enact eval` reads): the item's QA fields,
+/// ground truth included (the evaluator needs `key_frame_ids` and `gt_answer`), and `answer`,
+/// the model's raw reply as a string, which ENACT's own answer parser reads.
+#[derive(Serialize)]
+struct ModelOutputLine<'a> {
+    id: &'a str,
+    #[serde(rename = "type")]
+    item_type: &'a str,
+    task_name: &'a str,
+    key_frame_ids: &'a [String],
+    images: &'a [String],
+    question: &'a str,
+    options: [u8; 0],
+    gt_answer: &'a [u8],
+    answer: &'a str,
+}
+
+/// The model-output line of `item` answered with `answer`, without a trailing newline.
+pub fn model_output_line(item: &ReleaseItem, answer: &str) -> String {
+    let line = ModelOutputLine {
+        id: &item.id,
+        item_type: &item.item_type,
+        task_name: &item.task_name,
+        key_frame_ids: &item.key_frame_ids,
+        images: &item.images,
+        question: &item.question,
+        options: [],
+        gt_answer: &item.gt_answer,
+        answer,
+    };
+    // Serialising strings and integer lists cannot fail.
+    serde_json::to_string(&line).unwrap_or_default()
+}
+
 /// A tar archive written entry by entry: each call returns the bytes to send next, so the
 /// whole archive never sits in memory.
 pub struct ArchiveWriter {
@@ -118,6 +152,27 @@ mod tests {
         let hidden = release_line(&item(), false);
         assert!(!hidden.contains("gt_answer") && !hidden.contains("key_frame_ids"));
         assert!(hidden.contains("\"images\""));
+    }
+
+    #[test]
+    fn a_model_output_line_has_what_enact_eval_requires_and_the_answer_as_a_string() {
+        let line: serde_json::Value =
+            serde_json::from_str(&model_output_line(&item(), "The order is [2, 1]."))
+                .expect("json");
+        for field in [
+            "id",
+            "task_name",
+            "type",
+            "key_frame_ids",
+            "gt_answer",
+            "answer",
+        ] {
+            assert!(line.get(field).is_some(), "{field} missing from {line}");
+        }
+        assert_eq!(line["answer"], "The order is [2, 1].");
+        assert_eq!(line["gt_answer"], serde_json::json!([2, 1]));
+        assert_eq!(line["key_frame_ids"][0], "10");
+        assert_eq!(line["options"], serde_json::json!([]));
     }
 
     #[test]

@@ -362,6 +362,7 @@ pub const TABLES: &[Table] = &[
             ("stamp", Text),
             ("created_by", Text),
             ("created_at", Text),
+            ("job", Int),
         ],
         true,
     ),

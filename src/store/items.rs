@@ -65,7 +65,7 @@ fn summary_from_row(row: &impl Fields) -> Result<ItemSummary, sqlx::Error> {
     })
 }
 
-fn json_column<T: serde::de::DeserializeOwned>(
+pub(super) fn json_column<T: serde::de::DeserializeOwned>(
     row: &impl Fields,
     column: &str,
 ) -> Result<T, sqlx::Error> {

@@ -145,7 +145,9 @@ pub async fn insert(
 
 /// Takes the lease of the oldest job of one of `kinds` that is queued and due, or running on a
 /// lease that ran out before `now_ms` (its instance died), for `owner` until `lease_until_ms`.
-/// Run it in a write transaction: two instances then never take the same job.
+/// Run it in a write transaction: two instances then never take the same job. A job paused
+/// and resumed while its code was still working keeps that lease until the code has stopped
+/// (or the lease ran out), so the job's code never runs twice at once.
 pub async fn claim(
     conn: &mut Conn,
     kinds: &[JobKind],
@@ -164,7 +166,8 @@ pub async fn claim(
             "UPDATE jobs SET state = 'running', lease_owner = $1, lease_until_ms = $2, \
                     attempts = attempts + 1, updated_at = {now} \
              WHERE id = (SELECT id FROM jobs \
-                         WHERE ((state = 'queued' AND run_after_ms <= $3) \
+                         WHERE ((state = 'queued' AND run_after_ms <= $3 \
+                                 AND (lease_owner IS NULL OR lease_until_ms < $3)) \
                                 OR (state = 'running' AND lease_until_ms < $3)) \
                            AND $4 LIKE '%,' || kind || ',%' \
                          ORDER BY id LIMIT 1) \

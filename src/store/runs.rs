@@ -1,6 +1,12 @@
 //! Rows of model runs and of the items they asked.
 
+use std::collections::HashMap;
+
+use super::corrupt;
 use super::db::{Conn, Dialect, Fields, on};
+use super::items::json_column;
+
+use crate::core::release::ReleaseItem;
 
 use crate::core::credentials::{Scope, scopes_from_text};
 
@@ -23,11 +29,13 @@ pub struct RunRow {
     pub stamp: Option<String>,
     pub created_by: String,
     pub created_at: String,
+    /// The job the run was last started on the server with; `None` for a CLI-only run.
+    pub job: Option<i64>,
 }
 
 const RUN_COLUMNS: &str = "r.id, r.name, r.dataset, d.name AS dataset_name, r.endpoint, r.model, \
     r.params, r.prompt_version, r.prompt_hash, r.token, r.submission, r.stamp, r.created_by, \
-    r.created_at FROM model_runs r JOIN datasets d ON d.id = r.dataset";
+    r.created_at, r.job FROM model_runs r JOIN datasets d ON d.id = r.dataset";
 
 fn run_from_row(row: &impl Fields) -> Result<RunRow, sqlx::Error> {
     Ok(RunRow {
@@ -45,6 +53,7 @@ fn run_from_row(row: &impl Fields) -> Result<RunRow, sqlx::Error> {
         stamp: row.try_get("stamp")?,
         created_by: row.try_get("created_by")?,
         created_at: row.try_get("created_at")?,
+        job: row.try_get("job")?,
     })
 }
 
@@ -128,6 +137,19 @@ pub async fn list(conn: &mut Conn) -> Result<Vec<RunRow>, sqlx::Error> {
         let rows = sqlx::query(&format!("SELECT {RUN_COLUMNS} ORDER BY r.id DESC"))
             .fetch_all(&mut *c)
             .await?;
+        rows.iter().map(run_from_row).collect()
+    })
+}
+
+/// The runs of one dataset, newest first.
+pub async fn of_dataset(conn: &mut Conn, dataset: i64) -> Result<Vec<RunRow>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(&format!(
+            "SELECT {RUN_COLUMNS} WHERE r.dataset = $1 ORDER BY r.id DESC"
+        ))
+        .bind(dataset)
+        .fetch_all(&mut *c)
+        .await?;
         rows.iter().map(run_from_row).collect()
     })
 }
@@ -235,23 +257,127 @@ pub async fn items(conn: &mut Conn, run: i64) -> Result<Vec<RunItemRow>, sqlx::E
         .bind(run)
         .fetch_all(&mut *c)
         .await?;
+        rows.iter().map(item_from_row).collect()
+    })
+}
+
+fn item_from_row(row: &impl Fields) -> Result<RunItemRow, sqlx::Error> {
+    let state: String = row.try_get("state")?;
+    Ok(RunItemRow {
+        item_id: row.try_get("item_id")?,
+        answered: state == "answered",
+        response: row.try_get("response")?,
+        finish_reason: row.try_get("finish_reason")?,
+        prompt_tokens: row.try_get("prompt_tokens")?,
+        completion_tokens: row.try_get("completion_tokens")?,
+        latency_ms: row.try_get("latency_ms")?,
+        attempts: row.try_get("attempts")?,
+        error: row.try_get("error")?,
+        done_at: row.try_get("done_at")?,
+    })
+}
+
+/// How many items of a run have a row (answered or failed).
+pub async fn count_items(conn: &mut Conn, run: i64) -> Result<i64, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_scalar("SELECT COUNT(*) FROM model_run_items WHERE run = $1")
+            .bind(run)
+            .fetch_one(&mut *c)
+            .await
+    })
+}
+
+/// One page of a run's finished items, in import order.
+pub async fn item_page(
+    conn: &mut Conn,
+    run: i64,
+    offset: i64,
+    limit: i64,
+) -> Result<Vec<RunItemRow>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT i.item_id, r.state, r.response, r.finish_reason, r.prompt_tokens, \
+             r.completion_tokens, r.latency_ms, r.attempts, r.error, r.done_at \
+             FROM model_run_items r JOIN items i ON i.id = r.item WHERE r.run = $1 \
+             ORDER BY i.id LIMIT $2 OFFSET $3",
+        )
+        .bind(run)
+        .bind(limit)
+        .bind(offset)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(item_from_row).collect()
+    })
+}
+
+/// Up to `limit` answered items of a run after item row `after`, in import order: each
+/// item's row id, its release fields (ground truth included) and the model's raw answer.
+pub async fn answered_page(
+    conn: &mut Conn,
+    run: i64,
+    after: i64,
+    limit: i64,
+) -> Result<Vec<(i64, ReleaseItem, String)>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT i.id, i.item_id, i.item_type, i.task_name, i.key_frame_ids, i.question, \
+             i.gt_answer, r.response FROM model_run_items r JOIN items i ON i.id = r.item \
+             WHERE r.run = $1 AND r.state = 'answered' AND r.response IS NOT NULL AND i.id > $2 \
+             ORDER BY i.id LIMIT $3",
+        )
+        .bind(run)
+        .bind(after)
+        .bind(limit)
+        .fetch_all(&mut *c)
+        .await?;
+        let ids: Vec<i64> = rows
+            .iter()
+            .map(|row| row.try_get("id"))
+            .collect::<Result<_, _>>()?;
+        let mut paths: HashMap<i64, Vec<String>> = HashMap::new();
+        if !ids.is_empty() {
+            let ids = serde_json::to_string(&ids).map_err(|e| corrupt("item", e))?;
+            let image_rows = sqlx::query(&format!(
+                "SELECT item, path FROM item_images WHERE item IN ({}) ORDER BY item, position",
+                c.json_ids()
+            ))
+            .bind(ids)
+            .fetch_all(&mut *c)
+            .await?;
+            for row in &image_rows {
+                paths
+                    .entry(row.try_get("item")?)
+                    .or_default()
+                    .push(row.try_get("path")?);
+            }
+        }
         rows.iter()
             .map(|row| {
-                let state: String = row.try_get("state")?;
-                Ok(RunItemRow {
-                    item_id: row.try_get("item_id")?,
-                    answered: state == "answered",
-                    response: row.try_get("response")?,
-                    finish_reason: row.try_get("finish_reason")?,
-                    prompt_tokens: row.try_get("prompt_tokens")?,
-                    completion_tokens: row.try_get("completion_tokens")?,
-                    latency_ms: row.try_get("latency_ms")?,
-                    attempts: row.try_get("attempts")?,
-                    error: row.try_get("error")?,
-                    done_at: row.try_get("done_at")?,
-                })
+                let id: i64 = row.try_get("id")?;
+                let item = ReleaseItem {
+                    id: row.try_get("item_id")?,
+                    item_type: row.try_get("item_type")?,
+                    task_name: row.try_get("task_name")?,
+                    key_frame_ids: json_column(row, "key_frame_ids")?,
+                    images: paths.remove(&id).unwrap_or_default(),
+                    question: row.try_get("question")?,
+                    gt_answer: json_column(row, "gt_answer")?,
+                };
+                Ok((id, item, row.try_get("response")?))
             })
             .collect()
+    })
+}
+
+/// Links a run to the job it was just started on the server with.
+pub async fn set_job(conn: &mut Conn, run: i64, job: i64) -> Result<(), sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query("UPDATE model_runs SET job = $1 WHERE id = $2")
+            .bind(job)
+            .bind(run)
+            .execute(&mut *c)
+            .await?;
+        Ok(())
     })
 }
 

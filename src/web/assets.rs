@@ -9,6 +9,7 @@ use super::AppState;
 
 const APP_CSS: &str = include_str!("../../static/app.css");
 const ANNOTATE_JS: &str = include_str!("../../static/annotate.js");
+const RUN_PROGRESS_JS: &str = include_str!("../../static/run_progress.js");
 const FAVICON_SVG: &str = include_str!("../../static/favicon.svg");
 
 pub fn router() -> Router<AppState> {
@@ -20,6 +21,10 @@ pub fn router() -> Router<AppState> {
         .route(
             "/static/annotate.js",
             get(|| asset("text/javascript; charset=utf-8", ANNOTATE_JS)),
+        )
+        .route(
+            "/static/run_progress.js",
+            get(|| asset("text/javascript; charset=utf-8", RUN_PROGRESS_JS)),
         )
         .route(
             "/static/favicon.svg",

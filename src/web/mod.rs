@@ -34,6 +34,7 @@ pub mod openapi;
 mod pages;
 mod quality;
 mod rescore;
+mod run_pages;
 mod runs;
 pub mod session;
 mod studies;
@@ -225,6 +226,7 @@ fn admin_pages(state: &AppState) -> Router<AppState> {
         .merge(studies::admin_router())
         .merge(rescore::router())
         .merge(quality::router())
+        .merge(run_pages::admin_router())
         .route_layer(axum::middleware::from_fn_with_state(
             state.clone(),
             session::admin_only,
@@ -265,6 +267,7 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(annotate::router())
         .merge(admin_pages(&state))
         .merge(studies::page_router())
+        .merge(run_pages::page_router())
         .merge(assets::router())
         .merge(openapi::page_router())
         .merge(metrics::router(&state))

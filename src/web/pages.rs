@@ -123,6 +123,9 @@ struct BrowsePage {
     tasks: Vec<Choice>,
     previous: Option<String>,
     next: Option<String>,
+    /// Model runs whose replies anyone may read (the dataset's answers are public): id, name,
+    /// model.
+    runs: Vec<(i64, String, String)>,
 }
 
 async fn browse(
@@ -135,6 +138,11 @@ async fn browse(
     let (items, total) = selection.fetch(&state, &name).await?;
     let dataset = datasets::by_name(&state.hub, &name).await?;
     let task_names = datasets::task_names(&state.hub, &dataset).await?;
+    let runs = crate::app::runs::public_runs(&state.hub, &dataset)
+        .await?
+        .into_iter()
+        .map(|r| (r.id, r.name, r.model))
+        .collect();
     let filter = &selection.filter;
     let offset = selection.offset();
     let page_href = |page: u32| format!("/datasets/{name}?{}", selection.query_string(page));
@@ -184,6 +192,7 @@ async fn browse(
         previous: (selection.page > 1).then(|| page_href(selection.page - 1)),
         next: (shown_to < total).then(|| page_href(selection.page + 1)),
         dataset: name,
+        runs,
     };
     Ok(Html(page.render()?))
 }

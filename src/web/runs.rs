@@ -1,8 +1,11 @@
 //! Model runs worked by the server, over the JSON API (admins only): start one, list them,
-//! read one with its live progress, and pause, resume or cancel it.
+//! read one with its live progress, and pause, resume or cancel it; and a run's answers as
+//! ENACT's model-output JSONL (admins, or anyone for a dataset with public answers).
 
+use axum::body::Body;
 use axum::extract::State;
-use axum::http::StatusCode;
+use axum::http::{HeaderValue, StatusCode, header};
+use axum::response::{IntoResponse, Response};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -10,7 +13,7 @@ use super::extract::{Json, Path};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
 use crate::app::jobs::JobControl;
-use crate::app::runs::{self, RunCalls, RunSpec, ServerRunView};
+use crate::app::runs::{self, Audience, RunCalls, RunOutput, RunSpec, ServerRunView};
 use crate::app::tokens::Caller;
 use crate::core::credentials::Scope;
 use crate::core::model_run::{GenerationParams, Prices};
@@ -74,32 +77,95 @@ pub fn routes() -> Vec<ApiRoute> {
         .bearer(Scope::Admin)
         .responds_json::<ServerRunView>(200, "The run as changed.")
         .errors(&[400, 401, 403, 404, 409]),
+        ApiRoute::new(
+            Verb::Get,
+            "/admin/runs/{run}/responses",
+            admin_responses,
+            "A model run's answers as ENACT model-output JSONL",
+        )
+        .describe(RESPONSES_DESCRIPTION)
+        .bearer(Scope::Admin)
+        .responds(200, Some(JSONL), "The answers, one JSON object a line.")
+        .errors(&[401, 403, 404]),
+        ApiRoute::new(
+            Verb::Get,
+            "/runs/{run}/responses",
+            public_responses,
+            "A public model run's answers as ENACT model-output JSONL",
+        )
+        .describe(
+            "The same file as `/admin/runs/{run}/responses`, for anyone, when the run's dataset \
+             has public answers (404 otherwise).",
+        )
+        .responds(200, Some(JSONL), "The answers, one JSON object a line.")
+        .errors(&[404]),
     ]
+}
+
+const JSONL: &str = "application/x-ndjson";
+
+const RESPONSES_DESCRIPTION: &str = "Every answered item of the run, streamed in dataset order, \
+     as the file ENACT's `enact eval` reads: the item's QA fields with ground truth \
+     (`key_frame_ids`, `gt_answer`) and `answer`, the model's raw reply as a string. Failed items \
+     are left out (the hub scores them as unanswered). The suggested file name is \
+     `enact_ordering_{model}.jsonl`, from which ENACT takes the model's name.";
+
+/// A run's answers as a streamed JSONL download named as ENACT expects.
+pub(super) fn responses_download(output: RunOutput) -> Response {
+    let name = format!(
+        "enact_ordering_{}.jsonl",
+        super::file_name_safe(&output.run.model)
+    );
+    let mut response =
+        Body::from_stream(tokio_stream::wrappers::ReceiverStream::new(output.chunks))
+            .into_response();
+    let headers = response.headers_mut();
+    headers.insert(header::CONTENT_TYPE, HeaderValue::from_static(JSONL));
+    if let Ok(v) = HeaderValue::from_str(&format!("attachment; filename=\"{name}\"")) {
+        headers.insert(header::CONTENT_DISPOSITION, v);
+    }
+    response
+}
+
+async fn admin_responses(
+    State(state): State<AppState>,
+    Path(run): Path<i64>,
+) -> Result<Response, AppError> {
+    let output = runs::output(&state.hub, run, Audience::Admin).await?;
+    Ok(responses_download(output))
+}
+
+async fn public_responses(
+    State(state): State<AppState>,
+    Path(run): Path<i64>,
+) -> Result<Response, AppError> {
+    let output = runs::output(&state.hub, run, Audience::Public).await?;
+    Ok(responses_download(output))
 }
 
 /// A run to start.
 #[derive(Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-struct RunRequest {
-    dataset: String,
-    endpoint: String,
-    model: String,
-    name: Option<String>,
-    temperature: Option<f64>,
-    max_tokens: Option<u32>,
-    limit: Option<usize>,
+pub(super) struct RunRequest {
+    pub(super) dataset: String,
+    pub(super) endpoint: String,
+    pub(super) model: String,
+    pub(super) name: Option<String>,
+    pub(super) temperature: Option<f64>,
+    pub(super) max_tokens: Option<u32>,
+    pub(super) limit: Option<usize>,
     #[serde(default)]
-    retry_failed: bool,
+    pub(super) retry_failed: bool,
     /// The leaderboard's model name; the model's when not given.
-    submit_as: Option<String>,
+    pub(super) submit_as: Option<String>,
     #[serde(default)]
-    price_input: f64,
+    pub(super) price_input: f64,
     #[serde(default)]
-    price_output: f64,
-    key_variable: Option<String>,
-    concurrency: Option<usize>,
-    max_retries: Option<u32>,
-    timeout_s: Option<f64>,
+    pub(super) price_output: f64,
+    pub(super) key_variable: Option<String>,
+    pub(super) concurrency: Option<usize>,
+    pub(super) max_retries: Option<u32>,
+    pub(super) timeout_s: Option<f64>,
 }
 
 #[derive(Serialize, JsonSchema)]
@@ -115,40 +181,7 @@ async fn start_run(
     caller: Caller,
     Json(request): Json<RunRequest>,
 ) -> Result<(StatusCode, Json<RunStarted>), AppError> {
-    for (field, price) in [
-        ("price_input", request.price_input),
-        ("price_output", request.price_output),
-    ] {
-        if !(price.is_finite() && price >= 0.0) {
-            return Err(AppError::Invalid(format!(
-                "{field} must be a price of 0 or more, not {price}"
-            )));
-        }
-    }
-    let defaults = RunCalls::default();
-    let spec = RunSpec {
-        dataset: request.dataset,
-        endpoint: request.endpoint,
-        submit_as: Some(request.submit_as.unwrap_or_else(|| request.model.clone())),
-        model: request.model,
-        name: request.name,
-        params: GenerationParams {
-            temperature: request.temperature,
-            max_tokens: request.max_tokens,
-        },
-        limit: request.limit,
-        retry_failed: request.retry_failed,
-        prices: Prices {
-            input_usd_per_mtok: request.price_input,
-            output_usd_per_mtok: request.price_output,
-        },
-    };
-    let calls = RunCalls {
-        key_variable: request.key_variable,
-        concurrency: request.concurrency.unwrap_or(defaults.concurrency),
-        max_retries: request.max_retries.unwrap_or(defaults.max_retries),
-        timeout_s: request.timeout_s.unwrap_or(defaults.timeout_s),
-    };
+    let (spec, calls) = request.into_run()?;
     let (run, job) = runs::start(&state.hub, &caller.actor(), &spec, &calls).await?;
     Ok((
         StatusCode::ACCEPTED,
@@ -158,6 +191,47 @@ async fn start_run(
             job: job.0,
         }),
     ))
+}
+
+impl RunRequest {
+    /// The run asked for and how to call its endpoint; shared with the admin page's form.
+    pub(super) fn into_run(self) -> Result<(RunSpec, RunCalls), AppError> {
+        for (field, price) in [
+            ("price_input", self.price_input),
+            ("price_output", self.price_output),
+        ] {
+            if !(price.is_finite() && price >= 0.0) {
+                return Err(AppError::Invalid(format!(
+                    "{field} must be a price of 0 or more, not {price}"
+                )));
+            }
+        }
+        let defaults = RunCalls::default();
+        let spec = RunSpec {
+            dataset: self.dataset,
+            endpoint: self.endpoint,
+            submit_as: Some(self.submit_as.unwrap_or_else(|| self.model.clone())),
+            model: self.model,
+            name: self.name,
+            params: GenerationParams {
+                temperature: self.temperature,
+                max_tokens: self.max_tokens,
+            },
+            limit: self.limit,
+            retry_failed: self.retry_failed,
+            prices: Prices {
+                input_usd_per_mtok: self.price_input,
+                output_usd_per_mtok: self.price_output,
+            },
+        };
+        let calls = RunCalls {
+            key_variable: self.key_variable,
+            concurrency: self.concurrency.unwrap_or(defaults.concurrency),
+            max_retries: self.max_retries.unwrap_or(defaults.max_retries),
+            timeout_s: self.timeout_s.unwrap_or(defaults.timeout_s),
+        };
+        Ok((spec, calls))
+    }
 }
 
 async fn list_runs(State(state): State<AppState>) -> Result<Json<Vec<ServerRunView>>, AppError> {

@@ -10,14 +10,7 @@ use enact_hub::store;
 use crate::helpers::*;
 
 async fn set_answers(server: &TestServer, answers: AnswerVisibility) {
-    let mut conn = server.pool.acquire().await.expect("conn");
-    let dataset = store::datasets::by_name(&mut conn, "mini")
-        .await
-        .expect("query")
-        .expect("mini");
-    store::submissions::set_answer_visibility(&mut conn, dataset.id, answers)
-        .await
-        .expect("set answers");
+    set_mini_answers(&server.pool, answers).await;
 }
 
 async fn content_hashes(pool: &enact_hub::store::Pool, dataset: &str) -> HashMap<String, String> {

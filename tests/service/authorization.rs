@@ -218,8 +218,19 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                         format!("doomed-{n}")
                     }
                     "study" => "matrix".to_owned(),
-                    // A fresh queued run for every call, so that cancelling it succeeds.
-                    "run" => matrix_run(&server, n).await.to_string(),
+                    // A fresh queued run for every call, so that cancelling it succeeds; a
+                    // run's public route needs its dataset's answers public (another route
+                    // of the matrix hides them).
+                    "run" => {
+                        if route.path.starts_with("/runs/") {
+                            set_mini_answers(
+                                &server.pool,
+                                enact_hub::core::dataset::AnswerVisibility::Public,
+                            )
+                            .await;
+                        }
+                        matrix_run(&server, n).await.to_string()
+                    }
                     "change" => "cancel".to_owned(),
                     // The annotator behind the callers' session.
                     "annotator" => "ann".to_owned(),
@@ -434,6 +445,16 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("POST", "/admin/quality/gold", Page::Admin),
     ("POST", "/admin/quality/gold/clear", Page::Admin),
     ("POST", "/admin/quality/exclusion", Page::Admin),
+    ("GET", "/admin/runs", Page::Admin),
+    ("POST", "/admin/runs", Page::Admin),
+    ("GET", "/admin/runs/{run}", Page::Admin),
+    ("GET", "/admin/runs/{run}/progress", Page::Admin),
+    ("POST", "/admin/runs/{run}/control", Page::Admin),
+    ("GET", "/admin/runs/{run}/responses.jsonl", Page::Admin),
+    // Public for a dataset with public answers (the matrix makes `mini`'s public).
+    ("GET", "/runs/{run}", Page::Public),
+    ("GET", "/runs/{run}/responses.jsonl", Page::Public),
+    ("GET", "/static/run_progress.js", Page::Public),
 ];
 
 /// The literal paths of every `.route(` in the web adapter's source.
@@ -483,10 +504,17 @@ async fn every_page_route_answers_every_caller_as_the_matrix_says() {
     )
     .await
     .id();
+    set_mini_answers(
+        &server.pool,
+        enact_hub::core::dataset::AnswerVisibility::Public,
+    )
+    .await;
+    let run = matrix_run(&server, 0).await;
 
     let mut cells = 0;
     for &(verb, pattern, page) in PAGES {
         let path = pattern
+            .replace("{run}", &run.to_string())
             .replace("{dataset}", "mini")
             .replace("{item_id}", &item)
             .replace("{entry}", &submission.to_string())
@@ -601,7 +629,8 @@ async fn page_callers_without_the_right_are_refused_before_any_form_is_read() {
         let path = pattern
             .replace("{dataset}", "%ZZnot-stored")
             .replace("{item_id}", "%ZZnot-stored")
-            .replace("{study}", "%ZZnot-stored");
+            .replace("{study}", "%ZZnot-stored")
+            .replace("{run}", "%ZZnot-stored");
         for &(caller, want) in refused {
             for (content_type, body, what) in malformed_bodies() {
                 let method = if verb == "POST" {

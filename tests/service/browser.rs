@@ -577,3 +577,80 @@ async fn axe_finds_no_wcag_violation_on_the_pages_in_either_language() {
     );
     server.stop().await;
 }
+
+/// A server-side model run's page in Chromium: labelled controls, pause and resume by keyboard,
+/// and progress brought to the end by the page's script without a reload.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_run_page_follows_its_run_live_and_is_paused_and_resumed_by_keyboard() {
+    use enact_hub::app::Hub;
+    use enact_hub::app::jobs::Worker;
+    use enact_hub::app::runs;
+    use std::time::Duration;
+
+    use crate::runs::{answer_text, run_fixture, scripts, spec};
+    use crate::server_runs::{KEY_VARIABLE, fast, keyed};
+    use crate::standin::{StandIn, StandInConfig, Step};
+
+    if !browser_available() {
+        return;
+    }
+    let (dir, pool, records) = run_fixture(2).await;
+    let standin = StandIn::start(StandInConfig {
+        scripts: scripts(&dir.path().join("release"), &records, |_, r| {
+            vec![Step::Answer(answer_text(r, true))]
+        }),
+        // Slow enough that the page sees the run under way (12 items, one at a time).
+        latency: Duration::from_millis(400),
+        tokens_per_image: 85,
+        ..StandInConfig::default()
+    })
+    .await;
+    let hub = keyed(Hub::from(pool.clone()));
+    let server = serve_hub(hub.clone(), pool.clone(), dir, &Default::default()).await;
+    crate::annotate::annotator(&server, "boss", true).await;
+    let calls = runs::RunCalls {
+        key_variable: Some(KEY_VARIABLE.to_owned()),
+        concurrency: 1,
+        max_retries: 1,
+        timeout_s: 10.0,
+    };
+    let (run, _) = runs::start(&hub, &tester(), &spec(&standin, "watched"), &calls)
+        .await
+        .expect("started");
+    let worker = Worker::spawn(hub.clone(), enact_hub::app::job_handlers(), fast());
+    let found = run_node(
+        "run_progress.mjs",
+        json!({
+            "base": server.url(""), "name": "boss", "password": crate::annotate::PASSWORD,
+            "run": run.id, "chromium": CHROMIUM,
+        }),
+    )
+    .await;
+    worker.stop().await;
+    assert_eq!(found["unlabelled"], json!([]), "{found}");
+    assert!(
+        found["paused"]["notice"]
+            .as_str()
+            .is_some_and(|n| n.starts_with("Paused")),
+        "{found}"
+    );
+    assert_eq!(found["paused"]["resume_visible"], true, "{found}");
+    assert_eq!(found["paused"]["pause_visible"], false, "{found}");
+    let n = records.len();
+    assert_eq!(found["last"]["stage"], "done (submitted)", "{found}");
+    assert_eq!(found["last"]["done"], format!("{n} of {n}"), "{found}");
+    assert_ne!(found["last"]["cost"], "$0.0000", "{found}");
+    assert_eq!(found["last"]["pause_visible"], false, "{found}");
+    assert_eq!(found["last"]["cancel_visible"], false, "{found}");
+    assert_eq!(found["navigations"], 0, "the page was reloaded: {found}");
+    // What the page showed when it loaded after the resume was not the end: its script
+    // brought it there.
+    assert_ne!(found["resumed"]["done"], format!("{n} of {n}"), "{found}");
+    assert!(
+        found["resumed"]["stage"]
+            .as_str()
+            .is_some_and(|s| s.starts_with("queued")),
+        "{found}"
+    );
+    server.stop().await;
+}

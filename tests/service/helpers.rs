@@ -527,3 +527,15 @@ pub async fn mini_study(server: &TestServer, name: &str) {
 pub async fn count(pool: &Pool, sql: &str) -> i64 {
     db!(pool, fetch_one, sqlx::query_scalar::<_, i64>(sql)).unwrap_or_else(|e| panic!("{sql}: {e}"))
 }
+
+/// Makes dataset `mini`'s ground truth and per-item verdicts public, or hides them again.
+pub async fn set_mini_answers(pool: &Pool, answers: enact_hub::core::dataset::AnswerVisibility) {
+    let mut conn = pool.acquire().await.expect("conn");
+    let dataset = store::datasets::by_name(&mut conn, "mini")
+        .await
+        .expect("query")
+        .expect("mini");
+    store::submissions::set_answer_visibility(&mut conn, dataset.id, answers)
+        .await
+        .expect("set answers");
+}

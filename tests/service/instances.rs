@@ -5,6 +5,7 @@
 
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use enact_hub::core::credentials::Role;
@@ -17,36 +18,47 @@ use crate::annotate::{Browser, PASSWORD, annotator_on, assign_on};
 use crate::helpers::*;
 
 /// A server process; killed when dropped.
-struct Instance {
+pub(crate) struct Instance {
     child: Child,
-    base: String,
+    pub(crate) base: String,
+    /// Every line it wrote to standard output and standard error so far.
+    log: Arc<Mutex<Vec<String>>>,
 }
 
 impl Instance {
     /// Starts `enact-hub serve` on `db` and `frames`, on a port of its own choosing.
     fn start(db: &str, frames: &str) -> Instance {
+        Instance::start_with(db, &["--frames", frames], &[])
+    }
+
+    /// Starts `enact-hub serve --db db` with `args` and `env` besides, logging at `info`.
+    pub(crate) fn start_with(db: &str, args: &[&str], env: &[(&str, &str)]) -> Instance {
         let mut child = Command::new(env!("CARGO_BIN_EXE_enact-hub"))
-            .args([
-                "serve",
-                "--db",
-                db,
-                "--frames",
-                frames,
-                "--addr",
-                "127.0.0.1:0",
-            ])
+            .args(["serve", "--db", db, "--addr", "127.0.0.1:0"])
+            .args(args)
+            .envs(env.iter().copied())
             .env("RUST_LOG", "info")
             .env("NO_COLOR", "1")
-            .stdout(Stdio::null())
+            .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
             .expect("start enact-hub serve");
+        let log = Arc::new(Mutex::new(Vec::new()));
+        // Standard output is read to the end, so the server never blocks on a full pipe.
+        let stdout = BufReader::new(child.stdout.take().expect("stdout")).lines();
+        let kept = log.clone();
+        std::thread::spawn(move || {
+            for line in stdout.map_while(Result::ok) {
+                kept.lock().expect("the log").push(line);
+            }
+        });
         let mut lines = BufReader::new(child.stderr.take().expect("stderr")).lines();
         let base = loop {
             let line = lines
                 .next()
                 .expect("the server stopped before listening")
                 .expect("read the server's log");
+            log.lock().expect("the log").push(line.clone());
             if let Some(at) = line.find("listening on http://") {
                 let address = &line[at + "listening on ".len()..];
                 let end = address["http://".len()..]
@@ -55,17 +67,31 @@ impl Instance {
                 break address[..end].to_owned();
             }
         };
-        // Keep reading the log, so the server never blocks on a full pipe.
-        std::thread::spawn(move || lines.for_each(drop));
-        Instance { child, base }
+        let kept = log.clone();
+        std::thread::spawn(move || {
+            for line in lines.map_while(Result::ok) {
+                kept.lock().expect("the log").push(line);
+            }
+        });
+        Instance { child, base, log }
     }
 
-    fn url(&self, path: &str) -> String {
+    /// Its process id (which its job worker's lease owner names).
+    pub(crate) fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// The lines it logged so far.
+    pub(crate) fn log(&self) -> Vec<String> {
+        self.log.lock().expect("the log").clone()
+    }
+
+    pub(crate) fn url(&self, path: &str) -> String {
         format!("{}{path}", self.base)
     }
 
-    /// Stops the process at once, as a crash would.
-    fn kill(&mut self) {
+    /// Stops the process at once, as a crash would (SIGKILL).
+    pub(crate) fn kill(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }

@@ -217,6 +217,60 @@ async fn paused_jobs_stop_and_resume_and_cancel_is_audited() {
     assert_eq!(actions, ["job.cancel", "job.resume", "job.pause"]);
 }
 
+/// A job paused and resumed before its code noticed the pause is not started a second time
+/// beside the first: the resumed job waits for the first run to let go of its lease.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_job_resumed_before_its_code_stopped_never_runs_twice_at_once() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    let dir = TempDir::new().unwrap();
+    let pool = fresh_db(&dir).await;
+    let hub = Hub::from(pool.clone());
+    // (running now, most at once, starts)
+    let counts = Arc::new((
+        AtomicUsize::new(0),
+        AtomicUsize::new(0),
+        AtomicUsize::new(0),
+    ));
+    let seen = Arc::clone(&counts);
+    let handlers = JobHandlers::default().with(JobKind::Rescore, move |_, job: Arc<JobContext>| {
+        let counts = Arc::clone(&seen);
+        Box::pin(async move {
+            let now = counts.0.fetch_add(1, Ordering::SeqCst) + 1;
+            counts.1.fetch_max(now, Ordering::SeqCst);
+            counts.2.fetch_add(1, Ordering::SeqCst);
+            // Works for 1.5 s unless told to stop, checking between units of work.
+            for _ in 0..30 {
+                if job.stop_requested().is_some() {
+                    break;
+                }
+                tokio::time::sleep(Duration::from_millis(50)).await;
+            }
+            counts.0.fetch_sub(1, Ordering::SeqCst);
+            Ok(())
+        })
+    });
+    let worker = Worker::spawn(hub.clone(), handlers, fast());
+    let admin = Actor::Operator("admin".into());
+    let id = enqueue(&pool, json!({"n": 7})).await;
+    wait_for(&hub, id, JobState::Running).await;
+    // Both before the next lease renewal (every 200 ms) tells the code about the pause.
+    jobs::control(&hub, &admin, id, JobControl::Pause)
+        .await
+        .unwrap();
+    jobs::control(&hub, &admin, id, JobControl::Resume)
+        .await
+        .unwrap();
+    wait_for(&hub, id, JobState::Done).await;
+    worker.stop().await;
+    assert_eq!(counts.1.load(Ordering::SeqCst), 1, "ran twice at once");
+    assert_eq!(
+        counts.2.load(Ordering::SeqCst),
+        2,
+        "started again after the resume"
+    );
+}
+
 #[tokio::test]
 async fn a_graceful_stop_lets_go_at_once_for_the_next_instance() {
     let dir = TempDir::new().unwrap();

@@ -34,6 +34,8 @@ mod pages;
 mod quality;
 mod remote_runs;
 mod rescore;
+mod run_instances;
+mod run_pages;
 mod runs;
 mod score;
 mod server_runs;

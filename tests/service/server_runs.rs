@@ -17,9 +17,9 @@ use crate::runs::{
 };
 use crate::standin::{StandIn, StandInConfig, Step};
 
-const KEY_VARIABLE: &str = "STANDIN_API_KEY";
+pub const KEY_VARIABLE: &str = "STANDIN_API_KEY";
 
-fn fast() -> JobSettings {
+pub fn fast() -> JobSettings {
     JobSettings {
         lease: Duration::from_millis(900),
         poll: Duration::from_millis(20),
@@ -29,7 +29,7 @@ fn fast() -> JobSettings {
     }
 }
 
-fn keyed(hub: Hub) -> Hub {
+pub fn keyed(hub: Hub) -> Hub {
     let keys = EndpointKeys::from_pairs([(KEY_VARIABLE.to_owned(), SECRET_KEY.to_owned())])
         .expect("an allowlist");
     hub.with_endpoint_keys(keys)

@@ -13,6 +13,7 @@
 
 mod asker;
 mod remote;
+mod responses;
 mod server;
 
 use std::collections::BTreeMap;
@@ -26,6 +27,10 @@ use tokio::task::JoinSet;
 
 pub use asker::{ApiKey, CallSettings};
 pub use remote::{RemoteHub, default_cache, execute_remote, study_datasets};
+pub use responses::{
+    Audience, RESPONSES_PER_PAGE, ResponsePage, RunOutput, output, public_runs, response_page,
+    visible_run,
+};
 pub use server::{EndpointKeys, RunCalls, ServerRunView, control, start, view, views, work};
 
 use super::submissions::{self, SubmissionRow, Submitted};

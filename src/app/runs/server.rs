@@ -206,7 +206,7 @@ pub async fn start(
     let identity = super::identity(hub, spec).await?;
     let mut tx = hub.begin().await?;
     let run = super::find_or_create(&mut tx, actor, spec, &identity).await?;
-    if let Some(job) = unfinished_job(&mut tx, run.id).await? {
+    if let Some(job) = unfinished_job(&mut tx, &run).await? {
         return Err(AppError::Conflict(format!(
             "run '{}' already has job {} ({}): pause, resume or cancel that one",
             run.name,
@@ -234,6 +234,7 @@ pub async fn start(
         actor,
     )
     .await?;
+    store::runs::set_job(&mut tx, run.id, job.0).await?;
     audit::record(
         &mut tx,
         actor,
@@ -247,13 +248,16 @@ pub async fn start(
     Ok((run, job))
 }
 
-/// The job of run `run_id` that has not ended, if there is one.
+/// The job of `run` that has not ended, if there is one.
 async fn unfinished_job(
     conn: &mut store::Conn,
-    run_id: i64,
+    run: &RunRow,
 ) -> Result<Option<jobs::JobRow>, AppError> {
-    let open = store::jobs::unfinished(conn, JobKind::ModelRun).await?;
-    Ok(open.into_iter().find(|job| run_of(job) == Some(run_id)))
+    let Some(job) = run.job else {
+        return Ok(None);
+    };
+    let job = store::jobs::get(conn, job).await?;
+    Ok(job.filter(|j| !j.state.is_final()))
 }
 
 /// How often a running job's progress is written at most.
@@ -380,38 +384,32 @@ fn view_of(run: &RunRow, job: Option<&jobs::JobRow>) -> ServerRunView {
     }
 }
 
-/// The run of a model-run job's payload.
-fn run_of(job: &jobs::JobRow) -> Option<i64> {
-    serde_json::from_str::<serde_json::Value>(&job.payload)
-        .ok()
-        .and_then(|p| p.get("run_id").and_then(serde_json::Value::as_i64))
-}
-
-/// Model-run jobs looked at when matching runs to their newest job.
-const JOBS_LOOKED_AT: i64 = 1000;
-
-/// Every run, newest first, with its newest job.
+/// Every run, newest first, with the job it was last started with.
 pub async fn views(hub: &Hub) -> Result<Vec<ServerRunView>, AppError> {
     let mut conn = hub.conn().await?;
     let runs = store::runs::list(&mut conn).await?;
-    let jobs = store::jobs::list(&mut conn, Some(JobKind::ModelRun), JOBS_LOOKED_AT).await?;
-    Ok(runs
-        .iter()
-        .map(|run| view_of(run, jobs.iter().find(|j| run_of(j) == Some(run.id))))
-        .collect())
+    let mut views = Vec::with_capacity(runs.len());
+    for run in &runs {
+        views.push(view_with_job(&mut conn, run).await?);
+    }
+    Ok(views)
 }
 
-/// One run by id with its newest job.
+async fn view_with_job(conn: &mut store::Conn, run: &RunRow) -> Result<ServerRunView, AppError> {
+    let job = match run.job {
+        Some(job) => store::jobs::get(conn, job).await?,
+        None => None,
+    };
+    Ok(view_of(run, job.as_ref()))
+}
+
+/// One run by id with the job it was last started with.
 pub async fn view(hub: &Hub, id: i64) -> Result<ServerRunView, AppError> {
     let mut conn = hub.conn().await?;
     let run = store::runs::by_id(&mut conn, id)
         .await?
         .ok_or_else(|| AppError::NotFound(format!("no model run {id}")))?;
-    let jobs = store::jobs::list(&mut conn, Some(JobKind::ModelRun), JOBS_LOOKED_AT).await?;
-    Ok(view_of(
-        &run,
-        jobs.iter().find(|j| run_of(j) == Some(run.id)),
-    ))
+    view_with_job(&mut conn, &run).await
 }
 
 /// Pauses, resumes or cancels run `id`'s newest job (audited as the job's change).
