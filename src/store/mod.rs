@@ -16,6 +16,7 @@ pub mod frames;
 pub mod items;
 pub mod jobs;
 pub mod runs;
+pub mod staged;
 pub mod studies;
 pub mod submissions;
 

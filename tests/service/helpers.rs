@@ -6,7 +6,7 @@ use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 
 use enact_hub::app::Hub;
-use enact_hub::app::import::{ImportOptions, ImportReport, import_release};
+use enact_hub::app::import::{BATCH_LINES, ImportOptions, ImportReport, import_release};
 use enact_hub::core::audit::Actor;
 use enact_hub::core::credentials::Role;
 use enact_hub::store;
@@ -101,6 +101,7 @@ pub fn options(dataset: &str) -> ImportOptions {
         replace: false,
         progress: None,
         scene_graphs: None,
+        batch_lines: BATCH_LINES,
     }
 }
 

@@ -33,6 +33,7 @@ mod rescore;
 mod runs;
 mod score;
 mod server_runs;
+mod staged;
 #[path = "../support/standin.rs"]
 mod standin;
 mod studies;
