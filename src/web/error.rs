@@ -75,10 +75,22 @@ impl IntoResponse for AppError {
                     .headers_mut()
                     .insert(header::RETRY_AFTER, HeaderValue::from(*retry_after));
             }
+            AppError::Unavailable(_) => retry_soon(&mut response),
             _ => {}
         }
         response
     }
+}
+
+/// Seconds a client is asked to wait before retrying a `503`: a busy database is free again
+/// once the write holding its lock (one batch of an import, at most) commits.
+const UNAVAILABLE_RETRY_AFTER: u32 = 1;
+
+fn retry_soon(response: &mut Response) {
+    response.headers_mut().insert(
+        header::RETRY_AFTER,
+        HeaderValue::from(UNAVAILABLE_RETRY_AFTER),
+    );
 }
 
 /// The same errors, shown as a page to people browsing the site.
@@ -109,9 +121,13 @@ impl IntoResponse for PageError {
             reason: status.canonical_reason().unwrap_or("Error"),
             message: error.to_string(),
         };
-        match page.render() {
+        let mut response = match page.render() {
             Ok(html) => (status, Html(html)).into_response(),
             Err(_) => (status, error.to_string()).into_response(),
+        };
+        if matches!(error, AppError::Unavailable(_)) {
+            retry_soon(&mut response);
         }
+        response
     }
 }

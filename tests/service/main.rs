@@ -11,6 +11,7 @@ mod audit;
 mod authorization;
 mod backup;
 mod browser;
+mod busy;
 mod cli;
 mod client;
 mod constraints;
