@@ -34,3 +34,11 @@ CREATE TABLE staged_signatures (
     signatures  TEXT NOT NULL,
     PRIMARY KEY (staged, item_id)
 );
+
+-- A replacing import's cut-over deletes the replaced items, and with them what was made on
+-- them; without these the delete scans each of these tables once per item.
+CREATE INDEX submission_items_by_item ON submission_items (item);
+CREATE INDEX annotations_by_item ON annotations (item);
+CREATE INDEX drafts_by_item ON drafts (item);
+CREATE INDEX agreement_samples_by_item ON agreement_samples (item);
+CREATE INDEX model_run_items_by_item ON model_run_items (item);

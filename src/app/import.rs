@@ -94,8 +94,9 @@ pub struct ImportOptions {
     /// `{task}/scene_graph_0.json`. Without it, inverse items get signatures parsed from their
     /// action text where possible (see `semantics`).
     pub scene_graphs: Option<PathBuf>,
-    /// Lines validated and written per batch, each batch its own transaction
-    /// ([`BATCH_LINES`] unless a caller tunes it).
+    /// Lines validated and written per batch at most, each batch its own transaction
+    /// ([`BATCH_LINES`] unless a caller tunes it); fewer while batches hold the write lock
+    /// longer than 100 ms.
     pub batch_lines: usize,
 }
 
@@ -188,6 +189,11 @@ pub struct ImportReport {
     /// An unfinished import of the dataset from another file or with other options was
     /// discarded first.
     pub discarded_staged: bool,
+    /// The longest any of the import's write transactions (a batch, or the cut-over) held the
+    /// database's write lock, and the cut-over's, in milliseconds: how long a running server's
+    /// writers may have waited for it.
+    pub longest_transaction_ms: f64,
+    pub cut_over_ms: f64,
     pub seconds: f64,
 }
 
@@ -623,7 +629,12 @@ pub async fn import_release(
     report.qa_file = file.clone();
     report.discarded_staged = discarded;
 
-    let mut validator = Validator::open(&location, options.scene_graphs.as_deref(), batch_lines)?;
+    // The first batch is small; later ones grow while they hold the lock briefly.
+    let mut validator = Validator::open(
+        &location,
+        options.scene_graphs.as_deref(),
+        batch_lines.min(FIRST_BATCH_LINES),
+    )?;
     let mut distinct_frames: HashSet<String> = HashSet::new();
     if staged.lines_done > 0 {
         let lines = usize::try_from(staged.lines_done).unwrap_or(0);
@@ -686,7 +697,10 @@ pub async fn import_release(
                 None => Vec::new(),
             };
             let frames = read_new_frames(hub, frame_store, &location.root, &to_write).await?;
+            let began = Instant::now();
             let mut tx = hub.pool.begin().await?;
+            // Timed from when the lock is held.
+            let held = Instant::now();
             write_items(&mut tx, staged.staging, &to_write, &frames, &mut report).await?;
             for (item_id, semantics) in &refreshes {
                 let json = signatures_json(item_id, semantics)?;
@@ -722,6 +736,16 @@ pub async fn import_release(
                 });
             }
             tx.commit().await?;
+            let held = held.elapsed().as_secs_f64() * 1000.0;
+            report.longest_transaction_ms = report.longest_transaction_ms.max(held);
+            validator_slot.batch_lines =
+                next_batch_lines(validator_slot.batch_lines, batch_lines, held);
+            tracing::debug!(
+                lines = lines_done,
+                waited_ms = (began.elapsed().as_secs_f64() * 1000.0 - held),
+                held_ms = held,
+                "import batch committed"
+            );
             lines_done = progress.lines_done;
         }
         ImportObserver::tell(observer, told(&validator_slot, false));
@@ -751,9 +775,30 @@ pub async fn import_release(
     report.frames = distinct_frames.len();
     // Frames of unchanged items are reused as well.
     report.reused_frames = report.frames.saturating_sub(report.new_frames);
-    publish(hub, actor, &staged, &run_token, &location, &report).await?;
+    report.cut_over_ms = publish(hub, actor, &staged, &run_token, &location, &report).await?;
+    report.longest_transaction_ms = report.longest_transaction_ms.max(report.cut_over_ms);
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// Lines of an import's first batch (at most), before it knows how fast the database writes.
+const FIRST_BATCH_LINES: usize = 16;
+
+/// How long one batch's transaction should hold the write lock at most: a running server's
+/// writers wait for it.
+const BATCH_TARGET_MS: f64 = 100.0;
+
+/// The lines of the next batch: halved after a batch that held the lock longer than
+/// [`BATCH_TARGET_MS`] (a slow database, or a busy machine), grown back towards `most` after
+/// one that held it under a quarter of it.
+fn next_batch_lines(lines: usize, most: usize, held_ms: f64) -> usize {
+    if held_ms > BATCH_TARGET_MS {
+        (lines / 2).max(1)
+    } else if held_ms < BATCH_TARGET_MS / 4.0 {
+        (lines * 2).min(most)
+    } else {
+        lines
+    }
 }
 
 fn to_i64(n: usize) -> i64 {
@@ -841,7 +886,8 @@ async fn file_sha256(path: &Path) -> Result<String, ImportError> {
 }
 
 /// The one short transaction that makes a fully written staged import the dataset's current
-/// version (or, if it wrote nothing, just removes it).
+/// version (or, if it wrote nothing, just removes it). Returns how long it held the write
+/// lock, in milliseconds.
 async fn publish(
     hub: &super::Hub,
     actor: &Actor,
@@ -849,9 +895,10 @@ async fn publish(
     run_token: &str,
     location: &ReleaseLocation,
     report: &ImportReport,
-) -> Result<(), ImportError> {
+) -> Result<f64, ImportError> {
     let dataset = &report.dataset;
     let mut tx = hub.pool.begin().await?;
+    let held = Instant::now();
     match store::staged::for_dataset(&mut tx, dataset).await? {
         Some(current) if current.id == staged.id && current.run_token == run_token => {}
         _ => {
@@ -908,7 +955,7 @@ async fn publish(
     };
     store::audit::insert(&mut tx, &record).await?;
     tx.commit().await?;
-    Ok(())
+    Ok(held.elapsed().as_secs_f64() * 1000.0)
 }
 
 /// How many rows one cleanup transaction deletes.

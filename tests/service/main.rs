@@ -27,6 +27,7 @@ mod import;
 mod instances;
 mod jobs;
 mod leaderboard;
+mod live_import;
 mod migrate_db;
 mod openapi;
 mod pages;

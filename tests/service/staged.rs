@@ -154,19 +154,33 @@ async fn an_interrupted_import_is_invisible_and_resumes_after_its_last_batch() {
     run_interrupted(&pool, &root, interrupted_after(batched("main", 10), 4)).await;
     assert_eq!(new_version_items(&pool, "main").await, (items, 0));
     assert_eq!(count(&pool, "SELECT count(*) FROM staged_imports").await, 2);
+    // 40 and 30 records, unless a batch held the lock over 100 ms and the next ones shrank.
+    let staged_row = "SELECT rows_done FROM staged_imports WHERE dataset = ";
+    let staged = count(&pool, &format!("{staged_row}'main'")).await;
+    let staged_other = count(&pool, &format!("{staged_row}'other'")).await;
+    assert!((4..=40).contains(&staged) && (3..=30).contains(&staged_other));
     assert_eq!(
         count(&pool, "SELECT count(*) FROM items").await,
-        items + 30 + 40,
+        items + staged + staged_other,
         "staged items wait beside the dataset's"
     );
 
-    // Run again: it resumes after the 40 records, writes only the other items, and lands.
+    // Run again: it resumes after those records, writes only the other items, and lands.
     let report = import(&pool, &root, &batched("main", 10)).await;
-    assert_eq!(report.resumed_rows, 40, "{}", report.summary_line());
-    assert_eq!(report.items_written as i64, items - 40);
+    assert_eq!(
+        report.resumed_rows as i64,
+        staged,
+        "{}",
+        report.summary_line()
+    );
+    assert_eq!(report.items_written as i64, items - staged);
     assert_eq!(report.replaced_items as i64, items);
     assert_eq!(report.rows as i64, items);
-    assert!(report.summary_line().contains("resumed after 40 records"));
+    assert!(
+        report
+            .summary_line()
+            .contains(&format!("resumed after {staged} records"))
+    );
     assert_eq!(new_version_items(&pool, "main").await, (items, items));
     let resumed = dataset_digest(&pool, "main").await;
 
@@ -187,7 +201,7 @@ async fn an_interrupted_import_is_invisible_and_resumes_after_its_last_batch() {
 
     // The other dataset's unfinished import resumes too.
     let other_report = import(&pool, &root, &batched("other", 10)).await;
-    assert_eq!(other_report.resumed_rows, 30);
+    assert_eq!(other_report.resumed_rows as i64, staged_other);
     assert_eq!(other_report.new_items as i64, items);
     assert_eq!(count(&pool, "SELECT count(*) FROM staged_imports").await, 0);
     assert_eq!(
@@ -233,7 +247,7 @@ async fn an_unfinished_import_is_abandoned_or_discarded_for_another_file() {
         .await
         .expect("abandon")
         .expect("there was an unfinished import");
-    assert_eq!(gone.rows_done, 16);
+    assert!((2..=16).contains(&gone.rows_done), "{}", gone.rows_done);
     assert_eq!(count(&pool, "SELECT count(*) FROM staged_imports").await, 0);
     assert_eq!(count(&pool, "SELECT count(*) FROM items").await, items);
     assert_eq!(
