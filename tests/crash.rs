@@ -30,7 +30,9 @@ use sha2::{Digest, Sha256};
 use sqlx::SqlitePool;
 use tempfile::TempDir;
 
-use helpers::{answers, write_balanced_release, write_qa_file};
+use helpers::{
+    answers, dataset_digest, with_changed_questions, write_balanced_release, write_qa_file,
+};
 
 fn kills() -> usize {
     std::env::var("ENACT_CRASH_KILLS")
@@ -163,18 +165,7 @@ async fn imports_killed_at_random_are_all_or_nothing() {
     let b = dir.path().join("b");
     std::fs::create_dir_all(&b).expect("dir");
     copy_dir(&a.join("QA"), &b.join("QA"));
-    let changed: Vec<String> = records
-        .iter()
-        .map(|r| {
-            let mut r = r.clone();
-            let q = r["question"]
-                .as_str()
-                .expect("question")
-                .replace("Now please", "Please");
-            r["question"] = Value::String(q);
-            r.to_string()
-        })
-        .collect();
+    let changed = with_changed_questions(&records);
     write_qa_file(&b, &changed);
     let items = records.len() as i64;
 
@@ -254,27 +245,9 @@ async fn imports_killed_at_random_are_all_or_nothing() {
     );
 }
 
-/// sha256 over everything dataset `main`'s items hold: fields, images, frames, signatures.
+/// [`dataset_digest`] of dataset `main`.
 async fn main_digest(pool: &SqlitePool) -> String {
-    let rows: Vec<(String, String, i64, String, String)> = sqlx::query_as(
-        "SELECT i.item_id, i.content_hash, i.source_line, i.question || i.gt_answer, \
-         coalesce((SELECT s.source || s.signatures FROM item_signatures s WHERE s.item = i.id), \
-         '') FROM items i JOIN datasets d ON d.id = i.dataset_id WHERE d.name = 'main' \
-         ORDER BY i.item_id",
-    )
-    .fetch_all(pool)
-    .await
-    .expect("items");
-    let images: Vec<(String, i64, String, String)> = sqlx::query_as(
-        "SELECT i.item_id, ii.position, ii.path, f.sha256 FROM item_images ii \
-         JOIN items i ON i.id = ii.item JOIN frames f ON f.id = ii.frame \
-         JOIN datasets d ON d.id = i.dataset_id WHERE d.name = 'main' \
-         ORDER BY i.item_id, ii.position",
-    )
-    .fetch_all(pool)
-    .await
-    .expect("images");
-    hex::encode(Sha256::digest(format!("{rows:?}{images:?}").as_bytes()))
+    dataset_digest(&store::Pool::Sqlite(pool.clone()), "main").await
 }
 
 /// Imports of 600 items in batches of 20 lines killed at random moments, each run resuming the
@@ -294,18 +267,7 @@ async fn killed_imports_resume_after_their_last_batch_to_the_uninterrupted_resul
     let b = dir.path().join("b");
     std::fs::create_dir_all(&b).expect("dir");
     copy_dir(&a.join("QA"), &b.join("QA"));
-    let changed: Vec<String> = records
-        .iter()
-        .map(|r| {
-            let mut r = r.clone();
-            let q = r["question"]
-                .as_str()
-                .expect("question")
-                .replace("Now please", "Please");
-            r["question"] = Value::String(q);
-            r.to_string()
-        })
-        .collect();
+    let changed = with_changed_questions(&records);
     write_qa_file(&b, &changed);
     let import = |db: &Path, from: &Path| {
         enact_hub()

@@ -418,6 +418,24 @@ impl Validator {
         })
     }
 
+    /// The next record of the file (blank lines are counted and passed over), `None` at its
+    /// end.
+    fn next_record(&mut self) -> Result<Option<String>, ImportError> {
+        for line in self.lines.by_ref() {
+            let line = line.map_err(|source| ImportError::Io {
+                path: self.location.qa_file.display().to_string(),
+                source,
+            })?;
+            self.lines_read += 1;
+            self.bytes_read += line.len() as u64 + 1;
+            if !line.trim().is_empty() {
+                self.rows += 1;
+                return Ok(Some(line));
+            }
+        }
+        Ok(None)
+    }
+
     /// Moves past the first `lines` lines (written by an earlier run), remembering each valid
     /// id's first line as [`Validator::next_batch`] would; returns the image paths of the
     /// valid records among them (`skipped` lists the lines that were invalid).
@@ -428,17 +446,9 @@ impl Validator {
     ) -> Result<HashSet<String>, ImportError> {
         let mut paths = HashSet::new();
         while self.lines_read < lines {
-            let Some(line) = self.lines.next() else { break };
-            let line = line.map_err(|source| ImportError::Io {
-                path: self.location.qa_file.display().to_string(),
-                source,
-            })?;
-            self.lines_read += 1;
-            self.bytes_read += line.len() as u64 + 1;
-            if line.trim().is_empty() {
-                continue;
-            }
-            self.rows += 1;
+            let Some(line) = self.next_record()? else {
+                break;
+            };
             if let Ok(item) = parse_release_line(&line) {
                 self.first_line
                     .entry(item.id.clone())
@@ -454,19 +464,24 @@ impl Validator {
     /// The next batch of up to [`BATCH_LINES`] records, `None` at the end of the file.
     fn next_batch(&mut self) -> Result<Option<Validated>, ImportError> {
         let mut parsed: Vec<(usize, Result<QaItem, Vec<FieldProblem>>)> = Vec::new();
-        while parsed.len() < self.batch_lines {
-            let Some(line) = self.lines.next() else { break };
-            let line = line.map_err(|source| ImportError::Io {
-                path: self.location.qa_file.display().to_string(),
-                source,
-            })?;
-            self.lines_read += 1;
-            self.bytes_read += line.len() as u64 + 1;
-            if line.trim().is_empty() {
-                continue;
+        // The size of the images the batch names, from the file system (the images are read
+        // later): a batch of large images is cut short, so its transaction stays short.
+        let mut named_bytes = 0u64;
+        while parsed.len() < self.batch_lines && named_bytes < BATCH_IMAGE_BYTES {
+            let Some(line) = self.next_record()? else {
+                break;
+            };
+            let item = parse_release_line(&line);
+            if let Ok(item) = &item {
+                named_bytes += item
+                    .images
+                    .iter()
+                    .filter_map(|p| image_path(&self.location.root, p).ok())
+                    .filter_map(|p| std::fs::metadata(p).ok())
+                    .map(|m| m.len())
+                    .sum::<u64>();
             }
-            self.rows += 1;
-            parsed.push((self.lines_read, parse_release_line(&line)));
+            parsed.push((self.lines_read, item));
         }
         if parsed.is_empty() {
             return Ok(None);
@@ -780,6 +795,10 @@ pub async fn import_release(
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)
 }
+
+/// Image bytes a batch names at most (one line's may exceed it): with new frames they are
+/// what its transaction writes.
+const BATCH_IMAGE_BYTES: u64 = 4 << 20;
 
 /// Lines of an import's first batch (at most), before it knows how fast the database writes.
 const FIRST_BATCH_LINES: usize = 16;

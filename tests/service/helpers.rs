@@ -528,3 +528,50 @@ pub async fn mini_study(server: &TestServer, name: &str) {
 pub async fn count(pool: &Pool, sql: &str) -> i64 {
     db!(pool, fetch_one, sqlx::query_scalar::<_, i64>(sql)).unwrap_or_else(|e| panic!("{sql}: {e}"))
 }
+
+/// The lines of a second version of a release: every question with another last line.
+pub fn with_changed_questions(records: &[Value]) -> Vec<String> {
+    records
+        .iter()
+        .map(|r| {
+            let mut r = r.clone();
+            let q = r["question"]
+                .as_str()
+                .expect("question")
+                .replace("Now please", "Please");
+            r["question"] = Value::String(q);
+            r.to_string()
+        })
+        .collect()
+}
+
+/// sha256 over everything a dataset's items hold: fields, images, frames and signatures (not
+/// row ids), to compare what two imports stored.
+pub async fn dataset_digest(pool: &Pool, dataset: &str) -> String {
+    use sha2::{Digest, Sha256};
+    let rows: Vec<(String, String, i64, String, String)> = db!(
+        pool,
+        fetch_all,
+        sqlx::query_as(
+            "SELECT i.item_id, i.content_hash, i.source_line, i.question || i.gt_answer, \
+             coalesce((SELECT s.source || s.signatures FROM item_signatures s \
+             WHERE s.item = i.id), '') FROM items i JOIN datasets d ON d.id = i.dataset_id \
+             WHERE d.name = $1 ORDER BY i.item_id"
+        )
+        .bind(dataset)
+    )
+    .expect("items");
+    let images: Vec<(String, i64, String, String)> = db!(
+        pool,
+        fetch_all,
+        sqlx::query_as(
+            "SELECT i.item_id, ii.position, ii.path, f.sha256 FROM item_images ii \
+             JOIN items i ON i.id = ii.item JOIN frames f ON f.id = ii.frame \
+             JOIN datasets d ON d.id = i.dataset_id WHERE d.name = $1 \
+             ORDER BY i.item_id, ii.position"
+        )
+        .bind(dataset)
+    )
+    .expect("images");
+    hex::encode(Sha256::digest(format!("{rows:?}{images:?}").as_bytes()))
+}

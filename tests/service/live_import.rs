@@ -80,18 +80,7 @@ async fn answers_and_submissions_flow_while_a_2000_item_dataset_is_imported_and_
     let big_records = write_balanced_release(&big, &[3, 5, 8], 334);
     let items = big_records.len();
     assert!(items >= 2000);
-    let changed: Vec<String> = big_records
-        .iter()
-        .map(|r| {
-            let mut r = r.clone();
-            let q = r["question"]
-                .as_str()
-                .expect("question")
-                .replace("Now please", "Please");
-            r["question"] = Value::String(q);
-            r.to_string()
-        })
-        .collect();
+    let changed = with_changed_questions(&big_records);
     let version_b = big.join("QA").join("version_b.jsonl");
     std::fs::write(&version_b, changed.join("\n") + "\n").expect("version b");
 

@@ -11,10 +11,10 @@ use enact_hub::app::import::{
 };
 use enact_hub::store::Pool;
 use serde_json::Value;
-use sha2::{Digest, Sha256};
 
 use crate::helpers::{
-    count, db, fresh_db, import, options, tester, write_balanced_release, write_qa_file,
+    count, dataset_digest, db, fresh_db, import, options, tester, with_changed_questions,
+    write_balanced_release, write_qa_file,
 };
 
 /// Options writing `batch` lines per transaction, replacing changed items.
@@ -56,48 +56,7 @@ async fn run_interrupted(pool: &Pool, root: &Path, options: ImportOptions) {
 
 /// Version B of a release: every question with another last line.
 fn changed_version(root: &Path, records: &[Value]) {
-    let lines: Vec<String> = records
-        .iter()
-        .map(|r| {
-            let mut r = r.clone();
-            let q = r["question"]
-                .as_str()
-                .expect("question")
-                .replace("Now please", "Please");
-            r["question"] = Value::String(q);
-            r.to_string()
-        })
-        .collect();
-    write_qa_file(root, &lines);
-}
-
-/// sha256 over everything a dataset's items hold: fields, images, frames and signatures.
-async fn dataset_digest(pool: &Pool, dataset: &str) -> String {
-    let rows: Vec<(String, String, i64, String, String)> = db!(
-        pool,
-        fetch_all,
-        sqlx::query_as(
-            "SELECT i.item_id, i.content_hash, i.source_line, i.question || i.gt_answer, \
-             coalesce((SELECT s.source || s.signatures FROM item_signatures s \
-             WHERE s.item = i.id), '') FROM items i JOIN datasets d ON d.id = i.dataset_id \
-             WHERE d.name = $1 ORDER BY i.item_id"
-        )
-        .bind(dataset)
-    )
-    .expect("items");
-    let images: Vec<(String, i64, String, String)> = db!(
-        pool,
-        fetch_all,
-        sqlx::query_as(
-            "SELECT i.item_id, ii.position, ii.path, f.sha256 FROM item_images ii \
-             JOIN items i ON i.id = ii.item JOIN frames f ON f.id = ii.frame \
-             JOIN datasets d ON d.id = i.dataset_id WHERE d.name = $1 \
-             ORDER BY i.item_id, ii.position"
-        )
-        .bind(dataset)
-    )
-    .expect("images");
-    hex::encode(Sha256::digest(format!("{rows:?}{images:?}").as_bytes()))
+    write_qa_file(root, &with_changed_questions(records));
 }
 
 /// Items of `dataset` with the new version's question.
