@@ -956,25 +956,36 @@ async fn publish(
     if wrote_items || report.signatures_updated > 0 {
         store::bump_content_generation(&mut tx).await?;
     }
+    let detail = format!(
+        "{}: {} new, {} replaced, {} unchanged items; {} signature tables updated; {} lines \
+         skipped",
+        report.qa_file,
+        report.new_items,
+        report.replaced_items,
+        report.unchanged_items,
+        report.signatures_updated,
+        report.skipped.len()
+    );
+    log_import(&mut tx, actor, dataset, detail).await?;
+    tx.commit().await?;
+    Ok(held.elapsed().as_secs_f64() * 1000.0)
+}
+
+/// The audit log's entry for what an import did to `dataset`.
+async fn log_import(
+    tx: &mut store::Conn,
+    actor: &Actor,
+    dataset: &str,
+    detail: String,
+) -> Result<(), sqlx::Error> {
     let record = AuditRecord {
         actor,
         action: AuditAction::DatasetImport,
         target: format!("dataset {dataset}"),
         dataset: Some(dataset),
-        detail: format!(
-            "{}: {} new, {} replaced, {} unchanged items; {} signature tables updated; {} \
-             lines skipped",
-            report.qa_file,
-            report.new_items,
-            report.replaced_items,
-            report.unchanged_items,
-            report.signatures_updated,
-            report.skipped.len()
-        ),
+        detail,
     };
-    store::audit::insert(&mut tx, &record).await?;
-    tx.commit().await?;
-    Ok(held.elapsed().as_secs_f64() * 1000.0)
+    store::audit::insert(tx, &record).await
 }
 
 /// How many rows one cleanup transaction deletes.
@@ -1043,17 +1054,11 @@ pub async fn abandon(
     discard(hub, &staged).await?;
     let summary = StagedSummary::from(&staged);
     let mut tx = hub.pool.begin().await?;
-    let record = AuditRecord {
-        actor,
-        action: AuditAction::DatasetImport,
-        target: format!("dataset {dataset}"),
-        dataset: Some(dataset),
-        detail: format!(
-            "abandoned the unfinished import of {} records (file sha256 {})",
-            summary.rows_done, summary.qa_file_sha256
-        ),
-    };
-    store::audit::insert(&mut tx, &record).await?;
+    let detail = format!(
+        "abandoned the unfinished import of {} records (file sha256 {})",
+        summary.rows_done, summary.qa_file_sha256
+    );
+    log_import(&mut tx, actor, dataset, detail).await?;
     tx.commit().await?;
     Ok(Some(summary))
 }

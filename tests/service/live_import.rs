@@ -113,35 +113,28 @@ async fn answers_and_submissions_flow_while_a_2000_item_dataset_is_imported_and_
                 let gt = records[item]["gt_answer"].as_array().expect("gt").clone();
                 let path = format!("/annotate/mini/{}", ids[item]);
                 let counts = json!({"placements": seq, "swaps": 0, "clears": 0, "undos": 0});
-                if seq % 8 == 0 && item + 1 < ids.len() {
-                    let started = Instant::now();
-                    let r = browser
-                        .post_json(
-                            &format!("{path}/submit"),
-                            Some(&csrf),
-                            &json!({"slots": gt, "counts": counts}),
-                        )
-                        .await;
-                    let status = r.status();
-                    let text = r.text().await.unwrap_or_default();
+                let answer = seq % 8 == 0 && item + 1 < ids.len();
+                let (action, slots) = if answer {
+                    ("submit", Value::Array(gt))
+                } else {
+                    ("draft", Value::Array(vec![Value::Null; gt.len()]))
+                };
+                let started = Instant::now();
+                let r = browser
+                    .post_json(
+                        &format!("{path}/{action}"),
+                        Some(&csrf),
+                        &json!({"slots": slots, "counts": counts}),
+                    )
+                    .await;
+                let status = r.status();
+                let text = r.text().await.unwrap_or_default();
+                if answer {
                     if answers.record("answer", started, status, &text) {
                         item += 1;
                     }
-                } else {
-                    let slots = vec![Value::Null; gt.len()];
-                    let started = Instant::now();
-                    let r = browser
-                        .post_json(
-                            &format!("{path}/draft"),
-                            Some(&csrf),
-                            &json!({"slots": slots, "counts": counts}),
-                        )
-                        .await;
-                    let status = r.status();
-                    let text = r.text().await.unwrap_or_default();
-                    if drafts.record("draft", started, status, &text) {
-                        last_draft = Some((ids[item].clone(), seq));
-                    }
+                } else if drafts.record("draft", started, status, &text) {
+                    last_draft = Some((ids[item].clone(), seq));
                 }
                 tokio::time::sleep(Duration::from_millis(20)).await;
             }
