@@ -3,7 +3,7 @@
 
 use anyhow::Context;
 
-use super::import::{ImportOptions, ImportReport, import_release};
+use super::import::{BATCH_LINES, ImportOptions, ImportReport, import_release};
 use super::{AppError, Hub, annotators, datasets, submissions};
 use crate::core::annotation::balanced_sample;
 use crate::core::audit::Actor;
@@ -40,6 +40,7 @@ pub async fn load(hub: &Hub) -> anyhow::Result<ImportReport> {
         replace: true,
         progress: None,
         scene_graphs: Some(written.replayed_dir),
+        batch_lines: BATCH_LINES,
     };
     let report = import_release(hub, &Actor::Server, dir.path(), &options)
         .await

@@ -43,8 +43,9 @@ pub enum AppError {
         message: String,
         retry_after: Option<u64>,
     },
-    /// Something the server depends on (frame storage) failed or is not configured; the
-    /// message names it.
+    /// Something the server depends on (frame storage, or the database when a write cannot
+    /// get its lock in time) failed or is not configured; the message names it. Worth
+    /// retrying after a moment.
     #[error("{0}")]
     Unavailable(String),
     #[error("internal error")]
@@ -69,9 +70,16 @@ impl From<sqlx::Error> for AppError {
                 "text with a NUL character (\\u0000) cannot be stored or looked up".into(),
             );
         }
+        if crate::store::db::is_busy(&e) {
+            return AppError::Unavailable(DATABASE_BUSY.to_owned());
+        }
         AppError::Internal(e.into())
     }
 }
+
+/// What a write that could not get the database's lock in time is told (with `503` and
+/// `Retry-After` on the web).
+pub const DATABASE_BUSY: &str = "the database is busy (another write held its lock too long); nothing was changed, retry in a moment";
 
 impl From<tokio::task::JoinError> for AppError {
     fn from(e: tokio::task::JoinError) -> Self {

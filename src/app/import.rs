@@ -1,10 +1,18 @@
 //! Importing an ENACT release (`QA/enact_ordering.jsonl` + images) into the store.
 //!
-//! Three phases, a batch of lines at a time inside one transaction, so that a bad file never
-//! leaves anything half-written and memory holds one batch whatever the release's size:
+//! Three phases, a batch of lines at a time, so memory holds one batch whatever the release's
+//! size:
 //! 1. read and validate the lines and every image they name (CPU work, on rayon threads);
 //! 2. decide per item: new, unchanged, or changed (an error unless `replace`);
-//! 3. write the batch, reading only the frames not stored yet.
+//! 3. write the batch's new and changed items in one short transaction of its own, reading
+//!    only the frames not stored yet, under the hidden staging row of a staged import
+//!    (`store::staged`) that no reader sees, with how far the import got.
+//!
+//! When every line is written and checked, one short transaction makes the staged items the
+//! dataset's (the cut-over): readers see the old dataset or the new one, never part, and a
+//! running server's writers wait for one batch at most, never for the whole import. A killed
+//! import resumes after its last committed batch when run again with the same file and
+//! options; `abandon` discards it.
 //!
 //! Kept across batches: each id's first line (duplicates) and each distinct frame's hash (the
 //! report's count), a few dozen bytes per item.
@@ -16,11 +24,12 @@ use std::path::{Component, Path, PathBuf};
 use std::time::Instant;
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use super::frames::{self, FrameStore};
 use crate::core::audit::{Actor, AuditAction, AuditRecord};
+use crate::core::credentials::random_token;
 use crate::core::dataset::{FieldProblem, QaItem, parse_release_line};
 use crate::core::semantics::{self, ItemSemantics, SignatureSource};
 use crate::store;
@@ -85,6 +94,10 @@ pub struct ImportOptions {
     /// `{task}/scene_graph_0.json`. Without it, inverse items get signatures parsed from their
     /// action text where possible (see `semantics`).
     pub scene_graphs: Option<PathBuf>,
+    /// Lines validated and written per batch at most, each batch its own transaction
+    /// ([`BATCH_LINES`] unless a caller tunes it); fewer while batches hold the write lock
+    /// longer than 100 ms.
+    pub batch_lines: usize,
 }
 
 /// How far an import has got: told after each batch and once at the end.
@@ -139,14 +152,15 @@ impl fmt::Display for LineProblem {
 }
 
 /// A line left out by `--skip-invalid`, with every reason.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SkippedLine {
     pub line: usize,
     pub item_id: Option<String>,
     pub problems: Vec<FieldProblem>,
 }
 
-#[derive(Debug, Clone, Default, Serialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default)]
 pub struct ImportReport {
     pub dataset: String,
     pub qa_file: String,
@@ -166,6 +180,20 @@ pub struct ImportReport {
     pub exact_only_items: usize,
     /// Unchanged items whose stored signatures were added or refreshed.
     pub signatures_updated: usize,
+    /// Items this run wrote (new and replaced ones; a resumed run leaves out those that
+    /// earlier runs' committed batches wrote).
+    pub items_written: usize,
+    /// Records an earlier, interrupted run of the same import had committed, which this run
+    /// resumed after.
+    pub resumed_rows: usize,
+    /// An unfinished import of the dataset from another file or with other options was
+    /// discarded first.
+    pub discarded_staged: bool,
+    /// The longest any of the import's write transactions (a batch, or the cut-over) held the
+    /// database's write lock, and the cut-over's, in milliseconds: how long a running server's
+    /// writers may have waited for it.
+    pub longest_transaction_ms: f64,
+    pub cut_over_ms: f64,
     pub seconds: f64,
 }
 
@@ -207,6 +235,17 @@ impl ImportReport {
         if !self.skipped.is_empty() {
             s.push_str(&format!("; {} invalid rows skipped", self.skipped.len()));
         }
+        if self.resumed_rows > 0 {
+            s.push_str(&format!(
+                "; resumed after {} records an interrupted run had written ({} items written now)",
+                self.resumed_rows, self.items_written
+            ));
+        }
+        if self.discarded_staged {
+            s.push_str(
+                "; an unfinished import from another file or with other options was discarded",
+            );
+        }
         s.push_str(&format!("; {:.2} s", self.seconds));
         s
     }
@@ -243,6 +282,13 @@ pub enum ImportError {
     /// Writing frames to the object store failed; nothing was imported.
     #[error("{0}; nothing was imported")]
     FrameStorage(String),
+    /// The unfinished import of the dataset cannot go on.
+    #[error("the unfinished import of dataset '{dataset}': {message}")]
+    Staged { dataset: String, message: String },
+    #[error(
+        "another run of the import into dataset '{dataset}' took it over (or it was abandoned); this one stopped, nothing of it is visible"
+    )]
+    TakenOver { dataset: String },
 }
 
 impl ImportError {
@@ -294,8 +340,8 @@ struct Validated {
 }
 
 /// How many lines are validated and written at a time: memory holds one batch, whatever the
-/// size of the file.
-const BATCH_LINES: usize = 512;
+/// size of the file, and a running server's writers wait for one batch's transaction at most.
+pub const BATCH_LINES: usize = 64;
 
 /// A path from the QA file, checked to stay inside the release root.
 fn image_path(root: &Path, relative: &str) -> Result<PathBuf, String> {
@@ -346,10 +392,15 @@ struct Validator {
     /// Image bytes read so far.
     image_bytes: u64,
     first_line: HashMap<String, usize>,
+    batch_lines: usize,
 }
 
 impl Validator {
-    fn open(location: &ReleaseLocation, scene_graphs: Option<&Path>) -> Result<Self, ImportError> {
+    fn open(
+        location: &ReleaseLocation,
+        scene_graphs: Option<&Path>,
+        batch_lines: usize,
+    ) -> Result<Self, ImportError> {
         let file = std::fs::File::open(&location.qa_file).map_err(|source| ImportError::Io {
             path: location.qa_file.display().to_string(),
             source,
@@ -363,25 +414,74 @@ impl Validator {
             bytes_read: 0,
             image_bytes: 0,
             first_line: HashMap::new(),
+            batch_lines,
         })
     }
 
-    /// The next batch of up to [`BATCH_LINES`] records, `None` at the end of the file.
-    fn next_batch(&mut self) -> Result<Option<Validated>, ImportError> {
-        let mut parsed: Vec<(usize, Result<QaItem, Vec<FieldProblem>>)> = Vec::new();
-        while parsed.len() < BATCH_LINES {
-            let Some(line) = self.lines.next() else { break };
+    /// The next record of the file (blank lines are counted and passed over), `None` at its
+    /// end.
+    fn next_record(&mut self) -> Result<Option<String>, ImportError> {
+        for line in self.lines.by_ref() {
             let line = line.map_err(|source| ImportError::Io {
                 path: self.location.qa_file.display().to_string(),
                 source,
             })?;
             self.lines_read += 1;
             self.bytes_read += line.len() as u64 + 1;
-            if line.trim().is_empty() {
-                continue;
+            if !line.trim().is_empty() {
+                self.rows += 1;
+                return Ok(Some(line));
             }
-            self.rows += 1;
-            parsed.push((self.lines_read, parse_release_line(&line)));
+        }
+        Ok(None)
+    }
+
+    /// Moves past the first `lines` lines (written by an earlier run), remembering each valid
+    /// id's first line as [`Validator::next_batch`] would; returns the image paths of the
+    /// valid records among them (`skipped` lists the lines that were invalid).
+    fn skip_lines(
+        &mut self,
+        lines: usize,
+        skipped: &HashSet<usize>,
+    ) -> Result<HashSet<String>, ImportError> {
+        let mut paths = HashSet::new();
+        while self.lines_read < lines {
+            let Some(line) = self.next_record()? else {
+                break;
+            };
+            if let Ok(item) = parse_release_line(&line) {
+                self.first_line
+                    .entry(item.id.clone())
+                    .or_insert(self.lines_read);
+                if !skipped.contains(&self.lines_read) {
+                    paths.extend(item.images);
+                }
+            }
+        }
+        Ok(paths)
+    }
+
+    /// The next batch of up to [`BATCH_LINES`] records, `None` at the end of the file.
+    fn next_batch(&mut self) -> Result<Option<Validated>, ImportError> {
+        let mut parsed: Vec<(usize, Result<QaItem, Vec<FieldProblem>>)> = Vec::new();
+        // The size of the images the batch names, from the file system (the images are read
+        // later): a batch of large images is cut short, so its transaction stays short.
+        let mut named_bytes = 0u64;
+        while parsed.len() < self.batch_lines && named_bytes < BATCH_IMAGE_BYTES {
+            let Some(line) = self.next_record()? else {
+                break;
+            };
+            let item = parse_release_line(&line);
+            if let Ok(item) = &item {
+                named_bytes += item
+                    .images
+                    .iter()
+                    .filter_map(|p| image_path(&self.location.root, p).ok())
+                    .filter_map(|p| std::fs::metadata(p).ok())
+                    .map(|m| m.len())
+                    .sum::<u64>();
+            }
+            parsed.push((self.lines_read, item));
         }
         if parsed.is_empty() {
             return Ok(None);
@@ -502,11 +602,14 @@ fn content_hash(row: &ValidRow) -> String {
     hex::encode(Sha256::digest(canonical.to_string().as_bytes()))
 }
 
-/// Imports a release into `options.dataset`. See the module documentation for the phases;
-/// they run a batch of lines at a time inside the one transaction, so memory holds a batch
-/// whatever the size of the release. After the first invalid line (without `skip_invalid`) or
-/// conflicting item, nothing more is written but every line is still checked, so the error
-/// lists every problem; the transaction is then rolled back.
+/// Imports a release into `options.dataset`, staged: each batch of lines is validated, then
+/// its new and changed items are written in their own short transaction under a hidden
+/// staging row that no reader sees (`store::staged`), with how far the import got; when every
+/// line is written and checked, one short transaction moves them into the dataset. A failed
+/// import (invalid lines without `skip_invalid`, conflicts without `replace`) leaves nothing
+/// visible and removes what it staged; a killed one is resumed by running it again with the
+/// same file and options. After the first invalid line or conflicting item nothing more is
+/// written, but every line is still checked so the error lists every problem.
 pub async fn import_release(
     hub: &super::Hub,
     actor: &Actor,
@@ -519,7 +622,40 @@ pub async fn import_release(
     let qa_bytes = std::fs::metadata(&location.qa_file)
         .map(|m| m.len())
         .unwrap_or(0);
-    let validator = Validator::open(&location, options.scene_graphs.as_deref())?;
+    let file_sha256 = file_sha256(&location.qa_file).await?;
+    let run_token = random_token();
+    let batch_lines = options.batch_lines.max(1);
+    let (staged, discarded) =
+        start_staged(hub, options, &location, &file_sha256, &run_token).await?;
+
+    let mut report = if staged.lines_done > 0 {
+        let mut report: ImportReport =
+            serde_json::from_str(&staged.report).map_err(|e| ImportError::Staged {
+                dataset: options.dataset.clone(),
+                message: format!("its recorded progress cannot be read ({e}); abandon it"),
+            })?;
+        report.items_written = 0;
+        report.resumed_rows = usize::try_from(staged.rows_done).unwrap_or(0);
+        report
+    } else {
+        ImportReport::default()
+    };
+    report.dataset = options.dataset.clone();
+    report.qa_file = file.clone();
+    report.discarded_staged = discarded;
+
+    // The first batch is small; later ones grow while they hold the lock briefly.
+    let mut validator = Validator::open(
+        &location,
+        options.scene_graphs.as_deref(),
+        batch_lines.min(FIRST_BATCH_LINES),
+    )?;
+    let mut distinct_frames: HashSet<String> = HashSet::new();
+    if staged.lines_done > 0 {
+        let lines = usize::try_from(staged.lines_done).unwrap_or(0);
+        let skipped: HashSet<usize> = report.skipped.iter().map(|s| s.line).collect();
+        (validator, distinct_frames) = skim(validator, lines, skipped).await?;
+    }
     let observer = options.progress.as_ref();
     let told = |validator: &Validator, finished: bool| ImportProgress {
         qa_bytes_read: validator.bytes_read,
@@ -528,29 +664,20 @@ pub async fn import_release(
         image_bytes: validator.image_bytes,
         finished,
     };
-    let (mut validator, mut next) = next_batch(validator).await?;
+    ImportObserver::tell(observer, told(&validator, false));
 
-    // The write lock is taken now and kept to the end (later batches are validated while it is
-    // held): SQLite's IMMEDIATE (a deferred transaction that read first and wrote a batch later
-    // would fail at once if a running server wrote in between, instead of waiting), or
-    // PostgreSQL's advisory write lock (`Pool::begin`).
-    let mut tx = hub.pool.begin().await?;
-    let existing_dataset = store::datasets::by_name(&mut tx, &options.dataset).await?;
-    let stored_hashes = match &existing_dataset {
-        Some(d) => store::items::content_hashes(&mut tx, d.id).await?,
+    // What the file is checked against: the dataset as it is now (the cut-over refuses if it
+    // changed meanwhile).
+    let stored_hashes = match staged.target {
+        Some(id) => store::items::content_hashes(&mut hub.pool.acquire().await?, id).await?,
         None => HashMap::new(),
     };
-    let mut report = ImportReport {
-        dataset: options.dataset.clone(),
-        qa_file: file.clone(),
-        ..ImportReport::default()
-    };
-    let mut invalid: Vec<SkippedLine> = Vec::new();
+    let mut invalid: Vec<SkippedLine> = std::mem::take(&mut report.skipped);
     let mut conflicts: Vec<LineProblem> = Vec::new();
-    let mut distinct_frames: HashSet<String> = HashSet::new();
-    let mut dataset_id: Option<i64> = None;
-    let mut wrote_items = false;
+    let mut lines_done = staged.lines_done;
+    let frame_store = hub.frame_store();
 
+    let (mut validator_slot, mut next) = next_batch(validator).await?;
     while let Some(batch) = next {
         invalid.extend(batch.invalid);
         let refused = !options.skip_invalid && !invalid.is_empty();
@@ -580,36 +707,71 @@ pub async fn import_release(
         }
         // Once the import is bound to fail, the rest of the file is only checked.
         if !refused && conflicts.is_empty() {
-            if !to_write.is_empty() {
-                let id = match dataset_id {
-                    Some(id) => id,
-                    None => {
-                        let id = store::datasets::ensure(
-                            &mut tx,
-                            &options.dataset,
-                            &location.root.display().to_string(),
-                        )
-                        .await?;
-                        dataset_id = Some(id);
-                        id
-                    }
-                };
-                let frames = hub.frame_store();
-                write_items(&mut tx, frames, id, &location.root, &to_write, &mut report).await?;
-                wrote_items = true;
+            let refreshes = match staged.target {
+                Some(id) => signature_refreshes(hub, id, &batch.valid, &stored_hashes).await?,
+                None => Vec::new(),
+            };
+            let frames = read_new_frames(hub, frame_store, &location.root, &to_write).await?;
+            let began = Instant::now();
+            let mut tx = hub.pool.begin().await?;
+            // Timed from when the lock is held.
+            let held = Instant::now();
+            write_items(&mut tx, staged.staging, &to_write, &frames, &mut report).await?;
+            for (item_id, semantics) in &refreshes {
+                let json = signatures_json(item_id, semantics)?;
+                store::staged::stage_signatures(
+                    &mut tx,
+                    staged.id,
+                    item_id,
+                    semantics.source,
+                    &json,
+                )
+                .await?;
             }
-            if let Some(dataset) = &existing_dataset {
-                report.signatures_updated +=
-                    refresh_semantics(&mut tx, dataset.id, &batch.valid, &stored_hashes).await?;
+            report.signatures_updated += refreshes.len();
+            report.items_written += to_write.len();
+            let mut recorded = report.clone();
+            recorded.skipped.clone_from(&invalid);
+            let recorded = serde_json::to_string(&recorded).map_err(|e| ImportError::Staged {
+                dataset: options.dataset.clone(),
+                message: format!("cannot record its progress: {e}"),
+            })?;
+            let validator = &validator_slot;
+            let progress = store::staged::StagedProgress {
+                lines_done: to_i64(validator.lines_read),
+                rows_done: to_i64(validator.rows),
+                bytes_done: to_i64(validator.bytes_read as usize),
+                report: &recorded,
+            };
+            if !store::staged::record_batch(&mut tx, staged.id, &run_token, lines_done, &progress)
+                .await?
+            {
+                return Err(ImportError::TakenOver {
+                    dataset: options.dataset.clone(),
+                });
             }
+            tx.commit().await?;
+            let held = held.elapsed().as_secs_f64() * 1000.0;
+            report.longest_transaction_ms = report.longest_transaction_ms.max(held);
+            validator_slot.batch_lines =
+                next_batch_lines(validator_slot.batch_lines, batch_lines, held);
+            tracing::debug!(
+                lines = lines_done,
+                waited_ms = (began.elapsed().as_secs_f64() * 1000.0 - held),
+                held_ms = held,
+                "import batch committed"
+            );
+            lines_done = progress.lines_done;
         }
-        ImportObserver::tell(observer, told(&validator, false));
-        (validator, next) = next_batch(validator).await?;
+        ImportObserver::tell(observer, told(&validator_slot, false));
+        (validator_slot, next) = next_batch(validator_slot).await?;
     }
+    let validator = validator_slot;
     ImportObserver::tell(observer, told(&validator, true));
     report.rows = validator.rows;
     invalid.sort_by_key(|s| s.line);
     if !invalid.is_empty() && !options.skip_invalid {
+        discard(hub, &staged).await?;
         return Err(ImportError::Invalid {
             file,
             rows: report.rows,
@@ -617,6 +779,7 @@ pub async fn import_release(
         });
     }
     if !conflicts.is_empty() {
+        discard(hub, &staged).await?;
         return Err(ImportError::Conflict {
             file,
             dataset: options.dataset.clone(),
@@ -625,43 +788,313 @@ pub async fn import_release(
     }
     report.skipped = invalid;
     report.frames = distinct_frames.len();
+    // Frames of unchanged items are reused as well.
+    report.reused_frames = report.frames.saturating_sub(report.new_frames);
+    report.cut_over_ms = publish(hub, actor, &staged, &run_token, &location, &report).await?;
+    report.longest_transaction_ms = report.longest_transaction_ms.max(report.cut_over_ms);
+    report.seconds = started.elapsed().as_secs_f64();
+    Ok(report)
+}
 
+/// Image bytes a batch names at most (one line's may exceed it): with new frames they are
+/// what its transaction writes.
+const BATCH_IMAGE_BYTES: u64 = 4 << 20;
+
+/// Lines of an import's first batch (at most), before it knows how fast the database writes.
+const FIRST_BATCH_LINES: usize = 16;
+
+/// How long one batch's transaction should hold the write lock at most: a running server's
+/// writers wait for it.
+const BATCH_TARGET_MS: f64 = 100.0;
+
+/// The lines of the next batch: halved after a batch that held the lock longer than
+/// [`BATCH_TARGET_MS`] (a slow database, or a busy machine), grown back towards `most` after
+/// one that held it under a quarter of it.
+fn next_batch_lines(lines: usize, most: usize, held_ms: f64) -> usize {
+    if held_ms > BATCH_TARGET_MS {
+        (lines / 2).max(1)
+    } else if held_ms < BATCH_TARGET_MS / 4.0 {
+        (lines * 2).min(most)
+    } else {
+        lines
+    }
+}
+
+fn to_i64(n: usize) -> i64 {
+    i64::try_from(n).unwrap_or(i64::MAX)
+}
+
+/// Finds the staged import of `options.dataset` to resume (same file, same options, the
+/// dataset as it was) and takes it over, or discards a stale one and starts afresh. Returns
+/// the staged import and whether a stale one was discarded.
+async fn start_staged(
+    hub: &super::Hub,
+    options: &ImportOptions,
+    location: &ReleaseLocation,
+    file_sha256: &str,
+    run_token: &str,
+) -> Result<(store::staged::StagedImport, bool), ImportError> {
+    let fingerprint = options_fingerprint(options);
+    let source = location.root.display().to_string();
+    let mut discarded = false;
+    loop {
+        let mut tx = hub.pool.begin().await?;
+        let target = store::datasets::by_name(&mut tx, &options.dataset)
+            .await?
+            .map(|d| d.id);
+        match store::staged::for_dataset(&mut tx, &options.dataset).await? {
+            Some(staged)
+                if staged.file_sha256 == file_sha256
+                    && staged.options == fingerprint
+                    && staged.target == target =>
+            {
+                store::staged::claim(&mut tx, staged.id, run_token).await?;
+                tx.commit().await?;
+                return Ok((staged, discarded));
+            }
+            Some(stale) => {
+                tx.rollback().await?;
+                discard(hub, &stale).await?;
+                discarded = true;
+            }
+            None => {
+                let staged = store::staged::create(
+                    &mut tx,
+                    &options.dataset,
+                    &source,
+                    target,
+                    file_sha256,
+                    &fingerprint,
+                    run_token,
+                )
+                .await?;
+                tx.commit().await?;
+                return Ok((staged, discarded));
+            }
+        }
+    }
+}
+
+/// What of the options changes what an import writes; a resumed import must match it.
+fn options_fingerprint(options: &ImportOptions) -> String {
+    serde_json::json!({
+        "replace": options.replace,
+        "skip_invalid": options.skip_invalid,
+        "scene_graphs": options.scene_graphs.as_ref().map(|p| p.display().to_string()),
+    })
+    .to_string()
+}
+
+/// sha256 of a file, read on a blocking thread.
+async fn file_sha256(path: &Path) -> Result<String, ImportError> {
+    let path = path.to_path_buf();
+    tokio::task::spawn_blocking(move || {
+        let mut file = std::fs::File::open(&path).map_err(|source| ImportError::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        let mut hasher = Sha256::new();
+        std::io::copy(&mut file, &mut hasher).map_err(|source| ImportError::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        Ok(hex::encode(hasher.finalize()))
+    })
+    .await
+    .map_err(|e| ImportError::Location(format!("hashing task failed: {e}")))?
+}
+
+/// The one short transaction that makes a fully written staged import the dataset's current
+/// version (or, if it wrote nothing, just removes it). Returns how long it held the write
+/// lock, in milliseconds.
+async fn publish(
+    hub: &super::Hub,
+    actor: &Actor,
+    staged: &store::staged::StagedImport,
+    run_token: &str,
+    location: &ReleaseLocation,
+    report: &ImportReport,
+) -> Result<f64, ImportError> {
+    let dataset = &report.dataset;
+    let mut tx = hub.pool.begin().await?;
+    let held = Instant::now();
+    match store::staged::for_dataset(&mut tx, dataset).await? {
+        Some(current) if current.id == staged.id && current.run_token == run_token => {}
+        _ => {
+            return Err(ImportError::TakenOver {
+                dataset: dataset.clone(),
+            });
+        }
+    }
+    let target = store::datasets::by_name(&mut tx, dataset).await?;
+    if target.as_ref().map(|d| d.id) != staged.target {
+        return Err(ImportError::Staged {
+            dataset: dataset.clone(),
+            message: "the dataset was created or removed while the import ran; run it again"
+                .to_owned(),
+        });
+    }
+    let wrote_items = report.new_items + report.replaced_items > 0;
+    match &target {
+        None if wrote_items => store::staged::publish_as_new(&mut tx, staged).await?,
+        None => store::staged::remove(&mut tx, staged).await?,
+        Some(target) => {
+            let source = location.root.display().to_string();
+            store::staged::publish_into(&mut tx, staged, target.id, &source).await?;
+            store::staged::remove(&mut tx, staged).await?;
+            // Stored error analyses were computed from the old items or signatures.
+            if report.signatures_updated + report.replaced_items > 0 {
+                store::submissions::clear_error_analyses(&mut tx, target.id).await?;
+            }
+            // Human verdicts were judged with the old signatures (answers on replaced items
+            // went with them): judged again here, in the same transaction.
+            if report.signatures_updated > 0 {
+                super::rescore::rejudge_dataset(&mut tx, target.id).await?;
+            }
+        }
+    }
     if wrote_items || report.signatures_updated > 0 {
         store::bump_content_generation(&mut tx).await?;
     }
-    if let Some(dataset) = &existing_dataset {
-        // Stored error analyses were computed from the old items or signatures.
-        if report.signatures_updated + report.replaced_items > 0 {
-            store::submissions::clear_error_analyses(&mut tx, dataset.id).await?;
-        }
-        // Human verdicts were judged with the old signatures (answers on replaced items went
-        // with them): judged again here, in the same transaction.
-        if report.signatures_updated > 0 {
-            super::rescore::rejudge_dataset(&mut tx, dataset.id).await?;
-        }
-    }
-    // Frames of unchanged items are reused as well.
-    report.reused_frames = report.frames - report.new_frames;
+    let detail = format!(
+        "{}: {} new, {} replaced, {} unchanged items; {} signature tables updated; {} lines \
+         skipped",
+        report.qa_file,
+        report.new_items,
+        report.replaced_items,
+        report.unchanged_items,
+        report.signatures_updated,
+        report.skipped.len()
+    );
+    log_import(&mut tx, actor, dataset, detail).await?;
+    tx.commit().await?;
+    Ok(held.elapsed().as_secs_f64() * 1000.0)
+}
+
+/// The audit log's entry for what an import did to `dataset`.
+async fn log_import(
+    tx: &mut store::Conn,
+    actor: &Actor,
+    dataset: &str,
+    detail: String,
+) -> Result<(), sqlx::Error> {
     let record = AuditRecord {
         actor,
         action: AuditAction::DatasetImport,
-        target: format!("dataset {}", options.dataset),
-        dataset: Some(&options.dataset),
-        detail: format!(
-            "{}: {} new, {} replaced, {} unchanged items; {} signature tables updated; {} \
-             lines skipped",
-            report.qa_file,
-            report.new_items,
-            report.replaced_items,
-            report.unchanged_items,
-            report.signatures_updated,
-            report.skipped.len()
-        ),
+        target: format!("dataset {dataset}"),
+        dataset: Some(dataset),
+        detail,
     };
-    store::audit::insert(&mut tx, &record).await?;
+    store::audit::insert(tx, &record).await
+}
+
+/// How many rows one cleanup transaction deletes.
+const DELETE_BATCH: i64 = 256;
+
+/// Removes a staged import and everything it wrote, a few hundred rows per transaction.
+async fn discard(
+    hub: &super::Hub,
+    staged: &store::staged::StagedImport,
+) -> Result<(), sqlx::Error> {
+    loop {
+        let mut tx = hub.pool.begin().await?;
+        let deleted = store::staged::delete_items(&mut tx, staged.staging, DELETE_BATCH).await?;
+        tx.commit().await?;
+        if deleted == 0 {
+            break;
+        }
+    }
+    let mut tx = hub.pool.begin().await?;
+    store::staged::remove(&mut tx, staged).await?;
     tx.commit().await?;
-    report.seconds = started.elapsed().as_secs_f64();
-    Ok(report)
+    loop {
+        let mut tx = hub.pool.begin().await?;
+        let deleted = store::staged::delete_unused_frames(&mut tx, DELETE_BATCH).await?;
+        tx.commit().await?;
+        if deleted == 0 {
+            return Ok(());
+        }
+    }
+}
+
+/// A staged import, as `import --abandon` and the list of stale ones show it.
+#[derive(Debug, Clone, Serialize)]
+pub struct StagedSummary {
+    pub dataset: String,
+    pub qa_file_sha256: String,
+    /// Records of the file written by committed batches.
+    pub rows_done: i64,
+    pub started_at: String,
+    pub updated_at: String,
+}
+
+impl From<&store::staged::StagedImport> for StagedSummary {
+    fn from(s: &store::staged::StagedImport) -> Self {
+        StagedSummary {
+            dataset: s.dataset.clone(),
+            qa_file_sha256: s.file_sha256.clone(),
+            rows_done: s.rows_done,
+            started_at: s.started_at.clone(),
+            updated_at: s.updated_at.clone(),
+        }
+    }
+}
+
+/// Discards the staged (unfinished) import of `dataset`; `None` if there is none. The
+/// dataset itself is untouched.
+pub async fn abandon(
+    hub: &super::Hub,
+    actor: &Actor,
+    dataset: &str,
+) -> Result<Option<StagedSummary>, ImportError> {
+    let staged = store::staged::for_dataset(&mut hub.pool.acquire().await?, dataset).await?;
+    let Some(staged) = staged else {
+        return Ok(None);
+    };
+    discard(hub, &staged).await?;
+    let summary = StagedSummary::from(&staged);
+    let mut tx = hub.pool.begin().await?;
+    let detail = format!(
+        "abandoned the unfinished import of {} records (file sha256 {})",
+        summary.rows_done, summary.qa_file_sha256
+    );
+    log_import(&mut tx, actor, dataset, detail).await?;
+    tx.commit().await?;
+    Ok(Some(summary))
+}
+
+/// Staged imports no batch was written to for `hours` hours (killed and never resumed).
+pub async fn stale(hub: &super::Hub, hours: u32) -> Result<Vec<StagedSummary>, ImportError> {
+    let mut conn = hub.pool.acquire().await?;
+    let staged = store::staged::idle_for_hours(&mut conn, i64::from(hours)).await?;
+    Ok(staged.iter().map(StagedSummary::from).collect())
+}
+
+/// The validator moved past the first `lines` lines of the file, which committed batches of
+/// an earlier run wrote: each line is parsed again (for duplicate ids) and the images of its
+/// valid items hashed (for the report's count of distinct frames), but nothing is decoded
+/// or written.
+async fn skim(
+    mut validator: Validator,
+    lines: usize,
+    skipped: HashSet<usize>,
+) -> Result<(Validator, HashSet<String>), ImportError> {
+    tokio::task::spawn_blocking(move || {
+        let paths = validator.skip_lines(lines, &skipped)?;
+        let root = validator.location.root.clone();
+        let hashed: Vec<(String, u64)> = paths
+            .into_par_iter()
+            .filter_map(|p| {
+                let bytes = std::fs::read(image_path(&root, &p).ok()?).ok()?;
+                Some((hex::encode(Sha256::digest(&bytes)), bytes.len() as u64))
+            })
+            .collect();
+        validator.image_bytes += hashed.iter().map(|(_, n)| n).sum::<u64>();
+        let frames = hashed.into_iter().map(|(h, _)| h).collect();
+        Ok((validator, frames))
+    })
+    .await
+    .map_err(|e| ImportError::Location(format!("validation task failed: {e}")))?
 }
 
 /// The validator's next batch, validated on a blocking thread.
@@ -677,131 +1110,135 @@ async fn next_batch(
     Ok((validator, batch?))
 }
 
-/// Writes a batch's new and replaced items, storing each frame not stored yet (read again
-/// from disk and checked against what was validated). Frames are looked up by hash in the
-/// store (the transaction sees its own inserts), so nothing grows with the release here.
-/// With an object store, the batch's new frames are written there first, several at a time,
-/// and their rows hold no bytes; if the import then fails, the objects stay (they are named
-/// by their content, and a later import of them finds them in place).
-async fn write_items(
-    tx: &mut store::Conn,
+/// The bytes of a batch's frames not stored yet, read from disk (and checked against what was
+/// validated) before its transaction begins, so the transaction only writes. With an object
+/// store they are written there now, several at a time, and their rows will hold no bytes; if
+/// the import then fails the objects stay (named by their content, a later import finds them).
+async fn read_new_frames(
+    hub: &super::Hub,
     frame_store: &FrameStore,
-    dataset_id: i64,
     root: &Path,
     rows: &[(&ValidRow, String, bool)],
-    report: &mut ImportReport,
-) -> Result<(), ImportError> {
-    if let Some(objects) = frame_store.objects() {
-        let mut missing = Vec::new();
-        let mut seen = HashSet::new();
-        for (row, _, _) in rows {
-            for (facts, path) in row.frames.iter().zip(&row.item.images) {
-                if seen.insert(facts.sha256.as_str())
-                    && store::frames::id_by_hash(&mut *tx, &facts.sha256)
-                        .await?
-                        .is_none()
-                {
-                    missing.push((facts, path));
-                }
+) -> Result<HashMap<String, Vec<u8>>, ImportError> {
+    let mut conn = hub.pool.acquire().await?;
+    let mut missing = Vec::new();
+    let mut seen = HashSet::new();
+    for (row, _, _) in rows {
+        for (facts, path) in row.frames.iter().zip(&row.item.images) {
+            if seen.insert(facts.sha256.as_str())
+                && store::frames::id_by_hash(&mut conn, &facts.sha256)
+                    .await?
+                    .is_none()
+            {
+                missing.push((facts, path));
             }
-        }
-        // A few frames in memory at a time, written concurrently.
-        for chunk in missing.chunks(frames::PUTS_IN_FLIGHT) {
-            let mut uploads = Vec::with_capacity(chunk.len());
-            for (facts, path) in chunk {
-                let bytes = read_frame(root, path, facts).await?;
-                uploads.push((facts.sha256.clone(), bytes::Bytes::from(bytes)));
-            }
-            frames::put_all(objects, uploads.into_iter())
-                .await
-                .map_err(|e| ImportError::FrameStorage(e.to_string()))?;
         }
     }
+    drop(conn);
+    let mut bytes_by_hash = HashMap::new();
+    match frame_store.objects() {
+        Some(objects) => {
+            // A few frames in memory at a time, written concurrently.
+            for chunk in missing.chunks(frames::PUTS_IN_FLIGHT) {
+                let mut uploads = Vec::with_capacity(chunk.len());
+                for (facts, path) in chunk {
+                    let bytes = read_frame(root, path, facts).await?;
+                    uploads.push((facts.sha256.clone(), bytes::Bytes::from(bytes)));
+                }
+                frames::put_all(objects, uploads.into_iter())
+                    .await
+                    .map_err(|e| ImportError::FrameStorage(e.to_string()))?;
+            }
+        }
+        None => {
+            for (facts, path) in missing {
+                let bytes = read_frame(root, path, facts).await?;
+                bytes_by_hash.insert(facts.sha256.clone(), bytes);
+            }
+        }
+    }
+    Ok(bytes_by_hash)
+}
+
+/// Writes a batch's new and replaced items under the staging row, storing each frame not
+/// stored yet. `frames` holds the bytes [`read_new_frames`] read; a frame another import
+/// stored meanwhile is found by its hash, one it did not read (held in an object store) gets
+/// a row without bytes.
+async fn write_items(
+    tx: &mut store::Conn,
+    staging: i64,
+    rows: &[(&ValidRow, String, bool)],
+    frames: &HashMap<String, Vec<u8>>,
+    report: &mut ImportReport,
+) -> Result<(), ImportError> {
     for (row, hash, replacing) in rows {
         let mut ids = Vec::with_capacity(row.frames.len());
-        for (facts, path) in row.frames.iter().zip(&row.item.images) {
+        for facts in &row.frames {
             let id = match store::frames::id_by_hash(&mut *tx, &facts.sha256).await? {
                 Some(id) => id,
                 None => {
-                    // Held in the object store (written above), or here.
-                    let bytes = match frame_store {
-                        FrameStore::Objects(_) => Vec::new(),
-                        FrameStore::Database => read_frame(root, path, facts).await?,
-                    };
+                    let bytes = frames.get(&facts.sha256).map_or(&[][..], Vec::as_slice);
                     report.new_frames += 1;
-                    store::frames::insert(
-                        &mut *tx,
-                        &facts.sha256,
-                        facts.width,
-                        facts.height,
-                        &bytes,
-                    )
-                    .await?
+                    store::frames::insert(&mut *tx, &facts.sha256, facts.width, facts.height, bytes)
+                        .await?
                 }
             };
             ids.push(id);
         }
         if *replacing {
-            store::items::delete(&mut *tx, dataset_id, &row.item.id).await?;
             report.replaced_items += 1;
         } else {
             report.new_items += 1;
         }
-        store::items::insert(&mut *tx, dataset_id, &row.item, hash, row.line, &ids).await?;
+        store::items::insert(&mut *tx, staging, &row.item, hash, row.line, &ids).await?;
         if let Some(semantics) = &row.semantics {
-            store_semantics(&mut *tx, dataset_id, &row.item.id, semantics).await?;
+            let json = signatures_json(&row.item.id, semantics)?;
+            store::items::set_semantics(&mut *tx, staging, &row.item.id, semantics.source, &json)
+                .await?;
         }
     }
     Ok(())
 }
 
-async fn store_semantics(
-    conn: &mut store::Conn,
-    dataset_id: i64,
-    item_id: &str,
-    semantics: &ItemSemantics,
-) -> Result<(), ImportError> {
-    let json =
-        serde_json::to_string(&semantics.signatures).map_err(|e| ImportError::Signatures {
-            item_id: item_id.to_owned(),
-            message: e.to_string(),
-        })?;
-    store::items::set_semantics(conn, dataset_id, item_id, semantics.source, &json).await?;
-    Ok(())
+fn signatures_json(item_id: &str, semantics: &ItemSemantics) -> Result<String, ImportError> {
+    serde_json::to_string(&semantics.signatures).map_err(|e| ImportError::Signatures {
+        item_id: item_id.to_owned(),
+        message: e.to_string(),
+    })
 }
 
-/// Adds or refreshes the signatures of items that were already stored unchanged: a re-import
-/// with `--scene-graphs` upgrades action-text or exact-only items; a re-import without it never
-/// downgrades scene-graph signatures. Returns how many items changed.
-async fn refresh_semantics(
-    conn: &mut store::Conn,
+/// The items stored unchanged whose signatures the file adds or refreshes: a re-import with
+/// `--scene-graphs` upgrades action-text or exact-only items; a re-import without it never
+/// downgrades scene-graph signatures. Staged, and applied at the cut-over.
+async fn signature_refreshes<'r>(
+    hub: &super::Hub,
     dataset_id: i64,
-    rows: &[ValidRow],
+    rows: &'r [ValidRow],
     stored_hashes: &HashMap<String, String>,
-) -> Result<usize, ImportError> {
-    let mut updated = 0;
+) -> Result<Vec<(&'r str, &'r ItemSemantics)>, ImportError> {
+    let mut conn = hub.pool.acquire().await?;
+    let mut wanted = Vec::new();
     for row in rows {
         let Some(semantics) = &row.semantics else {
             continue;
         };
         if stored_hashes.get(&row.item.id) != Some(&content_hash(row)) {
-            continue; // new or replaced: written above
+            continue; // new or replaced: written with the item
         }
-        let stored = store::items::semantics_json(conn, dataset_id, &row.item.id).await?;
+        let stored = store::items::semantics_json(&mut conn, dataset_id, &row.item.id).await?;
         let json = serde_json::to_string(&semantics.signatures).unwrap_or_default();
-        let wanted = match &stored {
+        let refresh = match &stored {
             None => true,
             Some((source, stored_json)) => {
                 semantics.source == SignatureSource::SceneGraph
                     && (*source != SignatureSource::SceneGraph || *stored_json != json)
             }
         };
-        if wanted {
-            store_semantics(conn, dataset_id, &row.item.id, semantics).await?;
-            updated += 1;
+        if refresh {
+            wanted.push((row.item.id.as_str(), semantics));
         }
     }
-    Ok(updated)
+    Ok(wanted)
 }
 
 /// Reads a frame again for writing, checking it is still the file that was validated.

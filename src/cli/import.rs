@@ -8,14 +8,15 @@ use clap::Args;
 
 use super::{DbArg, frames, open, operator};
 use crate::app::import::{
-    ImportError, ImportObserver, ImportOptions, ImportProgress, ReleaseLocation, SkippedLine,
-    import_release,
+    BATCH_LINES, ImportError, ImportObserver, ImportOptions, ImportProgress, ReleaseLocation,
+    SkippedLine, abandon, import_release, stale,
 };
 
 #[derive(Args)]
 pub(super) struct ImportArgs {
     /// Release folder holding QA/enact_ordering.jsonl, or a path to a .jsonl file in its QA/ folder.
-    data: PathBuf,
+    #[arg(required_unless_present_any = ["abandon", "stale"])]
+    data: Option<PathBuf>,
     #[command(flatten)]
     db: DbArg,
     #[command(flatten)]
@@ -40,6 +41,19 @@ pub(super) struct ImportArgs {
     /// Print the full report as JSON on standard output.
     #[arg(long)]
     json: bool,
+    /// Lines validated and written per batch; each batch is one short transaction of its own.
+    #[arg(long, default_value_t = BATCH_LINES as u32, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    batch_lines: u32,
+    /// Discard the unfinished (killed) import into DATASET instead of importing; the dataset
+    /// itself is untouched.
+    #[arg(long, value_name = "DATASET", conflicts_with_all = ["data", "stale"])]
+    abandon: Option<String>,
+    /// List unfinished imports no batch was written to for a day; with --remove, discard them.
+    #[arg(long, conflicts_with = "data")]
+    stale: bool,
+    /// With --stale: discard the listed imports.
+    #[arg(long, requires = "stale")]
+    remove: bool,
 }
 
 /// The dataset name `import` uses when none is given: the release folder's name.
@@ -80,16 +94,73 @@ fn describe_line(line: &SkippedLine) -> String {
     s
 }
 
+/// How long an unfinished import waits untouched before `--stale` lists it.
+const STALE_HOURS: u32 = 24;
+
+/// `import --abandon DATASET` and `import --stale [--remove]`.
+async fn unfinished(args: &ImportArgs) -> anyhow::Result<ExitCode> {
+    let hub = open(&args.db.db).await?;
+    let result = unfinished_on(&hub, args).await;
+    hub.close().await;
+    result
+}
+
+async fn unfinished_on(hub: &crate::app::Hub, args: &ImportArgs) -> anyhow::Result<ExitCode> {
+    if let Some(dataset) = &args.abandon {
+        return match abandon(hub, &operator(), dataset).await? {
+            Some(s) => {
+                eprintln!(
+                    "abandoned the unfinished import into dataset '{}' ({} records written, \
+                     started {}, last batch {}); the dataset is unchanged",
+                    s.dataset, s.rows_done, s.started_at, s.updated_at
+                );
+                Ok(ExitCode::SUCCESS)
+            }
+            None => {
+                eprintln!("error: no unfinished import into dataset '{dataset}'");
+                Ok(ExitCode::FAILURE)
+            }
+        };
+    }
+    let found = stale(hub, STALE_HOURS).await?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&found)?);
+    }
+    for s in &found {
+        eprintln!(
+            "dataset '{}': {} records written, started {}, last batch {}",
+            s.dataset, s.rows_done, s.started_at, s.updated_at
+        );
+        if args.remove {
+            abandon(hub, &operator(), &s.dataset).await?;
+            eprintln!("  removed");
+        }
+    }
+    eprintln!(
+        "{} unfinished imports untouched for {STALE_HOURS} hours{}",
+        found.len(),
+        if args.remove || found.is_empty() {
+            ""
+        } else {
+            " (--remove discards them; running the same import again resumes one)"
+        }
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
 pub(super) async fn import(args: ImportArgs) -> anyhow::Result<ExitCode> {
+    let Some(data) = args.data.clone() else {
+        return unfinished(&args).await;
+    };
     let dataset = args
         .dataset
         .clone()
-        .unwrap_or_else(|| default_dataset_name(&args.data));
+        .unwrap_or_else(|| default_dataset_name(&data));
     let scene_graphs = match (&args.scene_graphs, args.no_scene_graphs) {
         (Some(dir), _) => Some(dir.clone()),
         (None, true) => None,
         // ENACT's download layout: QA/ beside replayed_activities/ (and segmented_activities/).
-        (None, false) => ReleaseLocation::resolve(&args.data)
+        (None, false) => ReleaseLocation::resolve(&data)
             .ok()
             .map(|location| location.root.join("replayed_activities"))
             .filter(|dir| dir.is_dir())
@@ -110,8 +181,9 @@ pub(super) async fn import(args: ImportArgs) -> anyhow::Result<ExitCode> {
         replace: args.replace,
         progress: std::io::stderr().is_terminal().then(progress_bar),
         scene_graphs,
+        batch_lines: args.batch_lines as usize,
     };
-    let result = import_release(&hub, &operator(), &args.data, &options).await;
+    let result = import_release(&hub, &operator(), &data, &options).await;
     if result.as_ref().is_ok_and(|r| r.new_frames > 0) {
         hub.truncate_log().await;
     }

@@ -383,6 +383,35 @@ pub const TABLES: &[Table] = &[
         ],
         false,
     ),
+    table(
+        "staged_imports",
+        &[
+            ("id", Int),
+            ("dataset", Text),
+            ("staging", Int),
+            ("target", Int),
+            ("file_sha256", Text),
+            ("options", Text),
+            ("run_token", Text),
+            ("lines_done", Int),
+            ("rows_done", Int),
+            ("bytes_done", Int),
+            ("report", Text),
+            ("started_at", Text),
+            ("updated_at", Text),
+        ],
+        true,
+    ),
+    table(
+        "staged_signatures",
+        &[
+            ("staged", Int),
+            ("item_id", Text),
+            ("source", Text),
+            ("signatures", Text),
+        ],
+        false,
+    ),
 ];
 
 /// One column's value.

@@ -43,6 +43,9 @@ pub struct DatasetOverview {
     pub tasks: i64,
 }
 
+/// Leaves out the hidden rows staged imports write under (see `store::staged`).
+const PUBLISHED: &str = "NOT EXISTS (SELECT 1 FROM staged_imports s WHERE s.staging = datasets.id)";
+
 fn dataset_from_row(row: &impl Fields) -> Result<Dataset, sqlx::Error> {
     Ok(Dataset {
         id: row.try_get("id")?,
@@ -54,38 +57,24 @@ fn dataset_from_row(row: &impl Fields) -> Result<Dataset, sqlx::Error> {
 
 pub async fn by_name(conn: &mut Conn, name: &str) -> Result<Option<Dataset>, sqlx::Error> {
     on!(conn, |c| {
-        let row = sqlx::query("SELECT id, name, created_at, source FROM datasets WHERE name = $1")
-            .bind(name)
-            .fetch_optional(&mut *c)
-            .await?;
-        row.as_ref().map(dataset_from_row).transpose()
-    })
-}
-
-/// Returns the dataset's id, creating it if needed, and records where it was imported from.
-pub async fn ensure(conn: &mut Conn, name: &str, source: &str) -> Result<i64, sqlx::Error> {
-    on!(conn, |c| {
-        sqlx::query(
-            "INSERT INTO datasets (name, source) VALUES ($1, $2) \
-         ON CONFLICT (name) DO UPDATE SET source = excluded.source",
-        )
+        let row = sqlx::query(&format!(
+            "SELECT id, name, created_at, source FROM datasets WHERE name = $1 AND {PUBLISHED}"
+        ))
         .bind(name)
-        .bind(source)
-        .execute(&mut *c)
+        .fetch_optional(&mut *c)
         .await?;
-        sqlx::query_scalar("SELECT id FROM datasets WHERE name = $1")
-            .bind(name)
-            .fetch_one(&mut *c)
-            .await
+        row.as_ref().map(dataset_from_row).transpose()
     })
 }
 
 /// Every dataset with its item counts, by name.
 pub async fn overview(conn: &mut Conn) -> Result<Vec<DatasetOverview>, sqlx::Error> {
     on!(conn, |c| {
-        let rows = sqlx::query("SELECT id, name, created_at, source FROM datasets ORDER BY name")
-            .fetch_all(&mut *c)
-            .await?;
+        let rows = sqlx::query(&format!(
+            "SELECT id, name, created_at, source FROM datasets WHERE {PUBLISHED} ORDER BY name"
+        ))
+        .fetch_all(&mut *c)
+        .await?;
         let mut out = Vec::with_capacity(rows.len());
         for row in &rows {
             let dataset = dataset_from_row(row)?;

@@ -142,7 +142,8 @@ impl Pool {
     /// A write transaction, serialised with every other one on the database. SQLite:
     /// `BEGIN IMMEDIATE` takes the write lock at once (a deferred transaction that read first
     /// and wrote after another writer's commit would fail with `database is locked` instead
-    /// of queueing). PostgreSQL: a transaction-scoped advisory lock taken first, so the checks
+    /// of queueing). PostgreSQL: a transaction-scoped advisory lock taken first (waiting at most
+    /// as long as SQLite's busy timeout, then failing as [`is_busy`]), so the checks
     /// the use cases make before they write (quotas, idempotency keys, run-once rules,
     /// assignment) hold across every server instance exactly as they do in one SQLite process.
     pub async fn begin(&self) -> Result<Tx, sqlx::Error> {
@@ -150,10 +151,14 @@ impl Pool {
             Pool::Sqlite(p) => Ok(Tx::Sqlite(p.begin_with("BEGIN IMMEDIATE").await?)),
             Pool::Pg(p) => {
                 let mut tx = p.begin().await?;
-                sqlx::query("SELECT pg_advisory_xact_lock($1)")
-                    .bind(WRITE_LOCK)
-                    .execute(&mut *tx)
-                    .await?;
+                // The timeout first (left to right), for this transaction only.
+                sqlx::query(
+                    "SELECT set_config('lock_timeout', $2, true), pg_advisory_xact_lock($1)",
+                )
+                .bind(WRITE_LOCK)
+                .bind(PG_LOCK_TIMEOUT)
+                .execute(&mut *tx)
+                .await?;
                 Ok(Tx::Pg(tx))
             }
         }
@@ -312,6 +317,30 @@ pub fn violation(e: &sqlx::Error) -> Option<Violation> {
         constraint: db.constraint().map(str::to_owned),
     })
 }
+
+/// Whether `e` says the database is busy: a write that could not get the lock in time
+/// (SQLite's `SQLITE_BUSY` and `SQLITE_LOCKED` codes and their extended forms after the busy
+/// timeout; PostgreSQL's `lock_not_available`, 55P03, after the `lock_timeout`
+/// [`Pool::begin`] sets), or no pooled connection free in time. Read from the error's code.
+pub fn is_busy(e: &sqlx::Error) -> bool {
+    match e {
+        sqlx::Error::PoolTimedOut => true,
+        sqlx::Error::Database(db) => {
+            let code = db.code();
+            let code = code.as_deref().unwrap_or("");
+            if code == "55P03" {
+                return true;
+            }
+            // SQLite reports its extended result code; the primary code is its low byte.
+            code.parse::<i64>().is_ok_and(|n| matches!(n & 0xff, 5 | 6))
+        }
+        _ => false,
+    }
+}
+
+/// How long a PostgreSQL write waits for the write lock before giving up as busy: as long as
+/// SQLite's busy timeout (`store::open`).
+const PG_LOCK_TIMEOUT: &str = "10s";
 
 /// A unique key a use case tells apart from others: the table it is on and the name
 /// PostgreSQL gives it (as the migrations declare it, or PostgreSQL's `<table>_<column>_key` /

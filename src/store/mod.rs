@@ -17,6 +17,7 @@ pub mod gold;
 pub mod items;
 pub mod jobs;
 pub mod runs;
+pub mod staged;
 pub mod studies;
 pub mod submissions;
 

@@ -77,10 +77,22 @@ impl IntoResponse for AppError {
                     .headers_mut()
                     .insert(header::RETRY_AFTER, HeaderValue::from(*retry_after));
             }
+            AppError::Unavailable(_) => retry_soon(&mut response),
             _ => {}
         }
         response
     }
+}
+
+/// Seconds a client is asked to wait before retrying a `503`: a busy database is free again
+/// once the write holding its lock (one batch of an import, at most) commits.
+const UNAVAILABLE_RETRY_AFTER: u32 = 1;
+
+fn retry_soon(response: &mut Response) {
+    response.headers_mut().insert(
+        header::RETRY_AFTER,
+        HeaderValue::from(UNAVAILABLE_RETRY_AFTER),
+    );
 }
 
 /// The same errors, shown as a page to people browsing the site.
@@ -158,6 +170,9 @@ impl IntoResponse for PageError {
         };
         // English until `localize_error_pages` renders it in the request's language.
         let mut response = parts.render(Tr::new(Locale::English));
+        if matches!(error, AppError::Unavailable(_)) {
+            retry_soon(&mut response);
+        }
         response.extensions_mut().insert(parts);
         response
     }

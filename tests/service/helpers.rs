@@ -6,7 +6,7 @@ use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 
 use enact_hub::app::Hub;
-use enact_hub::app::import::{ImportOptions, ImportReport, import_release};
+use enact_hub::app::import::{BATCH_LINES, ImportOptions, ImportReport, import_release};
 use enact_hub::core::audit::Actor;
 use enact_hub::core::credentials::Role;
 use enact_hub::store;
@@ -101,6 +101,7 @@ pub fn options(dataset: &str) -> ImportOptions {
         replace: false,
         progress: None,
         scene_graphs: None,
+        batch_lines: BATCH_LINES,
     }
 }
 
@@ -538,4 +539,51 @@ pub async fn set_mini_answers(pool: &Pool, answers: enact_hub::core::dataset::An
     store::submissions::set_answer_visibility(&mut conn, dataset.id, answers)
         .await
         .expect("set answers");
+}
+
+/// The lines of a second version of a release: every question with another last line.
+pub fn with_changed_questions(records: &[Value]) -> Vec<String> {
+    records
+        .iter()
+        .map(|r| {
+            let mut r = r.clone();
+            let q = r["question"]
+                .as_str()
+                .expect("question")
+                .replace("Now please", "Please");
+            r["question"] = Value::String(q);
+            r.to_string()
+        })
+        .collect()
+}
+
+/// sha256 over everything a dataset's items hold: fields, images, frames and signatures (not
+/// row ids), to compare what two imports stored.
+pub async fn dataset_digest(pool: &Pool, dataset: &str) -> String {
+    use sha2::{Digest, Sha256};
+    let rows: Vec<(String, String, i64, String, String)> = db!(
+        pool,
+        fetch_all,
+        sqlx::query_as(
+            "SELECT i.item_id, i.content_hash, i.source_line, i.question || i.gt_answer, \
+             coalesce((SELECT s.source || s.signatures FROM item_signatures s \
+             WHERE s.item = i.id), '') FROM items i JOIN datasets d ON d.id = i.dataset_id \
+             WHERE d.name = $1 ORDER BY i.item_id"
+        )
+        .bind(dataset)
+    )
+    .expect("items");
+    let images: Vec<(String, i64, String, String)> = db!(
+        pool,
+        fetch_all,
+        sqlx::query_as(
+            "SELECT i.item_id, ii.position, ii.path, f.sha256 FROM item_images ii \
+             JOIN items i ON i.id = ii.item JOIN frames f ON f.id = ii.frame \
+             JOIN datasets d ON d.id = i.dataset_id WHERE d.name = $1 \
+             ORDER BY i.item_id, ii.position"
+        )
+        .bind(dataset)
+    )
+    .expect("images");
+    hex::encode(Sha256::digest(format!("{rows:?}{images:?}").as_bytes()))
 }

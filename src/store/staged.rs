@@ -1,0 +1,319 @@
+//! Staged imports: a dataset's next version written batch by batch under a hidden `datasets`
+//! row, and the cut-over that moves it into the dataset. Maps rows only; the import use case
+//! (`app::import`) decides when each runs.
+
+use super::db::{Conn, Dialect, Fields, on};
+use crate::core::semantics::SignatureSource;
+
+/// One import in progress.
+#[derive(Debug, Clone)]
+pub struct StagedImport {
+    pub id: i64,
+    pub dataset: String,
+    /// The hidden `datasets` row the staged items belong to.
+    pub staging: i64,
+    /// The dataset's id when the import started; `None` if it did not exist.
+    pub target: Option<i64>,
+    pub file_sha256: String,
+    pub options: String,
+    pub run_token: String,
+    pub lines_done: i64,
+    pub rows_done: i64,
+    pub bytes_done: i64,
+    pub report: String,
+    pub started_at: String,
+    pub updated_at: String,
+}
+
+/// Where a staged import has got, written with each batch.
+#[derive(Debug, Clone)]
+pub struct StagedProgress<'a> {
+    pub lines_done: i64,
+    pub rows_done: i64,
+    pub bytes_done: i64,
+    pub report: &'a str,
+}
+
+const COLUMNS: &str = "id, dataset, staging, target, file_sha256, options, run_token, lines_done, \
+     rows_done, bytes_done, report, started_at, updated_at";
+
+fn from_row(row: &impl Fields) -> Result<StagedImport, sqlx::Error> {
+    Ok(StagedImport {
+        id: row.try_get("id")?,
+        dataset: row.try_get("dataset")?,
+        staging: row.try_get("staging")?,
+        target: row.try_get("target")?,
+        file_sha256: row.try_get("file_sha256")?,
+        options: row.try_get("options")?,
+        run_token: row.try_get("run_token")?,
+        lines_done: row.try_get("lines_done")?,
+        rows_done: row.try_get("rows_done")?,
+        bytes_done: row.try_get("bytes_done")?,
+        report: row.try_get("report")?,
+        started_at: row.try_get("started_at")?,
+        updated_at: row.try_get("updated_at")?,
+    })
+}
+
+/// The staged import of `dataset`, if one is in progress.
+pub async fn for_dataset(
+    conn: &mut Conn,
+    dataset: &str,
+) -> Result<Option<StagedImport>, sqlx::Error> {
+    on!(conn, |c| {
+        let row = sqlx::query(&format!(
+            "SELECT {COLUMNS} FROM staged_imports WHERE dataset = $1"
+        ))
+        .bind(dataset)
+        .fetch_optional(&mut *c)
+        .await?;
+        row.as_ref().map(from_row).transpose()
+    })
+}
+
+/// Every staged import no batch was written to for `hours` hours, oldest first.
+pub async fn idle_for_hours(conn: &mut Conn, hours: i64) -> Result<Vec<StagedImport>, sqlx::Error> {
+    // The cutoff in each database's own date arithmetic, in the timestamp columns' format.
+    match super::db::Connection::handle(conn) {
+        super::db::Handle::Sqlite(c) => {
+            let rows = sqlx::query(&format!(
+                "SELECT {COLUMNS} FROM staged_imports WHERE updated_at < \
+                 strftime('%Y-%m-%dT%H:%M:%SZ', 'now', '-' || $1 || ' hours') \
+                 ORDER BY updated_at, id"
+            ))
+            .bind(hours)
+            .fetch_all(&mut *c)
+            .await?;
+            rows.iter().map(from_row).collect()
+        }
+        super::db::Handle::Pg(c) => {
+            let rows = sqlx::query(&format!(
+                "SELECT {COLUMNS} FROM staged_imports WHERE updated_at < \
+                 to_char(now() AT TIME ZONE 'UTC' - make_interval(hours => $1::int), \
+                 'YYYY-MM-DD\"T\"HH24:MI:SS\"Z\"') ORDER BY updated_at, id"
+            ))
+            .bind(hours)
+            .fetch_all(&mut *c)
+            .await?;
+            rows.iter().map(from_row).collect()
+        }
+    }
+}
+
+/// The hidden `datasets` row a staged import of `dataset` writes under: a name no import
+/// gives (it starts with a control character), unique per dataset.
+fn staging_name(dataset: &str) -> String {
+    format!("\u{1}staged {dataset}")
+}
+
+/// Starts a staged import of `dataset`: its hidden dataset row and its record.
+pub async fn create(
+    conn: &mut Conn,
+    dataset: &str,
+    source: &str,
+    target: Option<i64>,
+    file_sha256: &str,
+    options: &str,
+    run_token: &str,
+) -> Result<StagedImport, sqlx::Error> {
+    on!(conn, |c| {
+        let staging: i64 =
+            sqlx::query_scalar("INSERT INTO datasets (name, source) VALUES ($1, $2) RETURNING id")
+                .bind(staging_name(dataset))
+                .bind(source)
+                .fetch_one(&mut *c)
+                .await?;
+        let row = sqlx::query(&format!(
+            "INSERT INTO staged_imports (dataset, staging, target, file_sha256, options, \
+             run_token) VALUES ($1, $2, $3, $4, $5, $6) RETURNING {COLUMNS}"
+        ))
+        .bind(dataset)
+        .bind(staging)
+        .bind(target)
+        .bind(file_sha256)
+        .bind(options)
+        .bind(run_token)
+        .fetch_one(&mut *c)
+        .await?;
+        from_row(&row)
+    })
+}
+
+/// Makes `run_token` the run that writes the staged import's batches from now on.
+pub async fn claim(conn: &mut Conn, id: i64, run_token: &str) -> Result<bool, sqlx::Error> {
+    on!(conn, |c| {
+        let now = c.utc_now();
+        let done = sqlx::query(&format!(
+            "UPDATE staged_imports SET run_token = $1, updated_at = {now} WHERE id = $2"
+        ))
+        .bind(run_token)
+        .bind(id)
+        .execute(&mut *c)
+        .await?;
+        Ok(done.rows_affected() == 1)
+    })
+}
+
+/// Records a committed batch, if `run_token` still owns the staged import and it had got to
+/// `lines_before`; `false` when another run took it over or it was abandoned.
+pub async fn record_batch(
+    conn: &mut Conn,
+    id: i64,
+    run_token: &str,
+    lines_before: i64,
+    progress: &StagedProgress<'_>,
+) -> Result<bool, sqlx::Error> {
+    on!(conn, |c| {
+        let now = c.utc_now();
+        let done = sqlx::query(&format!(
+            "UPDATE staged_imports SET lines_done = $1, rows_done = $2, bytes_done = $3, \
+             report = $4, updated_at = {now} \
+             WHERE id = $5 AND run_token = $6 AND lines_done = $7"
+        ))
+        .bind(progress.lines_done)
+        .bind(progress.rows_done)
+        .bind(progress.bytes_done)
+        .bind(progress.report)
+        .bind(id)
+        .bind(run_token)
+        .bind(lines_before)
+        .execute(&mut *c)
+        .await?;
+        Ok(done.rows_affected() == 1)
+    })
+}
+
+/// Stages a new signature table for an item the dataset holds unchanged.
+pub async fn stage_signatures(
+    conn: &mut Conn,
+    staged: i64,
+    item_id: &str,
+    source: SignatureSource,
+    signatures_json: &str,
+) -> Result<(), sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query(
+            "INSERT INTO staged_signatures (staged, item_id, source, signatures) \
+             VALUES ($1, $2, $3, $4) ON CONFLICT (staged, item_id) DO UPDATE \
+             SET source = excluded.source, signatures = excluded.signatures",
+        )
+        .bind(staged)
+        .bind(item_id)
+        .bind(source)
+        .bind(signatures_json)
+        .execute(&mut *c)
+        .await?;
+        Ok(())
+    })
+}
+
+/// Deletes up to `limit` of the staged items (their images and signatures go with them);
+/// returns how many.
+pub async fn delete_items(conn: &mut Conn, staging: i64, limit: i64) -> Result<u64, sqlx::Error> {
+    on!(conn, |c| {
+        let done = sqlx::query(
+            "DELETE FROM items WHERE id IN \
+             (SELECT id FROM items WHERE dataset_id = $1 LIMIT $2)",
+        )
+        .bind(staging)
+        .bind(limit)
+        .execute(&mut *c)
+        .await?;
+        Ok(done.rows_affected())
+    })
+}
+
+/// Deletes up to `limit` stored frames no item uses (left by a discarded staged import);
+/// returns how many. Every import inserts a frame in the transaction that links it to an
+/// item, so between transactions an unused frame is one nothing will link.
+pub async fn delete_unused_frames(conn: &mut Conn, limit: i64) -> Result<u64, sqlx::Error> {
+    on!(conn, |c| {
+        let done = sqlx::query(
+            "DELETE FROM frames WHERE id IN (SELECT f.id FROM frames f WHERE NOT EXISTS \
+             (SELECT 1 FROM item_images ii WHERE ii.frame = f.id) LIMIT $1)",
+        )
+        .bind(limit)
+        .execute(&mut *c)
+        .await?;
+        Ok(done.rows_affected())
+    })
+}
+
+/// Removes a staged import's record and its (emptied) hidden dataset row.
+pub async fn remove(conn: &mut Conn, staged: &StagedImport) -> Result<(), sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query("DELETE FROM staged_imports WHERE id = $1")
+            .bind(staged.id)
+            .execute(&mut *c)
+            .await?;
+        sqlx::query("DELETE FROM datasets WHERE id = $1")
+            .bind(staged.staging)
+            .execute(&mut *c)
+            .await?;
+        Ok(())
+    })
+}
+
+/// Cut-over into a dataset that does not exist yet: the hidden row becomes the dataset.
+pub async fn publish_as_new(conn: &mut Conn, staged: &StagedImport) -> Result<(), sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query("DELETE FROM staged_imports WHERE id = $1")
+            .bind(staged.id)
+            .execute(&mut *c)
+            .await?;
+        let now = c.utc_now();
+        sqlx::query(&format!(
+            "UPDATE datasets SET name = $1, created_at = {now} WHERE id = $2"
+        ))
+        .bind(&staged.dataset)
+        .bind(staged.staging)
+        .execute(&mut *c)
+        .await?;
+        Ok(())
+    })
+}
+
+/// Cut-over into an existing dataset: its items the staged version replaces are deleted
+/// (what was made on them goes with them), the staged items move in keeping their row ids,
+/// and the staged signature tables are applied. Returns (items replaced, signatures applied).
+pub async fn publish_into(
+    conn: &mut Conn,
+    staged: &StagedImport,
+    target: i64,
+    source: &str,
+) -> Result<(u64, u64), sqlx::Error> {
+    on!(conn, |c| {
+        let replaced = sqlx::query(
+            "DELETE FROM items WHERE dataset_id = $1 AND item_id IN \
+             (SELECT item_id FROM items WHERE dataset_id = $2)",
+        )
+        .bind(target)
+        .bind(staged.staging)
+        .execute(&mut *c)
+        .await?
+        .rows_affected();
+        sqlx::query("UPDATE items SET dataset_id = $1 WHERE dataset_id = $2")
+            .bind(target)
+            .bind(staged.staging)
+            .execute(&mut *c)
+            .await?;
+        let signatures = sqlx::query(
+            "INSERT INTO item_signatures (item, source, signatures) \
+             SELECT i.id, s.source, s.signatures FROM staged_signatures s \
+             JOIN items i ON i.dataset_id = $1 AND i.item_id = s.item_id WHERE s.staged = $2 \
+             ON CONFLICT (item) DO UPDATE SET source = excluded.source, \
+             signatures = excluded.signatures",
+        )
+        .bind(target)
+        .bind(staged.id)
+        .execute(&mut *c)
+        .await?
+        .rows_affected();
+        sqlx::query("UPDATE datasets SET source = $1 WHERE id = $2")
+            .bind(source)
+            .bind(target)
+            .execute(&mut *c)
+            .await?;
+        Ok((replaced, signatures))
+    })
+}
