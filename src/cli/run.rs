@@ -126,7 +126,7 @@ pub async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
             token: token.clone(),
         }),
         (Some(_), None) => anyhow::bail!("--hub needs --token (or ENACT_HUB_TOKEN)"),
-        (None, _) => Place::Local(open(&args.db).await?),
+        (None, _) => Place::Local(open(&args.db).await?.with_cache_limits(&runs::CACHE_LIMITS)),
     };
     let datasets = match (&args.dataset, &args.study, &place) {
         (Some(d), _, _) => vec![d.clone()],

@@ -46,6 +46,17 @@ use crate::core::submission::SubmissionMetadata;
 use crate::store;
 pub use crate::store::runs::{RunItemRow, RunRow};
 
+/// The caches a command-line run keeps: a run reads each item once, so the server's defaults
+/// (128 MiB of frames among them) would only hold memory that grows with the dataset's frames.
+pub const CACHE_LIMITS: super::cache::CacheLimits = super::cache::CacheLimits {
+    item_bytes: 4 * 1024 * 1024,
+    standing_entries: 1_000,
+    target_datasets: 1,
+    board_datasets: 1,
+    frame_bytes: 16 * 1024 * 1024,
+    db_page_cache_bytes: 8 * 1024 * 1024,
+};
+
 /// The account model runs submit as (with one token whose secret nobody is shown).
 pub const RUNS_ACCOUNT: &str = "model-runs";
 
