@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use super::annotators::now_ms;
 use super::changes::Change;
-use super::{AppError, Hub, audit, datasets};
+use super::{AppError, Hub, audit, datasets, items};
 use crate::core::annotation::{
     AssignmentState, Draft, Outcome, QueueEntry, QueueStatus, Session, Telemetry, balanced_split,
     next_in_queue,
@@ -83,7 +83,7 @@ pub async fn assign(
                     "items: give at least one item id".to_owned(),
                 ));
             }
-            listed_items(&mut conn, &dataset, item_ids)
+            items::listed(&mut conn, &dataset, item_ids)
                 .await?
                 .into_iter()
                 .map(|r| (*annotator, r))
@@ -122,30 +122,6 @@ pub async fn assign(
         requested: pairs.len() as u64,
         added,
     })
-}
-
-/// Store ids of the listed item ids of `dataset`, in the same order; every id not in the
-/// dataset is named in one refusal.
-pub(super) async fn listed_items(
-    conn: &mut store::Conn,
-    dataset: &store::datasets::Dataset,
-    item_ids: &[String],
-) -> Result<Vec<i64>, AppError> {
-    let rows = store::annotations::item_rowids(conn, dataset.id, item_ids).await?;
-    let missing: Vec<&str> = item_ids
-        .iter()
-        .zip(&rows)
-        .filter(|(_, row)| row.is_none())
-        .map(|(id, _)| id.as_str())
-        .collect();
-    if !missing.is_empty() {
-        return Err(AppError::Invalid(format!(
-            "items: not in dataset '{}': {}",
-            dataset.name,
-            missing.join(", ")
-        )));
-    }
-    Ok(rows.into_iter().flatten().collect())
 }
 
 /// An annotator's assigned items in queue order, with where each stands: the gold mix's order

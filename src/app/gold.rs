@@ -89,7 +89,7 @@ pub async fn set(
     let items = match choice {
         GoldChoice::Share { share, seed } => gold::draw_share(&all, *share, *seed),
         GoldChoice::List(ids) => {
-            let mut rows = super::annotation::listed_items(&mut conn, &dataset, ids).await?;
+            let mut rows = super::items::listed(&mut conn, &dataset, ids).await?;
             rows.sort_unstable();
             rows.dedup();
             if rows.len() >= all.len() {

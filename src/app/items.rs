@@ -42,3 +42,27 @@ pub async fn get(hub: &Hub, dataset: &str, item_id: &str) -> Result<Arc<StoredIt
     hub.items.insert_stored(dataset, item_id, found.clone());
     Ok(found)
 }
+
+/// Store ids of the listed item ids of `dataset`, in the same order; every id not in the
+/// dataset is named in one refusal.
+pub(super) async fn listed(
+    conn: &mut store::Conn,
+    dataset: &store::datasets::Dataset,
+    item_ids: &[String],
+) -> Result<Vec<i64>, AppError> {
+    let rows = store::annotations::item_rowids(conn, dataset.id, item_ids).await?;
+    let missing: Vec<&str> = item_ids
+        .iter()
+        .zip(&rows)
+        .filter(|(_, row)| row.is_none())
+        .map(|(id, _)| id.as_str())
+        .collect();
+    if !missing.is_empty() {
+        return Err(AppError::Invalid(format!(
+            "items: not in dataset '{}': {}",
+            dataset.name,
+            missing.join(", ")
+        )));
+    }
+    Ok(rows.into_iter().flatten().collect())
+}
