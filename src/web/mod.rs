@@ -93,7 +93,8 @@ pub struct AppState {
     logins: Arc<session::LoginLimiter>,
     sessions: Arc<session::SessionCache>,
     trusted_proxies: Arc<[forwarded::TrustedProxy]>,
-    metrics_token: Option<Arc<str>>,
+    /// SHA-256 of `WebConfig::metrics_token`, compared as API tokens are.
+    metrics_token_hash: Option<Arc<str>>,
 }
 
 impl AppState {
@@ -104,7 +105,10 @@ impl AppState {
             logins: Arc::new(session::LoginLimiter::default()),
             sessions: Arc::new(session::SessionCache::default()),
             trusted_proxies: config.trusted_proxies.clone().into(),
-            metrics_token: config.metrics_token.as_deref().map(Arc::from),
+            metrics_token_hash: config
+                .metrics_token
+                .as_deref()
+                .map(|t| Arc::from(crate::core::credentials::token_hash(t))),
         }
     }
 }

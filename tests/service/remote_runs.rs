@@ -8,7 +8,9 @@ use enact_hub::core::credentials::Role;
 use serde_json::Value;
 
 use crate::helpers::*;
-use crate::runs::{SECRET_KEY, answer_text, scripts, stored_submission};
+use crate::runs::{
+    SECRET_KEY, answer_text, finished, json_summary, scripts, stored_submission, task_accuracy,
+};
 use crate::standin::{StandIn, StandInConfig, Step};
 
 /// A hub serving `mini` (`per_cell` items per direction × L in 3, 4, 5) and the records.
@@ -104,17 +106,7 @@ async fn a_remote_run_keeps_replies_in_its_cache_and_goes_on_after_a_kill() {
         })
         .collect();
 
-    let mut again = command();
-    let second = tokio::task::spawn_blocking(move || again.output())
-        .await
-        .expect("joined")
-        .expect("run again");
-    assert!(
-        second.status.success(),
-        "{}",
-        String::from_utf8_lossy(&second.stderr)
-    );
-    let report: Value = serde_json::from_slice(&second.stdout).expect("a JSON summary");
+    let (second, report) = json_summary(command()).await;
     assert_eq!(report["progress"]["answered"], records.len(), "{report}");
     assert_eq!(report["progress"]["failed"], 0);
     assert_eq!(
@@ -152,8 +144,7 @@ async fn a_remote_run_keeps_replies_in_its_cache_and_goes_on_after_a_kill() {
     assert_eq!(stored.model, "Remote VL");
     assert_eq!(stored.account, "team-remote");
     let expected = (records.len() - wrong.len()) as f64 / records.len() as f64;
-    let overall = stored.scores.report.overall.as_ref().expect("overall");
-    assert!((overall.totals.task_accuracy - expected).abs() < 1e-9);
+    assert!((task_accuracy(&stored) - expected).abs() < 1e-9);
     assert_eq!(stored.scores.coverage.missing, 0);
     let stamp: Value = serde_json::from_str(&stored.notes).expect("a JSON stamp");
     assert_eq!(stamp["model"], "standin-vl");
@@ -175,13 +166,7 @@ async fn a_remote_run_keeps_replies_in_its_cache_and_goes_on_after_a_kill() {
 
     // Run a third time: nothing is asked, the same submission is found.
     let before = standin.total_requests();
-    let mut third = command();
-    let third = tokio::task::spawn_blocking(move || third.output())
-        .await
-        .expect("joined")
-        .expect("run a third time");
-    assert!(third.status.success());
-    let report3: Value = serde_json::from_slice(&third.stdout).expect("a JSON summary");
+    let (_, report3) = json_summary(command()).await;
     assert_eq!(report3["progress"]["asked_now"], 0);
     assert_eq!(report3["submission"], submission);
     assert_eq!(standin.total_requests(), before);
@@ -234,11 +219,7 @@ async fn a_remote_run_refuses_another_runs_cache_and_an_unknown_dataset() {
         .current_dir(work.path());
         c
     };
-    let mut first = run("mini", "model-a");
-    let first = tokio::task::spawn_blocking(move || first.output())
-        .await
-        .expect("joined")
-        .expect("first run");
+    let first = finished(run("mini", "model-a")).await;
     assert!(
         first.status.success(),
         "{}",
@@ -248,11 +229,7 @@ async fn a_remote_run_refuses_another_runs_cache_and_an_unknown_dataset() {
     let asked = standin.total_requests();
     assert_eq!(asked, records.len());
 
-    let mut other = run("mini", "model-b");
-    let other = tokio::task::spawn_blocking(move || other.output())
-        .await
-        .expect("joined")
-        .expect("second run");
+    let other = finished(run("mini", "model-b")).await;
     assert!(!other.status.success());
     let said = String::from_utf8_lossy(&other.stderr);
     assert!(
@@ -260,11 +237,7 @@ async fn a_remote_run_refuses_another_runs_cache_and_an_unknown_dataset() {
         "{said}"
     );
 
-    let mut missing = run("no-such-dataset", "model-a");
-    let missing = tokio::task::spawn_blocking(move || missing.output())
-        .await
-        .expect("joined")
-        .expect("third run");
+    let missing = finished(run("no-such-dataset", "model-a")).await;
     assert!(!missing.status.success());
     let said = String::from_utf8_lossy(&missing.stderr);
     assert!(

@@ -15,7 +15,9 @@ use serde_json::{Value, json};
 use crate::annotate::{Browser, PASSWORD, annotator_on};
 use crate::helpers::*;
 use crate::instances::Instance;
-use crate::runs::{SECRET_KEY, answer_text, run_fixture_located, scripts, stored_submission};
+use crate::runs::{
+    SECRET_KEY, answer_text, run_fixture_located, scripts, stored_submission, task_accuracy,
+};
 use crate::standin::{ItemCalls, StandIn, StandInConfig, Step};
 
 use crate::server_runs::KEY_VARIABLE;
@@ -181,11 +183,7 @@ async fn assert_finished(pool: &Pool, shown: &Value, records: &[Value]) {
     let stored = stored_submission(pool, submission).await;
     assert_eq!(stored.scores.coverage.answered, records.len());
     let expected = (records.len() - WRONG.len()) as f64 / records.len() as f64;
-    let overall = stored.scores.report.overall.as_ref().expect("overall");
-    assert!(
-        (overall.totals.task_accuracy - expected).abs() < 1e-9,
-        "{overall:?}"
-    );
+    assert!((task_accuracy(&stored) - expected).abs() < 1e-9);
 }
 
 /// The run's admin pages and downloads, read as an admin would in a browser: the list, the

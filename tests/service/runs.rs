@@ -93,6 +93,38 @@ pub async fn stored_submission(
         .expect("stored")
 }
 
+/// A stored submission's overall task accuracy.
+pub fn task_accuracy(stored: &enact_hub::store::submissions::SubmissionRow) -> f64 {
+    stored
+        .scores
+        .report
+        .overall
+        .as_ref()
+        .expect("overall")
+        .totals
+        .task_accuracy
+}
+
+/// Runs `command` to its end off the runtime's thread (the stand-in answers on it).
+pub async fn finished(mut command: std::process::Command) -> std::process::Output {
+    tokio::task::spawn_blocking(move || command.output())
+        .await
+        .expect("joined")
+        .expect("the command ran")
+}
+
+/// `command`'s `--json` summary; fails with its standard error unless it succeeded.
+pub async fn json_summary(command: std::process::Command) -> (std::process::Output, Value) {
+    let output = finished(command).await;
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let summary = serde_json::from_slice(&output.stdout).expect("a JSON summary");
+    (output, summary)
+}
+
 pub fn spec(standin: &StandIn, name: &str) -> RunSpec {
     RunSpec {
         dataset: "mini".to_owned(),
@@ -231,18 +263,8 @@ async fn a_run_keeps_every_reply_stores_failures_as_failures_and_submits_its_sco
     assert_eq!(stored.account, runs::RUNS_ACCOUNT);
     let coverage = &stored.scores.coverage;
     assert_eq!((coverage.answered, coverage.missing), (14, 4));
-    let overall = &stored
-        .scores
-        .report
-        .overall
-        .as_ref()
-        .expect("overall")
-        .totals;
     // 14 answered, of which 3 wrong: 11 right of 18.
-    assert!(
-        (overall.task_accuracy - 11.0 / 18.0).abs() < 1e-9,
-        "{overall:?}"
-    );
+    assert!((task_accuracy(&stored) - 11.0 / 18.0).abs() < 1e-9);
     let run = runs::by_name(&hub, "first").await.expect("the run");
     assert_eq!(run.submission, Some(submission));
     let stamp: Value = serde_json::from_str(run.stamp.as_deref().expect("a stamp")).expect("json");
@@ -470,18 +492,7 @@ async fn a_run_killed_part_way_goes_on_where_it_stopped() {
     )
     .expect("stored items");
 
-    // Waited for off the runtime's thread: the stand-in answers on it.
-    let mut again = command();
-    let second = tokio::task::spawn_blocking(move || again.output())
-        .await
-        .expect("joined")
-        .expect("run again");
-    assert!(
-        second.status.success(),
-        "{}",
-        String::from_utf8_lossy(&second.stderr)
-    );
-    let report: Value = serde_json::from_slice(&second.stdout).expect("a JSON summary");
+    let (second, report) = json_summary(command()).await;
     assert_eq!(report["progress"]["answered"], records.len());
     assert_eq!(
         report["progress"]["asked_now"],
@@ -509,8 +520,7 @@ async fn a_run_killed_part_way_goes_on_where_it_stopped() {
     let submission = report["submission"].as_i64().expect("submitted");
     let stored = stored_submission(&pool, submission).await;
     let expected = (records.len() - wrong.len()) as f64 / records.len() as f64;
-    let overall = stored.scores.report.overall.as_ref().expect("overall");
-    assert!((overall.totals.task_accuracy - expected).abs() < 1e-9);
+    assert!((task_accuracy(&stored) - expected).abs() < 1e-9);
     assert_eq!(stored.scores.coverage.missing, 0);
 
     for output in [
