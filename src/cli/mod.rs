@@ -19,6 +19,7 @@ mod accounts;
 mod agreement;
 mod audit;
 mod database;
+mod doctor;
 mod frames;
 mod generate;
 mod gold;
@@ -102,6 +103,10 @@ enum Command {
     /// every annotator's queue to check their work.
     #[command(subcommand)]
     Gold(gold::GoldCommand),
+    /// A checkup of the database for its operator: schema against this build, unfinished and
+    /// stale imports, stuck or failed jobs, the write-ahead log's size, optionally integrity.
+    /// Exits 1 when something needs action.
+    Doctor(doctor::DoctorArgs),
 }
 
 #[derive(Args)]
@@ -173,6 +178,7 @@ pub fn main() -> ExitCode {
             Command::MigrateDb(args) => database::migrate_db(args).await,
             Command::Rescore(args) => rescore::rescore(args).await,
             Command::Gold(command) => gold::gold(command).await,
+            Command::Doctor(args) => doctor::doctor(args).await,
         }
     });
     match result {

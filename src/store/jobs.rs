@@ -323,6 +323,19 @@ pub async fn counts(conn: &mut Conn) -> Result<Vec<(String, String, i64)>, sqlx:
     })
 }
 
+/// The newest failed jobs, at most `limit`.
+pub async fn failed(conn: &mut Conn, limit: i64) -> Result<Vec<JobRow>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(&format!(
+            "SELECT {COLUMNS} FROM jobs WHERE state = 'failed' ORDER BY id DESC LIMIT $1"
+        ))
+        .bind(limit)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(job_from_row).collect()
+    })
+}
+
 /// The running jobs, oldest first.
 pub async fn running(conn: &mut Conn) -> Result<Vec<JobRow>, sqlx::Error> {
     on!(conn, |c| {

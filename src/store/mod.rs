@@ -199,6 +199,43 @@ pub async fn truncate_wal(pool: &Pool) -> Result<bool, sqlx::Error> {
     Ok(busy == 0)
 }
 
+/// A SQLite database's file and its write-ahead log.
+#[derive(Debug, Clone)]
+pub struct SqliteFiles {
+    pub database: std::path::PathBuf,
+    pub wal: std::path::PathBuf,
+}
+
+/// Where a SQLite database lives on disk; `None` for PostgreSQL or an in-memory database.
+pub async fn sqlite_files(pool: &Pool) -> Result<Option<SqliteFiles>, sqlx::Error> {
+    let Some(pool) = pool.sqlite() else {
+        return Ok(None);
+    };
+    // Rows of (seq, name, file); `file` is empty for an in-memory database.
+    let rows: Vec<(i64, String, String)> = sqlx::query_as("PRAGMA database_list")
+        .fetch_all(pool)
+        .await?;
+    Ok(rows
+        .into_iter()
+        .find(|(_, name, file)| name == "main" && !file.is_empty())
+        .map(|(_, _, file)| SqliteFiles {
+            wal: std::path::PathBuf::from(format!("{file}-wal")),
+            database: file.into(),
+        }))
+}
+
+/// SQLite's `PRAGMA quick_check`: the problems it found (none when the file is sound), or
+/// `None` for PostgreSQL.
+pub async fn quick_check(pool: &Pool) -> Result<Option<Vec<String>>, sqlx::Error> {
+    let Some(pool) = pool.sqlite() else {
+        return Ok(None);
+    };
+    let rows: Vec<String> = sqlx::query_scalar("PRAGMA quick_check")
+        .fetch_all(pool)
+        .await?;
+    Ok(Some(rows.into_iter().filter(|r| r != "ok").collect()))
+}
+
 /// One round trip to the database.
 pub async fn ping(pool: &Pool) -> Result<(), sqlx::Error> {
     let mut conn = pool.acquire().await?;

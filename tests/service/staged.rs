@@ -265,3 +265,106 @@ async fn a_failed_import_removes_the_batches_it_staged() {
         );
     }
 }
+
+/// `doctor`'s findings on imports and jobs: an unfinished import is a notice, one untouched for
+/// a day a warning naming the command that removes it; a job whose instance died is a warning;
+/// `--remove-stale` discards the stale import, audited; integrity passes on a sound file.
+#[tokio::test]
+async fn doctor_lists_stale_imports_and_dead_jobs_and_removes_what_it_is_told() {
+    use enact_hub::app::doctor::{Level, Options, examine};
+
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    write_balanced_release(&root, &[3], 40);
+    let pool = fresh_db(&dir).await;
+    let hub = Hub::from(pool.clone());
+    let levels = |findings: &[enact_hub::app::doctor::Finding], check: &str| -> Vec<Level> {
+        findings
+            .iter()
+            .filter(|f| f.check == check)
+            .map(|f| f.level)
+            .collect()
+    };
+
+    let healthy = examine(&hub, &tester(), Options::default())
+        .await
+        .expect("doctor");
+    assert_eq!(healthy.worst(), Level::Ok, "{:#?}", healthy.findings);
+
+    run_interrupted(&pool, &root, interrupted_after(batched("fresh", 8), 2)).await;
+    let running = examine(&hub, &tester(), Options::default())
+        .await
+        .expect("doctor");
+    assert_eq!(levels(&running.findings, "imports"), [Level::Notice]);
+    assert_eq!(running.worst(), Level::Notice);
+
+    // A day later, and a job whose instance stopped holding it.
+    db!(
+        pool,
+        execute,
+        sqlx::query("UPDATE staged_imports SET updated_at = '2000-01-01T00:00:00Z'")
+    )
+    .expect("age the import");
+    db!(
+        pool,
+        execute,
+        sqlx::query(
+            "INSERT INTO jobs (kind, payload, state, attempts, lease_owner, lease_until_ms, \
+             created_by) VALUES ('rescore', '{}', 'running', 1, 'host-1', 1000, 'tests')"
+        )
+    )
+    .expect("a dead job");
+    let stale = examine(&hub, &tester(), Options::default())
+        .await
+        .expect("doctor");
+    assert_eq!(stale.worst(), Level::Warning);
+    let import = stale
+        .findings
+        .iter()
+        .find(|f| f.check == "imports")
+        .expect("the import");
+    assert_eq!(import.level, Level::Warning);
+    assert!(import.detail.contains("'fresh'"), "{}", import.detail);
+    assert!(
+        import
+            .fix
+            .as_deref()
+            .is_some_and(|fix| fix.contains("import --abandon fresh")),
+        "{import:?}"
+    );
+    let job = stale
+        .findings
+        .iter()
+        .find(|f| f.check == "jobs")
+        .expect("the job");
+    assert_eq!(job.level, Level::Warning);
+    assert!(job.detail.contains("host-1"), "{}", job.detail);
+
+    let removed = examine(
+        &hub,
+        &tester(),
+        Options {
+            remove_stale_imports: true,
+            integrity: true,
+            truncate_log: true,
+        },
+    )
+    .await
+    .expect("doctor");
+    assert_eq!(levels(&removed.findings, "imports"), [Level::Notice]);
+    assert_eq!(count(&pool, "SELECT count(*) FROM staged_imports").await, 0);
+    assert_eq!(
+        count(
+            &pool,
+            "SELECT count(*) FROM audit_log WHERE detail LIKE 'abandoned the unfinished import%'"
+        )
+        .await,
+        1
+    );
+    let integrity = levels(&removed.findings, "integrity");
+    assert!(
+        integrity == [Level::Ok] || (integrity == [Level::Notice] && pool.sqlite().is_none()),
+        "{:#?}",
+        removed.findings
+    );
+}
