@@ -19,6 +19,18 @@ export CARGO_TARGET_DIR
 CARGO_TARGET_DIR="$(realpath -m "${CARGO_TARGET_DIR:-target}")"
 TOOLS="$CARGO_TARGET_DIR/test-tools"
 PROFILE="${ENACT_HUB_WHEEL_PROFILE:-dev}"
+# The wheel's platform tag. The default, manylinux_2_34, is what a build on this system's glibc
+# gives. ENACT_HUB_WHEEL_COMPAT=manylinux2014 builds for glibc 2.17 instead, linking with zig
+# (`ziglang` from PyPI) through maturin's --zig; that build compiles every dependency again for an
+# explicit --target, so the default suite does not do it; README "Wheels and platforms" shows
+# the command.
+COMPAT="${ENACT_HUB_WHEEL_COMPAT:-manylinux_2_34}"
+ZIG_ARGS=()
+case "$COMPAT" in
+  manylinux_2_34) ;;
+  manylinux2014) ZIG_ARGS=(--zig) ;;
+  *) echo "error: ENACT_HUB_WHEEL_COMPAT must be manylinux_2_34 or manylinux2014, not $COMPAT" >&2; exit 2 ;;
+esac
 VERSION=$(sed -n 's/^version = "\(.*\)"$/\1/p' Cargo.toml | head -n 1)
 
 # Pinned tools from PyPI: maturin and its build in one virtualenv, and a wheelhouse of what the
@@ -37,6 +49,10 @@ if [ ! -x "$TOOLS_VENV/bin/maturin" ] || [ ! -f "$WHEELHOUSE/.complete" ]; then
   "$TOOLS_VENV/bin/pip" install --quiet --disable-pip-version-check 'maturin==1.16.0'
   "$TOOLS_VENV/bin/pip" download --quiet --disable-pip-version-check --dest "$WHEELHOUSE" "${PINNED[@]}"
   touch "$WHEELHOUSE/.complete"
+fi
+if [ ${#ZIG_ARGS[@]} -gt 0 ] && ! "$TOOLS_VENV/bin/python" -c 'import ziglang' 2>/dev/null; then
+  echo "== installing ziglang 0.13.0 (PyPI) into $TOOLS_VENV, the linker for a glibc 2.17 wheel"
+  "$TOOLS_VENV/bin/pip" install --quiet --disable-pip-version-check 'ziglang==0.13.0'
 fi
 
 WORK=$(mktemp -d)
@@ -73,8 +89,9 @@ serve_demo() {
 echo "== maturin build --profile $PROFILE (the wheel)"
 WHEELS="$WORK/wheels"
 BUILD_START=$(date +%s)
-"$TOOLS_VENV/bin/maturin" build --locked --profile "$PROFILE" --compatibility manylinux_2_34 \
-  --out "$WHEELS"
+# maturin finds zig through the virtualenv's python (`python -m ziglang`), so its bin goes first.
+PATH="$TOOLS_VENV/bin:$PATH" "$TOOLS_VENV/bin/maturin" build --locked --profile "$PROFILE" \
+  --compatibility "$COMPAT" "${ZIG_ARGS[@]}" --out "$WHEELS"
 WHEEL=$(ls "$WHEELS"/enact_hub-"$VERSION"-*.whl 2>/dev/null | head -n 1 || true)
 if [ -z "$WHEEL" ]; then
   echo "error: maturin built no wheel for version $VERSION in $WHEELS" >&2
@@ -111,6 +128,24 @@ if "\nVersion: {}\n".format(version) not in metadata:
     problems.append("METADATA does not give Version: " + version)
 if not re.search(r"^Requires-Dist: requests", metadata, re.M):
     problems.append("METADATA does not require requests")
+# The platform tag is a promise about glibc: no symbol of the binary may need a newer version.
+tag = re.search(r"manylinux_(\d+)_(\d+)_x86_64", wheel)
+if tag is None:
+    problems.append("the wheel's name has no manylinux_X_Y tag: " + wheel)
+else:
+    import subprocess, tempfile
+    promised = (int(tag.group(1)), int(tag.group(2)))
+    with tempfile.TemporaryDirectory() as scratch:
+        binary = zipfile.ZipFile(wheel).extract(
+            "enact_hub-{}.data/scripts/enact-hub".format(version), scratch)
+        symbols = subprocess.run(["objdump", "-T", binary], check=True, capture_output=True,
+                                 text=True).stdout
+    needed = max({tuple(int(p) for p in v.split(".")) for v in re.findall(r"GLIBC_(\d+(?:\.\d+)+)", symbols)})
+    print("   the binary needs glibc {}; the tag promises {}.{}".format(
+        ".".join(map(str, needed)), *promised))
+    if needed[:2] > promised:
+        problems.append("the binary needs glibc {} but the tag says {}.{}".format(
+            ".".join(map(str, needed)), *promised))
 if problems:
     sys.exit("error: " + "\n  ".join(problems))
 print("   {} entries: the binary, the enact_hub package and its metadata".format(len(names)))
