@@ -14,8 +14,9 @@ pub struct MigrateDbReport {
 }
 
 /// Copies every table of `from` into `to`, which must be empty (just created), in one
-/// transaction on each side: `from`'s write lock is held throughout, so nothing changes while
-/// it is read, and `to` holds all of it or none. Ids are kept; frames held in an object store
+/// transaction on each side: `from` is read in one snapshot transaction (every table as it was
+/// at one moment, while writers carry on: a backup of a running PostgreSQL server blocks no
+/// one), and `to` holds all of it or none. Ids are kept; frames held in an object store
 /// stay there (their rows are copied). `progress` hears of each table when it is done.
 pub async fn migrate_db(
     from: &Hub,
@@ -34,7 +35,7 @@ pub async fn migrate_db(
             )));
         }
     }
-    let mut source = from.begin().await?;
+    let mut source = from.pool.begin_snapshot().await?;
     copy::clear_generation(&mut target).await?;
     let mut tables = Vec::with_capacity(TABLES.len());
     for table in TABLES {

@@ -164,6 +164,20 @@ impl Pool {
         }
     }
 
+    /// A transaction that reads one consistent snapshot of the database and takes no write
+    /// lock, so writers carry on while it reads (a backup of a running server). SQLite: a
+    /// deferred transaction, whose snapshot of the write-ahead log is fixed at its first read;
+    /// PostgreSQL: `REPEATABLE READ READ ONLY`.
+    pub async fn begin_snapshot(&self) -> Result<Tx, sqlx::Error> {
+        Ok(match self {
+            Pool::Sqlite(p) => Tx::Sqlite(p.begin_with("BEGIN DEFERRED").await?),
+            Pool::Pg(p) => Tx::Pg(
+                p.begin_with("BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY")
+                    .await?,
+            ),
+        })
+    }
+
     pub async fn close(&self) {
         match self {
             Pool::Sqlite(p) => p.close().await,

@@ -177,3 +177,50 @@ async fn a_backup_under_write_load_restores_every_acknowledged_write() {
         assert!(String::from_utf8_lossy(&replaced.stderr).contains("createdb"));
     }
 }
+
+/// The snapshot transaction a backup (and migrate-db) reads in takes no write lock: a write
+/// commits while it is open, and it goes on seeing the database as it was when it began.
+#[tokio::test]
+async fn a_snapshot_read_lets_writers_commit_and_sees_none_of_their_writes() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pool = fresh_db(&dir).await;
+    let before = count(&pool, "SELECT count(*) FROM audit_log").await;
+    let mut snapshot = pool.begin_snapshot().await.expect("a snapshot");
+    assert_eq!(audit_rows(&mut snapshot).await, before);
+
+    // A write transaction takes the write lock: it would wait for a locking reader, then
+    // fail as busy after the lock timeout.
+    let mut write = pool
+        .begin()
+        .await
+        .expect("the write lock while the snapshot is open");
+    enact_hub::on_db!(&mut write, |c| sqlx::query(
+        "INSERT INTO audit_log (actor_kind, actor, action, target) \
+         VALUES ('operator', 'tests', 'backup.create', 'file x')"
+    )
+    .execute(&mut *c)
+    .await
+    .map(|_| ()))
+    .expect("insert");
+    write.commit().await.expect("commit beside the snapshot");
+
+    assert_eq!(
+        audit_rows(&mut snapshot).await,
+        before,
+        "the snapshot sees the database as it began"
+    );
+    snapshot.rollback().await.expect("end the snapshot");
+    assert_eq!(
+        count(&pool, "SELECT count(*) FROM audit_log").await,
+        before + 1
+    );
+}
+
+async fn audit_rows(tx: &mut enact_hub::store::Tx) -> i64 {
+    enact_hub::on_db!(tx, |c| sqlx::query_scalar::<_, i64>(
+        "SELECT count(*) FROM audit_log"
+    )
+    .fetch_one(&mut *c)
+    .await)
+    .expect("count the audit log")
+}
