@@ -41,6 +41,7 @@ pub async fn load(hub: &Hub) -> anyhow::Result<ImportReport> {
         progress: None,
         scene_graphs: Some(written.replayed_dir),
         batch_lines: BATCH_LINES,
+        stop: None,
     };
     let report = import_release(hub, &Actor::Server, dir.path(), &options)
         .await

@@ -44,6 +44,12 @@ pub struct ReleaseLocation {
 impl ReleaseLocation {
     /// Accepts a release directory (holding `QA/enact_ordering.jsonl`) or a path to a `.jsonl`
     /// file inside its `QA/` folder; image paths are relative to the parent of `QA/`.
+    /// The release's own scene graphs, in ENACT's download layout (`QA/` beside
+    /// `replayed_activities/`), when it has them.
+    pub fn own_scene_graphs(&self) -> Option<PathBuf> {
+        Some(self.root.join("replayed_activities")).filter(|dir| dir.is_dir())
+    }
+
     pub fn resolve(path: &Path) -> Result<ReleaseLocation, ImportError> {
         if path.is_dir() {
             let qa_file = path.join("QA").join("enact_ordering.jsonl");
@@ -81,6 +87,21 @@ impl ReleaseLocation {
     }
 }
 
+/// The dataset name an import takes when none is given: the release folder's name (`data` is
+/// the folder or its `QA/*.jsonl` file), else `enact`.
+pub fn default_dataset_name(data: &Path) -> String {
+    let folder = if data.is_file() {
+        data.parent().and_then(Path::parent)
+    } else {
+        Some(data)
+    };
+    folder
+        .and_then(|f| std::fs::canonicalize(f).ok())
+        .and_then(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .filter(|n| !n.is_empty())
+        .unwrap_or_else(|| "enact".to_owned())
+}
+
 #[derive(Debug, Clone)]
 pub struct ImportOptions {
     pub dataset: String,
@@ -98,6 +119,20 @@ pub struct ImportOptions {
     /// ([`BATCH_LINES`] unless a caller tunes it); fewer while batches hold the write lock
     /// longer than 100 ms.
     pub batch_lines: usize,
+    /// Asked between batches whether to stop: the import then ends with
+    /// [`ImportError::Stopped`], its committed batches kept for a later run to resume.
+    pub stop: Option<ImportStop>,
+}
+
+/// Whether an import should stop at its next batch (a paused or cancelled import job, or a
+/// server shutting down).
+#[derive(Clone)]
+pub struct ImportStop(pub std::sync::Arc<dyn Fn() -> bool + Send + Sync>);
+
+impl fmt::Debug for ImportStop {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("ImportStop")
+    }
 }
 
 /// How far an import has got: told after each batch and once at the end.
@@ -285,6 +320,10 @@ pub enum ImportError {
     /// The unfinished import of the dataset cannot go on.
     #[error("the unfinished import of dataset '{dataset}': {message}")]
     Staged { dataset: String, message: String },
+    #[error(
+        "the import into dataset '{dataset}' stopped after {lines} lines; run it again to resume"
+    )]
+    Stopped { dataset: String, lines: i64 },
     #[error(
         "another run of the import into dataset '{dataset}' took it over (or it was abandoned); this one stopped, nothing of it is visible"
     )]
@@ -764,6 +803,12 @@ pub async fn import_release(
             lines_done = progress.lines_done;
         }
         ImportObserver::tell(observer, told(&validator_slot, false));
+        if options.stop.as_ref().is_some_and(|stop| (stop.0)()) {
+            return Err(ImportError::Stopped {
+                dataset: options.dataset.clone(),
+                lines: lines_done,
+            });
+        }
         (validator_slot, next) = next_batch(validator_slot).await?;
     }
     let validator = validator_slot;

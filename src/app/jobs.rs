@@ -1,6 +1,6 @@
 //! Long work that must survive restarts and be worked by one instance at a time: model runs,
-//! rescoring (and, next, staged imports). One mechanism for all of them, in the shape of
-//! crates.io's worker:
+//! rescoring, and imports from the server's import folder. One mechanism for all of them, in
+//! the shape of crates.io's worker:
 //!
 //! - a job is a row (`jobs`): its kind, a JSON payload, its state and progress. [`enqueue`]
 //!   writes it on the caller's transaction, so the job exists exactly when the change that asks
@@ -73,6 +73,54 @@ pub async fn enqueue(
 pub async fn get(hub: &Hub, id: JobId) -> Result<Option<JobRow>, AppError> {
     let mut conn = hub.conn().await?;
     Ok(store::jobs::get(&mut conn, id.0).await?)
+}
+
+/// A job as the API shows it: its state, attempts and the progress its code last stored.
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
+pub struct JobView {
+    pub id: i64,
+    /// `model_run`, `rescore` or `import`.
+    pub kind: String,
+    /// `queued`, `running`, `paused`, `done`, `failed` or `cancelled`.
+    pub state: String,
+    pub attempts: i64,
+    /// Why the last attempt failed, if it did.
+    pub last_error: Option<String>,
+    /// What the job's code last reported (its shape depends on the kind), or null.
+    pub progress: serde_json::Value,
+    pub created_by: String,
+    pub created_at: String,
+    pub updated_at: String,
+    pub finished_at: Option<String>,
+}
+
+impl From<JobRow> for JobView {
+    fn from(job: JobRow) -> JobView {
+        JobView {
+            id: job.id,
+            kind: job.kind.as_str().to_owned(),
+            state: job.state.as_str().to_owned(),
+            attempts: job.attempts,
+            last_error: job.last_error,
+            progress: job
+                .progress
+                .as_deref()
+                .and_then(|p| serde_json::from_str(p).ok())
+                .unwrap_or(serde_json::Value::Null),
+            created_by: job.created_by,
+            created_at: job.created_at,
+            updated_at: job.updated_at,
+            finished_at: job.finished_at,
+        }
+    }
+}
+
+/// The job `id` as the API shows it.
+pub async fn view(hub: &Hub, id: JobId) -> Result<JobView, AppError> {
+    get(hub, id)
+        .await?
+        .map(JobView::from)
+        .ok_or_else(|| AppError::NotFound(format!("{id} does not exist")))
 }
 
 /// The newest jobs (of one kind when given), newest first.

@@ -45,6 +45,7 @@ pub mod error_analysis;
 pub mod frames;
 pub mod gold;
 pub mod import;
+pub mod import_jobs;
 pub mod items;
 pub mod jobs;
 pub mod leaderboard;
@@ -117,6 +118,9 @@ pub fn job_handlers() -> jobs::JobHandlers {
         .with(jobs::JobKind::ModelRun, |hub, job| {
             Box::pin(async move { runs::work(&hub, &job).await })
         })
+        .with(jobs::JobKind::Import, |hub, job| {
+            Box::pin(async move { import_jobs::work(&hub, &job).await })
+        })
 }
 
 /// What every use case works with: the store and the caches in front of it. Cheap to clone.
@@ -138,6 +142,8 @@ pub struct Hub {
     quotas: Quotas,
     /// The environment variables a server-side model run may take its API key from.
     endpoint_keys: runs::EndpointKeys,
+    /// The folder import jobs read releases from (`serve --import-dir`); none: refused.
+    import_dir: Option<Arc<std::path::PathBuf>>,
     metrics: Arc<metrics::Metrics>,
 }
 
@@ -168,6 +174,7 @@ impl Hub {
             changes: tokio::sync::broadcast::channel(1024).0,
             quotas,
             endpoint_keys: runs::EndpointKeys::default(),
+            import_dir: None,
             metrics: Arc::default(),
         }
     }
@@ -266,6 +273,17 @@ impl Hub {
     pub fn with_endpoint_keys(mut self, keys: runs::EndpointKeys) -> Hub {
         self.endpoint_keys = keys;
         self
+    }
+
+    /// The hub whose import jobs read releases from under `dir` (`serve --import-dir`).
+    pub fn with_import_dir(mut self, dir: Option<std::path::PathBuf>) -> Hub {
+        self.import_dir = dir.map(Arc::new);
+        self
+    }
+
+    /// The folder import jobs read releases from, when this instance has one.
+    pub fn import_dir(&self) -> Option<&std::path::Path> {
+        self.import_dir.as_deref().map(std::path::PathBuf::as_path)
     }
 
     /// The environment variables a server-side model run may take its API key from.

@@ -1,7 +1,7 @@
 //! `import`: an ENACT release into the database, with a progress bar on a terminal.
 
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args;
@@ -9,7 +9,7 @@ use clap::Args;
 use super::{DbArg, frames, open, operator};
 use crate::app::import::{
     BATCH_LINES, ImportError, ImportObserver, ImportOptions, ImportProgress, ReleaseLocation,
-    SkippedLine, abandon, import_release, stale,
+    SkippedLine, abandon, default_dataset_name, import_release, stale,
 };
 
 #[derive(Args)]
@@ -54,20 +54,6 @@ pub(super) struct ImportArgs {
     /// With --stale: discard the listed imports.
     #[arg(long, requires = "stale")]
     remove: bool,
-}
-
-/// The dataset name `import` uses when none is given: the release folder's name.
-fn default_dataset_name(data: &Path) -> String {
-    let folder = if data.is_file() {
-        data.parent().and_then(Path::parent)
-    } else {
-        Some(data)
-    };
-    folder
-        .and_then(|f| std::fs::canonicalize(f).ok())
-        .and_then(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
-        .filter(|n| !n.is_empty())
-        .unwrap_or_else(|| "enact".to_owned())
 }
 
 /// One line per rejected row: the row's first problems, and how many more it has.
@@ -162,8 +148,7 @@ pub(super) async fn import(args: ImportArgs) -> anyhow::Result<ExitCode> {
         // ENACT's download layout: QA/ beside replayed_activities/ (and segmented_activities/).
         (None, false) => ReleaseLocation::resolve(&data)
             .ok()
-            .map(|location| location.root.join("replayed_activities"))
-            .filter(|dir| dir.is_dir())
+            .and_then(|location| location.own_scene_graphs())
             .inspect(|dir| {
                 eprintln!(
                     "scene graphs: {} (the release's own; --scene-graphs DIR overrides, \
@@ -182,6 +167,7 @@ pub(super) async fn import(args: ImportArgs) -> anyhow::Result<ExitCode> {
         progress: std::io::stderr().is_terminal().then(progress_bar),
         scene_graphs,
         batch_lines: args.batch_lines as usize,
+        stop: None,
     };
     let result = import_release(&hub, &operator(), &data, &options).await;
     if result.as_ref().is_ok_and(|r| r.new_frames > 0) {

@@ -49,6 +49,11 @@ pub(super) struct ServeArgs {
         value_name = "VAR"
     )]
     endpoint_keys: Vec<String>,
+    /// The folder admins may import releases from over the API or the admin page (`POST
+    /// /api/v1/admin/imports` names a release by its path under it); without it such imports
+    /// are refused. Every instance working jobs needs the same folder (a shared volume).
+    #[arg(long, env = "ENACT_HUB_IMPORT_DIR", value_name = "DIR")]
+    import_dir: Option<PathBuf>,
     /// A bearer token that `GET /metrics` accepts besides admin tokens: give it to the
     /// Prometheus scraper (`authorization: {credentials: ...}`).
     #[arg(
@@ -131,7 +136,8 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         .with_frame_store(frame_store, args.frame_redirect.map(Duration::from_secs))
         .with_endpoint_keys(app::runs::EndpointKeys::from_env(
             args.endpoint_keys.clone(),
-        )?);
+        )?)
+        .with_import_dir(args.import_dir.clone());
     if args.demo {
         app::demo::load(&hub).await?;
     }

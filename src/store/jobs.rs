@@ -12,15 +12,18 @@ pub enum JobKind {
     ModelRun,
     /// Stored results re-scored under the current metric version.
     Rescore,
+    /// A release imported from the server's import folder (staged, as the command line does).
+    Import,
 }
 
 impl JobKind {
-    pub const ALL: [JobKind; 2] = [JobKind::ModelRun, JobKind::Rescore];
+    pub const ALL: [JobKind; 3] = [JobKind::ModelRun, JobKind::Rescore, JobKind::Import];
 
     pub fn as_str(self) -> &'static str {
         match self {
             JobKind::ModelRun => "model_run",
             JobKind::Rescore => "rescore",
+            JobKind::Import => "import",
         }
     }
 

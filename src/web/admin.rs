@@ -90,6 +90,9 @@ struct AdminPage {
     /// A new account's invite link, shown once.
     invite: Option<(String, String)>,
     metric_version: u32,
+    /// The folder releases are imported from (`serve --import-dir`), when there is one.
+    import_dir: Option<String>,
+    imports: Vec<crate::app::import_jobs::ImportJobSummary>,
 }
 
 fn percent(v: f64) -> String {
@@ -149,8 +152,11 @@ pub(super) async fn render_admin(
         }
     }
     let flags = annotation::flags(&state.hub).await?;
+    let imports = crate::app::import_jobs::recent(&state.hub, 10).await?;
     let page = AdminPage {
         metric_version: crate::core::metric::METRIC_VERSION,
+        import_dir: state.hub.import_dir().map(|d| d.display().to_string()),
+        imports,
         name: session.name,
         csrf: session.csrf_token,
         annotators: accounts

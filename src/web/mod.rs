@@ -27,6 +27,7 @@ mod error_analysis;
 mod extract;
 pub mod forwarded;
 pub mod i18n;
+mod imports;
 mod leaderboard;
 mod locale_switch;
 mod metrics;
@@ -147,6 +148,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(leaderboard::api_routes());
     routes.extend(error_analysis::routes());
     routes.extend(studies::routes());
+    routes.extend(imports::routes());
     routes.extend(rescore::routes());
     routes.extend(runs::routes());
     routes.extend(quality::routes());
@@ -228,6 +230,7 @@ fn admin_pages(state: &AppState) -> Router<AppState> {
         .merge(admin_tokens::router())
         .merge(admin_audit::router())
         .merge(studies::admin_router())
+        .merge(imports::router())
         .merge(rescore::router())
         .merge(quality::router())
         .merge(run_pages::admin_router())

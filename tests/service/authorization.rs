@@ -86,6 +86,11 @@ fn body_of(verb: Verb, path: &str, records: &[Value], n: usize) -> Option<(Strin
             "application/json",
         )),
         (Verb::Delete, "/admin/studies/{study}") => Some((String::new(), "text/plain")),
+        (Verb::Post, "/admin/imports") => Some((
+            json!({"path": "release", "dataset": format!("imported-{n}")}).to_string(),
+            "application/json",
+        )),
+        (Verb::Post, "/admin/jobs/{job}/{change}") => Some((String::new(), "text/plain")),
         (Verb::Post, "/admin/rescore") => {
             Some((json!({"dataset": "mini"}).to_string(), "application/json"))
         }
@@ -231,6 +236,16 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                         }
                         matrix_run(&server, n).await.to_string()
                     }
+                    // A fresh queued job for every call, so that cancelling it succeeds.
+                    "job" => enact_hub::app::rescore::request(
+                        &enact_hub::app::Hub::from(server.pool.clone()),
+                        &tester(),
+                        Some("mini"),
+                    )
+                    .await
+                    .expect("a queued rescore")
+                    .0
+                    .to_string(),
                     "change" => "cancel".to_owned(),
                     // The annotator behind the callers' session.
                     "annotator" => "ann".to_owned(),
@@ -428,6 +443,7 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("POST", "/admin/tokens/revoke", Page::Admin),
     ("GET", "/admin/audit", Page::Admin),
     ("POST", "/admin/rescore", Page::Admin),
+    ("POST", "/admin/imports", Page::Admin),
     (
         "POST",
         "/admin/datasets/{dataset}/agreement-protocol",

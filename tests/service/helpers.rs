@@ -102,6 +102,7 @@ pub fn options(dataset: &str) -> ImportOptions {
         progress: None,
         scene_graphs: None,
         batch_lines: BATCH_LINES,
+        stop: None,
     }
 }
 
@@ -291,7 +292,9 @@ where
     let dir = tempfile::tempdir().expect("tempdir");
     let (pool, db) = fresh_db_located(&dir).await;
     setup(pool.clone(), dir.path().to_path_buf()).await;
-    let mut server = serve_hub(Hub::from(pool.clone()), pool, dir, &config).await;
+    // The test's folder is also the folder import jobs may read releases from.
+    let hub = Hub::from(pool.clone()).with_import_dir(Some(dir.path().to_path_buf()));
+    let mut server = serve_hub(hub, pool, dir, &config).await;
     server.db = db;
     server
 }

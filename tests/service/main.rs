@@ -25,6 +25,7 @@ mod helpers;
 mod hostile;
 mod i18n;
 mod import;
+mod import_jobs;
 mod instances;
 mod jobs;
 mod leaderboard;

@@ -1,0 +1,333 @@
+//! Imports worked as jobs: an admin asks the hub (API or admin page) to import a release that
+//! sits in the server's import folder (`serve --import-dir`), and the serving instances' job
+//! workers run the same staged import as the command line. Started again after a crash, a
+//! restart or a takeover, the job resumes after the import's last committed batch; paused, it
+//! stops between batches and keeps them; cancelled, it discards what it staged.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+
+use super::import::{
+    BATCH_LINES, ImportError, ImportObserver, ImportOptions, ImportProgress, ImportStop,
+    ReleaseLocation, abandon, default_dataset_name, import_release,
+};
+use super::jobs::{self, JobContext, JobId, JobKind, JobState};
+use super::{AppError, Hub};
+use crate::core::audit::Actor;
+use crate::store;
+
+/// What an admin asks for: a release under the import folder, and the command line's options.
+#[derive(Debug, Clone, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ImportRequest {
+    /// The release folder (or its `QA/*.jsonl` file), relative to the server's import folder.
+    pub path: String,
+    /// The dataset to import into; the release folder's name when absent.
+    #[serde(default)]
+    pub dataset: Option<String>,
+    /// Overwrite stored items whose content differs (`import --replace`).
+    #[serde(default)]
+    pub replace: bool,
+    /// Import the valid lines and list the others (`import --skip-invalid`).
+    #[serde(default)]
+    pub skip_invalid: bool,
+}
+
+/// The job's payload: the request as resolved when it was queued, and who asked.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct ImportPayload {
+    /// Relative to the import folder, as asked.
+    path: String,
+    dataset: String,
+    replace: bool,
+    skip_invalid: bool,
+    actor_kind: String,
+    actor: String,
+}
+
+/// What a queued import's progress says, for pages and `GET /api/v1/admin/jobs/{id}`.
+#[derive(Debug, Clone, Serialize)]
+#[serde(tag = "outcome", rename_all = "snake_case")]
+enum ImportOutcome {
+    /// Still going: how far it has read.
+    Importing {
+        dataset: String,
+        qa_bytes_read: u64,
+        qa_bytes: u64,
+        rows: usize,
+    },
+    /// Imported: the import's report (as `import --json` prints it).
+    Imported {
+        dataset: String,
+        report: super::import::ImportReport,
+    },
+    /// Refused for what the release holds (invalid lines, conflicts): retrying cannot help,
+    /// so the job ends here with the reasons.
+    Refused {
+        dataset: String,
+        error: String,
+        details: Vec<String>,
+    },
+    /// Cancelled by an admin: what it had staged is discarded.
+    Cancelled { dataset: String },
+}
+
+/// Where `path` (relative to `root`) is, refused when it leaves `root` (`..`, a symbolic link
+/// out) or is not there.
+fn under(root: &Path, path: &str) -> Result<PathBuf, AppError> {
+    let root = std::fs::canonicalize(root)
+        .map_err(|e| AppError::internal(format!("the import folder {}: {e}", root.display())))?;
+    let asked = Path::new(path.trim());
+    if asked.as_os_str().is_empty() || asked.is_absolute() {
+        return Err(AppError::Invalid(format!(
+            "path: {path:?} must be a release's path relative to the server's import folder"
+        )));
+    }
+    let resolved = std::fs::canonicalize(root.join(asked)).map_err(|_| {
+        AppError::NotFound(format!("path: no {path:?} in the server's import folder"))
+    })?;
+    if !resolved.starts_with(&root) {
+        return Err(AppError::Invalid(format!(
+            "path: {path:?} leaves the server's import folder"
+        )));
+    }
+    Ok(resolved)
+}
+
+/// The release at `path` under `root`: its QA file must be JSON lines and the release folder
+/// (the images' base) must lie inside `root` too.
+fn release_under(root: &Path, path: &str) -> Result<(PathBuf, ReleaseLocation), AppError> {
+    let resolved = under(root, path)?;
+    let location =
+        ReleaseLocation::resolve(&resolved).map_err(|e| AppError::Invalid(format!("path: {e}")))?;
+    if location.qa_file.extension().and_then(|e| e.to_str()) != Some("jsonl") {
+        return Err(AppError::Invalid(format!(
+            "path: {path:?} is neither a release folder (with QA/enact_ordering.jsonl) nor a \
+             .jsonl file"
+        )));
+    }
+    let inside = std::fs::canonicalize(&location.root)
+        .ok()
+        .zip(std::fs::canonicalize(root).ok())
+        .is_some_and(|(release, root)| release.starts_with(root));
+    if !inside {
+        return Err(AppError::Invalid(format!(
+            "path: the release of {path:?} (its images' folder) leaves the server's import \
+             folder"
+        )));
+    }
+    Ok((resolved, location))
+}
+
+/// The import folder of this instance, or the refusal an admin reads.
+fn import_dir(hub: &Hub) -> Result<&Path, AppError> {
+    hub.import_dir().ok_or_else(|| {
+        AppError::NotPermitted(
+            "this server imports releases from its own disk only when started with \
+             --import-dir DIR (ENACT_HUB_IMPORT_DIR); use `enact-hub import` on the server"
+                .into(),
+        )
+    })
+}
+
+/// Queues an import of the release at `request.path` under the import folder. The release's
+/// location is checked now (its `QA/enact_ordering.jsonl` found); its lines are checked by the
+/// job. Refused while another import job into the same dataset is unfinished.
+pub async fn request(hub: &Hub, actor: &Actor, request: &ImportRequest) -> Result<JobId, AppError> {
+    let (path, _) = release_under(import_dir(hub)?, &request.path)?;
+    let dataset = request
+        .dataset
+        .as_deref()
+        .map(str::trim)
+        .filter(|d| !d.is_empty())
+        .map_or_else(|| default_dataset_name(&path), str::to_owned);
+    let payload = ImportPayload {
+        path: request.path.trim().to_owned(),
+        dataset,
+        replace: request.replace,
+        skip_invalid: request.skip_invalid,
+        actor_kind: actor.kind().to_owned(),
+        actor: actor.name().to_owned(),
+    };
+    let mut tx = hub.begin().await?;
+    for job in store::jobs::unfinished(&mut tx, JobKind::Import).await? {
+        let other: Option<ImportPayload> = serde_json::from_str(&job.payload).ok();
+        if other.is_some_and(|o| o.dataset == payload.dataset) {
+            return Err(AppError::Conflict(format!(
+                "job {} is already importing into dataset '{}' ({})",
+                job.id,
+                payload.dataset,
+                job.state.as_str()
+            )));
+        }
+    }
+    let id = jobs::enqueue(&mut tx, JobKind::Import, &serde_json::json!(payload), actor).await?;
+    tx.commit().await?;
+    Ok(id)
+}
+
+/// How often a running import's progress is written.
+const PROGRESS_EVERY: Duration = Duration::from_secs(2);
+
+/// Works a queued import: the staged import of the command line, resumed where an earlier
+/// start of the job stopped, its progress stored every few seconds. A refusal for the
+/// release's content ends the job with the reasons in its progress (no retry); a database or
+/// disk error fails it, to be retried.
+pub async fn work(hub: &Hub, job: &Arc<JobContext>) -> Result<(), AppError> {
+    let payload: ImportPayload = serde_json::from_value(job.payload.clone())
+        .map_err(|e| AppError::internal(format!("import job: unreadable payload: {e}")))?;
+    let actor = Actor::from_parts(&payload.actor_kind, &payload.actor).ok_or_else(|| {
+        AppError::internal(format!(
+            "import job: unknown actor kind {:?}",
+            payload.actor_kind
+        ))
+    })?;
+    let (path, location) = release_under(import_dir(hub)?, &payload.path)?;
+    let latest: Arc<Mutex<Option<ImportProgress>>> = Arc::default();
+    let noted = Arc::clone(&latest);
+    let stopping = Arc::clone(job);
+    let options = ImportOptions {
+        dataset: payload.dataset.clone(),
+        skip_invalid: payload.skip_invalid,
+        replace: payload.replace,
+        progress: Some(ImportObserver(Arc::new(move |p: &ImportProgress| {
+            *noted.lock().unwrap_or_else(|p| p.into_inner()) = Some(*p);
+        }))),
+        scene_graphs: location.own_scene_graphs(),
+        batch_lines: BATCH_LINES,
+        stop: Some(ImportStop(Arc::new(move || {
+            stopping.stop_requested().is_some()
+        }))),
+    };
+    let importing = import_release(hub, &actor, &path, &options);
+    tokio::pin!(importing);
+    let mut tick = tokio::time::interval(PROGRESS_EVERY);
+    let result = loop {
+        tokio::select! {
+            result = &mut importing => break result,
+            _ = tick.tick() => {
+                let seen = latest.lock().unwrap_or_else(|p| p.into_inner()).take();
+                if let Some(p) = seen {
+                    let outcome = ImportOutcome::Importing {
+                        dataset: payload.dataset.clone(),
+                        qa_bytes_read: p.qa_bytes_read,
+                        qa_bytes: p.qa_bytes,
+                        rows: p.rows,
+                    };
+                    job.progress(hub, serde_json::json!(outcome)).await?;
+                }
+            }
+        }
+    };
+    let dataset = payload.dataset.clone();
+    let outcome = match result {
+        Ok(report) => {
+            if report.new_frames > 0 {
+                hub.truncate_log().await;
+            }
+            ImportOutcome::Imported { dataset, report }
+        }
+        Err(ImportError::Stopped { .. }) => {
+            if job.stop_requested() != Some(JobState::Cancelled) {
+                // Paused, or the instance is stopping: the batches stay for the next start.
+                return Ok(());
+            }
+            abandon(hub, &actor, &payload.dataset)
+                .await
+                .map_err(|e| AppError::Internal(e.into()))?;
+            ImportOutcome::Cancelled { dataset }
+        }
+        Err(
+            e @ (ImportError::Invalid { .. }
+            | ImportError::Conflict { .. }
+            | ImportError::Location(_)
+            | ImportError::ImageChanged { .. }),
+        ) => ImportOutcome::Refused {
+            dataset,
+            error: e.to_string(),
+            details: e.details(),
+        },
+        Err(e) => return Err(AppError::Internal(e.into())),
+    };
+    job.progress(hub, serde_json::json!(outcome)).await
+}
+
+/// An import job as the admin page lists it.
+#[derive(Debug, Clone, Serialize)]
+pub struct ImportJobSummary {
+    pub id: i64,
+    pub state: &'static str,
+    pub dataset: String,
+    pub path: String,
+    /// Where it stands, in a sentence.
+    pub outcome: String,
+    pub updated_at: String,
+}
+
+/// The newest import jobs, at most `limit`.
+pub async fn recent(hub: &Hub, limit: u32) -> Result<Vec<ImportJobSummary>, AppError> {
+    let jobs = jobs::list(hub, Some(JobKind::Import), limit).await?;
+    Ok(jobs
+        .into_iter()
+        .map(|job| {
+            let payload: Option<ImportPayload> = serde_json::from_str(&job.payload).ok();
+            let progress: Option<serde_json::Value> = job
+                .progress
+                .as_deref()
+                .and_then(|p| serde_json::from_str(p).ok());
+            ImportJobSummary {
+                id: job.id,
+                state: job.state.as_str(),
+                dataset: payload
+                    .as_ref()
+                    .map(|p| p.dataset.clone())
+                    .unwrap_or_default(),
+                path: payload.map(|p| p.path).unwrap_or_default(),
+                outcome: describe(job.state, progress.as_ref(), job.last_error.as_deref()),
+                updated_at: job.updated_at,
+            }
+        })
+        .collect())
+}
+
+/// A sentence for an import job's state and stored progress.
+fn describe(state: JobState, progress: Option<&serde_json::Value>, error: Option<&str>) -> String {
+    let field = |name: &str| progress.and_then(|p| p.get(name));
+    let outcome = field("outcome").and_then(serde_json::Value::as_str);
+    match outcome {
+        Some("importing") => {
+            let read = field("qa_bytes_read")
+                .and_then(serde_json::Value::as_u64)
+                .unwrap_or(0);
+            let total = field("qa_bytes")
+                .and_then(serde_json::Value::as_u64)
+                .unwrap_or(0);
+            let rows = field("rows")
+                .and_then(serde_json::Value::as_u64)
+                .unwrap_or(0);
+            let share = if total == 0 {
+                0.0
+            } else {
+                100.0 * read as f64 / total as f64
+            };
+            format!("{rows} lines read ({share:.0} % of the QA file)")
+        }
+        Some("imported") => field("report")
+            .and_then(|r| serde_json::from_value::<super::import::ImportReport>(r.clone()).ok())
+            .map_or_else(|| "imported".to_owned(), |r| r.summary_line()),
+        Some("refused") => field("error")
+            .and_then(serde_json::Value::as_str)
+            .unwrap_or("refused")
+            .to_owned(),
+        Some("cancelled") => "cancelled; what it had staged was discarded".to_owned(),
+        _ => match (state, error) {
+            (JobState::Queued, Some(e)) => format!("waiting to retry after: {e}"),
+            (JobState::Failed, Some(e)) => format!("failed: {e}"),
+            (JobState::Queued, None) => "waiting for a job worker".to_owned(),
+            (state, _) => state.as_str().to_owned(),
+        },
+    }
+}
