@@ -221,7 +221,7 @@ fn format(locale: Locale, key: &str, args: Option<&FluentArgs>) -> String {
 pub fn pseudo(english: &str) -> String {
     const FILLER: [&str; 6] = ["ipsum", "dolor", "sit", "amet", "elit", "sed"];
     let length = english.chars().count();
-    let wanted = length * 2 / 5 + usize::from(length % 5 != 0);
+    let wanted = (length * 2).div_ceil(5);
     let mut padding = String::new();
     for word in FILLER.iter().cycle() {
         if padding.chars().count() >= wanted {

@@ -292,18 +292,9 @@ async fn a_study_of_three_families_draws_every_label_whole() {
         ("world-skin", rig(&|r| r.robot_colour = [224, 172, 105])),
     ])
     .await;
-    let (_, token) = api_token(
-        &server.pool,
-        "admin",
-        enact_hub::core::credentials::Role::Admin,
-        None,
-        None,
-    )
-    .await;
-    server
-        .call(reqwest::Method::POST, "/api/v1/admin/studies")
-        .bearer(&token)
-        .json(&json!({
+    let token = create_study(
+        &server,
+        json!({
             "name": "three",
             "baseline": crate::studies::BASELINE,
             "variants": [
@@ -312,9 +303,9 @@ async fn a_study_of_three_families_draws_every_label_whole() {
                 "Camera FOV/Aperture 80=world-fov80",
                 "Robot appearance/Skin colour=world-skin",
             ],
-        }))
-        .expect(201)
-        .await;
+        }),
+    )
+    .await;
     let datasets = [
         crate::studies::BASELINE,
         "world-fov30",
@@ -514,17 +505,7 @@ struct PublicWorld {
 
 impl PublicWorld {
     async fn new() -> PublicWorld {
-        let records = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
-        let shared = records.clone();
-        let server = spawn_app_with(|pool, dir| async move {
-            let root = dir.join("release");
-            let written = write_release(&root, &[3, 4]);
-            import(&pool, &root, &options("mini")).await;
-            import(&pool, &root, &options("mini-b")).await;
-            *shared.lock().expect("lock") = written;
-        })
-        .await;
-        let records: Vec<Value> = records.lock().expect("lock").clone();
+        let (server, records) = spawn_app_with_release_as(&["mini", "mini-b"]).await;
         let id = |i: usize| records[i]["id"].as_str().expect("id").to_owned();
         let mut invites = Vec::new();
         for name in ["ana", "bo"] {
@@ -539,24 +520,15 @@ impl PublicWorld {
             invites.push(format!("/invite/{token}"));
         }
         crate::annotate::annotator(&server, "boss", true).await;
-        let (_, admin) = api_token(
-            &server.pool,
-            "admin",
-            enact_hub::core::credentials::Role::Admin,
-            None,
-            None,
-        )
-        .await;
-        server
-            .call(reqwest::Method::POST, "/api/v1/admin/studies")
-            .bearer(&admin)
-            .json(&json!({
+        let admin = create_study(
+            &server,
+            json!({
                 "name": "camera",
                 "baseline": "mini",
                 "variants": ["Camera height/Low camera (1.0 m)=mini-b"],
-            }))
-            .expect(201)
-            .await;
+            }),
+        )
+        .await;
         let chance = enact_hub::core::demo::CHANCE_BASELINE_MODEL.replace(' ', "%20");
         let mut submissions = Vec::new();
         for dataset in ["mini", "mini-b"] {
@@ -726,6 +698,25 @@ async fn pseudo_locale_pages_lay_out_right_to_left_without_overflow_or_overlap()
         problems.join("\n")
     );
     world.server.stop().await;
+}
+
+/// Creates the study `body` describes over the API as a new admin; the admin's API token.
+async fn create_study(server: &TestServer, body: Value) -> String {
+    let (_, token) = api_token(
+        &server.pool,
+        "admin",
+        enact_hub::core::credentials::Role::Admin,
+        None,
+        None,
+    )
+    .await;
+    server
+        .call(reqwest::Method::POST, "/api/v1/admin/studies")
+        .bearer(&token)
+        .json(&body)
+        .expect(201)
+        .await;
+    token
 }
 
 /// A server-side model run's page in Chromium: labelled controls, pause and resume by keyboard,
