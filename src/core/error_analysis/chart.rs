@@ -15,7 +15,7 @@ const BAR_HEIGHT: f64 = 22.0;
 const LINE_HEIGHT: f64 = 14.0;
 /// A label longer than this wraps at its spaces; the label column is as wide as the widest
 /// line (a word longer than this gets a line of its own, and the column grows to hold it).
-const LABEL_WRAP: f64 = 240.0;
+const LABEL_WRAP: f64 = 300.0;
 /// Between a label's end and the plot.
 const LABEL_GAP: f64 = 8.0;
 /// The narrowest label column, so that short labels leave the charts aligned with each other.
