@@ -260,6 +260,7 @@ errors-heading = Error analysis: { $dataset }
 errors-leaderboard = Leaderboard
 errors-explanation = Each answer of the right length is compared step by step with the truth: true and predicted state changes are matched, and the rest classed as in the ENACT paper (polarity inversion, predicate substitution, entity substitution, omission, hallucination) and by what they are about. Hand figures count grasping changes of each gripper; mixing is the share of a hand's true changes given to the other hand.
 errors-empty = No published submission and no human answer yet.
+errors-examples-withheld = Examples are not shown: the answers of dataset “{ $dataset }” are hidden, so only aggregate figures are.
 errors-row = row
 errors-overall = overall
 errors-structural = Structural errors

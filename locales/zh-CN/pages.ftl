@@ -231,6 +231,7 @@ errors-heading = 错误分析：{ $dataset }
 errors-leaderboard = 排行榜
 errors-explanation = 每个长度正确的答案都会与真实答案逐步比较：匹配真实的和预测的状态变化，其余按 ENACT 论文的分类（极性反转、谓词替换、实体替换、遗漏、幻觉）以及所涉及的内容归类。手部数据统计每个夹爪的抓取变化；“混淆”指某只手的真实变化被归给另一只手的比例。
 errors-empty = 还没有已发布的提交，也没有人类答案。
+errors-examples-withheld = 不显示示例：数据集“{ $dataset }”的答案是隐藏的，因此只显示汇总数据。
 errors-row = 行
 errors-overall = 总体
 errors-structural = 结构性错误

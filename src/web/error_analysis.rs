@@ -23,7 +23,7 @@ use super::{AppError, AppState};
 use crate::app::error_analysis::{self, Analysed, ComparedRow};
 use crate::app::tokens::Caller;
 use crate::core::credentials::Scope;
-use crate::core::error_analysis::chart::{self, BarChart};
+use crate::core::error_analysis::chart::{self, BarChart, ChartNames};
 use crate::core::error_analysis::{
     ErrorExample, ErrorFigures, Hand, HandFigures, SemanticCategory, StructuralClass,
 };
@@ -294,13 +294,6 @@ fn figures(analysed: &Analysed, direction: Option<Direction>) -> &ErrorFigures {
     }
 }
 
-/// Column headings shared by both pages.
-struct Headings {
-    structural: Vec<String>,
-    semantic: Vec<String>,
-    hands: Vec<String>,
-}
-
 /// The message key of a structural class (the paper's taxonomy).
 fn structural_key(class: StructuralClass) -> &'static str {
     match class {
@@ -322,7 +315,9 @@ fn semantic_key(category: SemanticCategory) -> &'static str {
     }
 }
 
-fn headings(tr: &Tr) -> Headings {
+/// The names of the classes, categories and hand measures in the reader's language: the
+/// tables' column headings and the charts' labels and legends.
+fn headings(tr: &Tr) -> ChartNames {
     let mut hands = Vec::new();
     for h in Hand::BOTH {
         let hand = tr.t(match h {
@@ -337,7 +332,7 @@ fn headings(tr: &Tr) -> Headings {
             hands.push(format!("{hand} {}", tr.t(m)));
         }
     }
-    Headings {
+    ChartNames {
         structural: StructuralClass::ALL
             .iter()
             .map(|c| tr.t(structural_key(*c)))
@@ -366,7 +361,7 @@ struct ComparisonPage {
     dataset: String,
     direction: String,
     links: Vec<(String, String, bool)>,
-    headings: Headings,
+    headings: ChartNames,
     rows: Vec<FigureRow>,
     structural: BarChart,
     semantic: BarChart,
@@ -414,6 +409,7 @@ async fn comparison_page(
         }
         format!("{base}?{}", q.join("&"))
     };
+    let headings = headings(&tr);
     let page = ComparisonPage {
         dataset: dataset.name.clone(),
         direction: tr.t(direction_link_key(direction_name(direction))),
@@ -427,7 +423,6 @@ async fn comparison_page(
                 )
             })
             .collect(),
-        headings: headings(&tr),
         rows: rows
             .iter()
             .zip(&labels)
@@ -439,10 +434,14 @@ async fn comparison_page(
                 )
             })
             .collect(),
-        structural: chart::structural_chart(&drawn),
-        semantic: chart::semantic_chart(&drawn),
-        hands: chart::hand_chart(&drawn),
-        withheld: rows.iter().find_map(|r| r.analysis.withheld.clone()),
+        structural: chart::structural_chart(&drawn, &headings),
+        semantic: chart::semantic_chart(&drawn, &headings),
+        hands: chart::hand_chart(&drawn, &headings),
+        headings,
+        withheld: rows
+            .iter()
+            .any(|r| r.analysis.withheld.is_some())
+            .then(|| tr.t_s("errors-examples-withheld", "dataset", &dataset.name)),
         tr,
     };
     Ok(Html(page.render()?))
@@ -470,7 +469,7 @@ struct RowPage {
     tr: Tr,
     dataset: String,
     label: String,
-    headings: Headings,
+    headings: ChartNames,
     rows: Vec<FigureRow>,
     structural: BarChart,
     semantic: BarChart,
@@ -553,20 +552,34 @@ async fn row_page(
         ("forward", &a.by_direction.forward),
         ("inverse", &a.by_direction.inverse),
     ];
-    let drawn: Vec<(&str, &ErrorFigures)> = groups[1..].to_vec();
+    let directions: Vec<String> = groups[1..]
+        .iter()
+        .map(|(g, _)| tr.t(direction_link_key(g)))
+        .collect();
+    let drawn: Vec<(&str, &ErrorFigures)> = directions
+        .iter()
+        .zip(&groups[1..])
+        .map(|(name, (_, f))| (name.as_str(), *f))
+        .collect();
+    let headings = headings(&tr);
     let page = RowPage {
         dataset: dataset.name.clone(),
         label,
-        headings: headings(&tr),
         rows: groups
             .iter()
             .map(|(g, f)| figure_row(tr.t(direction_link_key(g)), None, f))
             .collect(),
-        structural: chart::structural_chart(&drawn),
-        semantic: chart::semantic_chart(&drawn),
-        hands: chart::hand_chart(&drawn),
+        structural: chart::structural_chart(&drawn, &headings),
+        semantic: chart::semantic_chart(&drawn, &headings),
+        hands: chart::hand_chart(&drawn, &headings),
+        headings,
         examples: example_groups(&tr, &dataset.name, &a.examples),
-        withheld: row.analysis.withheld.clone(),
+        // The API's English reason, in the reader's language.
+        withheld: row
+            .analysis
+            .withheld
+            .as_ref()
+            .map(|_| tr.t_s("errors-examples-withheld", "dataset", &dataset.name)),
         tr,
     };
     Ok(Html(page.render()?))

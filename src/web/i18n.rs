@@ -27,11 +27,18 @@ use super::cookies::cookie;
 /// The cookie holding the locale a browser chose with the switch.
 pub const LOCALE_COOKIE: &str = "enact_lang";
 
-/// A locale the pages are written in. Every one is complete: each has every message.
+/// A locale the pages are written in. Every one in [`Locale::ALL`] is complete: each has every
+/// message.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Locale {
     English,
     SimplifiedChinese,
+    /// A pseudo-locale for layout checks, never offered to users: English wrapped in `⟦…⟧`,
+    /// 40 % longer, on a right-to-left page (see [`pseudo`]). It is not in [`Locale::ALL`], so
+    /// the switch, `Accept-Language` and saved preferences never choose it; only a hand-set
+    /// `enact_lang=ar-XB` cookie does (the tag is the one Chromium and Android give their
+    /// right-to-left pseudo-locale).
+    PseudoRtl,
 }
 
 impl Locale {
@@ -42,6 +49,15 @@ impl Locale {
         match self {
             Locale::English => "en",
             Locale::SimplifiedChinese => "zh-CN",
+            Locale::PseudoRtl => "ar-XB",
+        }
+    }
+
+    /// The direction its pages are written in: the `dir` attribute.
+    pub fn direction(self) -> &'static str {
+        match self {
+            Locale::English | Locale::SimplifiedChinese => "ltr",
+            Locale::PseudoRtl => "rtl",
         }
     }
 
@@ -50,13 +66,15 @@ impl Locale {
         match self {
             Locale::English => "English",
             Locale::SimplifiedChinese => "简体中文",
+            Locale::PseudoRtl => "⟦pseudo⟧",
         }
     }
 
     /// The catalogue's source, embedded so that an installed binary needs nothing on disk.
+    /// The pseudo-locale has none of its own: its messages are made from English ones.
     pub fn catalogue_source(self) -> &'static str {
         match self {
-            Locale::English => include_str!("../../locales/en/pages.ftl"),
+            Locale::English | Locale::PseudoRtl => include_str!("../../locales/en/pages.ftl"),
             Locale::SimplifiedChinese => include_str!("../../locales/zh-CN/pages.ftl"),
         }
     }
@@ -111,9 +129,13 @@ impl Locale {
     }
 
     /// The locale of a request: the switch's cookie, else `Accept-Language`, else English.
+    /// The cookie alone can also name the pseudo-locale (set by hand, as the layout test does).
     pub fn of_request(headers: &HeaderMap) -> Locale {
         cookie(headers, LOCALE_COOKIE)
-            .and_then(|c| Locale::from_tag(&c))
+            .and_then(|c| {
+                Locale::from_tag(&c)
+                    .or_else(|| (c.trim() == Locale::PseudoRtl.tag()).then_some(Locale::PseudoRtl))
+            })
             .or_else(|| {
                 headers
                     .get(header::ACCEPT_LANGUAGE)
@@ -169,6 +191,9 @@ fn bundle(locale: Locale) -> Option<&'static FluentBundle<FluentResource>> {
 /// The message `key` of `locale` with `args`; the key itself when it is missing (the catalogue
 /// test keeps that from shipping).
 fn format(locale: Locale, key: &str, args: Option<&FluentArgs>) -> String {
+    if locale == Locale::PseudoRtl {
+        return pseudo(&format(Locale::English, key, args));
+    }
     let Some(bundle) = bundle(locale) else {
         return key.to_owned();
     };
@@ -187,6 +212,25 @@ fn format(locale: Locale, key: &str, args: Option<&FluentArgs>) -> String {
         );
     }
     text.into_owned()
+}
+
+/// The pseudo-locale's version of an English message: wrapped in `⟦…⟧` (a string that reaches
+/// a page without them did not come from the catalogue) and made 40 % longer with filler words,
+/// as translations into longer languages are. Filler words rather than one long run, so that
+/// text wraps as real words would. `{name}` placeholders of the script's messages are kept.
+pub fn pseudo(english: &str) -> String {
+    const FILLER: [&str; 6] = ["ipsum", "dolor", "sit", "amet", "elit", "sed"];
+    let length = english.chars().count();
+    let wanted = (length * 2).div_ceil(5);
+    let mut padding = String::new();
+    for word in FILLER.iter().cycle() {
+        if padding.chars().count() >= wanted {
+            break;
+        }
+        padding.push(' ');
+        padding.push_str(word);
+    }
+    format!("⟦{english}{padding}⟧")
 }
 
 /// Fluent's hook for numbers in messages: grouped, with the fraction digits the value has
@@ -330,6 +374,11 @@ impl Tr {
         self.locale.tag()
     }
 
+    /// The `dir` attribute of the page: the locale's writing direction.
+    pub fn dir(&self) -> &'static str {
+        self.locale.direction()
+    }
+
     /// A message without variables.
     pub fn t(&self, key: &str) -> String {
         format(self.locale, key, None)
@@ -437,7 +486,7 @@ impl Tr {
         };
         match (self.locale, parsed) {
             (_, None) => timestamp.to_owned(),
-            (Locale::English, Some(_)) => day.to_owned(),
+            (Locale::English | Locale::PseudoRtl, Some(_)) => day.to_owned(),
             (Locale::SimplifiedChinese, Some((y, m, d))) => format!("{y}年{m}月{d}日"),
         }
     }
@@ -564,6 +613,40 @@ mod tests {
         headers.insert(header::COOKIE, HeaderValue::from_static("enact_lang=xx"));
         assert_eq!(Locale::of_request(&headers), Locale::SimplifiedChinese);
         assert_eq!(Locale::of_request(&HeaderMap::new()), Locale::English);
+    }
+
+    #[test]
+    fn the_pseudo_locale_is_chosen_only_by_its_cookie() {
+        assert_eq!(Locale::from_tag("ar-XB"), None);
+        assert_eq!(Locale::negotiate("ar-XB, ar"), None);
+        let mut headers = HeaderMap::new();
+        headers.insert(header::COOKIE, HeaderValue::from_static("enact_lang=ar-XB"));
+        assert_eq!(Locale::of_request(&headers), Locale::PseudoRtl);
+        let tr = Tr::of_request(&headers, &axum::http::Uri::from_static("/"));
+        assert_eq!((tr.lang(), tr.dir()), ("ar-XB", "rtl"));
+        assert_eq!(Tr::new(Locale::English).dir(), "ltr");
+        // Every real locale is offered by the switch of a pseudo page; the pseudo one is not.
+        assert_eq!(tr.others().len(), Locale::ALL.len());
+    }
+
+    #[test]
+    fn pseudo_messages_are_wrapped_and_forty_percent_longer() {
+        let tr = Tr::new(Locale::PseudoRtl);
+        let english =
+            Tr::new(Locale::English).t_nn("home-items-from-tasks", "items", 12, "tasks", 3);
+        let text = tr.t_nn("home-items-from-tasks", "items", 12, "tasks", 3);
+        assert!(
+            text.starts_with("⟦12 items from 3 tasks") && text.ends_with('⟧'),
+            "{text}"
+        );
+        let inner = text.chars().count() - 2;
+        assert!(inner * 5 >= english.chars().count() * 7, "{text}");
+        assert!(inner * 5 < english.chars().count() * 7 + 5 * 8, "{text}");
+        assert_eq!(pseudo(""), "⟦⟧");
+        let script: serde_json::Value =
+            serde_json::from_str(&tr.script_messages()).expect("script messages are JSON");
+        let slot = script["js-slot-empty"].as_str().expect("a message");
+        assert!(slot.starts_with("⟦Slot {slot}: empty"), "{slot}");
     }
 
     #[test]

@@ -1,7 +1,8 @@
 // axe-core (npm) run in Chromium over the annotator's and the public pages, in each locale
 // asked for: prints one JSON line with every WCAG 2.x A/AA violation found (page, locale,
 // rule, the elements). Started by tests/service/browser.rs, which fails on any. Each locale
-// signs in through its own single-use invite, `params.invites[i]`.
+// signs in through its own single-use invite, `params.invites[i]`; then, with `params.admin`
+// ({name, password}), logs in as that admin for `params.admin_pages`.
 import { createRequire } from "node:module";
 import { readFileSync } from "node:fs";
 import { openPage } from "./chromium.mjs";
@@ -26,6 +27,17 @@ for (const [i, locale] of params.locales.entries()) {
       await page.goto(params.base + path);
       await page.waitForLoadState("networkidle");
       await report(page, locale, path);
+    }
+    if (params.admin) {
+      await page.goto(`${params.base}/login`);
+      await page.fill('input[name="name"]', params.admin.name);
+      await page.fill('input[name="password"]', params.admin.password);
+      await Promise.all([page.waitForNavigation(), page.click('main button[type="submit"]')]);
+      for (const path of params.admin_pages || []) {
+        await page.goto(params.base + path);
+        await page.waitForLoadState("networkidle");
+        await report(page, locale, path);
+      }
     }
   } finally {
     await context.close();

@@ -292,18 +292,9 @@ async fn a_study_of_three_families_draws_every_label_whole() {
         ("world-skin", rig(&|r| r.robot_colour = [224, 172, 105])),
     ])
     .await;
-    let (_, token) = api_token(
-        &server.pool,
-        "admin",
-        enact_hub::core::credentials::Role::Admin,
-        None,
-        None,
-    )
-    .await;
-    server
-        .call(reqwest::Method::POST, "/api/v1/admin/studies")
-        .bearer(&token)
-        .json(&json!({
+    let token = create_study(
+        &server,
+        json!({
             "name": "three",
             "baseline": crate::studies::BASELINE,
             "variants": [
@@ -312,9 +303,9 @@ async fn a_study_of_three_families_draws_every_label_whole() {
                 "Camera FOV/Aperture 80=world-fov80",
                 "Robot appearance/Skin colour=world-skin",
             ],
-        }))
-        .expect(201)
-        .await;
+        }),
+    )
+    .await;
     let datasets = [
         crate::studies::BASELINE,
         "world-fov30",
@@ -499,6 +490,104 @@ async fn an_annotator_reading_chinese_finishes_both_directions_by_keyboard() {
     server.stop().await;
 }
 
+/// The public and annotator pages with something on each: the `mini` release and a second
+/// import of it (`mini-b`) as the variant of a study `camera`; on both, a perfect model, a
+/// reversed one and one named like the demo's chance baseline (the longest row label of the
+/// error analysis); two annotators (`ana`, `bo`) with both directions' first items assigned and
+/// single-use invites; an admin `boss` with a password, for the agreement report.
+struct PublicWorld {
+    server: TestServer,
+    records: Vec<Value>,
+    invites: Vec<String>,
+    /// The submissions on `mini`: exact, reversed, chance.
+    submissions: Vec<i64>,
+}
+
+impl PublicWorld {
+    async fn new() -> PublicWorld {
+        let (server, records) = spawn_app_with_release_as(&["mini", "mini-b"]).await;
+        let id = |i: usize| records[i]["id"].as_str().expect("id").to_owned();
+        let mut invites = Vec::new();
+        for name in ["ana", "bo"] {
+            let token = new_token();
+            let annotator = {
+                let mut conn = server.pool.acquire().await.expect("conn");
+                store::annotations::create_annotator(&mut conn, name, false, &token_hash(&token))
+                    .await
+                    .expect("insert")
+            };
+            assign(&server, annotator, &[&id(0), &id(1)]).await;
+            invites.push(format!("/invite/{token}"));
+        }
+        crate::annotate::annotator(&server, "boss", true).await;
+        let admin = create_study(
+            &server,
+            json!({
+                "name": "camera",
+                "baseline": "mini",
+                "variants": ["Camera height/Low camera (1.0 m)=mini-b"],
+            }),
+        )
+        .await;
+        let chance = enact_hub::core::demo::CHANCE_BASELINE_MODEL.replace(' ', "%20");
+        let mut submissions = Vec::new();
+        for dataset in ["mini", "mini-b"] {
+            for (model, wrong) in [
+                ("exact", vec![]),
+                ("reversed", vec![0, 1, 2, 3]),
+                (chance.as_str(), vec![1, 2]),
+            ] {
+                let body = answers(&records, &wrong);
+                let reply =
+                    submit_to(&server, dataset, &format!("model={model}"), &admin, body).await;
+                assert_eq!(reply.status, 201, "{}", reply.text);
+                if dataset == "mini" {
+                    submissions.push(reply.id());
+                }
+            }
+        }
+        PublicWorld {
+            server,
+            records,
+            invites,
+            submissions,
+        }
+    }
+
+    fn item(&self, i: usize) -> String {
+        self.records[i]["id"].as_str().expect("id").to_owned()
+    }
+
+    /// The pages an annotator reaches: the queue and a forward and an inverse item.
+    fn annotator_pages(&self) -> Vec<String> {
+        vec![
+            "/annotate".to_owned(),
+            format!("/annotate/mini/{}", self.item(0)),
+            format!("/annotate/mini/{}", self.item(1)),
+        ]
+    }
+
+    /// The public pages: home, dataset and items, leaderboard, error analyses, studies.
+    fn public_pages(&self) -> Vec<String> {
+        vec![
+            "/".to_owned(),
+            "/datasets/mini".to_owned(),
+            format!("/datasets/mini/items/{}", self.item(0)),
+            format!("/datasets/mini/items/{}", self.item(1)),
+            "/leaderboard/mini".to_owned(),
+            "/leaderboard/mini/errors".to_owned(),
+            format!("/leaderboard/mini/errors/{}", self.submissions[2]),
+            "/studies".to_owned(),
+            "/studies/camera".to_owned(),
+            "/login".to_owned(),
+            "/datasets/no-such-dataset".to_owned(),
+        ]
+    }
+}
+
+/// Admin pages the layout and accessibility checks cover (English only, as admin pages are).
+const ADMIN_PAGES: [&str; 1] = ["/admin/datasets/mini/report"];
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn axe_finds_no_wcag_violation_on_the_pages_in_either_language() {
     if !browser_available() {
@@ -509,61 +598,27 @@ async fn axe_finds_no_wcag_violation_on_the_pages_in_either_language() {
         "tests/browser/node_modules/axe-core is missing: run `npm ci` in tests/browser \
          (scripts/test.sh does)"
     );
-    let (server, records) = spawn_app_with_release().await;
-    let id = |i: usize| records[i]["id"].as_str().expect("id").to_owned();
-    // One annotator per language: an invite works once.
-    let mut invites = Vec::new();
-    for name in ["ana", "bo"] {
-        let token = new_token();
-        let annotator = {
-            let mut conn = server.pool.acquire().await.expect("conn");
-            store::annotations::create_annotator(&mut conn, name, false, &token_hash(&token))
-                .await
-                .expect("insert")
-        };
-        assign(&server, annotator, &[&id(0), &id(1)]).await;
-        invites.push(format!("/invite/{token}"));
-    }
-    // Rows on the leaderboard and in the error analysis: a perfect model and a wrong one.
-    let (_, submitter) = api_token(
-        &server.pool,
-        "lab",
-        enact_hub::core::credentials::Role::Submitter,
-        None,
-        None,
-    )
-    .await;
-    let mut submissions = Vec::new();
-    for (model, wrong) in [("exact", vec![]), ("reversed", vec![0, 1, 2, 3])] {
-        let body = answers(&records, &wrong);
-        let reply = submit_to(&server, "mini", &format!("model={model}"), &submitter, body).await;
-        assert_eq!(reply.status, 201, "{}", reply.text);
-        submissions.push(reply.id());
-    }
-    let pages = [
-        "/".to_owned(),
-        "/datasets/mini".to_owned(),
-        format!("/datasets/mini/items/{}", id(0)),
-        format!("/datasets/mini/items/{}", id(1)),
-        "/leaderboard/mini".to_owned(),
-        "/leaderboard/mini/errors".to_owned(),
-        format!("/leaderboard/mini/errors/{}", submissions[1]),
-        "/studies".to_owned(),
-        "/annotate".to_owned(),
-        format!("/annotate/mini/{}", id(0)),
-        format!("/annotate/mini/{}", id(1)),
-        "/login".to_owned(),
-        "/datasets/no-such-dataset".to_owned(),
-    ];
+    let world = PublicWorld::new().await;
+    let pages: Vec<String> = world
+        .public_pages()
+        .into_iter()
+        .chain(world.annotator_pages())
+        .collect();
     let params = json!({
-        "base": server.url(""),
-        "invites": invites,
+        "base": world.server.url(""),
+        "invites": world.invites,
         "pages": pages,
+        "admin": {"name": "boss", "password": crate::annotate::PASSWORD},
+        "admin_pages": ADMIN_PAGES,
         "locales": ["en-US", "zh-CN"],
         "chromium": CHROMIUM,
     });
     let found = run_node("axe.mjs", params).await;
-    assert_eq!(found["checked"], 2 * (pages.len() + 1), "{found}");
+    assert_eq!(
+        found["checked"],
+        2 * (pages.len() + ADMIN_PAGES.len() + 1),
+        "{found}"
+    );
     let violations = found["violations"].as_array().expect("violations");
     assert!(
         violations.is_empty(),
@@ -575,7 +630,93 @@ async fn axe_finds_no_wcag_violation_on_the_pages_in_either_language() {
             .collect::<Vec<_>>()
             .join("\n")
     );
-    server.stop().await;
+    world.server.stop().await;
+}
+
+/// The pseudo-locale (English wrapped in ⟦…⟧, 40 % longer) on right-to-left pages, at a
+/// desktop's 1280×800 and a phone's 390×844: nothing scrolls sideways, leaves the viewport,
+/// overlaps another text or is cut by its figure, on the annotation pages, the public pages and
+/// the agreement report (English, turned right-to-left by the script).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn pseudo_locale_pages_lay_out_right_to_left_without_overflow_or_overlap() {
+    if !browser_available() {
+        return;
+    }
+    let world = PublicWorld::new().await;
+    let groups = json!([
+        {"as": "annotator", "translated": true, "pages": world.annotator_pages()},
+        {"as": "anyone", "translated": true, "pages": world.public_pages()},
+        {"as": "admin", "translated": false, "pages": ADMIN_PAGES},
+    ]);
+    let found = run_node(
+        "layout.mjs",
+        json!({
+            "base": world.server.url(""),
+            "invite": world.invites[0],
+            "password": crate::annotate::PASSWORD,
+            "admin": {"name": "boss", "password": crate::annotate::PASSWORD},
+            "cookie": enact_hub::web::i18n::Locale::PseudoRtl.tag(),
+            "groups": groups,
+            "viewports": [[1280, 800], [390, 844]],
+            "chromium": CHROMIUM,
+            "failure_dir": env!("CARGO_TARGET_TMPDIR"),
+        }),
+    )
+    .await;
+    // The one console error expected: the missing dataset's page is a 404.
+    let unexpected: Vec<&Value> = found["consoleErrors"]
+        .as_array()
+        .expect("console errors")
+        .iter()
+        .filter(|e| {
+            !e.as_str()
+                .is_some_and(|e| e.contains("/datasets/no-such-dataset"))
+        })
+        .collect();
+    assert!(unexpected.is_empty(), "{unexpected:?}");
+    let checked = found["checked"].as_array().expect("checked pages");
+    let pages = world.annotator_pages().len() + world.public_pages().len() + ADMIN_PAGES.len();
+    assert_eq!(checked.len(), 2 * pages, "{found}");
+    let mut problems = Vec::new();
+    for page in checked {
+        let path = page["path"].as_str().expect("path");
+        if !ADMIN_PAGES.contains(&path) {
+            // Served in the pseudo-locale: right to left, and its text from the catalogue.
+            assert_eq!(page["dir"], "rtl", "{page}");
+            assert_eq!(page["lang"], "ar-XB", "{page}");
+            assert!(page["pseudo"].as_u64() > Some(3), "{page}");
+        }
+        for problem in page["problems"].as_array().expect("problems") {
+            problems.push(format!("{} at {}: {problem}", path, page["viewport"]));
+        }
+    }
+    assert!(
+        problems.is_empty(),
+        "{} layout problems (screenshots in {}):\n{}",
+        problems.len(),
+        env!("CARGO_TARGET_TMPDIR"),
+        problems.join("\n")
+    );
+    world.server.stop().await;
+}
+
+/// Creates the study `body` describes over the API as a new admin; the admin's API token.
+async fn create_study(server: &TestServer, body: Value) -> String {
+    let (_, token) = api_token(
+        &server.pool,
+        "admin",
+        enact_hub::core::credentials::Role::Admin,
+        None,
+        None,
+    )
+    .await;
+    server
+        .call(reqwest::Method::POST, "/api/v1/admin/studies")
+        .bearer(&token)
+        .json(&body)
+        .expect(201)
+        .await;
+    token
 }
 
 /// A server-side model run's page in Chromium: labelled controls, pause and resume by keyboard,

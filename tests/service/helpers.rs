@@ -327,12 +327,20 @@ pub async fn serve_hub(hub: Hub, pool: Pool, dir: TempDir, config: &WebConfig) -
 
 /// A server whose database holds a small generated release as dataset "mini" (L = 3 and 4).
 pub async fn spawn_app_with_release() -> (TestServer, Vec<Value>) {
+    spawn_app_with_release_as(&["mini"]).await
+}
+
+/// [`spawn_app_with_release`] with the release imported once under each of `datasets`.
+pub async fn spawn_app_with_release_as(datasets: &[&str]) -> (TestServer, Vec<Value>) {
     let records = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
     let shared = records.clone();
+    let datasets: Vec<String> = datasets.iter().map(|d| (*d).to_owned()).collect();
     let server = spawn_app_with(|pool, dir| async move {
         let root = dir.join("release");
         let written = write_release(&root, &[3, 4]);
-        import(&pool, &root, &options("mini")).await;
+        for dataset in &datasets {
+            import(&pool, &root, &options(dataset)).await;
+        }
         *shared.lock().expect("lock") = written;
     })
     .await;

@@ -143,16 +143,16 @@ async fn accept_language_chooses_the_pages_language() {
     let (server, _) = spawn_app_with_release().await;
     let (status, zh) = page(&server, "/", "fr;q=1, zh-CN;q=0.8, en;q=0.5").await;
     assert_eq!(status, StatusCode::OK);
-    assert!(zh.contains(r#"<html lang="zh-CN">"#), "{zh}");
+    assert!(zh.contains(r#"<html lang="zh-CN" dir="ltr">"#), "{zh}");
     assert!(zh.contains("数据集"));
     assert!(
         zh.contains(r#"value="en" lang="en""#),
         "the switch offers English: {zh}"
     );
     let (_, en) = page(&server, "/", "de, en-GB;q=0.9, zh;q=0.3").await;
-    assert!(en.contains(r#"<html lang="en">"#), "{en}");
+    assert!(en.contains(r#"<html lang="en" dir="ltr">"#), "{en}");
     let (_, none) = page(&server, "/", "de").await;
-    assert!(none.contains(r#"<html lang="en">"#));
+    assert!(none.contains(r#"<html lang="en" dir="ltr">"#));
     server.stop().await;
 }
 
@@ -161,7 +161,7 @@ async fn error_pages_are_translated_and_api_errors_stay_english() {
     let (server, _) = spawn_app_with_release().await;
     let (status, html) = page(&server, "/datasets/nope", "zh-CN").await;
     assert_eq!(status, StatusCode::NOT_FOUND);
-    assert!(html.contains(r#"<html lang="zh-CN">"#), "{html}");
+    assert!(html.contains(r#"<html lang="zh-CN" dir="ltr">"#), "{html}");
     assert!(html.contains("404 未找到"), "{html}");
     // The detail is the use case's own message, marked as English.
     assert!(html.contains(r#"<span lang="en">"#), "{html}");
@@ -175,6 +175,32 @@ async fn error_pages_are_translated_and_api_errors_stay_english() {
     let body: serde_json::Value = r.json().await.expect("json");
     let error = body["error"].as_str().expect("error");
     assert!(error.is_ascii() && error.contains("nope"), "{error}");
+    server.stop().await;
+}
+
+/// The layout check's pseudo-locale: a page right to left with every message in ⟦…⟧ when the
+/// cookie names it by hand, and nothing a user can pick by accident (not the switch, not
+/// `Accept-Language`).
+#[tokio::test]
+async fn only_a_hand_set_cookie_chooses_the_right_to_left_pseudo_locale() {
+    let (server, _) = spawn_app_with_release().await;
+    let reply = server
+        .call(reqwest::Method::GET, "/")
+        .header("cookie", "enact_lang=ar-XB")
+        .send()
+        .await;
+    assert_eq!(reply.status, StatusCode::OK);
+    let html = reply.text;
+    assert!(html.contains(r#"<html lang="ar-XB" dir="rtl">"#), "{html}");
+    assert!(html.contains("⟦Datasets"), "{html}");
+    // The switch offers the real locales only.
+    assert!(!html.contains(r#"value="ar-XB""#), "{html}");
+    assert!(html.contains(r#"value="en""#) && html.contains(r#"value="zh-CN""#));
+    let (_, asked) = page(&server, "/", "ar-XB, ar").await;
+    assert!(asked.contains(r#"<html lang="en" dir="ltr">"#), "{asked}");
+    let mut visitor = Browser::new(&server);
+    let r = visitor.post_form("/locale", &[("locale", "ar-XB")]).await;
+    assert_eq!(r.status(), StatusCode::BAD_REQUEST);
     server.stop().await;
 }
 
@@ -197,7 +223,7 @@ async fn the_switch_sets_a_cookie_and_saves_a_signed_in_annotators_choice() {
     assert_eq!(r.headers()["location"], "/leaderboard/x");
     assert!(visitor.cookie_header().contains("enact_lang=zh-CN"));
     let (_, home) = visitor.text("/").await;
-    assert!(home.contains(r#"<html lang="zh-CN">"#));
+    assert!(home.contains(r#"<html lang="zh-CN" dir="ltr">"#));
     // Never somewhere else.
     let r = visitor
         .post_form("/locale", &[("locale", "en"), ("back", "//evil.example/")])

@@ -12,7 +12,7 @@ use crate::core::bundle::{
 };
 use crate::core::dataset::Direction;
 use crate::core::error_analysis::HandFigures;
-use crate::core::error_analysis::chart::{BarChart, hand_chart_of};
+use crate::core::error_analysis::chart::{BarChart, ChartNames, hand_chart_of};
 
 impl Stamp for StudyStamp {
     fn stamp_fields(&self) -> Vec<String> {
@@ -86,7 +86,8 @@ pub fn handedness_svg(report: &StudyReport) -> Result<Option<String>, askama::Er
             .filter(|r| r.direction == direction)
             .map(|r| (r.label.as_str(), &r.hands))
             .collect();
-        let chart = hand_chart_of(&rows);
+        // The exported figure is the paper's, in English.
+        let chart = hand_chart_of(&rows, &ChartNames::english());
         labels = chart.legend.clone();
         width = width.max(chart.width);
         let height = chart.height;
