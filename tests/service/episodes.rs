@@ -321,4 +321,95 @@ async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
         }
     }
     assert!(inverse_checked > 0);
+
+    // A second curator who saw the right gripper: the comparison counts the difference, an
+    // export waits for an admin to choose, and then exports the chosen graphs.
+    let mut other = graphs();
+    other["key_frames"][2]["edges"][0]["states"] = json!(["RightGrasping"]);
+    let other_file = dir.path().join("bob.json");
+    std::fs::write(&other_file, other.to_string()).unwrap();
+    let (ok, _, err) = run(&[
+        "episode",
+        "graphs",
+        "kitchen_real",
+        "--db",
+        db,
+        "--set",
+        other_file.to_str().unwrap(),
+        "--curator",
+        "bob",
+    ]);
+    assert!(ok, "{err}");
+    let (ok, out, err) = run(&[
+        "episode",
+        "compare",
+        "kitchen_real",
+        "--db",
+        db,
+        "--curators",
+        "curator-ann,bob",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let comparison: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(
+        comparison["key_frames"][2]["only_a"],
+        json!(["robot_r1 -> apple_2: LeftGrasping"])
+    );
+    assert_eq!(
+        comparison["key_frames"][2]["only_b"],
+        json!(["robot_r1 -> apple_2: RightGrasping"])
+    );
+    // Transitions 3->6 and 6->9 each differ by the grasp on both sides; 2 of 4 are the same.
+    assert_eq!(
+        comparison["transition_components"],
+        json!({"shared": 5, "only_a": 2, "only_b": 2})
+    );
+    let (ok, _, err) = run(&[
+        "episode",
+        "export",
+        "kitchen_real",
+        "--db",
+        db,
+        "--out",
+        export.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && err.contains("graphs from 2 curators (bob, curator-ann)"),
+        "{err}"
+    );
+    let (ok, _, err) = run(&[
+        "episode",
+        "resolve",
+        "kitchen_real",
+        "--db",
+        db,
+        "--curator",
+        "bob",
+    ]);
+    assert!(ok, "{err}");
+    let again = dir.path().join("again");
+    let (ok, _, err) = run(&[
+        "episode",
+        "export",
+        "kitchen_real",
+        "--db",
+        db,
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let segmented = std::fs::read_to_string(
+        again.join("segmented_activities/kitchen_real/segmented_scene_graph_0.json"),
+    )
+    .unwrap();
+    assert!(segmented.contains("RightGrasping") && !segmented.contains("LeftGrasping"));
+    assert_eq!(
+        count(
+            &pool,
+            "SELECT COUNT(*) FROM audit_log WHERE action LIKE 'episode.%'"
+        )
+        .await,
+        4
+    );
 }
