@@ -322,6 +322,23 @@ async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
     }
     assert!(inverse_checked > 0);
 
+    // The release imports with every item's signatures from the exported scene graphs.
+    let (ok, _, err) = run(&[
+        "import",
+        data.to_str().unwrap(),
+        "--db",
+        db,
+        "--dataset",
+        "kitchen-real",
+    ]);
+    assert!(ok, "{err}");
+    let stored = count(&pool, "SELECT COUNT(*) FROM items").await;
+    assert_eq!(stored, items.len() as i64);
+    assert_eq!(
+        count(&pool, "SELECT COUNT(*) FROM item_signatures").await,
+        stored
+    );
+
     // A second curator who saw the right gripper: the comparison counts the difference, an
     // export waits for an admin to choose, and then exports the chosen graphs.
     let mut other = graphs();
