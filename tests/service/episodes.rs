@@ -287,6 +287,15 @@ async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
         count(&pool, "SELECT COUNT(*) FROM item_signatures").await,
         stored
     );
+    // ... and says where its items come from.
+    let overview = enact_hub::app::datasets::overview(&pool.clone().into())
+        .await
+        .unwrap();
+    let dataset = &overview[0].dataset;
+    assert_eq!(
+        (dataset.origin.as_str(), dataset.scene.as_str()),
+        ("real", "kitchen")
+    );
 
     // A second curator who saw the right gripper: the comparison counts the difference, an
     // export waits for an admin to choose, and then exports the chosen graphs.
