@@ -20,6 +20,7 @@ mod agreement;
 mod audit;
 mod database;
 mod doctor;
+mod episode;
 mod frames;
 mod generate;
 mod gold;
@@ -107,6 +108,10 @@ enum Command {
     /// stale imports, stuck or failed jobs, the write-ahead log's size, optionally integrity.
     /// Exits 1 when something needs action.
     Doctor(doctor::DoctorArgs),
+    /// Real-world episodes: import recorded frames, set each curator's key frames and scene
+    /// graphs, compare two curators, choose the graphs to export, export for `generate`.
+    #[command(subcommand)]
+    Episode(episode::EpisodeCommand),
 }
 
 #[derive(Args)]
@@ -179,6 +184,7 @@ pub fn main() -> ExitCode {
             Command::Rescore(args) => rescore::rescore(args).await,
             Command::Gold(command) => gold::gold(command).await,
             Command::Doctor(args) => doctor::doctor(args).await,
+            Command::Episode(command) => episode::episode(command).await,
         }
     });
     match result {
