@@ -130,7 +130,7 @@ async fn schema(hub: &Hub) -> Result<Finding, AppError> {
 async fn imports(hub: &Hub, actor: &Actor, remove_stale: bool) -> Result<Vec<Finding>, AppError> {
     let unfinished = {
         let mut conn = hub.pool.acquire().await?;
-        store::staged::idle_for_hours(&mut conn, 0).await?
+        store::staged::all(&mut conn).await?
     };
     let stale: Vec<String> = super::import::stale(hub, STALE_IMPORT_HOURS)
         .await

@@ -71,6 +71,18 @@ pub async fn for_dataset(
     })
 }
 
+/// Every staged import, oldest first.
+pub async fn all(conn: &mut Conn) -> Result<Vec<StagedImport>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(&format!(
+            "SELECT {COLUMNS} FROM staged_imports ORDER BY updated_at, id"
+        ))
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter().map(from_row).collect()
+    })
+}
+
 /// Every staged import no batch was written to for `hours` hours, oldest first.
 pub async fn idle_for_hours(conn: &mut Conn, hours: i64) -> Result<Vec<StagedImport>, sqlx::Error> {
     // The cutoff in each database's own date arithmetic, in the timestamp columns' format.
