@@ -1,9 +1,9 @@
 // Drives headless Chromium through a curator's episode: upload the frames, mark key frames,
 // draw the first scene graph and edit the next ones by keyboard and by mouse, watching the
-// transition's sentences update, then save. Started by tests/service/browser.rs (mode "e2e",
-// which also runs axe-core over the episode pages) and by scripts/screenshots-episode.sh
-// (mode "screenshots"). Parameters come as JSON in the first argument; prints one JSON line
-// of findings, or saves a screenshot and exits 1.
+// transition's sentences update, then save; axe-core then checks the episode pages. Started
+// by tests/service/episode_browser.rs (and through it by scripts/screenshots-episode.sh, which
+// asks for the README's pictures). Parameters come as JSON in the first argument; prints one
+// JSON line of findings, or saves a screenshot and exits 1.
 import { createRequire } from "node:module";
 import { mkdirSync, readFileSync } from "node:fs";
 import { tmpdir } from "node:os";
@@ -11,7 +11,7 @@ import { join } from "node:path";
 import { check, openPage, tabTo } from "./chromium.mjs";
 
 const params = JSON.parse(process.argv[2]);
-const { base, mode } = params;
+const { base } = params;
 
 async function login(page) {
   await page.goto(base + params.invite);
@@ -101,6 +101,7 @@ async function e2e(page) {
   await addRelationByKeyboard(page, "fridge_1", "NextTo", "table_1");
   await transition(page);
   check((await page.$$(".node-row")).length === params.objects.length, "objects added by keyboard");
+  await shoot(page, "episode-editor-first.png");
 
   // Key frame 2 (PageDown) starts as a copy of key frame 1: edit only what changed.
   await stripKeys(page, ["PageDown"]);
@@ -137,6 +138,7 @@ async function e2e(page) {
     await page.click('#add-node button[type="submit"]');
   });
   found.transitions.push(await transition(page));
+  await shoot(page, "episode-editor-transition.png");
 
   // Key frame 5 by keyboard: close the fridge (Tab to its Open box, Space).
   await stripKeys(page, ["PageDown"]);
@@ -178,23 +180,18 @@ async function axe(page, paths) {
   return violations;
 }
 
-// The editor for the README: the first key frame's graph, and a later key frame's transition.
-async function screenshots(page) {
-  await login(page);
-  mkdirSync(params.out, { recursive: true });
-  await page.goto(`${base}/episodes/${params.episode}`);
-  for (const shot of params.shots) {
-    await page.click(`.strip-frame[data-position="${shot.frame}"]`);
-    await transition(page).catch(() => {});
-    await page.evaluate(() => window.scrollTo(0, 0));
-    await page.screenshot({ path: join(params.out, shot.file), fullPage: true });
-  }
-  return { written: params.shots.length };
+// With `params.screenshots` (a folder), the README's pictures of the editor at this point.
+async function shoot(page, file) {
+  if (!params.screenshots) return;
+  mkdirSync(params.screenshots, { recursive: true });
+  // The filmstrip at the top of the window, the editor and the transition below it.
+  await page.evaluate(() => document.getElementById("filmstrip").scrollIntoView());
+  await page.screenshot({ path: join(params.screenshots, file) });
 }
 
 const { context, page, consoleErrors } = await openPage(params);
 try {
-  const found = mode === "screenshots" ? await screenshots(page) : await e2e(page);
+  const found = await e2e(page);
   check(consoleErrors.length === 0, `console errors:\n${consoleErrors.join("\n")}`);
   found.console_errors = consoleErrors.length;
   console.log(JSON.stringify({ ok: true, ...found }));
