@@ -43,6 +43,7 @@ pub mod bundle;
 pub mod credentials;
 pub mod dataset;
 pub mod demo;
+pub mod episode;
 pub mod error_analysis;
 pub mod gold;
 pub mod heatmap;

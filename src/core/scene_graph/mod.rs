@@ -28,7 +28,9 @@ pub use diff::{
 };
 pub use names::{NameError, format_object_name};
 pub use record::{FrameRecord, GraphDelta, SceneEdge, SceneGraph, SceneNode};
-pub use sentence::{SentenceParseError, parse_action, render_diff, sentence_count};
+pub use sentence::{
+    SentenceParseError, parse_action, render_diff, render_diff_first_templates, sentence_count,
+};
 pub use signature::diff_signatures;
 pub use timeline::{FrameSelection, SceneGraphTimeline, TimelineError, TransientFilter};
 pub use visibility::{EVALUATION_SENSORS, View, restrict_to_view, restrict_to_view_indexed};

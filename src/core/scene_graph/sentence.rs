@@ -132,6 +132,13 @@ pub fn render_diff<R: Rng + ?Sized>(
     render_with(diff, &mut |n| rng.random_range(0..n))
 }
 
+/// [`render_diff`] with every sentence in its first template ("now becomes", "is no longer"):
+/// one fixed rendering to show what the pipeline will write. The pipeline picks each verb at
+/// random among four (gained) or two (lost) templates; the signatures do not depend on it.
+pub fn render_diff_first_templates(diff: &StateDiff) -> Result<Option<String>, NameError> {
+    render_with(diff, &mut |_| 0)
+}
+
 fn render_with(
     diff: &StateDiff,
     pick: &mut dyn FnMut(usize) -> usize,
