@@ -288,6 +288,8 @@
   let generation = 0;
   function changed() {
     render();
+    // Until the server has described this change, nothing on screen claims it is saved.
+    saveStatus.textContent = "";
     clearTimeout(pending);
     const mine = ++generation;
     pending = setTimeout(async () => {
