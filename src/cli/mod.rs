@@ -19,6 +19,7 @@ mod accounts;
 mod agreement;
 mod audit;
 mod database;
+mod episode;
 mod frames;
 mod generate;
 mod gold;
@@ -102,6 +103,10 @@ enum Command {
     /// every annotator's queue to check their work.
     #[command(subcommand)]
     Gold(gold::GoldCommand),
+    /// Real-world episodes: import recorded frames, set each curator's key frames and scene
+    /// graphs, compare two curators, choose the graphs to export, export for `generate`.
+    #[command(subcommand)]
+    Episode(episode::EpisodeCommand),
 }
 
 #[derive(Args)]
@@ -173,6 +178,7 @@ pub fn main() -> ExitCode {
             Command::MigrateDb(args) => database::migrate_db(args).await,
             Command::Rescore(args) => rescore::rescore(args).await,
             Command::Gold(command) => gold::gold(command).await,
+            Command::Episode(command) => episode::episode(command).await,
         }
     });
     match result {

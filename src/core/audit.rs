@@ -85,10 +85,16 @@ pub enum AuditAction {
     /// An annotator's answers kept out of a dataset's Human row and agreement report.
     AnnotatorExclude,
     AnnotatorInclude,
+    /// A real-world episode's frames imported.
+    EpisodeImport,
+    /// A curator's key frames and graphs of an episode set (replacing the earlier ones).
+    EpisodeGraphs,
+    /// The graphs an episode exports chosen by an admin.
+    EpisodeResolve,
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 25] = [
+    pub const ALL: [AuditAction; 28] = [
         AuditAction::DatasetImport,
         AuditAction::DatasetAnswerVisibility,
         AuditAction::TokenIssue,
@@ -114,6 +120,9 @@ impl AuditAction {
         AuditAction::GoldClear,
         AuditAction::AnnotatorExclude,
         AuditAction::AnnotatorInclude,
+        AuditAction::EpisodeImport,
+        AuditAction::EpisodeGraphs,
+        AuditAction::EpisodeResolve,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -143,6 +152,9 @@ impl AuditAction {
             AuditAction::GoldClear => "gold.clear",
             AuditAction::AnnotatorExclude => "annotator.exclude",
             AuditAction::AnnotatorInclude => "annotator.include",
+            AuditAction::EpisodeImport => "episode.import",
+            AuditAction::EpisodeGraphs => "episode.graphs",
+            AuditAction::EpisodeResolve => "episode.resolve",
         }
     }
 

@@ -368,12 +368,17 @@ impl UniqueKey {
         table: "agreement_rounds",
         constraint: "agreement_rounds_pkey",
     };
+    pub const EPISODE_NAME: UniqueKey = UniqueKey {
+        table: "episodes",
+        constraint: "episodes_name_key",
+    };
     /// Every key a use case recognises; `store::tests` checks each against both schemas.
-    pub const ALL: [UniqueKey; 4] = [
+    pub const ALL: [UniqueKey; 5] = [
         UniqueKey::SUBMISSION_IDEMPOTENCY_KEY,
         UniqueKey::ANNOTATOR_NAME,
         UniqueKey::STUDY_NAME,
         UniqueKey::AGREEMENT_ROUND,
+        UniqueKey::EPISODE_NAME,
     ];
 
     /// Whether `e`, returned by an INSERT into this key's table, is a duplicate of this key.

@@ -12,6 +12,7 @@ pub mod audit;
 pub mod copy;
 pub mod datasets;
 pub mod db;
+pub mod episodes;
 pub mod frames;
 pub mod gold;
 pub mod items;

@@ -16,6 +16,7 @@ mod cli;
 mod client;
 mod constraints;
 mod demo_link;
+mod episodes;
 mod errors;
 mod escaping;
 #[path = "../support/fixtures.rs"]

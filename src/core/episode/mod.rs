@@ -15,6 +15,7 @@
 
 mod compare;
 mod describe;
+mod export;
 mod validate;
 
 use serde::{Deserialize, Serialize};
@@ -24,6 +25,7 @@ use crate::core::scene_graph::visibility::EVALUATION_SENSORS;
 
 pub use compare::{Comparison, ComponentCounts, KeyFrameDifference, TransitionDifference, compare};
 pub use describe::{TransitionView, describe};
+pub use export::{TaskExport, export_task};
 pub use validate::{GraphProblem, validate};
 
 /// The fewest key frames an export needs: the shortest step length ENACT asks (L = 3) needs

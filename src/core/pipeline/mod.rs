@@ -9,6 +9,7 @@
 
 pub mod kfts;
 pub(crate) mod label;
+pub mod marked;
 pub(crate) mod prompt;
 pub mod qa;
 pub mod release;
@@ -30,6 +31,7 @@ use crate::core::scene_graph::{
 };
 
 pub use kfts::{KftsError, PathTable, SampledPaths, TransitionGraph, sample_paths};
+use marked::{MARKED_KEY_FRAMES_FILE, MarkedKeyFrames, marked_segmentation};
 pub use qa::{GeneratedItem, TypeNaming};
 pub use release::TaskRelease;
 use release::write_release;
@@ -139,6 +141,12 @@ pub enum PipelineError {
     NoTasks { dir: PathBuf },
     #[error("task {task}: scene graph {path} is missing")]
     MissingSceneGraph { task: String, path: PathBuf },
+    #[error("task {task}: {path}: {message}")]
+    MarkedKeyFrames {
+        task: String,
+        path: PathBuf,
+        message: String,
+    },
     #[error("task {task}: {source}")]
     SceneGraph {
         task: String,
@@ -263,8 +271,13 @@ pub fn segment_task(
             source: Box::new(source),
         })
     };
+    let marked_path = replayed_dir.join(task).join(MARKED_KEY_FRAMES_FILE);
     let large = std::fs::metadata(&path).is_ok_and(|m| m.len() > STREAM_THRESHOLD_BYTES);
-    let (segmentation, raw) = if large {
+    let (segmentation, raw) = if marked_path.is_file() {
+        // Key frames a person marked (an exported episode): taken as they are, never scanned,
+        // so no similarity or stability filter drops one.
+        marked_task(task, &path, &marked_path)?
+    } else if large {
         // Read as a stream twice: through the filter for segmentation, then only the records
         // the key frames are rebuilt from. Neither pass holds the file or every frame.
         let filtered =
@@ -303,6 +316,53 @@ pub fn segment_task(
         segmentation,
         key_frame_graphs: SceneGraphTimeline::from_records(path, records),
     })
+}
+
+/// The segmentation of a task whose key frames are listed in its marker file.
+fn marked_task(
+    task: &str,
+    path: &Path,
+    marked_path: &Path,
+) -> Result<(Segmentation, SceneGraphTimeline), PipelineError> {
+    let marked_error = |message: String| PipelineError::MarkedKeyFrames {
+        task: task.to_string(),
+        path: marked_path.to_path_buf(),
+        message,
+    };
+    let text = std::fs::read(marked_path).map_err(|source| PipelineError::Read {
+        path: marked_path.to_path_buf(),
+        source,
+    })?;
+    let marked: MarkedKeyFrames =
+        serde_json::from_slice(&text).map_err(|e| marked_error(e.to_string()))?;
+    let raw = SceneGraphTimeline::load(path, FrameSelection::All).map_err(|source| {
+        PipelineError::SceneGraph {
+            task: task.to_string(),
+            source: Box::new(source),
+        }
+    })?;
+    let numbers: Vec<u64> = marked
+        .key_frames
+        .iter()
+        .map(|f| {
+            f.parse::<u64>()
+                .map_err(|_| marked_error(format!("key frame {f:?} is not a frame number")))
+        })
+        .collect::<Result<_, _>>()?;
+    if numbers.windows(2).any(|w| w[0] >= w[1]) {
+        return Err(marked_error(
+            "key frames are not in increasing order".into(),
+        ));
+    }
+    let mut graphs = Vec::with_capacity(marked.key_frames.len());
+    for frame in &marked.key_frames {
+        let graph = raw.scene_graph(frame).map_err(|e| {
+            marked_error(format!("key frame {frame} has no scene graph record: {e}"))
+        })?;
+        graphs.push((frame.clone(), graph.into_owned()));
+    }
+    let segmentation = marked_segmentation(&graphs, raw.frame_ids().count());
+    Ok((segmentation, raw))
 }
 
 /// ENACT quirk: ENACT re-seeds its RNG with the same constant before each generator runs on a

@@ -1,0 +1,324 @@
+//! Real-world episodes through the command line: import recorded frames, set a curator's
+//! graphs (refused with the key frame and field named), export, `generate` keeping every
+//! marked key frame, and the items' action texts and ground truth checked by the verifier.
+
+use std::path::Path;
+
+use enact_hub::core::dataset::{Direction, parse_release_line};
+use enact_hub::core::episode::{EpisodeGraphs, describe};
+use enact_hub::core::scene_graph::parse_action;
+use enact_hub::core::verifier::{Permutation, parse_answer_enact, parse_python_json, verify};
+use serde_json::{Value, json};
+
+use crate::helpers::{count, enact_hub, fresh_db_located};
+
+fn run(args: &[&str]) -> (bool, String, String) {
+    let out = enact_hub()
+        .env("ENACT_HUB_OPERATOR", "curator-ann")
+        .args(args)
+        .output()
+        .expect("enact-hub runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Twelve distinct frames named so that only natural order puts them right (`frame_2` before
+/// `frame_10`); one is a JPEG.
+fn write_frames(dir: &Path) {
+    std::fs::create_dir_all(dir).unwrap();
+    for n in 1..=12u32 {
+        let image = image::RgbImage::from_fn(64, 48, |x, y| {
+            image::Rgb([(n * 20) as u8, (x * 4) as u8, (y * 5) as u8])
+        });
+        let format = if n == 5 {
+            image::ImageFormat::Jpeg
+        } else {
+            image::ImageFormat::Png
+        };
+        let ext = if n == 5 { "jpg" } else { "png" };
+        image
+            .save_with_format(dir.join(format!("frame_{n}.{ext}")), format)
+            .unwrap();
+    }
+}
+
+fn node(name: &str, category: &str, states: &[&str]) -> Value {
+    json!({"name": name, "category": category, "states": states})
+}
+
+/// Five key frames: the fridge opens, the robot takes the apple out, puts it on the table and
+/// turns the stove on, then closes the fridge.
+fn graphs() -> Value {
+    let frame = |frame: u32, fridge: &[&str], stove: &[&str], edges: Value| {
+        json!({"frame": frame, "nodes": [
+            node("robot_r1", "agent", &[]),
+            node("fridge_1", "fridge", fridge),
+            node("apple_2", "apple", &[]),
+            node("table_3", "table", &[]),
+            node("stove_4", "stove", stove),
+        ], "edges": edges})
+    };
+    json!({"key_frames": [
+        frame(0, &[], &[], json!([{"from": "apple_2", "to": "fridge_1", "states": ["Inside"]}])),
+        frame(3, &["Open"], &[], json!([{"from": "apple_2", "to": "fridge_1", "states": ["Inside"]}])),
+        frame(6, &["Open"], &[], json!([{"from": "robot_r1", "to": "apple_2", "states": ["LeftGrasping"]}])),
+        frame(9, &["Open"], &["ToggledOn"], json!([{"from": "apple_2", "to": "table_3", "states": ["OnTop"]}])),
+        frame(11, &[], &["ToggledOn"], json!([{"from": "apple_2", "to": "table_3", "states": ["OnTop"]}])),
+    ]})
+}
+
+#[tokio::test]
+async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pool, db) = fresh_db_located(&dir).await;
+    let db = db.to_str().unwrap();
+    let frames = dir.path().join("frames");
+    write_frames(&frames);
+
+    // Anything but a frame in the folder is refused by name, and nothing is stored.
+    std::fs::write(frames.join("notes.txt"), "x").unwrap();
+    let (ok, _, err) = run(&[
+        "episode",
+        "import",
+        frames.to_str().unwrap(),
+        "--db",
+        db,
+        "--name",
+        "kitchen_real",
+    ]);
+    assert!(
+        !ok && err.contains("notes.txt") && err.contains("only PNG and JPEG"),
+        "{err}"
+    );
+    std::fs::remove_file(frames.join("notes.txt")).unwrap();
+    std::fs::write(frames.join("frame_13.png"), b"not a png").unwrap();
+    let (ok, _, err) = run(&[
+        "episode",
+        "import",
+        frames.to_str().unwrap(),
+        "--db",
+        db,
+        "--name",
+        "kitchen_real",
+    ]);
+    assert!(
+        !ok && err.contains("frame_13.png") && err.contains("cannot decode"),
+        "{err}"
+    );
+    std::fs::remove_file(frames.join("frame_13.png")).unwrap();
+    assert_eq!(count(&pool, "SELECT COUNT(*) FROM episodes").await, 0);
+
+    let (ok, out, err) = run(&[
+        "episode",
+        "import",
+        frames.to_str().unwrap(),
+        "--db",
+        db,
+        "--name",
+        "kitchen_real",
+        "--scene",
+        "kitchen",
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("12 frames imported (scene kitchen)"), "{out}");
+    // Twelve frames and twelve filmstrip copies.
+    assert_eq!(
+        count(&pool, "SELECT COUNT(*) FROM episode_frames").await,
+        12
+    );
+    assert_eq!(count(&pool, "SELECT COUNT(*) FROM frames").await, 24);
+    let (ok, _, err) = run(&[
+        "episode",
+        "import",
+        frames.to_str().unwrap(),
+        "--db",
+        db,
+        "--name",
+        "kitchen_real",
+    ]);
+    assert!(!ok && err.contains("exists already"), "{err}");
+
+    // A graph with mistakes is refused whole, each problem with its key frame and field.
+    let mut bad = graphs();
+    bad["key_frames"][2]["nodes"][1]["states"] = json!(["Opn"]);
+    bad["key_frames"][3]["edges"][0]["to"] = json!("shelf_9");
+    let bad_file = dir.path().join("bad.json");
+    std::fs::write(&bad_file, bad.to_string()).unwrap();
+    let (ok, _, err) = run(&[
+        "episode",
+        "graphs",
+        "kitchen_real",
+        "--db",
+        db,
+        "--set",
+        bad_file.to_str().unwrap(),
+    ]);
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("key frame 2 (frame 6), nodes[1].states[0]: unknown predicate \"Opn\""),
+        "{err}"
+    );
+    assert!(
+        err.contains("key frame 3 (frame 9), edges[0].to: \"shelf_9\" is not an object"),
+        "{err}"
+    );
+    assert_eq!(count(&pool, "SELECT COUNT(*) FROM episode_graphs").await, 0);
+
+    let file = dir.path().join("graphs.json");
+    std::fs::write(&file, graphs().to_string()).unwrap();
+    let (ok, out, err) = run(&[
+        "episode",
+        "graphs",
+        "kitchen_real",
+        "--db",
+        db,
+        "--set",
+        file.to_str().unwrap(),
+    ]);
+    assert!(
+        ok && out.contains("graphs of curator curator-ann set (5 key frames)"),
+        "{out}{err}"
+    );
+    let back = dir.path().join("back.json");
+    let (ok, _, err) = run(&[
+        "episode",
+        "graphs",
+        "kitchen_real",
+        "--db",
+        db,
+        "--get",
+        back.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let stored: EpisodeGraphs = serde_json::from_slice(&std::fs::read(&back).unwrap()).unwrap();
+    let sent: EpisodeGraphs = serde_json::from_value(graphs()).unwrap();
+    assert_eq!(stored, sent);
+    let (ok, out, _) = run(&["episode", "list", "--db", db]);
+    assert!(
+        ok && out.contains("kitchen_real\t12 frames\tscene kitchen\tcurators: curator-ann"),
+        "{out}"
+    );
+    assert_eq!(
+        count(
+            &pool,
+            "SELECT COUNT(*) FROM audit_log WHERE action LIKE 'episode.%'"
+        )
+        .await,
+        2
+    );
+
+    // Export, then generate: every marked key frame is kept.
+    let export = dir.path().join("export");
+    let (ok, out, err) = run(&[
+        "episode",
+        "export",
+        "kitchen_real",
+        "--db",
+        db,
+        "--out",
+        export.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("12 frames and 5 key frames (0, 3, 6, 9, 11)"),
+        "{out}"
+    );
+    let replayed = export.join("replayed_activities");
+    for n in 0..12 {
+        let png = replayed.join(format!("kitchen_real/external_sensor1/{n:05}.png"));
+        let image = image::open(&png).unwrap_or_else(|e| panic!("{}: {e}", png.display()));
+        assert_eq!((image.width(), image.height()), (64, 48));
+    }
+    // Natural order: frame_2 is position 1, frame_10 position 9 (its red channel says which).
+    let red = |n: u32| {
+        image::open(replayed.join(format!("kitchen_real/external_sensor1/{n:05}.png")))
+            .unwrap()
+            .to_rgb8()
+            .get_pixel(0, 0)[0]
+    };
+    assert_eq!((red(1), red(9)), (40, 200));
+    assert!(
+        export
+            .join("segmented_activities/kitchen_real/segmented_scene_graph_0.json")
+            .is_file()
+    );
+
+    let data = dir.path().join("data");
+    let (ok, _, err) = run(&[
+        "generate",
+        replayed.to_str().unwrap(),
+        "--out",
+        data.to_str().unwrap(),
+        "--steps",
+        "3,4",
+    ]);
+    assert!(ok, "{err}");
+    let summary: Value =
+        serde_json::from_slice(&std::fs::read(data.join("generation_summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        summary["tasks"][0]["key_frames"],
+        json!(["0", "3", "6", "9", "11"])
+    );
+
+    // The items' action texts say what the curator's transitions say, and the verifier
+    // accepts the ground truth and refuses a wrong answer.
+    let described = describe(&sent);
+    let by_pair: std::collections::BTreeMap<(String, String), Vec<String>> = described
+        .iter()
+        .map(|t| {
+            (
+                (t.from_frame.to_string(), t.to_frame.to_string()),
+                t.visible_signatures.clone(),
+            )
+        })
+        .collect();
+    let text = std::fs::read_to_string(data.join("QA/enact_ordering.jsonl")).unwrap();
+    let items: Vec<_> = text
+        .lines()
+        .map(|l| parse_release_line(l).expect("a valid item"))
+        .collect();
+    assert!(items.len() >= 4, "{} items", items.len());
+    let refs: Vec<_> = items.iter().collect();
+    let signatures =
+        enact_hub::core::semantics::from_scene_graphs(&data.join("replayed_activities"), &refs);
+    let mut inverse_checked = 0;
+    for (item, signatures) in items.iter().zip(&signatures) {
+        let signatures = signatures
+            .as_ref()
+            .expect("signatures from the exported graphs");
+        let gt = Permutation::new(item.gt_answer.clone()).expect("a permutation");
+        let answer = |labels: &[u8]| {
+            let text = serde_json::to_string(labels).unwrap();
+            parse_answer_enact(&parse_python_json(&text).unwrap(), labels.len()).unwrap()
+        };
+        let right = verify(item.direction, &gt, &answer(gt.labels()), Some(signatures)).unwrap();
+        assert!(right.task_accuracy, "{}", item.id);
+        let mut wrong: Vec<u8> = gt.labels().to_vec();
+        wrong.reverse();
+        let wrong = verify(item.direction, &gt, &answer(&wrong), Some(signatures)).unwrap();
+        assert!(
+            !wrong.task_accuracy,
+            "{}: reversed answer accepted",
+            item.id
+        );
+        if item.direction == Direction::Inverse {
+            // Each action line, read back, is the transition it describes.
+            let frames = &item.key_frame_ids;
+            // `gt_answer[step]` is the label of the action of transition `step`.
+            for (step, &label) in item.gt_answer.iter().enumerate() {
+                let action = &item.actions[usize::from(label) - 1];
+                let pair = (frames[step].clone(), frames[step + 1].clone());
+                if let Some(expected) = by_pair.get(&pair) {
+                    let parsed: Vec<String> = parse_action(action).unwrap().into_iter().collect();
+                    assert_eq!(&parsed, expected, "{}: step {step}", item.id);
+                    inverse_checked += 1;
+                }
+            }
+        }
+    }
+    assert!(inverse_checked > 0);
+}
