@@ -39,6 +39,7 @@ pub mod cache;
 pub mod changes;
 pub mod datasets;
 pub mod demo;
+pub mod episode_curation;
 pub mod episodes;
 mod error;
 pub mod error_analysis;
