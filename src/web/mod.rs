@@ -22,6 +22,7 @@ mod archive;
 mod assets;
 mod auth;
 mod cookies;
+mod episodes;
 pub mod error;
 mod error_analysis;
 mod extract;
@@ -231,6 +232,7 @@ fn admin_pages(state: &AppState) -> Router<AppState> {
         .merge(rescore::router())
         .merge(quality::router())
         .merge(run_pages::admin_router())
+        .merge(episodes::admin_router())
         .route_layer(axum::middleware::from_fn_with_state(
             state.clone(),
             session::admin_only,
@@ -269,6 +271,7 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(error_analysis::page_router())
         .merge(session::router())
         .merge(annotate::router())
+        .merge(episodes::router())
         .merge(admin_pages(&state))
         .merge(studies::page_router())
         .merge(run_pages::page_router())
