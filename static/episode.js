@@ -79,7 +79,7 @@
   function toggleKey(position) {
     if (keyFrames.has(position)) {
       keyFrames.delete(position);
-      announce(m("unmarked", { n: position + 1, count: keyFrames.size }));
+      announce(m("unmarked", { n: position, count: keyFrames.size }));
     } else {
       // A new key frame starts as a copy of the key frame before it, so the curator edits
       // only what changed; the first one starts empty.
@@ -88,7 +88,7 @@
         ? { nodes: [], edges: [], visible: null }
         : copyGraph(keyFrames.get(before));
       keyFrames.set(position, Object.assign({ frame: position }, graph));
-      announce(m("marked", { n: position + 1, count: keyFrames.size }));
+      announce(m("marked", { n: position, count: keyFrames.size }));
     }
     changed();
   }
@@ -126,9 +126,9 @@
     const frame = frames[current];
     if (frame) {
       large.src = frame.src;
-      large.alt = m("frame", { n: current + 1, total: frames.length });
+      large.alt = m("frame", { n: current, last: frames.length - 1 });
     }
-    caption.textContent = m("frame", { n: current + 1, total: frames.length });
+    caption.textContent = m("frame", { n: current, last: frames.length - 1 });
     keyBadge.hidden = !keyFrames.has(current);
     const lengths = allowedLengths(keyFrames.size);
     keySummary.textContent = lengths.length

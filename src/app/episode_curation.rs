@@ -284,8 +284,7 @@ pub async fn resolve_by_key_frame(
             .and_then(|frames| frames.get(frame))
             .ok_or_else(|| {
                 AppError::Invalid(format!(
-                    "curator '{curator}' marked no key frame at frame {} of episode '{name}'",
-                    frame + 1
+                    "curator '{curator}' marked no key frame at frame {frame} of episode '{name}'"
                 ))
             })?;
         key_frames.insert(*frame, key_frame.clone());

@@ -92,9 +92,10 @@ async fn list_page(
     Ok(Html(page.render()?))
 }
 
+/// A frame of the filmstrip. Frames are named by their 0-based position everywhere (the
+/// graphs file's `frame`, the problems `validate` names), so the page does too.
 struct StripFrame {
     position: usize,
-    number: usize,
     thumb: String,
 }
 
@@ -156,7 +157,6 @@ async fn episode_page(
             .enumerate()
             .map(|(position, f)| StripFrame {
                 position,
-                number: position + 1,
                 thumb: frame_url(&f.thumbnail_sha256),
             })
             .collect(),
@@ -433,7 +433,6 @@ struct TransitionRow {
 
 struct KeyFrameRow {
     frame: usize,
-    number: usize,
     in_a: bool,
     in_b: bool,
     only_a: Vec<String>,
@@ -491,7 +490,7 @@ async fn compare_page(
             .transitions
             .iter()
             .map(|t| TransitionRow {
-                label: format!("{} → {}", t.from_frame + 1, t.to_frame + 1),
+                label: format!("{} → {}", t.from_frame, t.to_frame),
                 shared: t.components.shared,
                 only_a: t.only_a.clone(),
                 only_b: t.only_b.clone(),
@@ -502,7 +501,6 @@ async fn compare_page(
             .iter()
             .map(|k| KeyFrameRow {
                 frame: k.frame,
-                number: k.frame + 1,
                 in_a: k.in_a,
                 in_b: k.in_b,
                 only_a: k.only_a.clone(),

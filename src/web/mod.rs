@@ -5,9 +5,10 @@
 //! scripts; `auth` checks API tokens (before the handler, for every route whose table entry
 //! asks for one), `session` logs annotators in (and gates the admin pages), `annotate` is
 //! their side of human annotation and `admin`, `admin_tokens` and `admin_audit` the admins';
-//! `error_analysis` serves the error taxonomy as JSON and pages. Each page module exposes one
-//! `router()`; they are merged once in [`router`], the admin pages behind one gate
-//! ([`admin_pages`]). The JSON routes are one table instead ([`api_routes`]): the `/api/v1`
+//! `error_analysis` serves the error taxonomy as JSON and pages; `episodes` the curators' pages
+//! for real-world episodes (key frames, the scene-graph editor, comparison and resolution).
+//! Each page module exposes one `router()`; they are merged once in [`router`], the admin
+//! pages behind one gate ([`admin_pages`]). The JSON routes are one table instead ([`api_routes`]): the `/api/v1`
 //! router, its authorization and the OpenAPI document (`openapi`) are all built from it.
 //! `extract` holds the extractors whose rejections are the JSON error body; `i18n` the pages'
 //! languages (message catalogues, the request's locale), `locale_switch` the switch.

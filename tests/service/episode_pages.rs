@@ -238,7 +238,7 @@ async fn curators_describe_draft_and_save_and_an_admin_compares_resolves_and_exp
         .await;
     let (status, text) = body(r).await;
     assert_eq!(status, StatusCode::BAD_REQUEST, "{text}");
-    assert!(text.contains("alice") && text.contains("frame 5"), "{text}");
+    assert!(text.contains("alice") && text.contains("frame 4"), "{text}");
     server.stop().await;
 }
 
