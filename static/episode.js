@@ -28,7 +28,10 @@
   for (const span of document.getElementById("messages").content.children) {
     messages[span.dataset.key] = span.textContent;
   }
-  const m = (key, values) =>
+  // The page is in English, as the admin pages are: its script's messages come from the
+  // page's own <template id="messages">, not from the translated pages' catalogue
+  // (SCRIPT_MESSAGES in src/web/i18n.rs), so each is written once, in the template.
+  const say = (key, values) =>
     (messages[key] || key).replace(/\{(\w+)\}/g, (whole, name) =>
       values && name in values ? String(values[name]) : whole);
 
@@ -79,7 +82,7 @@
   function toggleKey(position) {
     if (keyFrames.has(position)) {
       keyFrames.delete(position);
-      announce(m("unmarked", { n: position, count: keyFrames.size }));
+      announce(say("unmarked", { n: position, count: keyFrames.size }));
     } else {
       // A new key frame starts as a copy of the key frame before it, so the curator edits
       // only what changed; the first one starts empty.
@@ -88,7 +91,7 @@
         ? { nodes: [], edges: [], visible: null }
         : copyGraph(keyFrames.get(before));
       keyFrames.set(position, Object.assign({ frame: position }, graph));
-      announce(m("marked", { n: position, count: keyFrames.size }));
+      announce(say("marked", { n: position, count: keyFrames.size }));
     }
     changed();
   }
@@ -126,14 +129,14 @@
     const frame = frames[current];
     if (frame) {
       large.src = frame.src;
-      large.alt = m("frame", { n: current, last: frames.length - 1 });
+      large.alt = say("frame", { n: current, last: frames.length - 1 });
     }
-    caption.textContent = m("frame", { n: current, last: frames.length - 1 });
+    caption.textContent = say("frame", { n: current, last: frames.length - 1 });
     keyBadge.hidden = !keyFrames.has(current);
     const lengths = allowedLengths(keyFrames.size);
     keySummary.textContent = lengths.length
-      ? m("keys", { count: keyFrames.size, lengths: lengths.join(", ") })
-      : m("keys-none", { count: keyFrames.size });
+      ? say("keys", { count: keyFrames.size, lengths: lengths.join(", ") })
+      : say("keys-none", { count: keyFrames.size });
   }
 
   function stateToggle(name, state, checked, onChange) {
@@ -141,7 +144,7 @@
     const box = label.querySelector(".state-box");
     box.checked = checked;
     box.dataset.state = state;
-    box.setAttribute("aria-label", m("state", { name, state }));
+    box.setAttribute("aria-label", say("state", { name, state }));
     box.dataset.focus = `state:${name}:${state}`;
     label.querySelector(".state-name").textContent = state;
     box.addEventListener("change", () => onChange(box.checked));
@@ -162,7 +165,7 @@
       row.querySelector(".node-category").textContent = node.category;
       const visible = row.querySelector(".node-visible");
       visible.checked = graph.visible === null || graph.visible.includes(node.name);
-      visible.setAttribute("aria-label", m("visible", { name: node.name }));
+      visible.setAttribute("aria-label", say("visible", { name: node.name }));
       visible.dataset.focus = `visible:${node.name}`;
       visible.addEventListener("change", () => {
         const names = graph.visible === null ? graph.nodes.map((n) => n.name) : graph.visible;
@@ -181,7 +184,7 @@
         }));
       }
       const remove = row.querySelector(".remove-node");
-      remove.setAttribute("aria-label", m("remove-node", { name: node.name }));
+      remove.setAttribute("aria-label", say("remove-node", { name: node.name }));
       remove.addEventListener("click", () => {
         graph.nodes = graph.nodes.filter((n) => n !== node);
         // Edges to the removed object stay until the curator removes them: the server flags
@@ -197,7 +200,7 @@
         row.dataset.edge = `${edge.from} ${state} ${edge.to}`;
         row.querySelector(".edge-text").textContent = row.dataset.edge;
         const remove = row.querySelector(".remove-edge");
-        remove.setAttribute("aria-label", m("remove-node", { name: row.dataset.edge }));
+        remove.setAttribute("aria-label", say("remove-node", { name: row.dataset.edge }));
         remove.addEventListener("click", () => {
           edge.states = edge.states.filter((s) => s !== state);
           if (!edge.states.length) graph.edges = graph.edges.filter((e) => e !== edge);
@@ -231,7 +234,7 @@
     if (index === 0) {
       const li = document.createElement("li");
       li.className = "meta";
-      li.textContent = m("first");
+      li.textContent = say("first");
       sentencesList.appendChild(li);
       return;
     }
@@ -240,7 +243,7 @@
     if (!t.components.length) {
       const line = document.createElement("p");
       line.className = "notice error";
-      line.textContent = m("no-change");
+      line.textContent = say("no-change");
       problemsBox.appendChild(line);
     }
     for (const sentence of t.sentences) {
@@ -301,10 +304,10 @@
         ]);
         if (mine !== generation) return;
         described = description;
-        saveStatus.textContent = m("draft");
+        saveStatus.textContent = say("draft");
         renderTransition();
       } catch (e) {
-        if (mine === generation) saveStatus.textContent = m("failed", { error: e.message });
+        if (mine === generation) saveStatus.textContent = say("failed", { error: e.message });
       }
     }, 250);
   }
@@ -316,8 +319,8 @@
     const name = addNode.elements.name.value.trim();
     const category = addNode.elements.category.value.trim();
     if (graph.nodes.some((n) => n.name === name)) {
-      announce(m("name-taken", { name }));
-      saveStatus.textContent = m("name-taken", { name });
+      announce(say("name-taken", { name }));
+      saveStatus.textContent = say("name-taken", { name });
       return;
     }
     graph.nodes.push({ name, category, states: [] });
@@ -336,7 +339,7 @@
     const state = addEdge.elements.state.value;
     let edge = graph.edges.find((e) => e.from === from && e.to === to);
     if (edge && edge.states.includes(state)) {
-      saveStatus.textContent = m("edge-exists");
+      saveStatus.textContent = say("edge-exists");
       return;
     }
     if (!edge) {
@@ -352,10 +355,10 @@
     generation++;
     try {
       described = await post("/graphs", document_());
-      saveStatus.textContent = m("saved");
-      announce(m("saved"));
+      saveStatus.textContent = say("saved");
+      announce(say("saved"));
     } catch (e) {
-      saveStatus.textContent = m("failed", { error: e.message });
+      saveStatus.textContent = say("failed", { error: e.message });
       announce(saveStatus.textContent);
     }
     renderTransition();
