@@ -790,7 +790,17 @@ pub async fn import_release(
     report.frames = distinct_frames.len();
     // Frames of unchanged items are reused as well.
     report.reused_frames = report.frames.saturating_sub(report.new_frames);
-    report.cut_over_ms = publish(hub, actor, &staged, &run_token, &location, &report).await?;
+    let real_scene = options.scene_graphs.as_deref().and_then(real_world_scene);
+    report.cut_over_ms = publish(
+        hub,
+        actor,
+        &staged,
+        &run_token,
+        &location,
+        &report,
+        real_scene.as_deref(),
+    )
+    .await?;
     report.longest_transaction_ms = report.longest_transaction_ms.max(report.cut_over_ms);
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)
@@ -904,6 +914,33 @@ async fn file_sha256(path: &Path) -> Result<String, ImportError> {
     .map_err(|e| ImportError::Location(format!("hashing task failed: {e}")))?
 }
 
+/// The scene(s) of a release made from exported real-world episodes: `Some` when every task
+/// folder of its scene graphs holds the marker of hand-marked key frames (scenes joined by
+/// ", " when they differ), `None` for anything else (a simulator's replays).
+fn real_world_scene(replayed: &Path) -> Option<String> {
+    let mut scenes = std::collections::BTreeSet::new();
+    let mut tasks = 0;
+    for entry in std::fs::read_dir(replayed).ok()?.flatten() {
+        if !entry.path().is_dir() {
+            continue;
+        }
+        tasks += 1;
+        let marker = entry
+            .path()
+            .join(crate::core::pipeline::marked::MARKED_KEY_FRAMES_FILE);
+        let text = std::fs::read(marker).ok()?;
+        let marked: crate::core::pipeline::marked::MarkedKeyFrames =
+            serde_json::from_slice(&text).ok()?;
+        if marked.origin != "real" {
+            return None;
+        }
+        if !marked.scene.is_empty() {
+            scenes.insert(marked.scene);
+        }
+    }
+    (tasks > 0).then(|| scenes.into_iter().collect::<Vec<_>>().join(", "))
+}
+
 /// The one short transaction that makes a fully written staged import the dataset's current
 /// version (or, if it wrote nothing, just removes it). Returns how long it held the write
 /// lock, in milliseconds.
@@ -914,6 +951,7 @@ async fn publish(
     run_token: &str,
     location: &ReleaseLocation,
     report: &ImportReport,
+    real_scene: Option<&str>,
 ) -> Result<f64, ImportError> {
     let dataset = &report.dataset;
     let mut tx = hub.pool.begin().await?;
@@ -952,6 +990,9 @@ async fn publish(
                 super::rescore::rejudge_dataset(&mut tx, target.id).await?;
             }
         }
+    }
+    if let Some(scene) = real_scene {
+        store::datasets::set_origin(&mut tx, dataset, "real", scene).await?;
     }
     if wrote_items || report.signatures_updated > 0 {
         store::bump_content_generation(&mut tx).await?;

@@ -13,6 +13,10 @@ pub struct Dataset {
     pub name: String,
     pub created_at: String,
     pub source: String,
+    /// `simulation`, or `real` for items made from an exported real-world episode.
+    pub origin: String,
+    /// The scene(s) a real-world dataset was recorded in; empty otherwise.
+    pub scene: String,
 }
 
 /// Item counts of one dataset by direction and step length.
@@ -52,13 +56,15 @@ fn dataset_from_row(row: &impl Fields) -> Result<Dataset, sqlx::Error> {
         name: row.try_get("name")?,
         created_at: row.try_get("created_at")?,
         source: row.try_get("source")?,
+        origin: row.try_get("origin")?,
+        scene: row.try_get("scene")?,
     })
 }
 
 pub async fn by_name(conn: &mut Conn, name: &str) -> Result<Option<Dataset>, sqlx::Error> {
     on!(conn, |c| {
         let row = sqlx::query(&format!(
-            "SELECT id, name, created_at, source FROM datasets WHERE name = $1 AND {PUBLISHED}"
+            "SELECT id, name, created_at, source, origin, scene FROM datasets WHERE name = $1 AND {PUBLISHED}"
         ))
         .bind(name)
         .fetch_optional(&mut *c)
@@ -71,7 +77,7 @@ pub async fn by_name(conn: &mut Conn, name: &str) -> Result<Option<Dataset>, sql
 pub async fn overview(conn: &mut Conn) -> Result<Vec<DatasetOverview>, sqlx::Error> {
     on!(conn, |c| {
         let rows = sqlx::query(&format!(
-            "SELECT id, name, created_at, source FROM datasets WHERE {PUBLISHED} ORDER BY name"
+            "SELECT id, name, created_at, source, origin, scene FROM datasets WHERE {PUBLISHED} ORDER BY name"
         ))
         .fetch_all(&mut *c)
         .await?;
@@ -128,5 +134,23 @@ pub async fn counts(conn: &mut Conn, dataset_id: i64) -> Result<ItemCounts, sqlx
                 .insert(step_length, n);
         }
         Ok(counts)
+    })
+}
+
+/// Records where a dataset's items come from (`simulation` or `real`) and the scene.
+pub async fn set_origin(
+    conn: &mut Conn,
+    dataset: &str,
+    origin: &str,
+    scene: &str,
+) -> Result<(), sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query("UPDATE datasets SET origin = $1, scene = $2 WHERE name = $3")
+            .bind(origin)
+            .bind(scene)
+            .bind(dataset)
+            .execute(&mut *c)
+            .await?;
+        Ok(())
     })
 }

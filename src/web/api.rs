@@ -102,6 +102,10 @@ pub fn frame_url(sha256: &str) -> String {
 struct DatasetView {
     name: String,
     created_at: String,
+    /// `simulation`, or `real` for items made from a recorded real-world episode.
+    origin: String,
+    /// The scene(s) a real-world dataset was recorded in; empty otherwise.
+    scene: String,
     items: i64,
     forward: i64,
     inverse: i64,
@@ -117,6 +121,8 @@ impl From<DatasetOverview> for DatasetView {
             items_url: format!("/api/v1/datasets/{}/items", o.dataset.name),
             name: o.dataset.name,
             created_at: o.dataset.created_at,
+            origin: o.dataset.origin,
+            scene: o.dataset.scene,
             items: o.items.total,
             forward: o.items.forward,
             inverse: o.items.inverse,

@@ -45,6 +45,21 @@ fn write_frames(dir: &Path) {
     }
 }
 
+/// `episode import FRAMES --db DB --name kitchen_real` with `extra` arguments.
+fn import_frames(frames: &Path, db: &str, extra: &[&str]) -> (bool, String, String) {
+    let mut args = vec!["episode", "import", frames.to_str().unwrap(), "--db", db];
+    args.extend_from_slice(&["--name", "kitchen_real"]);
+    args.extend_from_slice(extra);
+    run(&args)
+}
+
+/// `episode COMMAND kitchen_real --db DB` with `args`.
+fn episode(db: &str, command: &str, args: &[&str]) -> (bool, String, String) {
+    let mut all = vec!["episode", command, "kitchen_real", "--db", db];
+    all.extend_from_slice(args);
+    run(&all)
+}
+
 fn node(name: &str, category: &str, states: &[&str]) -> Value {
     json!({"name": name, "category": category, "states": states})
 }
@@ -80,30 +95,14 @@ async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
 
     // Anything but a frame in the folder is refused by name, and nothing is stored.
     std::fs::write(frames.join("notes.txt"), "x").unwrap();
-    let (ok, _, err) = run(&[
-        "episode",
-        "import",
-        frames.to_str().unwrap(),
-        "--db",
-        db,
-        "--name",
-        "kitchen_real",
-    ]);
+    let (ok, _, err) = import_frames(&frames, db, &[]);
     assert!(
         !ok && err.contains("notes.txt") && err.contains("only PNG and JPEG"),
         "{err}"
     );
     std::fs::remove_file(frames.join("notes.txt")).unwrap();
     std::fs::write(frames.join("frame_13.png"), b"not a png").unwrap();
-    let (ok, _, err) = run(&[
-        "episode",
-        "import",
-        frames.to_str().unwrap(),
-        "--db",
-        db,
-        "--name",
-        "kitchen_real",
-    ]);
+    let (ok, _, err) = import_frames(&frames, db, &[]);
     assert!(
         !ok && err.contains("frame_13.png") && err.contains("cannot decode"),
         "{err}"
@@ -111,17 +110,7 @@ async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
     std::fs::remove_file(frames.join("frame_13.png")).unwrap();
     assert_eq!(count(&pool, "SELECT COUNT(*) FROM episodes").await, 0);
 
-    let (ok, out, err) = run(&[
-        "episode",
-        "import",
-        frames.to_str().unwrap(),
-        "--db",
-        db,
-        "--name",
-        "kitchen_real",
-        "--scene",
-        "kitchen",
-    ]);
+    let (ok, out, err) = import_frames(&frames, db, &["--scene", "kitchen"]);
     assert!(ok, "{err}");
     assert!(out.contains("12 frames imported (scene kitchen)"), "{out}");
     // Twelve frames and twelve filmstrip copies.
@@ -130,15 +119,7 @@ async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
         12
     );
     assert_eq!(count(&pool, "SELECT COUNT(*) FROM frames").await, 24);
-    let (ok, _, err) = run(&[
-        "episode",
-        "import",
-        frames.to_str().unwrap(),
-        "--db",
-        db,
-        "--name",
-        "kitchen_real",
-    ]);
+    let (ok, _, err) = import_frames(&frames, db, &[]);
     assert!(!ok && err.contains("exists already"), "{err}");
 
     // A graph with mistakes is refused whole, each problem with its key frame and field.
@@ -147,15 +128,7 @@ async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
     bad["key_frames"][3]["edges"][0]["to"] = json!("shelf_9");
     let bad_file = dir.path().join("bad.json");
     std::fs::write(&bad_file, bad.to_string()).unwrap();
-    let (ok, _, err) = run(&[
-        "episode",
-        "graphs",
-        "kitchen_real",
-        "--db",
-        db,
-        "--set",
-        bad_file.to_str().unwrap(),
-    ]);
+    let (ok, _, err) = episode(db, "graphs", &["--set", bad_file.to_str().unwrap()]);
     assert!(!ok, "{err}");
     assert!(
         err.contains("key frame 2 (frame 6), nodes[1].states[0]: unknown predicate \"Opn\""),
@@ -169,29 +142,13 @@ async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
 
     let file = dir.path().join("graphs.json");
     std::fs::write(&file, graphs().to_string()).unwrap();
-    let (ok, out, err) = run(&[
-        "episode",
-        "graphs",
-        "kitchen_real",
-        "--db",
-        db,
-        "--set",
-        file.to_str().unwrap(),
-    ]);
+    let (ok, out, err) = episode(db, "graphs", &["--set", file.to_str().unwrap()]);
     assert!(
         ok && out.contains("graphs of curator curator-ann set (5 key frames)"),
         "{out}{err}"
     );
     let back = dir.path().join("back.json");
-    let (ok, _, err) = run(&[
-        "episode",
-        "graphs",
-        "kitchen_real",
-        "--db",
-        db,
-        "--get",
-        back.to_str().unwrap(),
-    ]);
+    let (ok, _, err) = episode(db, "graphs", &["--get", back.to_str().unwrap()]);
     assert!(ok, "{err}");
     let stored: EpisodeGraphs = serde_json::from_slice(&std::fs::read(&back).unwrap()).unwrap();
     let sent: EpisodeGraphs = serde_json::from_value(graphs()).unwrap();
@@ -212,15 +169,7 @@ async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
 
     // Export, then generate: every marked key frame is kept.
     let export = dir.path().join("export");
-    let (ok, out, err) = run(&[
-        "episode",
-        "export",
-        "kitchen_real",
-        "--db",
-        db,
-        "--out",
-        export.to_str().unwrap(),
-    ]);
+    let (ok, out, err) = episode(db, "export", &["--out", export.to_str().unwrap()]);
     assert!(ok, "{err}");
     assert!(
         out.contains("12 frames and 5 key frames (0, 3, 6, 9, 11)"),
@@ -321,4 +270,82 @@ async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
         }
     }
     assert!(inverse_checked > 0);
+
+    // The release imports with every item's signatures from the exported scene graphs.
+    let (ok, _, err) = run(&[
+        "import",
+        data.to_str().unwrap(),
+        "--db",
+        db,
+        "--dataset",
+        "kitchen-real",
+    ]);
+    assert!(ok, "{err}");
+    let stored = count(&pool, "SELECT COUNT(*) FROM items").await;
+    assert_eq!(stored, items.len() as i64);
+    assert_eq!(
+        count(&pool, "SELECT COUNT(*) FROM item_signatures").await,
+        stored
+    );
+    // ... and says where its items come from.
+    let overview = enact_hub::app::datasets::overview(&pool.clone().into())
+        .await
+        .unwrap();
+    let dataset = &overview[0].dataset;
+    assert_eq!(
+        (dataset.origin.as_str(), dataset.scene.as_str()),
+        ("real", "kitchen")
+    );
+
+    // A second curator who saw the right gripper: the comparison counts the difference, an
+    // export waits for an admin to choose, and then exports the chosen graphs.
+    let mut other = graphs();
+    other["key_frames"][2]["edges"][0]["states"] = json!(["RightGrasping"]);
+    let other_file = dir.path().join("bob.json");
+    std::fs::write(&other_file, other.to_string()).unwrap();
+    let (ok, _, err) = episode(
+        db,
+        "graphs",
+        &["--set", other_file.to_str().unwrap(), "--curator", "bob"],
+    );
+    assert!(ok, "{err}");
+    let (ok, out, err) = episode(db, "compare", &["--curators", "curator-ann,bob", "--json"]);
+    assert!(ok, "{err}");
+    let comparison: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(
+        comparison["key_frames"][2]["only_a"],
+        json!(["robot_r1 -> apple_2: LeftGrasping"])
+    );
+    assert_eq!(
+        comparison["key_frames"][2]["only_b"],
+        json!(["robot_r1 -> apple_2: RightGrasping"])
+    );
+    // Transitions 3->6 and 6->9 each differ by the grasp on both sides; 2 of 4 are the same.
+    assert_eq!(
+        comparison["transition_components"],
+        json!({"shared": 5, "only_a": 2, "only_b": 2})
+    );
+    let (ok, _, err) = episode(db, "export", &["--out", export.to_str().unwrap()]);
+    assert!(
+        !ok && err.contains("graphs from 2 curators (bob, curator-ann)"),
+        "{err}"
+    );
+    let (ok, _, err) = episode(db, "resolve", &["--curator", "bob"]);
+    assert!(ok, "{err}");
+    let again = dir.path().join("again");
+    let (ok, _, err) = episode(db, "export", &["--out", again.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let segmented = std::fs::read_to_string(
+        again.join("segmented_activities/kitchen_real/segmented_scene_graph_0.json"),
+    )
+    .unwrap();
+    assert!(segmented.contains("RightGrasping") && !segmented.contains("LeftGrasping"));
+    assert_eq!(
+        count(
+            &pool,
+            "SELECT COUNT(*) FROM audit_log WHERE action LIKE 'episode.%'"
+        )
+        .await,
+        4
+    );
 }

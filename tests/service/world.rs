@@ -55,6 +55,10 @@ async fn simulated_replays_generate_items_that_import_with_scene_graph_semantics
     assert_eq!(report.rows, summary.items);
     assert_eq!(report.new_items, summary.items);
     assert_eq!(report.scene_graph_items, summary.items);
+    let overview = enact_hub::app::datasets::overview(&pool.clone().into())
+        .await
+        .unwrap();
+    assert_eq!(overview[0].dataset.origin, "simulation");
 }
 
 #[tokio::test]

@@ -355,3 +355,207 @@ fn two_curators_with_planted_differences() {
         ]
     );
 }
+
+mod round_trip {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::super::*;
+    use crate::core::pipeline::marked::MARKED_KEY_FRAMES_FILE;
+    use crate::core::pipeline::{SegmentationParams, segment_task};
+    use crate::core::scene_graph::{View, pair_signatures};
+
+    const CATEGORIES: [&str; 6] = ["fridge", "apple", "table", "stove", "cabinet", "bowl"];
+    const UNARY: [&str; 4] = ["Open", "ToggledOn", "Cooked", "Folded"];
+    const BINARY: [&str; 4] = ["OnTop", "Inside", "NextTo", "Under"];
+    const GRIPPERS: [&str; 2] = ["LeftGrasping", "RightGrasping"];
+
+    /// Adds `state` to the list if absent, removes it if present.
+    fn toggle(states: &mut Vec<String>, state: &str) {
+        match states.iter().position(|s| s == state) {
+            Some(i) => {
+                states.remove(i);
+            }
+            None => states.push(state.to_string()),
+        }
+    }
+
+    fn toggle_edge(key_frame: &mut KeyFrameGraph, from: &str, to: &str, state: &str) {
+        match key_frame
+            .edges
+            .iter()
+            .position(|e| e.from == from && e.to == to)
+        {
+            Some(i) => {
+                toggle(&mut key_frame.edges[i].states, state);
+                if key_frame.edges[i].states.is_empty() {
+                    key_frame.edges.remove(i);
+                }
+            }
+            None => key_frame.edges.push(SceneEdge {
+                from: from.into(),
+                to: to.into(),
+                states: vec![state.into()],
+            }),
+        }
+    }
+
+    /// One random edit of a key frame: a unary state, a relation or a grasp toggled.
+    fn edit(rng: &mut ChaCha8Rng, key_frame: &mut KeyFrameGraph) {
+        let objects = key_frame.nodes.len() - 1; // node 0 is the robot
+        let pick = |rng: &mut ChaCha8Rng| 1 + rng.random_range(0..objects);
+        match rng.random_range(0..3) {
+            0 => {
+                let i = pick(rng);
+                toggle(
+                    &mut key_frame.nodes[i].states,
+                    UNARY[rng.random_range(0..UNARY.len())],
+                );
+            }
+            1 => {
+                let (a, b) = (pick(rng), pick(rng));
+                if a != b {
+                    let (from, to) = (
+                        key_frame.nodes[a].name.clone(),
+                        key_frame.nodes[b].name.clone(),
+                    );
+                    toggle_edge(
+                        key_frame,
+                        &from,
+                        &to,
+                        BINARY[rng.random_range(0..BINARY.len())],
+                    );
+                }
+            }
+            _ => {
+                let to = key_frame.nodes[pick(rng)].name.clone();
+                toggle_edge(key_frame, "robot_r1", &to, GRIPPERS[rng.random_range(0..2)]);
+            }
+        }
+    }
+
+    /// Random valid graphs: 3 to 6 objects, 4 to 8 key frames, each later one the one before
+    /// with one to three edits; sometimes an object out of sight.
+    fn random_graphs(rng: &mut ChaCha8Rng) -> (EpisodeGraphs, usize) {
+        loop {
+            let objects = rng.random_range(3..=CATEGORIES.len());
+            let mut first = KeyFrameGraph {
+                frame: rng.random_range(0..3),
+                nodes: vec![EpisodeNode {
+                    name: "robot_r1".into(),
+                    category: "agent".into(),
+                    states: vec![],
+                    parent: None,
+                }],
+                edges: vec![],
+                visible: None,
+            };
+            for (i, category) in CATEGORIES.iter().take(objects).enumerate() {
+                first.nodes.push(EpisodeNode {
+                    name: format!("{category}_{}", i + 1),
+                    category: (*category).into(),
+                    states: vec![],
+                    parent: None,
+                });
+            }
+            let mut key_frames = vec![first];
+            for _ in 1..rng.random_range(4..=8) {
+                let mut next = key_frames[key_frames.len() - 1].clone();
+                next.frame += rng.random_range(1..5);
+                for _ in 0..rng.random_range(1..=3) {
+                    edit(rng, &mut next);
+                }
+                // Out of sight: an object no edge touches, now and then.
+                next.visible = None;
+                if rng.random_bool(0.3) {
+                    let hidden = &next.nodes[next.nodes.len() - 1].name;
+                    if !next
+                        .edges
+                        .iter()
+                        .any(|e| &e.from == hidden || &e.to == hidden)
+                    {
+                        next.visible = Some(
+                            next.nodes
+                                .iter()
+                                .filter(|n| &n.name != hidden)
+                                .map(|n| n.name.clone())
+                                .collect(),
+                        );
+                    }
+                }
+                key_frames.push(next);
+            }
+            let frame_count = key_frames[key_frames.len() - 1].frame + 1 + rng.random_range(0..3);
+            let graphs = EpisodeGraphs { key_frames };
+            if validate(&graphs, frame_count).is_ok() {
+                return (graphs, frame_count);
+            }
+        }
+    }
+
+    /// The export read back by the hub's segmentation and scene-graph reader gives the same key
+    /// frames, graphs and transitions, over many random episodes.
+    #[test]
+    fn exports_read_back_as_the_same_key_frames_and_transitions() {
+        let mut rng = ChaCha8Rng::seed_from_u64(28);
+        let dir = tempfile::tempdir().unwrap();
+        for case in 0..150 {
+            let (graphs, _) = random_graphs(&mut rng);
+            let task = format!("episode_{case}");
+            let export = export_task(&task, "kitchen", &graphs, |_| FrameSize::NOMINAL);
+            let task_dir = dir.path().join(&task);
+            std::fs::create_dir_all(task_dir.join("external_sensor1")).unwrap();
+            std::fs::write(
+                task_dir.join("scene_graph_0.json"),
+                serde_json::to_vec(&export.scene_graph).unwrap(),
+            )
+            .unwrap();
+            std::fs::write(
+                task_dir.join(MARKED_KEY_FRAMES_FILE),
+                serde_json::to_vec(&export.marked).unwrap(),
+            )
+            .unwrap();
+            for k in &graphs.key_frames {
+                std::fs::write(
+                    task_dir.join(format!("external_sensor1/{:05}.png", k.frame)),
+                    b"png",
+                )
+                .unwrap();
+            }
+            let segmented = segment_task(dir.path(), &task, &SegmentationParams::default())
+                .unwrap_or_else(|e| panic!("case {case}: {e}"));
+            let frames: Vec<String> = graphs
+                .key_frames
+                .iter()
+                .map(|k| k.frame.to_string())
+                .collect();
+            assert_eq!(segmented.segmentation.key_frames, frames, "case {case}");
+            let timeline = &segmented.key_frame_graphs;
+            for k in &graphs.key_frames {
+                let graph = timeline.scene_graph(&k.frame.to_string()).unwrap();
+                assert_eq!(
+                    &KeyFrameGraph::from_scene_graph(k.frame, &graph),
+                    k,
+                    "case {case}"
+                );
+            }
+            for t in describe(&graphs) {
+                let (from, to) = (t.from_frame.to_string(), t.to_frame.to_string());
+                let visible: Vec<String> = pair_signatures(timeline, &from, &to, View::Visible)
+                    .unwrap()
+                    .into_iter()
+                    .collect();
+                let full: Vec<String> = pair_signatures(timeline, &from, &to, View::Full)
+                    .unwrap()
+                    .into_iter()
+                    .collect();
+                assert_eq!(visible, t.visible_signatures, "case {case}: {from} -> {to}");
+                assert_eq!(full, t.full_signatures, "case {case}: {from} -> {to}");
+                assert!(
+                    !visible.is_empty(),
+                    "case {case}: a valid transition shows a change"
+                );
+            }
+        }
+    }
+}

@@ -10,6 +10,7 @@ use serde::Serialize;
 use serde_json::{Map, Value};
 
 use crate::core::pipeline::label::LabelFont;
+use crate::core::pipeline::marked::MARKED_KEY_FRAMES_FILE;
 use crate::core::pipeline::qa::GeneratedItem;
 use crate::core::pipeline::{
     GenerationSummary, PipelineError, SegmentedTask, frame_image_path, scene_graph_path,
@@ -133,6 +134,14 @@ pub(crate) fn write_release(
             );
         }
         write_json(&scene_graph_path(&replayed_out, task), &Value::Object(doc))?;
+        // Key frames a person marked travel with the release: the import reads the origin
+        // and scene of a real-world dataset from them.
+        let marked = release.replayed_dir.join(task).join(MARKED_KEY_FRAMES_FILE);
+        if marked.is_file() {
+            let to = replayed_out.join(task).join(MARKED_KEY_FRAMES_FILE);
+            std::fs::copy(&marked, &to)
+                .map_err(|source| PipelineError::Write { path: to, source })?;
+        }
         image_dirs.push(replayed_out.join(task).join("external_sensor1"));
     }
     for dir in &image_dirs {
