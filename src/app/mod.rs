@@ -40,6 +40,7 @@ pub mod changes;
 pub mod datasets;
 pub mod demo;
 pub mod doctor;
+pub mod episode_curation;
 pub mod episodes;
 mod error;
 pub mod error_analysis;

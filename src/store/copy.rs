@@ -448,6 +448,16 @@ pub const TABLES: &[Table] = &[
         ],
         false,
     ),
+    table(
+        "episode_drafts",
+        &[
+            ("episode", Int),
+            ("curator", Text),
+            ("graphs", Text),
+            ("updated_at_ms", Int),
+        ],
+        false,
+    ),
 ];
 
 /// One column's value.

@@ -12,6 +12,7 @@ pub mod audit;
 pub mod copy;
 pub mod datasets;
 pub mod db;
+pub mod episode_drafts;
 pub mod episodes;
 pub mod frames;
 pub mod gold;

@@ -38,26 +38,31 @@ fn archive_file_name(dataset: &str) -> String {
     format!("{}.tar", super::file_name_safe(dataset))
 }
 
-async fn download(
-    State(state): State<AppState>,
-    Path(name): Path<String>,
-) -> Result<Response, AppError> {
-    let archive = datasets::release_archive(&state.hub, &name).await?;
-    let disposition = format!(
-        "attachment; filename=\"{}\"",
-        archive_file_name(&archive.dataset.name)
-    );
+/// A tar stream as a download named `file_name` (already safe in a quoted header).
+pub(super) fn tar_download(
+    chunks: tokio::sync::mpsc::Receiver<Result<bytes::Bytes, std::io::Error>>,
+    file_name: &str,
+) -> Response {
     let mut response =
-        Body::from_stream(tokio_stream::wrappers::ReceiverStream::new(archive.chunks))
-            .into_response();
+        Body::from_stream(tokio_stream::wrappers::ReceiverStream::new(chunks)).into_response();
     let headers = response.headers_mut();
     headers.insert(
         header::CONTENT_TYPE,
         HeaderValue::from_static("application/x-tar"),
     );
-    if let Ok(v) = HeaderValue::from_str(&disposition) {
+    if let Ok(v) = HeaderValue::from_str(&format!("attachment; filename=\"{file_name}\"")) {
         headers.insert(header::CONTENT_DISPOSITION, v);
     }
+    response
+}
+
+async fn download(
+    State(state): State<AppState>,
+    Path(name): Path<String>,
+) -> Result<Response, AppError> {
+    let archive = datasets::release_archive(&state.hub, &name).await?;
+    let mut response = tar_download(archive.chunks, &archive_file_name(&archive.dataset.name));
+    let headers = response.headers_mut();
     headers.insert(
         "x-enact-ground-truth",
         HeaderValue::from_static(if archive.with_truth {

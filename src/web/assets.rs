@@ -10,6 +10,8 @@ use super::AppState;
 const APP_CSS: &str = include_str!("../../static/app.css");
 const ANNOTATE_JS: &str = include_str!("../../static/annotate.js");
 const RUN_PROGRESS_JS: &str = include_str!("../../static/run_progress.js");
+const EPISODE_JS: &str = include_str!("../../static/episode.js");
+const EPISODE_CSS: &str = include_str!("../../static/episode.css");
 const FAVICON_SVG: &str = include_str!("../../static/favicon.svg");
 
 pub fn router() -> Router<AppState> {
@@ -25,6 +27,14 @@ pub fn router() -> Router<AppState> {
         .route(
             "/static/run_progress.js",
             get(|| asset("text/javascript; charset=utf-8", RUN_PROGRESS_JS)),
+        )
+        .route(
+            "/static/episode.js",
+            get(|| asset("text/javascript; charset=utf-8", EPISODE_JS)),
+        )
+        .route(
+            "/static/episode.css",
+            get(|| asset("text/css; charset=utf-8", EPISODE_CSS)),
         )
         .route(
             "/static/favicon.svg",

@@ -5,9 +5,10 @@
 //! scripts; `auth` checks API tokens (before the handler, for every route whose table entry
 //! asks for one), `session` logs annotators in (and gates the admin pages), `annotate` is
 //! their side of human annotation and `admin`, `admin_tokens` and `admin_audit` the admins';
-//! `error_analysis` serves the error taxonomy as JSON and pages. Each page module exposes one
-//! `router()`; they are merged once in [`router`], the admin pages behind one gate
-//! ([`admin_pages`]). The JSON routes are one table instead ([`api_routes`]): the `/api/v1`
+//! `error_analysis` serves the error taxonomy as JSON and pages; `episodes` the curators' pages
+//! for real-world episodes (key frames, the scene-graph editor, comparison and resolution).
+//! Each page module exposes one `router()`; they are merged once in [`router`], the admin
+//! pages behind one gate ([`admin_pages`]). The JSON routes are one table instead ([`api_routes`]): the `/api/v1`
 //! router, its authorization and the OpenAPI document (`openapi`) are all built from it.
 //! `extract` holds the extractors whose rejections are the JSON error body; `i18n` the pages'
 //! languages (message catalogues, the request's locale), `locale_switch` the switch.
@@ -22,6 +23,7 @@ mod archive;
 mod assets;
 mod auth;
 mod cookies;
+mod episodes;
 pub mod error;
 mod error_analysis;
 mod extract;
@@ -234,6 +236,7 @@ fn admin_pages(state: &AppState) -> Router<AppState> {
         .merge(rescore::router())
         .merge(quality::router())
         .merge(run_pages::admin_router())
+        .merge(episodes::admin_router())
         .route_layer(axum::middleware::from_fn_with_state(
             state.clone(),
             session::admin_only,
@@ -272,6 +275,7 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(error_analysis::page_router())
         .merge(session::router())
         .merge(annotate::router())
+        .merge(episodes::router())
         .merge(admin_pages(&state))
         .merge(studies::page_router())
         .merge(run_pages::page_router())

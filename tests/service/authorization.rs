@@ -471,6 +471,19 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("GET", "/runs/{run}", Page::Public),
     ("GET", "/runs/{run}/responses.jsonl", Page::Public),
     ("GET", "/static/run_progress.js", Page::Public),
+    ("GET", "/static/episode.js", Page::Public),
+    ("GET", "/static/episode.css", Page::Public),
+    ("GET", "/episodes", Page::Session),
+    ("GET", "/episodes/{name}", Page::Session),
+    ("POST", "/episodes/{name}/describe", Page::Session),
+    ("POST", "/episodes/{name}/draft", Page::Session),
+    ("POST", "/episodes/{name}/graphs", Page::Session),
+    ("GET", "/admin/episodes/new", Page::Admin),
+    ("POST", "/admin/episodes", Page::Admin),
+    ("POST", "/admin/episodes/folder", Page::Admin),
+    ("GET", "/admin/episodes/{name}/compare", Page::Admin),
+    ("POST", "/admin/episodes/{name}/resolve", Page::Admin),
+    ("GET", "/admin/episodes/{name}/export", Page::Admin),
 ];
 
 /// The literal paths of every `.route(` in the web adapter's source.

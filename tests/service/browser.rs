@@ -11,14 +11,14 @@ use serde_json::{Value, json};
 use crate::annotate::assign;
 use crate::helpers::*;
 
-const CHROMIUM: &str = "/usr/bin/chromium";
+pub(crate) const CHROMIUM: &str = "/usr/bin/chromium";
 
 fn browser_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/browser")
 }
 
 /// Whether Chromium and playwright-core are here (they must be in CI; elsewhere the test skips).
-fn browser_available() -> bool {
+pub(crate) fn browser_available() -> bool {
     let in_ci = std::env::var("CI").is_ok_and(|v| v == "true");
     if !Path::new(CHROMIUM).exists() {
         assert!(
@@ -36,7 +36,7 @@ fn browser_available() -> bool {
 }
 
 /// Runs `script` in tests/browser with `params`; its last line of output as JSON.
-async fn run_node(script: &'static str, params: Value) -> Value {
+pub(crate) async fn run_node(script: &'static str, params: Value) -> Value {
     let output = tokio::task::spawn_blocking(move || {
         std::process::Command::new("node")
             .arg(browser_dir().join(script))

@@ -16,6 +16,8 @@ mod cli;
 mod client;
 mod constraints;
 mod demo_link;
+mod episode_browser;
+mod episode_pages;
 mod episodes;
 mod errors;
 mod escaping;
