@@ -20,6 +20,8 @@
 //! - [`studies`]: ablation studies (a baseline and variant datasets) and their reports.
 //! - [`rescore`]: stored results (submissions' scores, human verdicts) computed again under
 //!   the current metric version, in the foreground or as a job.
+//! - [`heavy`]: the one bounded pool, at a lower priority, where CPU-heavy work runs (scoring,
+//!   analyses, reports, imports' validation), so that interactive requests keep a core.
 //! - [`audit`]: the audit log every audited use case writes in its own transaction.
 //! - [`demo`]: the built-in demo dataset, its chance baseline and its login link.
 //! - [`backup`]: online snapshots of the database, and restoring one.
@@ -43,6 +45,7 @@ mod error;
 pub mod error_analysis;
 pub mod frames;
 pub mod gold;
+pub mod heavy;
 pub mod import;
 pub mod items;
 pub mod jobs;
@@ -138,6 +141,7 @@ pub struct Hub {
     /// The environment variables a server-side model run may take its API key from.
     endpoint_keys: runs::EndpointKeys,
     metrics: Arc<metrics::Metrics>,
+    heavy: heavy::HeavyPool,
 }
 
 impl From<SqlitePool> for Hub {
@@ -155,6 +159,8 @@ impl From<Pool> for Hub {
 impl Hub {
     pub fn new(pool: Pool, quotas: Quotas) -> Hub {
         let caches = watch::Caches::new(&cache::CacheLimits::default());
+        let metrics = Arc::new(metrics::Metrics::default());
+        let heavy = heavy::HeavyPool::new(heavy::HeavyLimits::default(), metrics.heavy());
         Hub {
             pool,
             items: caches.items,
@@ -167,7 +173,8 @@ impl Hub {
             changes: tokio::sync::broadcast::channel(1024).0,
             quotas,
             endpoint_keys: runs::EndpointKeys::default(),
-            metrics: Arc::default(),
+            metrics,
+            heavy,
         }
     }
 
@@ -254,6 +261,17 @@ impl Hub {
     /// How long a presigned frame URL is valid, when frame requests are redirected.
     pub fn frame_redirect(&self) -> Option<std::time::Duration> {
         self.frame_redirect
+    }
+
+    /// The hub whose heavy work runs on a pool bounded by `limits` (call before serving).
+    pub fn with_heavy_limits(mut self, limits: heavy::HeavyLimits) -> Hub {
+        self.heavy = heavy::HeavyPool::new(limits, self.metrics.heavy());
+        self
+    }
+
+    /// Where CPU-heavy work runs.
+    pub fn heavy(&self) -> &heavy::HeavyPool {
+        &self.heavy
     }
 
     pub fn with_quotas(mut self, quotas: Quotas) -> Hub {

@@ -21,6 +21,7 @@ mod escaping;
 #[path = "../support/fixtures.rs"]
 mod fixtures;
 mod frames;
+mod heavy;
 mod helpers;
 mod hostile;
 mod i18n;
