@@ -171,26 +171,30 @@ impl Default for Metrics {
             cache_misses.clone(),
         );
         let heavy = HeavyMetrics::default();
-        registry.register(
-            "heavy_queued",
-            "Heavy work (scoring, analyses, reports, imports' validation) waiting for a pool thread",
-            heavy.queued.clone(),
-        );
-        registry.register(
-            "heavy_running",
-            "Heavy work running on the pool's threads",
-            heavy.running.clone(),
-        );
-        registry.register(
-            "heavy_refused",
-            "Heavy work refused with 503 because every place in the pool was taken",
-            heavy.refused.clone(),
-        );
-        registry.register(
-            "heavy_done",
-            "Heavy work the pool finished",
-            heavy.done.clone(),
-        );
+        for (name, help, gauge) in [
+            (
+                "heavy_queued",
+                "Heavy work (scoring, analyses, reports, imports' validation) waiting for a pool thread",
+                &heavy.queued,
+            ),
+            (
+                "heavy_running",
+                "Heavy work running on the pool's threads",
+                &heavy.running,
+            ),
+        ] {
+            registry.register(name, help, gauge.clone());
+        }
+        for (name, help, counter) in [
+            (
+                "heavy_refused",
+                "Heavy work refused with 503 because every place in the pool was taken",
+                &heavy.refused,
+            ),
+            ("heavy_done", "Heavy work the pool finished", &heavy.done),
+        ] {
+            registry.register(name, help, counter.clone());
+        }
         Metrics {
             registry,
             requests,
