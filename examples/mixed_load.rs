@@ -10,7 +10,9 @@
 //! - readers: the leaderboard page and JSON, item lists, item JSON and frames.
 //!
 //! It prints requests, throughput and p50/p99/max latency per route, and fails when any reply
-//! is a 5xx or mentions `database is locked`.
+//! is a 5xx or mentions `database is locked`. With `--window FILE` (two lines: the Unix time in
+//! milliseconds something began, then when it ended, e.g. an import the script runs midway) it
+//! prints the same table again for the requests sent in that window.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -29,10 +31,19 @@ use serde_json::{Value, json};
 
 const PASSWORD: &str = "mixed load password";
 
-/// Latencies (µs) and statuses per route, shared by every simulated client.
+/// One request: when it was sent (Unix milliseconds), how long it took (µs) and its status
+/// (0: no reply).
+#[derive(Clone, Copy)]
+struct Timed {
+    sent_ms: u64,
+    micros: u64,
+    status: u16,
+}
+
+/// Latencies and statuses per route, shared by every simulated client.
 #[derive(Default)]
 struct Stats {
-    routes: BTreeMap<&'static str, Vec<u64>>,
+    routes: BTreeMap<&'static str, Vec<Timed>>,
     statuses: BTreeMap<(&'static str, u16), u64>,
     locked: u64,
     failures: Vec<String>,
@@ -62,6 +73,7 @@ impl Load {
     /// Sends `request`, times it until the whole body is read, and records it under `route`.
     async fn send(&self, route: &'static str, request: reqwest::RequestBuilder) -> Option<Reply> {
         let started = Instant::now();
+        let sent_ms = unix_ms();
         let result = request.send().await;
         let reply = match result {
             Ok(r) => {
@@ -98,7 +110,11 @@ impl Load {
         };
         let micros = started.elapsed().as_micros() as u64;
         let mut stats = self.stats.lock().unwrap();
-        stats.routes.entry(route).or_default().push(micros);
+        stats.routes.entry(route).or_default().push(Timed {
+            sent_ms,
+            micros,
+            status: reply.as_ref().map_or(0, |r| r.status),
+        });
         if let Some(r) = &reply {
             *stats.statuses.entry((route, r.status)).or_default() += 1;
             if r.text.contains("database is locked") {
@@ -322,12 +338,78 @@ async fn reader(load: Load, index: usize, ids: Arc<Vec<String>>, frames: Arc<Vec
     }
 }
 
+fn unix_ms() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_millis() as u64)
+}
+
+/// The routes whose latencies count as an annotator's writes.
+const ANNOTATOR_WRITES: [&str; 3] = [
+    "POST /annotate/{dataset}/{item}/draft",
+    "POST /annotate/{dataset}/{item}/submit",
+    "POST /annotate/{dataset}/{item}/skip",
+];
+
+/// The per-route table of the requests sent in `window` (Unix ms, inclusive), over `seconds`,
+/// and a line for the annotators' writes together.
+fn print_table(stats: &Stats, window: (u64, u64), seconds: f64) -> usize {
+    println!(
+        "| route | requests | req/s | p50 ms | p99 ms | max ms | statuses |\n|---|---|---|---|---|---|---|"
+    );
+    let in_window = |t: &&Timed| (window.0..=window.1).contains(&t.sent_ms);
+    let mut total = 0;
+    let mut writes = Vec::new();
+    for (route, times) in &stats.routes {
+        let sent: Vec<&Timed> = times.iter().filter(in_window).collect();
+        if sent.is_empty() {
+            continue;
+        }
+        let mut sorted: Vec<u64> = sent.iter().map(|t| t.micros).collect();
+        sorted.sort_unstable();
+        total += sorted.len();
+        if ANNOTATOR_WRITES.contains(route) {
+            writes.extend_from_slice(&sorted);
+        }
+        let mut by_status = BTreeMap::<u16, u64>::new();
+        for t in &sent {
+            *by_status.entry(t.status).or_default() += 1;
+        }
+        let statuses: Vec<String> = by_status.iter().map(|(s, n)| format!("{s}: {n}")).collect();
+        println!(
+            "| {route} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {} |",
+            sorted.len(),
+            sorted.len() as f64 / seconds,
+            percentile(&sorted, 0.5),
+            percentile(&sorted, 0.99),
+            percentile(&sorted, 1.0),
+            statuses.join(", ")
+        );
+    }
+    if !writes.is_empty() {
+        writes.sort_unstable();
+        println!(
+            "\nannotator writes (drafts, answers, flags): {} requests, p50 {:.1} ms, p99 {:.1} ms, max {:.1} ms",
+            writes.len(),
+            percentile(&writes, 0.5),
+            percentile(&writes, 0.99),
+            percentile(&writes, 1.0)
+        );
+    }
+    total
+}
+
 fn percentile(sorted: &[u64], p: f64) -> f64 {
     let rank = ((p * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
     sorted[rank - 1] as f64 / 1000.0
 }
 
-async fn run(base: String, accounts: PathBuf, seconds: u64) -> anyhow::Result<bool> {
+async fn run(
+    base: String,
+    accounts: PathBuf,
+    seconds: u64,
+    window: Option<PathBuf>,
+) -> anyhow::Result<bool> {
     let accounts: Value = serde_json::from_slice(&std::fs::read(&accounts)?)?;
     let client = reqwest::Client::builder()
         .redirect(reqwest::redirect::Policy::none())
@@ -417,31 +499,18 @@ async fn run(base: String, accounts: PathBuf, seconds: u64) -> anyhow::Result<bo
         task.await?;
     }
     let elapsed = started.elapsed().as_secs_f64();
+    let ended_ms = unix_ms();
     let stats = load.stats.lock().unwrap();
+    let total = print_table(&stats, (0, u64::MAX), elapsed);
+    let scored = stats
+        .statuses
+        .get(&("POST /api/v1/datasets/{dataset}/submissions", 201))
+        .copied()
+        .unwrap_or(0);
     println!(
-        "| route | requests | req/s | p50 ms | p99 ms | max ms | statuses |\n|---|---|---|---|---|---|---|"
+        "submissions scored and stored: {scored} ({:.2}/s)",
+        scored as f64 / elapsed
     );
-    let mut total = 0;
-    for (route, times) in &stats.routes {
-        let mut sorted = times.clone();
-        sorted.sort_unstable();
-        total += sorted.len();
-        let statuses: Vec<String> = stats
-            .statuses
-            .iter()
-            .filter(|((r, _), _)| r == route)
-            .map(|((_, s), n)| format!("{s}: {n}"))
-            .collect();
-        println!(
-            "| {route} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {} |",
-            sorted.len(),
-            sorted.len() as f64 / elapsed,
-            percentile(&sorted, 0.5),
-            percentile(&sorted, 0.99),
-            percentile(&sorted, 1.0),
-            statuses.join(", ")
-        );
-    }
     let server_errors: u64 = stats
         .statuses
         .iter()
@@ -457,6 +526,23 @@ async fn run(base: String, accounts: PathBuf, seconds: u64) -> anyhow::Result<bo
     );
     for failure in stats.failures.iter().take(10) {
         eprintln!("failure: {failure}");
+    }
+    if let Some(window) = window {
+        let text = std::fs::read_to_string(&window)?;
+        let mut times = text.lines().filter_map(|l| l.trim().parse::<u64>().ok());
+        let from = times
+            .next()
+            .ok_or_else(|| anyhow::anyhow!("{}: no start time", window.display()))?;
+        let (to, note) = match times.next() {
+            Some(to) => (to, ""),
+            None => (ended_ms, " (it had not ended when the load did)"),
+        };
+        let seconds = to.saturating_sub(from) as f64 / 1000.0;
+        println!(
+            "\nrequests sent during the window of {}: {seconds:.1} s{note}",
+            window.display()
+        );
+        print_table(&stats, (from, to), seconds.max(0.001));
     }
     Ok(stats.failures.is_empty() && stats.locked == 0)
 }
@@ -513,7 +599,7 @@ fn flag(args: &[String], name: &str) -> Option<String> {
 async fn main() -> anyhow::Result<std::process::ExitCode> {
     let args: Vec<String> = std::env::args().collect();
     let usage = "usage: mixed_load setup --db DB --dataset NAME --out FILE | \
-                 run --base URL --accounts FILE [--seconds 60]";
+                 run --base URL --accounts FILE [--seconds 60] [--window FILE]";
     match args.get(1).map(String::as_str) {
         Some("setup") => {
             let (Some(db), Some(dataset), Some(out)) = (
@@ -532,7 +618,8 @@ async fn main() -> anyhow::Result<std::process::ExitCode> {
                 anyhow::bail!("{usage}");
             };
             let seconds = flag(&args, "--seconds").map_or(Ok(60), |s| s.parse())?;
-            let clean = run(base, accounts.into(), seconds).await?;
+            let window = flag(&args, "--window").map(PathBuf::from);
+            let clean = run(base, accounts.into(), seconds, window).await?;
             Ok(if clean {
                 std::process::ExitCode::SUCCESS
             } else {

@@ -140,16 +140,18 @@ pub async fn agreement(
     let unavailable =
         |e: &dyn std::fmt::Display| AppError::Invalid(format!("dataset '{}': {e}", dataset.name));
     let overlap = overlapping_answers(&answers).map_err(|e| unavailable(&e))?;
-    let section = tokio::task::spawn_blocking(move || {
-        agreement_section(
-            &overlap,
-            options.encoding,
-            options.level,
-            &options.bootstrap,
-        )
-    })
-    .await?
-    .map_err(|e| unavailable(&e))?;
+    let section = hub
+        .heavy()
+        .run(move || {
+            agreement_section(
+                &overlap,
+                options.encoding,
+                options.level,
+                &options.bootstrap,
+            )
+        })
+        .await?
+        .map_err(|e| unavailable(&e))?;
     Ok((hash, section))
 }
 
@@ -217,7 +219,8 @@ pub async fn report(
 ) -> Result<AgreementReport, AppError> {
     let dataset = datasets::by_name(hub, dataset).await?;
     let inputs = report_inputs(hub, &dataset, settings).await?;
-    tokio::task::spawn_blocking(move || build_report(&inputs))
+    hub.heavy()
+        .run(move || build_report(&inputs))
         .await?
         .map_err(|e| match e {
             // The reader's choices: a submission id or a level that does not apply.

@@ -29,11 +29,11 @@ pub const DEMO_ACCOUNT: &str = "enact-hub demo";
 pub async fn load(hub: &Hub) -> anyhow::Result<ImportReport> {
     let dir = tempfile::tempdir().context("cannot create a temporary directory")?;
     let out = dir.path().to_path_buf();
-    let written =
-        tokio::task::spawn_blocking(move || demo::write_demo_release(&out, demo::DEFAULT_SEED))
-            .await
-            .context("demo generation task failed")?
-            .context("cannot generate the demo dataset")?;
+    let written = hub
+        .heavy()
+        .run_waiting(move || demo::write_demo_release(&out, demo::DEFAULT_SEED))
+        .await
+        .context("cannot generate the demo dataset")?;
     let options = ImportOptions {
         dataset: DEMO_DATASET.to_owned(),
         skip_invalid: false,

@@ -199,25 +199,25 @@ pub async fn import(
     check_name(name)?;
     let files = {
         let dir = dir.to_path_buf();
-        tokio::task::spawn_blocking(move || {
-            let files = frame_files(&dir)?;
-            // Decode every frame once before storing any, so a bad one refuses the import.
-            for (_, path) in &files {
-                image::ImageReader::open(path)
-                    .and_then(|r| r.with_guessed_format())
-                    .map_err(|e| AppError::Invalid(format!("{}: {e}", path.display())))?
-                    .decode()
-                    .map_err(|e| {
-                        AppError::Invalid(format!(
-                            "{}: cannot decode the image: {e}",
-                            path.display()
-                        ))
-                    })?;
-            }
-            Ok::<_, AppError>(files)
-        })
-        .await
-        .map_err(AppError::internal)??
+        hub.heavy()
+            .run_waiting(move || {
+                let files = frame_files(&dir)?;
+                // Decode every frame once before storing any, so a bad one refuses the import.
+                for (_, path) in &files {
+                    image::ImageReader::open(path)
+                        .and_then(|r| r.with_guessed_format())
+                        .map_err(|e| AppError::Invalid(format!("{}: {e}", path.display())))?
+                        .decode()
+                        .map_err(|e| {
+                            AppError::Invalid(format!(
+                                "{}: cannot decode the image: {e}",
+                                path.display()
+                            ))
+                        })?;
+                }
+                Ok::<_, AppError>(files)
+            })
+            .await?
     };
     let mut tx = hub.begin().await?;
     let episode = match store::episodes::insert(&mut tx, name, scene, &actor.to_string()).await {
@@ -231,9 +231,10 @@ pub async fn import(
     };
     for (position, (file_name, path)) in files.iter().enumerate() {
         let path = path.clone();
-        let prepared = tokio::task::spawn_blocking(move || prepare_frame(&path))
+        let prepared = hub
+            .heavy()
+            .run_waiting(move || prepare_frame(&path))
             .await
-            .map_err(AppError::internal)?
             .map_err(AppError::Invalid)?;
         let size = (prepared.width, prepared.height);
         let frame = store_frame(hub, &mut tx, prepared.png, size).await?;

@@ -81,6 +81,12 @@ impl From<sqlx::Error> for AppError {
 /// `Retry-After` on the web).
 pub const DATABASE_BUSY: &str = "the database is busy (another write held its lock too long); nothing was changed, retry in a moment";
 
+impl From<super::heavy::HeavyBusy> for AppError {
+    fn from(e: super::heavy::HeavyBusy) -> Self {
+        AppError::Unavailable(e.to_string())
+    }
+}
+
 impl From<tokio::task::JoinError> for AppError {
     fn from(e: tokio::task::JoinError) -> Self {
         AppError::Internal(e.into())

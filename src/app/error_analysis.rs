@@ -129,7 +129,9 @@ pub(crate) async fn submission_analysis(
     let verdicts = store::submissions::verdicts(&mut conn, row.id).await?;
     drop(conn);
     let targets = submissions::dataset_targets(hub, row.dataset_id).await?;
-    let analysis = tokio::task::spawn_blocking(move || analyse_verdicts(&targets, &verdicts))
+    let analysis = hub
+        .heavy()
+        .run(move || analyse_verdicts(&targets, &verdicts))
         .await?
         .map_err(|e| AppError::internal(format!("submission {}: {e}", row.id)))?;
     let json = serde_json::to_string(&analysis).map_err(AppError::internal)?;
@@ -193,7 +195,8 @@ async fn humans(
         return Ok(None);
     }
     let name = dataset.name.clone();
-    tokio::task::spawn_blocking(move || human_error_analysis(&answers))
+    hub.heavy()
+        .run(move || human_error_analysis(&answers))
         .await?
         .map(Some)
         .map_err(|e| AppError::internal(format!("dataset '{name}': stored annotations: {e}")))

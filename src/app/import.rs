@@ -28,6 +28,7 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use super::frames::{self, FrameStore};
+use super::heavy::HeavyPool;
 use crate::core::audit::{Actor, AuditAction, AuditRecord};
 use crate::core::credentials::random_token;
 use crate::core::dataset::{FieldProblem, QaItem, parse_release_line};
@@ -661,7 +662,7 @@ pub async fn import_release(
     let qa_bytes = std::fs::metadata(&location.qa_file)
         .map(|m| m.len())
         .unwrap_or(0);
-    let file_sha256 = file_sha256(&location.qa_file).await?;
+    let file_sha256 = file_sha256(hub.heavy(), &location.qa_file).await?;
     let run_token = random_token();
     let batch_lines = options.batch_lines.max(1);
     let (staged, discarded) =
@@ -693,7 +694,7 @@ pub async fn import_release(
     if staged.lines_done > 0 {
         let lines = usize::try_from(staged.lines_done).unwrap_or(0);
         let skipped: HashSet<usize> = report.skipped.iter().map(|s| s.line).collect();
-        (validator, distinct_frames) = skim(validator, lines, skipped).await?;
+        (validator, distinct_frames) = skim(hub.heavy(), validator, lines, skipped).await?;
     }
     let observer = options.progress.as_ref();
     let told = |validator: &Validator, finished: bool| ImportProgress {
@@ -716,7 +717,7 @@ pub async fn import_release(
     let mut lines_done = staged.lines_done;
     let frame_store = hub.frame_store();
 
-    let (mut validator_slot, mut next) = next_batch(validator).await?;
+    let (mut validator_slot, mut next) = next_batch(hub.heavy(), validator).await?;
     while let Some(batch) = next {
         invalid.extend(batch.invalid);
         let refused = !options.skip_invalid && !invalid.is_empty();
@@ -809,7 +810,7 @@ pub async fn import_release(
                 lines: lines_done,
             });
         }
-        (validator_slot, next) = next_batch(validator_slot).await?;
+        (validator_slot, next) = next_batch(hub.heavy(), validator_slot).await?;
     }
     let validator = validator_slot;
     ImportObserver::tell(observer, told(&validator, true));
@@ -940,23 +941,23 @@ fn options_fingerprint(options: &ImportOptions) -> String {
     .to_string()
 }
 
-/// sha256 of a file, read on a blocking thread.
-async fn file_sha256(path: &Path) -> Result<String, ImportError> {
+/// sha256 of a file, read on the heavy-work pool.
+async fn file_sha256(heavy: &HeavyPool, path: &Path) -> Result<String, ImportError> {
     let path = path.to_path_buf();
-    tokio::task::spawn_blocking(move || {
-        let mut file = std::fs::File::open(&path).map_err(|source| ImportError::Io {
-            path: path.display().to_string(),
-            source,
-        })?;
-        let mut hasher = Sha256::new();
-        std::io::copy(&mut file, &mut hasher).map_err(|source| ImportError::Io {
-            path: path.display().to_string(),
-            source,
-        })?;
-        Ok(hex::encode(hasher.finalize()))
-    })
-    .await
-    .map_err(|e| ImportError::Location(format!("hashing task failed: {e}")))?
+    heavy
+        .run_waiting(move || {
+            let mut file = std::fs::File::open(&path).map_err(|source| ImportError::Io {
+                path: path.display().to_string(),
+                source,
+            })?;
+            let mut hasher = Sha256::new();
+            std::io::copy(&mut file, &mut hasher).map_err(|source| ImportError::Io {
+                path: path.display().to_string(),
+                source,
+            })?;
+            Ok(hex::encode(hasher.finalize()))
+        })
+        .await
 }
 
 /// The scene(s) of a release made from exported real-world episodes: `Some` when every task
@@ -1161,38 +1162,41 @@ pub async fn stale(hub: &super::Hub, hours: u32) -> Result<Vec<StagedSummary>, I
 /// valid items hashed (for the report's count of distinct frames), but nothing is decoded
 /// or written.
 async fn skim(
+    heavy: &HeavyPool,
     mut validator: Validator,
     lines: usize,
     skipped: HashSet<usize>,
 ) -> Result<(Validator, HashSet<String>), ImportError> {
-    tokio::task::spawn_blocking(move || {
-        let paths = validator.skip_lines(lines, &skipped)?;
-        let root = validator.location.root.clone();
-        let hashed: Vec<(String, u64)> = paths
-            .into_par_iter()
-            .filter_map(|p| {
-                let bytes = std::fs::read(image_path(&root, &p).ok()?).ok()?;
-                Some((hex::encode(Sha256::digest(&bytes)), bytes.len() as u64))
-            })
-            .collect();
-        validator.image_bytes += hashed.iter().map(|(_, n)| n).sum::<u64>();
-        let frames = hashed.into_iter().map(|(h, _)| h).collect();
-        Ok((validator, frames))
-    })
-    .await
-    .map_err(|e| ImportError::Location(format!("validation task failed: {e}")))?
+    heavy
+        .run_waiting(move || {
+            let paths = validator.skip_lines(lines, &skipped)?;
+            let root = validator.location.root.clone();
+            let hashed: Vec<(String, u64)> = paths
+                .into_par_iter()
+                .filter_map(|p| {
+                    let bytes = std::fs::read(image_path(&root, &p).ok()?).ok()?;
+                    Some((hex::encode(Sha256::digest(&bytes)), bytes.len() as u64))
+                })
+                .collect();
+            validator.image_bytes += hashed.iter().map(|(_, n)| n).sum::<u64>();
+            let frames = hashed.into_iter().map(|(h, _)| h).collect();
+            Ok((validator, frames))
+        })
+        .await
 }
 
-/// The validator's next batch, validated on a blocking thread.
+/// The validator's next batch, validated on the heavy-work pool (an import under way waits for
+/// a place there rather than failing halfway).
 async fn next_batch(
+    heavy: &HeavyPool,
     mut validator: Validator,
 ) -> Result<(Validator, Option<Validated>), ImportError> {
-    let (validator, batch) = tokio::task::spawn_blocking(move || {
-        let batch = validator.next_batch();
-        (validator, batch)
-    })
-    .await
-    .map_err(|e| ImportError::Location(format!("validation task failed: {e}")))?;
+    let (validator, batch) = heavy
+        .run_waiting(move || {
+            let batch = validator.next_batch();
+            (validator, batch)
+        })
+        .await;
     Ok((validator, batch?))
 }
 

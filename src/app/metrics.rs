@@ -61,6 +61,15 @@ pub enum LoginFailure {
     Token,
 }
 
+/// The heavy-work pool's gauges and counters, shared with the pool ([`super::heavy`]).
+#[derive(Clone, Default)]
+pub struct HeavyMetrics {
+    pub(super) queued: Gauge,
+    pub(super) running: Gauge,
+    pub(super) refused: Counter,
+    pub(super) done: Counter,
+}
+
 /// One instance's metrics.
 pub struct Metrics {
     registry: Registry,
@@ -76,6 +85,7 @@ pub struct Metrics {
     cache_entries: Family<CacheLabels, Gauge>,
     cache_hits: Family<CacheLabels, Gauge>,
     cache_misses: Family<CacheLabels, Gauge>,
+    heavy: HeavyMetrics,
 }
 
 /// Seconds from 0.5 ms to about 16 s, doubling.
@@ -160,6 +170,31 @@ impl Default for Metrics {
             "Lookups each cache could not answer since the start",
             cache_misses.clone(),
         );
+        let heavy = HeavyMetrics::default();
+        for (name, help, gauge) in [
+            (
+                "heavy_queued",
+                "Heavy work (scoring, analyses, reports, imports' validation) waiting for a pool thread",
+                &heavy.queued,
+            ),
+            (
+                "heavy_running",
+                "Heavy work running on the pool's threads",
+                &heavy.running,
+            ),
+        ] {
+            registry.register(name, help, gauge.clone());
+        }
+        for (name, help, counter) in [
+            (
+                "heavy_refused",
+                "Heavy work refused with 503 because every place in the pool was taken",
+                &heavy.refused,
+            ),
+            ("heavy_done", "Heavy work the pool finished", &heavy.done),
+        ] {
+            registry.register(name, help, counter.clone());
+        }
         Metrics {
             registry,
             requests,
@@ -174,6 +209,7 @@ impl Default for Metrics {
             cache_entries,
             cache_hits,
             cache_misses,
+            heavy,
         }
     }
 }
@@ -195,6 +231,11 @@ impl Metrics {
                 route: route.to_owned(),
             })
             .observe(took.as_secs_f64());
+    }
+
+    /// The heavy-work pool's gauges and counters, for the pool to move.
+    pub(super) fn heavy(&self) -> HeavyMetrics {
+        self.heavy.clone()
     }
 
     pub(super) fn connection_waited(&self, took: Duration) {

@@ -20,6 +20,8 @@
 //! - [`studies`]: ablation studies (a baseline and variant datasets) and their reports.
 //! - [`rescore`]: stored results (submissions' scores, human verdicts) computed again under
 //!   the current metric version, in the foreground or as a job.
+//! - [`heavy`]: the one bounded pool, at a lower priority, where CPU-heavy work runs (scoring,
+//!   analyses, reports, imports' validation), so that interactive requests keep a core.
 //! - [`audit`]: the audit log every audited use case writes in its own transaction.
 //! - [`demo`]: the built-in demo dataset, its chance baseline and its login link.
 //! - [`backup`]: online snapshots of the database, and restoring one.
@@ -46,6 +48,7 @@ mod error;
 pub mod error_analysis;
 pub mod frames;
 pub mod gold;
+pub mod heavy;
 pub mod import;
 pub mod import_jobs;
 pub mod items;
@@ -147,6 +150,7 @@ pub struct Hub {
     /// The folder import jobs read releases from (`serve --import-dir`); none: refused.
     import_dir: Option<Arc<std::path::PathBuf>>,
     metrics: Arc<metrics::Metrics>,
+    heavy: heavy::HeavyPool,
 }
 
 impl From<SqlitePool> for Hub {
@@ -164,6 +168,8 @@ impl From<Pool> for Hub {
 impl Hub {
     pub fn new(pool: Pool, quotas: Quotas) -> Hub {
         let caches = watch::Caches::new(&cache::CacheLimits::default());
+        let metrics = Arc::new(metrics::Metrics::default());
+        let heavy = heavy::HeavyPool::new(heavy::HeavyLimits::default(), metrics.heavy());
         Hub {
             pool,
             items: caches.items,
@@ -177,7 +183,8 @@ impl Hub {
             quotas,
             endpoint_keys: runs::EndpointKeys::default(),
             import_dir: None,
-            metrics: Arc::default(),
+            metrics,
+            heavy,
         }
     }
 
@@ -264,6 +271,17 @@ impl Hub {
     /// How long a presigned frame URL is valid, when frame requests are redirected.
     pub fn frame_redirect(&self) -> Option<std::time::Duration> {
         self.frame_redirect
+    }
+
+    /// The hub whose heavy work runs on a pool bounded by `limits` (call before serving).
+    pub fn with_heavy_limits(mut self, limits: heavy::HeavyLimits) -> Hub {
+        self.heavy = heavy::HeavyPool::new(limits, self.metrics.heavy());
+        self
+    }
+
+    /// Where CPU-heavy work runs.
+    pub fn heavy(&self) -> &heavy::HeavyPool {
+        &self.heavy
     }
 
     pub fn with_quotas(mut self, quotas: Quotas) -> Hub {

@@ -90,16 +90,16 @@ pub async fn report(
     }
     work.sort_by(|a, b| a.name.cmp(&b.name));
     // Judging answers without a stored verdict and the pairwise alphas are CPU work.
-    let annotators =
-        tokio::task::spawn_blocking(move || quality::annotator_quality(&work, fast_seconds))
-            .await
-            .map_err(AppError::internal)?
-            .map_err(|e| {
-                AppError::internal(format!(
-                    "dataset '{}': stored annotations: {e}",
-                    dataset.name
-                ))
-            })?;
+    let annotators = hub
+        .heavy()
+        .run(move || quality::annotator_quality(&work, fast_seconds))
+        .await?
+        .map_err(|e| {
+            AppError::internal(format!(
+                "dataset '{}': stored annotations: {e}",
+                dataset.name
+            ))
+        })?;
     Ok(QualityReport {
         dataset: dataset.name,
         fast_seconds,

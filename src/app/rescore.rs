@@ -364,9 +364,11 @@ async fn rescore_one_submission(hub: &Hub, id: i64) -> Result<Unit, AppError> {
         }
         let targets = submissions::dataset_targets(hub, row.dataset_id).await?;
         let scoring = targets.clone();
-        let scored =
-            tokio::task::spawn_blocking(move || rescore_submission(&scoring.targets, &answers))
-                .await?;
+        // Rescoring is long work already under way: it waits for a place on the pool.
+        let scored = hub
+            .heavy()
+            .run_waiting(move || rescore_submission(&scoring.targets, &answers))
+            .await;
         let scored = match scored {
             Ok(scored) => scored,
             Err(SubmissionError::Rejected(problems)) => {

@@ -434,7 +434,8 @@ pub async fn report(
         variants,
         by_step_length,
     };
-    tokio::task::spawn_blocking(move || build_study_report(&inputs))
+    hub.heavy()
+        .run(move || build_study_report(&inputs))
         .await?
         .map_err(|e| AppError::internal(format!("study '{}': {e}", row.name)))
 }

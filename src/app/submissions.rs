@@ -75,12 +75,14 @@ pub async fn dataset_targets(hub: &Hub, dataset: i64) -> Result<Arc<DatasetTarge
     }
     let rows = store::items::scoring_items(&mut conn, dataset).await?;
     drop(conn);
-    let targets = tokio::task::spawn_blocking(move || {
-        let item_rows = rows.iter().map(|r| r.row_id).collect();
-        scoring::targets_from_stored(rows).map(|targets| DatasetTargets { targets, item_rows })
-    })
-    .await?
-    .map_err(AppError::internal)?;
+    let targets = hub
+        .heavy()
+        .run(move || {
+            let item_rows = rows.iter().map(|r| r.row_id).collect();
+            scoring::targets_from_stored(rows).map(|targets| DatasetTargets { targets, item_rows })
+        })
+        .await?
+        .map_err(AppError::internal)?;
     let targets = Arc::new(targets);
     hub.targets.put(dataset, generation, targets.clone());
     Ok(targets)
@@ -177,50 +179,52 @@ fn body_sha256(body: &[u8]) -> String {
     hex::encode(Sha256::digest(body))
 }
 
-/// Scores `body` against every item of the dataset (off the async workers): 422 with every
-/// problem when the body is refused.
+/// Scores `body` against every item of the dataset (on the heavy-work pool): 422 with every
+/// problem when the body is refused, 503 when the pool is full.
 async fn score_body(
+    hub: &Hub,
     targets: Arc<DatasetTargets>,
     dataset_name: &str,
     body: Vec<u8>,
 ) -> Result<ScoredSubmission, AppError> {
     let dataset_name = dataset_name.to_owned();
-    tokio::task::spawn_blocking(move || {
-        let text = std::str::from_utf8(&body).map_err(|e| {
-            let line = body[..e.valid_up_to()]
-                .iter()
-                .filter(|b| **b == b'\n')
-                .count()
-                + 1;
-            AppError::Rejected {
-                message: format!(
-                    "line {line}: the body is not UTF-8 text (byte {} is invalid)",
-                    e.valid_up_to()
-                ),
-                problems: Vec::new(),
-            }
-        })?;
-        match score_submission(&targets.targets, text) {
-            Ok(scored) => Ok(scored),
-            Err(SubmissionError::Rejected(problems)) => {
-                let first: Vec<String> =
-                    problems.iter().take(5).map(|p| p.message.clone()).collect();
-                Err(AppError::Rejected {
+    hub.heavy()
+        .run(move || {
+            let text = std::str::from_utf8(&body).map_err(|e| {
+                let line = body[..e.valid_up_to()]
+                    .iter()
+                    .filter(|b| **b == b'\n')
+                    .count()
+                    + 1;
+                AppError::Rejected {
                     message: format!(
-                        "{} problems; nothing was stored: {}{}",
-                        problems.len(),
-                        first.join("; "),
-                        if problems.len() > 5 { "; …" } else { "" }
+                        "line {line}: the body is not UTF-8 text (byte {} is invalid)",
+                        e.valid_up_to()
                     ),
-                    problems,
-                })
+                    problems: Vec::new(),
+                }
+            })?;
+            match score_submission(&targets.targets, text) {
+                Ok(scored) => Ok(scored),
+                Err(SubmissionError::Rejected(problems)) => {
+                    let first: Vec<String> =
+                        problems.iter().take(5).map(|p| p.message.clone()).collect();
+                    Err(AppError::Rejected {
+                        message: format!(
+                            "{} problems; nothing was stored: {}{}",
+                            problems.len(),
+                            first.join("; "),
+                            if problems.len() > 5 { "; …" } else { "" }
+                        ),
+                        problems,
+                    })
+                }
+                Err(SubmissionError::Dataset(e)) => Err(AppError::internal(format!(
+                    "dataset {dataset_name} cannot be scored: {e}"
+                ))),
             }
-            Err(SubmissionError::Dataset(e)) => Err(AppError::internal(format!(
-                "dataset {dataset_name} cannot be scored: {e}"
-            ))),
-        }
-    })
-    .await?
+        })
+        .await?
 }
 
 async fn by_id(hub: &Hub, id: i64) -> Result<Option<SubmissionRow>, AppError> {
@@ -262,7 +266,7 @@ where
     let body = body.await?;
     let targets = dataset_targets(hub, dataset.id).await?;
     let sha256 = body_sha256(&body);
-    let scored = score_body(targets.clone(), &dataset.name, body).await?;
+    let scored = score_body(hub, targets.clone(), &dataset.name, body).await?;
 
     let mut tx = hub.begin().await?;
     let new = NewSubmission {
@@ -448,7 +452,7 @@ pub async fn file_baseline(
     let targets = dataset_targets(hub, dataset.id).await?;
     let body = answer_body(&targets);
     let sha256 = body_sha256(body.as_bytes());
-    let scored = score_body(targets.clone(), &dataset.name, body.into_bytes()).await?;
+    let scored = score_body(hub, targets.clone(), &dataset.name, body.into_bytes()).await?;
     let mut tx = hub.begin().await?;
     let account = super::tokens::ensure_account(&mut tx, account_name, Role::Submitter).await?;
     let token = NewToken::generate();

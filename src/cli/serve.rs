@@ -10,6 +10,7 @@ use clap::Args;
 
 use super::{DEFAULT_DB, MIB, describe_db, frames, resolve};
 use crate::app::cache::CacheLimits;
+use crate::app::heavy::HeavyLimits;
 use crate::app::{self, Hub, Quotas};
 use crate::web::{Server, WebConfig, shutdown_signal};
 
@@ -97,6 +98,18 @@ pub(super) struct ServeArgs {
     /// Largest submission body accepted, in bytes.
     #[arg(long, default_value_t = WebConfig::default().submission_body_limit)]
     submission_body_limit: usize,
+    /// Threads for heavy work (scoring submissions, rescoring, error analyses, reports,
+    /// imports' validation); the default is one per core.
+    #[arg(long, env = "ENACT_HUB_HEAVY_THREADS", default_value_t = HeavyLimits::default().threads, value_name = "N")]
+    heavy_threads: usize,
+    /// Heavy work waiting for a thread beyond those running; a request that would wait
+    /// beyond this is answered 503 with Retry-After.
+    #[arg(long, env = "ENACT_HUB_HEAVY_QUEUE", default_value_t = HeavyLimits::default().queue, value_name = "N")]
+    heavy_queue: usize,
+    /// The heavy-work threads' nice value on Linux, 0 to 19: the higher, the sooner they give
+    /// a core up to page loads and answers (0: the server's own priority).
+    #[arg(long, env = "ENACT_HUB_HEAVY_NICE", default_value_t = HeavyLimits::default().nice, value_name = "NICE")]
+    heavy_nice: i32,
     /// Submissions a token may make per UTC day (rejected ones count too).
     #[arg(long, default_value_t = Quotas::default().daily)]
     daily_quota: i64,
@@ -126,9 +139,17 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         frame_bytes: args.frame_cache_mib * MIB,
         db_page_cache_bytes: args.db_cache_mib * MIB,
     };
+    let heavy = HeavyLimits {
+        threads: args.heavy_threads,
+        queue: args.heavy_queue,
+        nice: args.heavy_nice,
+    }
+    .checked()
+    .map_err(anyhow::Error::msg)?;
     let frame_store = args.frames.store()?;
     let hub = Hub::open_serving(&db, &limits)
         .await?
+        .with_heavy_limits(heavy)
         .with_quotas(Quotas {
             daily: args.daily_quota,
             total: args.total_quota,

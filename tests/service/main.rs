@@ -24,6 +24,7 @@ mod escaping;
 #[path = "../support/fixtures.rs"]
 mod fixtures;
 mod frames;
+mod heavy;
 mod helpers;
 mod hostile;
 mod i18n;

@@ -13,10 +13,10 @@ use crate::helpers::*;
 const METRICS_TOKEN: &str = "scrape-4d1c9e07b2a8";
 
 /// One scrape, parsed.
-struct Scrape(prometheus_parse::Scrape);
+pub struct Scrape(prometheus_parse::Scrape);
 
 impl Scrape {
-    async fn of(server: &TestServer, token: &str) -> Scrape {
+    pub async fn of(server: &TestServer, token: &str) -> Scrape {
         let reply = server
             .client
             .get(server.url("/metrics"))
@@ -36,7 +36,7 @@ impl Scrape {
     }
 
     /// The value of the sample `name` whose labels include `labels` (0 when there is none).
-    fn value(&self, name: &str, labels: &[(&str, &str)]) -> f64 {
+    pub fn value(&self, name: &str, labels: &[(&str, &str)]) -> f64 {
         self.0
             .samples
             .iter()
