@@ -141,6 +141,19 @@ pub enum JobControl {
 }
 
 impl JobControl {
+    /// `pause`, `resume` or `cancel`, as paths and forms spell them; anything else is refused
+    /// saying what is allowed.
+    pub fn parse(text: &str) -> Result<JobControl, AppError> {
+        match text {
+            "pause" => Ok(JobControl::Pause),
+            "resume" => Ok(JobControl::Resume),
+            "cancel" => Ok(JobControl::Cancel),
+            other => Err(AppError::Invalid(format!(
+                "change: {other:?} is not pause, resume or cancel"
+            ))),
+        }
+    }
+
     /// The state a job moves to, if it may from `from`.
     fn target(self, from: JobState) -> Option<JobState> {
         match (self, from) {

@@ -108,16 +108,7 @@ async fn change_job(
     Path((job, change)): Path<(i64, String)>,
     caller: Caller,
 ) -> Result<axum::Json<JobView>, AppError> {
-    let change = match change.as_str() {
-        "pause" => JobControl::Pause,
-        "resume" => JobControl::Resume,
-        "cancel" => JobControl::Cancel,
-        other => {
-            return Err(AppError::Invalid(format!(
-                "change: {other:?} is not pause, resume or cancel"
-            )));
-        }
-    };
+    let change = JobControl::parse(&change)?;
     let changed = jobs::control(&state.hub, &caller.actor(), JobId(job), change).await?;
     Ok(axum::Json(JobView::from(changed)))
 }

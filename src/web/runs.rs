@@ -250,16 +250,7 @@ async fn change_run(
     Path((run, change)): Path<(i64, String)>,
     caller: Caller,
 ) -> Result<Json<ServerRunView>, AppError> {
-    let change = match change.as_str() {
-        "pause" => JobControl::Pause,
-        "resume" => JobControl::Resume,
-        "cancel" => JobControl::Cancel,
-        other => {
-            return Err(AppError::Invalid(format!(
-                "{other:?} is not a change of a run: pause, resume or cancel"
-            )));
-        }
-    };
+    let change = JobControl::parse(&change)?;
     Ok(Json(
         runs::control(&state.hub, &caller.actor(), run, change).await?,
     ))
