@@ -1083,6 +1083,12 @@ async fn discard(
     hub: &super::Hub,
     staged: &store::staged::StagedImport,
 ) -> Result<(), sqlx::Error> {
+    // Its rows go in many short transactions: first, in one, it stops being resumable, or a
+    // run killed half-way through the deletes would leave a staged import that a later run of
+    // the same file takes over and publishes with part of its rows gone.
+    let mut tx = hub.pool.begin().await?;
+    store::staged::forget(&mut tx, staged.id).await?;
+    tx.commit().await?;
     loop {
         let mut tx = hub.pool.begin().await?;
         let deleted = store::staged::delete_items(&mut tx, staged.staging, DELETE_BATCH).await?;

@@ -166,6 +166,23 @@ pub async fn claim(conn: &mut Conn, id: i64, run_token: &str) -> Result<bool, sq
     })
 }
 
+/// Makes the staged import impossible to resume or to write to (its file hash and run token
+/// emptied): the first step of discarding it, so that a run killed while its rows are deleted
+/// leaves nothing another run could take over and publish half of.
+pub async fn forget(conn: &mut Conn, id: i64) -> Result<(), sqlx::Error> {
+    on!(conn, |c| {
+        let now = c.utc_now();
+        sqlx::query(&format!(
+            "UPDATE staged_imports SET file_sha256 = '', run_token = '', updated_at = {now} \
+             WHERE id = $1"
+        ))
+        .bind(id)
+        .execute(&mut *c)
+        .await?;
+        Ok(())
+    })
+}
+
 /// Records a committed batch, if `run_token` still owns the staged import and it had got to
 /// `lines_before`; `false` when another run took it over or it was abandoned.
 pub async fn record_batch(

@@ -368,3 +368,38 @@ async fn doctor_lists_stale_imports_and_dead_jobs_and_removes_what_it_is_told() 
         removed.findings
     );
 }
+
+/// What a discard killed between its steps leaves (the staged import forgotten, part of its
+/// rows deleted) is never resumed: the next run of the same file discards the rest and imports
+/// from the start, so the dataset becomes the whole new version, not the rows that were left.
+#[tokio::test]
+async fn a_discard_cut_short_is_never_resumed() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let records = write_balanced_release(&root, &[3], 40);
+    let items = records.len() as i64;
+    let pool = fresh_db(&dir).await;
+    import(&pool, &root, &options("main")).await;
+    changed_version(&root, &records);
+    run_interrupted(&pool, &root, interrupted_after(batched("main", 8), 2)).await;
+
+    let mut conn = pool.acquire().await.expect("conn");
+    let staged = enact_hub::store::staged::for_dataset(&mut conn, "main")
+        .await
+        .expect("read")
+        .expect("a staged import");
+    enact_hub::store::staged::forget(&mut conn, staged.id)
+        .await
+        .expect("forget");
+    let deleted = enact_hub::store::staged::delete_items(&mut conn, staged.staging, 3)
+        .await
+        .expect("delete some");
+    assert_eq!(deleted, 3);
+    drop(conn);
+
+    let report = import(&pool, &root, &batched("main", 8)).await;
+    assert!(report.discarded_staged, "{}", report.summary_line());
+    assert_eq!(report.resumed_rows, 0);
+    assert_eq!(new_version_items(&pool, "main").await, (items, items));
+    assert_eq!(count(&pool, "SELECT count(*) FROM staged_imports").await, 0);
+}
