@@ -189,17 +189,6 @@ pub async fn content_hashes(
     })
 }
 
-pub async fn delete(conn: &mut Conn, dataset_id: i64, item_id: &str) -> Result<(), sqlx::Error> {
-    on!(conn, |c| {
-        sqlx::query("DELETE FROM items WHERE dataset_id = $1 AND item_id = $2")
-            .bind(dataset_id)
-            .bind(item_id)
-            .execute(&mut *c)
-            .await?;
-        Ok(())
-    })
-}
-
 /// Writes one item and links its images; `frame_ids[i]` is the stored frame of `item.images[i]`.
 pub async fn insert(
     conn: &mut Conn,

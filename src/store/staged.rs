@@ -312,6 +312,19 @@ pub async fn publish_into(
     source: &str,
 ) -> Result<(u64, u64), sqlx::Error> {
     on!(conn, |c| {
+        // Verdicts do not reference items (they are written by the thousand per submission,
+        // and an index by item to cascade on would cost every submission a write per item):
+        // the replaced items' verdicts go first, found by key.
+        sqlx::query(
+            "DELETE FROM submission_items WHERE submission IN \
+             (SELECT id FROM submissions WHERE dataset = $1) AND item IN \
+             (SELECT id FROM items WHERE dataset_id = $1 AND item_id IN \
+             (SELECT item_id FROM items WHERE dataset_id = $2))",
+        )
+        .bind(target)
+        .bind(staged.staging)
+        .execute(&mut *c)
+        .await?;
         let replaced = sqlx::query(
             "DELETE FROM items WHERE dataset_id = $1 AND item_id IN \
              (SELECT item_id FROM items WHERE dataset_id = $2)",

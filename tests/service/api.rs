@@ -1,5 +1,6 @@
 //! The JSON read API: datasets, item lists with filters and pages, items, frames with ETags.
 
+use enact_hub::core::credentials::Role;
 use reqwest::StatusCode;
 use reqwest::header::{CACHE_CONTROL, CONTENT_TYPE, ETAG, IF_NONE_MATCH};
 use serde_json::Value;
@@ -283,5 +284,40 @@ async fn item_json_follows_a_replacing_import_made_while_serving() {
         tokio::time::sleep(std::time::Duration::from_millis(100)).await;
     }
     assert!(updated, "item JSON still stale after 4 s");
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn a_replacing_import_removes_the_replaced_items_verdicts_and_keeps_the_others() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, token) = api_token(&server.pool, "modeller", Role::Submitter, None, None).await;
+    let id = submit_to(
+        &server,
+        "mini",
+        "model=oracle",
+        &token,
+        ground_truth_answers(&records),
+    )
+    .await
+    .id();
+    let verdicts = format!("SELECT count(*) FROM submission_items WHERE submission = {id}");
+    let all = records.len() as i64;
+    assert_eq!(count(&server.pool, &verdicts).await, all);
+
+    // Two items change; the release is imported again over them.
+    let root = server.dir().join("release");
+    let mut lines: Vec<String> = records.iter().map(Value::to_string).collect();
+    let changed = with_changed_questions(&records[..2]);
+    lines[..2].clone_from_slice(&changed);
+    write_qa_file(&root, &lines);
+    let mut replace = options("mini");
+    replace.replace = true;
+    let report = import(&server.pool, &root, &replace).await;
+    assert_eq!(report.replaced_items, 2);
+
+    assert_eq!(count(&server.pool, &verdicts).await, all - 2);
+    let orphans = "SELECT count(*) FROM submission_items v \
+                   WHERE NOT EXISTS (SELECT 1 FROM items i WHERE i.id = v.item)";
+    assert_eq!(count(&server.pool, orphans).await, 0);
     server.stop().await;
 }
