@@ -753,7 +753,7 @@ pub async fn import_release(
             };
             let frames = read_new_frames(hub, frame_store, &location.root, &to_write).await?;
             let began = Instant::now();
-            let mut tx = hub.pool.begin().await?;
+            let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
             // Timed from when the lock is held.
             let held = Instant::now();
             write_items(&mut tx, staged.staging, &to_write, &frames, &mut report).await?;
@@ -894,7 +894,7 @@ async fn start_staged(
     let source = location.root.display().to_string();
     let mut discarded = false;
     loop {
-        let mut tx = hub.pool.begin().await?;
+        let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
         let target = store::datasets::by_name(&mut tx, &options.dataset)
             .await?
             .map(|d| d.id);
@@ -1000,7 +1000,7 @@ async fn publish(
     real_scene: Option<&str>,
 ) -> Result<f64, ImportError> {
     let dataset = &report.dataset;
-    let mut tx = hub.pool.begin().await?;
+    let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
     let held = Instant::now();
     match store::staged::for_dataset(&mut tx, dataset).await? {
         Some(current) if current.id == staged.id && current.run_token == run_token => {}
@@ -1086,22 +1086,22 @@ async fn discard(
     // Its rows go in many short transactions: first, in one, it stops being resumable, or a
     // run killed half-way through the deletes would leave a staged import that a later run of
     // the same file takes over and publishes with part of its rows gone.
-    let mut tx = hub.pool.begin().await?;
+    let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
     store::staged::forget(&mut tx, staged.id).await?;
     tx.commit().await?;
     loop {
-        let mut tx = hub.pool.begin().await?;
+        let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
         let deleted = store::staged::delete_items(&mut tx, staged.staging, DELETE_BATCH).await?;
         tx.commit().await?;
         if deleted == 0 {
             break;
         }
     }
-    let mut tx = hub.pool.begin().await?;
+    let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
     store::staged::remove(&mut tx, staged).await?;
     tx.commit().await?;
     loop {
-        let mut tx = hub.pool.begin().await?;
+        let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
         let deleted = store::staged::delete_unused_frames(&mut tx, DELETE_BATCH).await?;
         tx.commit().await?;
         if deleted == 0 {
@@ -1146,7 +1146,7 @@ pub async fn abandon(
     };
     discard(hub, &staged).await?;
     let summary = StagedSummary::from(&staged);
-    let mut tx = hub.pool.begin().await?;
+    let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
     let detail = format!(
         "abandoned the unfinished import of {} records (file sha256 {})",
         summary.rows_done, summary.qa_file_sha256

@@ -151,6 +151,8 @@ pub struct Hub {
     import_dir: Option<Arc<std::path::PathBuf>>,
     metrics: Arc<metrics::Metrics>,
     heavy: heavy::HeavyPool,
+    /// The order this process's writers take the database's write lock in.
+    gate: store::gate::WriteGate,
 }
 
 impl From<SqlitePool> for Hub {
@@ -185,6 +187,7 @@ impl Hub {
             import_dir: None,
             metrics,
             heavy,
+            gate: store::gate::WriteGate::default(),
         }
     }
 
@@ -391,10 +394,27 @@ impl Hub {
     }
 
     /// A write transaction, serialised with every other writer of the database
-    /// ([`Pool::begin`]).
+    /// ([`Pool::begin`]), for a request someone waits on: it goes before every bulk write
+    /// this process has waiting ([`store::gate`]).
     async fn begin(&self) -> Result<store::Tx, AppError> {
+        Ok(self.begin_in(store::gate::Lane::Interactive).await?)
+    }
+
+    /// A write transaction for many rows at once (a submission's verdicts, rescoring, an
+    /// import's batches), which lets interactive writers go first.
+    async fn begin_bulk(&self) -> Result<store::Tx, AppError> {
+        Ok(self.begin_in(store::gate::Lane::Bulk).await?)
+    }
+
+    /// A write transaction in `lane`; a wait longer than the database's busy timeout fails
+    /// as busy ([`store::db::is_busy`]).
+    async fn begin_in(&self, lane: store::gate::Lane) -> Result<store::Tx, sqlx::Error> {
         let asked = std::time::Instant::now();
-        let tx = self.pool.begin().await?;
+        // As long as the database's own busy timeout; then the same 503.
+        let turn = tokio::time::timeout(store::WRITE_WAIT, self.gate.enter(lane))
+            .await
+            .map_err(|_| sqlx::Error::PoolTimedOut)?;
+        let tx = self.pool.begin().await?.holding(turn);
         self.metrics.write_waited(asked.elapsed());
         Ok(tx)
     }

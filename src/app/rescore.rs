@@ -387,7 +387,7 @@ async fn rescore_one_submission(hub: &Hub, id: i64) -> Result<Unit, AppError> {
             }
         };
         let new_scores = serde_json::to_string(&scored.scores)?;
-        let mut tx = hub.begin().await?;
+        let mut tx = hub.begin_bulk().await?;
         if store::content_generation(&mut tx).await? != generation {
             // An import changed the items meanwhile: score against what it left.
             tx.rollback().await?;
@@ -462,7 +462,7 @@ where
             .iter()
             .map(|a| (a, human_verdict(&a.answer)))
             .collect();
-        let mut tx = hub.begin().await?;
+        let mut tx = hub.begin_bulk().await?;
         if store::content_generation(&mut tx).await? != generation {
             tx.rollback().await?;
             attempts += 1;

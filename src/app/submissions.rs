@@ -268,7 +268,7 @@ where
     let sha256 = body_sha256(&body);
     let scored = score_body(hub, targets.clone(), &dataset.name, body).await?;
 
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.begin_bulk().await?;
     let new = NewSubmission {
         dataset: dataset.id,
         account: caller.account_id,
@@ -453,7 +453,7 @@ pub async fn file_baseline(
     let body = answer_body(&targets);
     let sha256 = body_sha256(body.as_bytes());
     let scored = score_body(hub, targets.clone(), &dataset.name, body.into_bytes()).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.begin_bulk().await?;
     let account = super::tokens::ensure_account(&mut tx, account_name, Role::Submitter).await?;
     let token = NewToken::generate();
     let token_id =

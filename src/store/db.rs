@@ -97,34 +97,69 @@ impl Connection for PooledConn {
     }
 }
 
-/// A write transaction; rolled back when dropped without [`Tx::commit`].
-pub enum Tx {
+/// A write transaction; rolled back when dropped without [`Tx::commit`]. It may hold this
+/// process's turn to write ([`Tx::holding`]), given up once the transaction has ended.
+pub struct Tx {
+    // Declared first, so dropped first: the rollback is queued before the turn passes on.
+    tx: EitherTx,
+    turn: Option<super::gate::WriteTurn>,
+}
+
+enum EitherTx {
     Sqlite(Transaction<'static, Sqlite>),
     Pg(Transaction<'static, Postgres>),
 }
 
 impl Connection for Tx {
     fn handle(&mut self) -> Handle<'_> {
-        match self {
-            Tx::Sqlite(t) => Handle::Sqlite(t),
-            Tx::Pg(t) => Handle::Pg(t),
+        match &mut self.tx {
+            EitherTx::Sqlite(t) => Handle::Sqlite(t),
+            EitherTx::Pg(t) => Handle::Pg(t),
         }
     }
 }
 
 impl Tx {
-    pub async fn commit(self) -> Result<(), sqlx::Error> {
-        match self {
-            Tx::Sqlite(t) => t.commit().await,
-            Tx::Pg(t) => t.commit().await,
+    fn sqlite(tx: Transaction<'static, Sqlite>) -> Tx {
+        Tx {
+            tx: EitherTx::Sqlite(tx),
+            turn: None,
         }
     }
 
-    pub async fn rollback(self) -> Result<(), sqlx::Error> {
-        match self {
-            Tx::Sqlite(t) => t.rollback().await,
-            Tx::Pg(t) => t.rollback().await,
+    fn pg(tx: Transaction<'static, Postgres>) -> Tx {
+        Tx {
+            tx: EitherTx::Pg(tx),
+            turn: None,
         }
+    }
+
+    /// The transaction, keeping `turn` until it commits or rolls back.
+    pub fn holding(self, turn: super::gate::WriteTurn) -> Tx {
+        Tx {
+            turn: Some(turn),
+            ..self
+        }
+    }
+
+    pub async fn commit(self) -> Result<(), sqlx::Error> {
+        let Tx { tx, turn } = self;
+        let done = match tx {
+            EitherTx::Sqlite(t) => t.commit().await,
+            EitherTx::Pg(t) => t.commit().await,
+        };
+        drop(turn);
+        done
+    }
+
+    pub async fn rollback(self) -> Result<(), sqlx::Error> {
+        let Tx { tx, turn } = self;
+        let done = match tx {
+            EitherTx::Sqlite(t) => t.rollback().await,
+            EitherTx::Pg(t) => t.rollback().await,
+        };
+        drop(turn);
+        done
     }
 }
 
@@ -148,7 +183,7 @@ impl Pool {
     /// assignment) hold across every server instance exactly as they do in one SQLite process.
     pub async fn begin(&self) -> Result<Tx, sqlx::Error> {
         match self {
-            Pool::Sqlite(p) => Ok(Tx::Sqlite(p.begin_with("BEGIN IMMEDIATE").await?)),
+            Pool::Sqlite(p) => Ok(Tx::sqlite(p.begin_with("BEGIN IMMEDIATE").await?)),
             Pool::Pg(p) => {
                 let mut tx = p.begin().await?;
                 // The timeout first (left to right), for this transaction only.
@@ -159,7 +194,7 @@ impl Pool {
                 .bind(PG_LOCK_TIMEOUT)
                 .execute(&mut *tx)
                 .await?;
-                Ok(Tx::Pg(tx))
+                Ok(Tx::pg(tx))
             }
         }
     }
@@ -170,8 +205,8 @@ impl Pool {
     /// PostgreSQL: `REPEATABLE READ READ ONLY`.
     pub async fn begin_snapshot(&self) -> Result<Tx, sqlx::Error> {
         Ok(match self {
-            Pool::Sqlite(p) => Tx::Sqlite(p.begin_with("BEGIN DEFERRED").await?),
-            Pool::Pg(p) => Tx::Pg(
+            Pool::Sqlite(p) => Tx::sqlite(p.begin_with("BEGIN DEFERRED").await?),
+            Pool::Pg(p) => Tx::pg(
                 p.begin_with("BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY")
                     .await?,
             ),

@@ -15,6 +15,7 @@ pub mod db;
 pub mod episode_drafts;
 pub mod episodes;
 pub mod frames;
+pub mod gate;
 pub mod gold;
 pub mod items;
 pub mod jobs;
@@ -31,6 +32,9 @@ pub use db::{Conn, Pool, PooledConn, Tx};
 use db::{Fields, on};
 use sqlx::SqlitePool;
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
+
+/// How long a write waits for the database's write lock before it is refused as busy.
+pub const WRITE_WAIT: Duration = Duration::from_secs(10);
 
 /// Connections in a pool.
 pub const MAX_CONNECTIONS: u32 = 8;
@@ -64,7 +68,7 @@ pub async fn open_with_page_cache(
         // last transactions, never corrupt the file.
         .synchronous(SqliteSynchronous::Normal)
         .foreign_keys(true)
-        .busy_timeout(Duration::from_secs(10))
+        .busy_timeout(WRITE_WAIT)
         .pragma("cache_size", cache_size)
         .pragma("temp_store", "memory")
         // One import is one transaction, so the write-ahead log grows to the size of its new
