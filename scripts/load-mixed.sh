@@ -9,11 +9,11 @@
 #   scripts/load-mixed.sh
 #   IMPORT_MIDWAY=1 scripts/load-mixed.sh
 #
-# IMPORT_MIDWAY=1: a world release (`enact-hub simulate --activity all` then `generate`, kept
-# in bench-out/mixed/world for the next run) is imported as dataset "world" with the command
-# line into the served database, IMPORT_AFTER seconds (default 10) into the load; the table is
-# printed again for the requests sent while the import ran, with the annotators' writes
-# together. ENACT_HUB_BIN: a server binary to measure instead of this checkout's (e.g. a build
+# IMPORT_MIDWAY=1: a world release of 2,628 items (`enact-hub simulate --activity all` then
+# `generate --num-to-sample 43`, kept in bench-out/mixed/world-2628 for the next run) is
+# imported as dataset "world" with the command line into the served database, IMPORT_AFTER
+# seconds (default 10) into the load; the table is printed again for the requests sent while
+# the import ran, with the annotators' writes together. ENACT_HUB_BIN: a server binary to measure instead of this checkout's (e.g. a build
 # of main, for before/after); the load client is always this checkout's. SERVE_ARGS: more
 # `serve` flags (e.g. `--heavy-nice 19`).
 #
@@ -35,11 +35,11 @@ BIN=${ENACT_HUB_BIN:-${CARGO_TARGET_DIR:-target}/release/enact-hub}
 OWN_BIN=${CARGO_TARGET_DIR:-target}/release/enact-hub
 LOAD=${CARGO_TARGET_DIR:-target}/release/examples/mixed_load
 echo "server: $BIN; load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-WORLD=$OUT/world
+WORLD=$OUT/world-2628
 if [ "${IMPORT_MIDWAY:-0}" = 1 ] && [ ! -f "$WORLD/QA/enact_ordering.jsonl" ]; then
   rm -rf "$OUT/world-replay" "$WORLD"
   "$OWN_BIN" simulate --seed 3 --activity all --out "$OUT/world-replay" >&2
-  "$OWN_BIN" generate "$OUT/world-replay" --out "$WORLD" >&2
+  "$OWN_BIN" generate "$OUT/world-replay" --num-to-sample 43 --out "$WORLD" >&2
 fi
 DB="$OUT/mixed.db"
 rm -f "$DB" "$DB-wal" "$DB-shm"
