@@ -21,6 +21,7 @@ use crate::core::submission::{
 use crate::core::version::BUILD;
 use crate::store;
 use crate::store::accounts::AttemptsMade;
+use crate::store::datasets::Dataset;
 use crate::store::db::UniqueKey;
 use crate::store::submissions::NewSubmission;
 pub use crate::store::submissions::{StoredVerdict, SubmissionRow};
@@ -136,9 +137,11 @@ fn attempt_quota(made: AttemptsMade, daily: i64, total: i64) -> AttemptQuota {
 }
 
 /// Takes one attempt from the caller's quotas, refused ones counted too; admins are exempt.
-async fn take_attempt(hub: &Hub, caller: &Caller) -> Result<(), AppError> {
+/// Counts one attempt against the caller's quotas; returns its id (none for an admin, whose
+/// attempts are not counted).
+async fn take_attempt(hub: &Hub, caller: &Caller) -> Result<Option<i64>, AppError> {
     if caller.has(Scope::Admin) {
-        return Ok(());
+        return Ok(None);
     }
     let daily = caller.daily_quota.unwrap_or(hub.quotas.daily);
     let total = caller.total_quota.unwrap_or(hub.quotas.total);
@@ -148,12 +151,14 @@ async fn take_attempt(hub: &Hub, caller: &Caller) -> Result<(), AppError> {
     let mut tx = hub.begin().await?;
     let made = store::accounts::attempts_made(&mut tx, caller.token_id).await?;
     let quota = attempt_quota(made, daily, total);
-    if quota == AttemptQuota::Granted {
-        store::accounts::record_attempt(&mut tx, caller.token_id).await?;
-    }
+    let attempt = if quota == AttemptQuota::Granted {
+        Some(store::accounts::record_attempt(&mut tx, caller.token_id).await?)
+    } else {
+        None
+    };
     tx.commit().await?;
     match quota {
-        AttemptQuota::Granted => Ok(()),
+        AttemptQuota::Granted => Ok(attempt),
         AttemptQuota::DailyExhausted { limit } => {
             let retry_after = seconds_until_utc_midnight();
             Err(AppError::LimitReached {
@@ -262,7 +267,42 @@ where
             return repeat_of(existing, &body);
         }
     }
-    take_attempt(hub, caller).await?;
+    let attempt = take_attempt(hub, caller).await?;
+    let stored = store_submission(hub, caller, &dataset, metadata, idempotency_key, body).await;
+    if let (Err(AppError::Unavailable(_)), Some(attempt)) = (&stored, attempt) {
+        // The server was too busy to take it on (a full scoring queue, a write lock held too
+        // long): that is not the caller's attempt to pay for.
+        give_back_attempt(hub, attempt).await;
+    }
+    stored
+}
+
+/// Forgets an attempt the server refused for being busy; a failure is logged, not answered
+/// (the caller is already being told to retry).
+async fn give_back_attempt(hub: &Hub, attempt: i64) {
+    let given_back = async {
+        let mut tx = hub.begin().await?;
+        store::accounts::forget_attempt(&mut tx, attempt).await?;
+        tx.commit().await?;
+        Ok::<(), AppError>(())
+    };
+    if let Err(e) = given_back.await {
+        tracing::warn!(attempt, error = %e, "a refused submission still counts against its quota");
+    }
+}
+
+/// Reads, scores and stores a submission whose attempt is counted ([`submit`]).
+async fn store_submission<B>(
+    hub: &Hub,
+    caller: &Caller,
+    dataset: &Dataset,
+    metadata: SubmissionMetadata,
+    idempotency_key: Option<&str>,
+    body: B,
+) -> Result<Submitted, AppError>
+where
+    B: Future<Output = Result<Vec<u8>, AppError>>,
+{
     let body = body.await?;
     let targets = dataset_targets(hub, dataset.id).await?;
     let sha256 = body_sha256(&body);

@@ -209,12 +209,22 @@ pub async fn attempts_made(conn: &mut Conn, token: i64) -> Result<AttemptsMade, 
     })
 }
 
-/// Records one submission attempt by `token`.
+/// Records one submission attempt by `token`; returns its id.
 #[tracing::instrument(skip_all)]
-pub async fn record_attempt(conn: &mut Conn, token: i64) -> Result<(), sqlx::Error> {
+pub async fn record_attempt(conn: &mut Conn, token: i64) -> Result<i64, sqlx::Error> {
     on!(conn, |c| {
-        sqlx::query("INSERT INTO submission_attempts (token) VALUES ($1)")
+        sqlx::query_scalar("INSERT INTO submission_attempts (token) VALUES ($1) RETURNING id")
             .bind(token)
+            .fetch_one(&mut *c)
+            .await
+    })
+}
+
+/// Forgets the attempt `id` (one the server could not take on).
+pub async fn forget_attempt(conn: &mut Conn, id: i64) -> Result<(), sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query("DELETE FROM submission_attempts WHERE id = $1")
+            .bind(id)
             .execute(&mut *c)
             .await?;
         Ok(())

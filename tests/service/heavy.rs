@@ -96,6 +96,11 @@ async fn a_full_pool_answers_503_with_retry_after_and_admitted_work_completes() 
         count(&server.pool, "SELECT count(*) FROM submissions").await,
         0
     );
+    // The refused attempt is not counted against the token's quota: only the waiting one is.
+    assert_eq!(
+        count(&server.pool, "SELECT count(*) FROM submission_attempts").await,
+        1
+    );
 
     // Once the thread is free the waiting submission is scored and stored, and the refused
     // one succeeds when sent again.
@@ -107,6 +112,10 @@ async fn a_full_pool_answers_503_with_retry_after_and_admitted_work_completes() 
     assert_eq!(again.status, StatusCode::CREATED, "{}", again.text);
     assert_eq!(
         count(&server.pool, "SELECT count(*) FROM submissions").await,
+        2
+    );
+    assert_eq!(
+        count(&server.pool, "SELECT count(*) FROM submission_attempts").await,
         2
     );
     let after = until_gauge(&server, "enact_hub_heavy_running", 0.0).await;
