@@ -204,7 +204,7 @@ mod tests {
         settle().await;
         drop(held); // hands the turn to `first`, which never looks
         drop(first); // its drop must pass the turn to `second`
-        tokio::time::timeout(Duration::from_millis(500), second)
+        let _turn = tokio::time::timeout(Duration::from_millis(500), second)
             .await
             .expect("the turn reached the second writer")
             .unwrap();
