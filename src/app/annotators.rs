@@ -108,7 +108,7 @@ pub async fn accept_invite(
         return Err(AppError::Invalid(problem));
     }
     let password = password.to_owned();
-    let hash = tokio::task::spawn_blocking(move || hash_password(&password))
+    let hash = password_work(move || hash_password(&password))
         .await?
         .map_err(|e| AppError::internal(format!("argon2: {e}")))?;
     let invite = token_hash(invite_token);
@@ -168,13 +168,28 @@ pub async fn check_password(
         return Ok(None);
     };
     let password = password.to_owned();
-    let found =
-        tokio::task::spawn_blocking(move || verify_password(&password, &hash).then_some(id))
-            .await?;
+    let found = password_work(move || verify_password(&password, &hash).then_some(id)).await?;
     if found.is_none() {
         hub.metrics.login_failed(LoginFailure::Password);
     }
     Ok(found)
+}
+
+/// Password hashes computed at once: one fewer than the cores (at least one). Each is tens of
+/// milliseconds of CPU by design; a burst of logins (a class starting together) queues here
+/// and leaves a core to the pages and answers of the annotators already working.
+static PASSWORD_WORK: std::sync::LazyLock<tokio::sync::Semaphore> =
+    std::sync::LazyLock::new(|| {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        tokio::sync::Semaphore::new(cores.saturating_sub(1).max(1))
+    });
+
+/// Runs a password hash or check off the request threads, in its turn ([`PASSWORD_WORK`]).
+async fn password_work<T: Send + 'static>(
+    work: impl FnOnce() -> T + Send + 'static,
+) -> Result<T, AppError> {
+    let _turn = PASSWORD_WORK.acquire().await.map_err(AppError::internal)?;
+    Ok(tokio::task::spawn_blocking(work).await?)
 }
 
 /// Starts a session for `annotator`; returns its secret token (for the cookie).

@@ -1,6 +1,7 @@
 //! What an operator watches, in Prometheus' text format (`GET /metrics`): counters and
 //! histograms each instance keeps in memory from its start (requests by route and status,
-//! their latency, waits for a database connection and for a write transaction, submissions
+//! their latency, waits for a database connection and for a write transaction, how long write
+//! transactions held the turn to write, submissions
 //! scored, annotator answers, failed logins), and gauges read when scraped (the caches' sizes
 //! and hit counts, jobs by kind and state, and the items done by each running job).
 //!
@@ -35,6 +36,11 @@ struct RouteLabels {
 #[derive(Clone, Debug, Hash, PartialEq, Eq, EncodeLabelSet)]
 struct KindLabels {
     kind: String,
+}
+
+#[derive(Clone, Debug, Hash, PartialEq, Eq, EncodeLabelSet)]
+struct LaneLabels {
+    lane: String,
 }
 
 #[derive(Clone, Debug, Hash, PartialEq, Eq, EncodeLabelSet)]
@@ -77,6 +83,7 @@ pub struct Metrics {
     latency: Family<RouteLabels, Histogram>,
     connection_wait: Histogram,
     write_wait: Histogram,
+    write_held: Family<LaneLabels, Histogram>,
     submissions_scored: Counter,
     annotator_answers: Counter,
     login_failures: Family<KindLabels, Counter>,
@@ -121,6 +128,16 @@ impl Default for Metrics {
             "db_write_wait_seconds",
             "Time to begin a write transaction (a connection, then the write lock on SQLite)",
             write_wait.clone(),
+        );
+        let write_held = Family::<LaneLabels, Histogram>::new_with_constructor(|| {
+            Histogram::new(seconds_buckets())
+        });
+        registry.register(
+            "db_write_held_seconds",
+            "Time a write transaction kept this instance's turn to write (from the turn to its \
+             commit or rollback), by lane: interactive (answers, drafts, logins, admin changes) \
+             or bulk (submissions' verdicts, rescoring, import batches)",
+            write_held.clone(),
         );
         let submissions_scored = Counter::default();
         registry.register(
@@ -201,6 +218,7 @@ impl Default for Metrics {
             latency,
             connection_wait,
             write_wait,
+            write_held,
             submissions_scored,
             annotator_answers,
             login_failures,
@@ -244,6 +262,18 @@ impl Metrics {
 
     pub(super) fn write_waited(&self, took: Duration) {
         self.write_wait.observe(took.as_secs_f64());
+    }
+
+    pub(super) fn write_held(&self, lane: store::gate::Lane, took: Duration) {
+        let lane = match lane {
+            store::gate::Lane::Interactive => "interactive",
+            store::gate::Lane::Bulk => "bulk",
+        };
+        self.write_held
+            .get_or_create(&LaneLabels {
+                lane: lane.to_owned(),
+            })
+            .observe(took.as_secs_f64());
     }
 
     pub(super) fn submission_scored(&self) {

@@ -172,6 +172,10 @@ impl Hub {
         let caches = watch::Caches::new(&cache::CacheLimits::default());
         let metrics = Arc::new(metrics::Metrics::default());
         let heavy = heavy::HeavyPool::new(heavy::HeavyLimits::default(), metrics.heavy());
+        let gate = store::gate::WriteGate::observed({
+            let metrics = metrics.clone();
+            Arc::new(move |lane, held| metrics.write_held(lane, held))
+        });
         Hub {
             pool,
             items: caches.items,
@@ -187,7 +191,7 @@ impl Hub {
             import_dir: None,
             metrics,
             heavy,
-            gate: store::gate::WriteGate::default(),
+            gate,
         }
     }
 

@@ -12,6 +12,7 @@
 
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex, PoisonError};
+use std::time::{Duration, Instant};
 
 use tokio::sync::oneshot;
 
@@ -25,10 +26,14 @@ pub enum Lane {
     Bulk,
 }
 
+/// Told how long each turn to write was held, and in which lane.
+pub type HeldObserver = Arc<dyn Fn(Lane, Duration) + Send + Sync>;
+
 /// The gate; clones share it.
 #[derive(Clone, Default)]
 pub struct WriteGate {
     state: Arc<Mutex<State>>,
+    observer: Option<HeldObserver>,
 }
 
 /// Invariant: when `held` is false both queues are empty (a release hands the turn to the
@@ -44,11 +49,16 @@ struct State {
 #[must_use]
 pub struct WriteTurn {
     gate: WriteGate,
+    lane: Lane,
+    since: Instant,
 }
 
 impl Drop for WriteTurn {
     fn drop(&mut self) {
         self.gate.pass_on();
+        if let Some(observer) = &self.gate.observer {
+            observer(self.lane, self.since.elapsed());
+        }
     }
 }
 
@@ -76,6 +86,22 @@ impl Drop for Waiting<'_> {
 }
 
 impl WriteGate {
+    /// A gate that tells `observer` how long each turn was held.
+    pub fn observed(observer: HeldObserver) -> WriteGate {
+        WriteGate {
+            observer: Some(observer),
+            ..WriteGate::default()
+        }
+    }
+
+    fn turn(&self, lane: Lane) -> WriteTurn {
+        WriteTurn {
+            gate: self.clone(),
+            lane,
+            since: Instant::now(),
+        }
+    }
+
     fn lock(&self) -> std::sync::MutexGuard<'_, State> {
         // The state is a flag and two queues, consistent after every statement.
         self.state.lock().unwrap_or_else(PoisonError::into_inner)
@@ -87,7 +113,7 @@ impl WriteGate {
             let mut state = self.lock();
             if !state.held {
                 state.held = true;
-                return WriteTurn { gate: self.clone() };
+                return self.turn(lane);
             }
             let (sender, receiver) = oneshot::channel();
             match lane {
@@ -105,7 +131,7 @@ impl WriteGate {
         // wait ends with the turn.
         let _ = receiver.await;
         waiting.turn = None;
-        WriteTurn { gate: self.clone() }
+        self.turn(lane)
     }
 
     /// Writers waiting, (interactive, bulk).
