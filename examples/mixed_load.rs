@@ -351,6 +351,72 @@ const ANNOTATOR_WRITES: [&str; 3] = [
     "POST /annotate/{dataset}/{item}/skip",
 ];
 
+/// The routes whose latencies count as an annotator's pages.
+const ANNOTATOR_PAGES: [&str; 3] = [
+    "GET /annotate",
+    "GET /annotate/next",
+    "GET /annotate/{dataset}/{item}",
+];
+
+/// p50 / p99 / max in ms of the requests of `routes` sent from `from` (Unix ms) on, and how
+/// many there were.
+fn latencies(stats: &Stats, routes: &[&str], from: u64) -> (usize, f64, f64, f64) {
+    let mut sorted: Vec<u64> = routes
+        .iter()
+        .filter_map(|r| stats.routes.get(r))
+        .flatten()
+        .filter(|t| t.sent_ms >= from)
+        .map(|t| t.micros)
+        .collect();
+    if sorted.is_empty() {
+        return (0, 0.0, 0.0, 0.0);
+    }
+    sorted.sort_unstable();
+    (
+        sorted.len(),
+        percentile(&sorted, 0.5),
+        percentile(&sorted, 0.99),
+        percentile(&sorted, 1.0),
+    )
+}
+
+/// The annotators' pages and writes together, over the whole run and once every annotator
+/// has logged in: the 50 logins of the first seconds (each a password hash, CPU-heavy by
+/// design) are a burst no steady state has.
+fn print_annotator_lines(stats: &Stats, started_ms: u64) {
+    let logged_in = stats
+        .routes
+        .get("POST /login")
+        .into_iter()
+        .flatten()
+        .map(|t| t.sent_ms + t.micros / 1000)
+        .max()
+        .unwrap_or(0);
+    for (what, from) in [
+        ("the whole run".to_owned(), 0),
+        (
+            format!(
+                "after the last login, from {:.1} s",
+                logged_in.saturating_sub(started_ms) as f64 / 1000.0
+            ),
+            logged_in,
+        ),
+    ] {
+        for (kind, routes) in [
+            ("annotator pages (queue, next, item)", &ANNOTATOR_PAGES[..]),
+            (
+                "annotator writes (drafts, answers, flags)",
+                &ANNOTATOR_WRITES[..],
+            ),
+        ] {
+            let (n, p50, p99, max) = latencies(stats, routes, from);
+            println!(
+                "{kind}, {what}: {n} requests, p50 {p50:.1} ms, p99 {p99:.1} ms, max {max:.1} ms"
+            );
+        }
+    }
+}
+
 /// The per-route table of the requests sent in `window` (Unix ms, inclusive), over `seconds`,
 /// and a line for the annotators' writes together.
 fn print_table(stats: &Stats, window: (u64, u64), seconds: f64) -> usize {
@@ -452,6 +518,7 @@ async fn run(
     );
     let (slots, ids, frames) = (Arc::new(slots), Arc::new(ids), Arc::new(frames));
     let started = Instant::now();
+    let started_ms = unix_ms();
     let load = Load {
         client,
         base,
@@ -511,6 +578,8 @@ async fn run(
         "submissions scored and stored: {scored} ({:.2}/s)",
         scored as f64 / elapsed
     );
+    println!();
+    print_annotator_lines(&stats, started_ms);
     let server_errors: u64 = stats
         .statuses
         .iter()
