@@ -2,6 +2,10 @@
 //! annotator's submitted answers with the kind of assignment behind them, completed primary
 //! answers, and the protocol round with its cross-assignments.
 
+use std::collections::HashSet;
+
+use sqlx::QueryBuilder;
+
 use super::db::{Conn, Fields, on};
 
 use super::annotations::human_answer_from_row;
@@ -144,6 +148,9 @@ pub async fn round(
     })
 }
 
+/// Rows per multi-row INSERT: at most 4 bound values each, well under either database's limit.
+const ROWS_PER_STATEMENT: usize = 1000;
+
 /// Records a protocol round and its cross-assignments, appended to each annotator's queue
 /// like any other assignment. Call inside a transaction. Returns the assignments added (a
 /// pair already assigned, under either kind, is left as it was). A dataset that already has
@@ -167,28 +174,56 @@ pub async fn insert_round(
         .bind(started_by)
         .execute(&mut *c)
         .await?;
-        for sample in &plan.samples {
-            sqlx::query(
-            "INSERT INTO agreement_samples (dataset, item, source_annotator) VALUES ($1, $2, $3)",
-        )
-        .bind(dataset_id)
-        .bind(sample.item)
-        .bind(sample.source_annotator)
-        .execute(&mut *c)
-        .await?;
+        for chunk in plan.samples.chunks(ROWS_PER_STATEMENT) {
+            let mut builder = QueryBuilder::new(
+                "INSERT INTO agreement_samples (dataset, item, source_annotator) ",
+            );
+            builder.push_values(chunk, |mut b, sample| {
+                b.push_bind(dataset_id)
+                    .push_bind(sample.item)
+                    .push_bind(sample.source_annotator);
+            });
+            builder.build().execute(&mut *c).await?;
         }
+        // Each annotator's new items go after the last of its queue, in the plan's order; an
+        // item it already has is left where it is. Written a few statements per annotator,
+        // not one per assignment: a round of 50 annotators is tens of thousands of rows, and
+        // the whole round is one write transaction.
         let mut added = 0;
-        for &(annotator, item) in &plan.assignments {
-            let done = sqlx::query(
-                "INSERT INTO assignments (annotator, item, position, kind) \
-             SELECT $1, $2, coalesce(max(position), 0) + 1, 'agreement' FROM assignments \
-             WHERE annotator = $1 ON CONFLICT (annotator, item) DO NOTHING",
+        for group in plan.assignments.chunk_by(|a, b| a.0 == b.0) {
+            let annotator = group[0].0;
+            let last: i64 = sqlx::query_scalar(
+                "SELECT coalesce(max(position), 0) FROM assignments WHERE annotator = $1",
             )
             .bind(annotator)
-            .bind(item)
-            .execute(&mut *c)
+            .fetch_one(&mut *c)
             .await?;
-            added += done.rows_affected();
+            let held: HashSet<i64> =
+                sqlx::query_scalar("SELECT item FROM assignments WHERE annotator = $1")
+                    .bind(annotator)
+                    .fetch_all(&mut *c)
+                    .await?
+                    .into_iter()
+                    .collect();
+            let mut seen = HashSet::new();
+            let new: Vec<(i64, i64)> = group
+                .iter()
+                .map(|&(_, item)| item)
+                .filter(|item| !held.contains(item) && seen.insert(*item))
+                .zip(last + 1..)
+                .collect();
+            for chunk in new.chunks(ROWS_PER_STATEMENT) {
+                let mut builder =
+                    QueryBuilder::new("INSERT INTO assignments (annotator, item, position, kind) ");
+                builder.push_values(chunk, |mut b, &(item, position)| {
+                    b.push_bind(annotator)
+                        .push_bind(item)
+                        .push_bind(position)
+                        .push_bind("agreement");
+                });
+                builder.push(" ON CONFLICT (annotator, item) DO NOTHING");
+                added += builder.build().execute(&mut *c).await?.rows_affected();
+            }
         }
         Ok(added)
     })
