@@ -30,7 +30,11 @@ async fn scoring_items(hub: &Hub, dataset: &str) -> Result<Vec<ScoringItem>, App
 /// Every item of a stored dataset with its ground truth and the signatures stored at import.
 pub async fn stored_targets(hub: &Hub, dataset: &str) -> Result<Vec<ScoringTarget>, AppError> {
     let rows = scoring_items(hub, dataset).await?;
-    scoring::targets_from_stored(rows).map_err(AppError::internal)
+    // Parsing every item's signatures is heavy work for a full-size dataset.
+    hub.heavy()
+        .run(move || scoring::targets_from_stored(rows))
+        .await?
+        .map_err(AppError::internal)
 }
 
 /// The scene-graph signatures stored for a dataset's items, for the ENACT policy.
