@@ -237,10 +237,11 @@ async fn by_id(hub: &Hub, id: i64) -> Result<Option<SubmissionRow>, AppError> {
     Ok(store::submissions::by_id(&mut conn, id).await?)
 }
 
-/// Submits a model's answers to `dataset`: counts the attempt against the caller's quotas,
-/// reads the body (only then, so an attempt over quota never uploads), scores it against
-/// every item and stores the submission with every verdict in one transaction. The caller's
-/// `submit` scope was checked before the request reached this (the web's route table).
+/// Submits a model's answers to `dataset`: counts the attempt against the caller's quotas
+/// (given back when the server was too busy to take it on), reads the body (only then, so an
+/// attempt over quota never uploads), scores it against every item and stores the submission
+/// with every verdict in one transaction. The caller's `submit` scope was checked before the
+/// request reached this (the web's route table).
 ///
 /// With an `idempotency_key` already used by this token, the first submission is returned
 /// when the body is the same, and 409 when it differs.
