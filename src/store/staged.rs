@@ -252,14 +252,17 @@ pub async fn delete_items(conn: &mut Conn, staging: i64, limit: i64) -> Result<u
     })
 }
 
-/// Deletes up to `limit` stored frames no item uses (left by a discarded staged import);
-/// returns how many. Every import inserts a frame in the transaction that links it to an
-/// item, so between transactions an unused frame is one nothing will link.
+/// Deletes up to `limit` stored frames that no item or episode uses (left by a discarded
+/// staged import); returns how many. Every import (of a release or of an episode) inserts a
+/// frame in the transaction that links it, so between transactions an unused frame is one
+/// nothing will link.
 pub async fn delete_unused_frames(conn: &mut Conn, limit: i64) -> Result<u64, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query(
             "DELETE FROM frames WHERE id IN (SELECT f.id FROM frames f WHERE NOT EXISTS \
-             (SELECT 1 FROM item_images ii WHERE ii.frame = f.id) LIMIT $1)",
+             (SELECT 1 FROM item_images ii WHERE ii.frame = f.id) AND NOT EXISTS \
+             (SELECT 1 FROM episode_frames e WHERE e.frame = f.id) AND NOT EXISTS \
+             (SELECT 1 FROM episode_frames e WHERE e.thumbnail = f.id) LIMIT $1)",
         )
         .bind(limit)
         .execute(&mut *c)

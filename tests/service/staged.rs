@@ -403,3 +403,51 @@ async fn a_discard_cut_short_is_never_resumed() {
     assert_eq!(new_version_items(&pool, "main").await, (items, items));
     assert_eq!(count(&pool, "SELECT count(*) FROM staged_imports").await, 0);
 }
+
+#[tokio::test]
+async fn discarding_a_staged_import_keeps_the_frames_of_episodes() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pool = fresh_db(&dir).await;
+    let hub = Hub::from(pool.clone());
+    let root = dir.path().join("release");
+    write_balanced_release(&root, &[3], 4);
+    import(&pool, &root, &options("main")).await;
+    // An episode's frames and thumbnails are linked to no item.
+    let shots = dir.path().join("shots");
+    std::fs::create_dir_all(&shots).expect("dir");
+    for n in 0..3u32 {
+        let png = crate::helpers::png_bytes(7000 + n, n as usize);
+        std::fs::write(shots.join(format!("shot_{n}.png")), png).expect("frame");
+    }
+    enact_hub::app::episodes::import(&hub, &tester(), &shots, "kitchen", "")
+        .await
+        .expect("episode imported");
+    let frames = count(&pool, "SELECT count(*) FROM frames").await;
+
+    // A new version with new frames, interrupted, then abandoned: what it staged goes, the
+    // episode's frames stay.
+    let changed = dir.path().join("changed");
+    let records = write_balanced_release(&changed, &[3], 40);
+    let lines: Vec<String> = records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            if let Some(first) = r["images"][0].as_str() {
+                let png = crate::helpers::png_bytes(9000 + i as u32, i);
+                std::fs::write(changed.join(first), png).expect("image");
+            }
+            r.to_string()
+        })
+        .collect();
+    write_qa_file(&changed, &lines);
+    run_interrupted(&pool, &changed, interrupted_after(batched("main", 8), 2)).await;
+    assert!(count(&pool, "SELECT count(*) FROM frames").await > frames);
+    abandon(&hub, &tester(), "main")
+        .await
+        .expect("abandon")
+        .expect("there was an unfinished import");
+    assert_eq!(count(&pool, "SELECT count(*) FROM frames").await, frames);
+    let linked = "SELECT count(*) FROM episode_frames e JOIN frames f ON f.id = e.frame \
+                  JOIN frames t ON t.id = e.thumbnail";
+    assert_eq!(count(&pool, linked).await, 3);
+}
