@@ -219,7 +219,11 @@ pub async fn import(
             })
             .await?
     };
-    let mut tx = hub.begin().await?;
+    // A killed import of this name left an incomplete episode: it goes first.
+    if let Some(left) = store::episodes::incomplete(&mut hub.conn().await?, name).await? {
+        remove_incomplete(hub, left).await?;
+    }
+    let mut tx = hub.begin_bulk().await?;
     let episode = match store::episodes::insert(&mut tx, name, scene, &actor.to_string()).await {
         Ok(id) => id,
         Err(e) if UniqueKey::EPISODE_NAME.is_violated_by(&e) => {
@@ -229,27 +233,18 @@ pub async fn import(
         }
         Err(e) => return Err(e.into()),
     };
-    for (position, (file_name, path)) in files.iter().enumerate() {
-        let path = path.clone();
-        let prepared = hub
-            .heavy()
-            .run_waiting(move || prepare_frame(&path))
-            .await
-            .map_err(AppError::Invalid)?;
-        let size = (prepared.width, prepared.height);
-        let frame = store_frame(hub, &mut tx, prepared.png, size).await?;
-        let thumbnail =
-            store_frame(hub, &mut tx, prepared.thumbnail, prepared.thumbnail_size).await?;
-        store::episodes::insert_frame(
-            &mut tx,
-            episode,
-            position as i64,
-            file_name,
-            frame,
-            thumbnail,
-        )
-        .await?;
+    tx.commit().await?;
+    // The frames are converted outside any transaction and written a few per transaction, so
+    // a long recording never holds the write lock for long; the episode stays hidden until
+    // the last is written. A failure removes what was written.
+    if let Err(e) = write_frames(hub, episode, &files).await {
+        if let Err(cleanup) = remove_incomplete(hub, episode).await {
+            tracing::warn!(episode = name, error = %cleanup, "an incomplete episode was left");
+        }
+        return Err(e);
     }
+    let mut tx = hub.begin().await?;
+    store::episodes::mark_complete(&mut tx, episode).await?;
     audit::record(
         &mut tx,
         actor,
@@ -270,6 +265,57 @@ pub async fn import(
     .await?;
     tx.commit().await?;
     Ok(get(hub, name).await?.summary)
+}
+
+/// Frames of an episode written per transaction.
+const FRAMES_PER_BATCH: usize = 8;
+
+/// Converts and stores the frames of an incomplete episode, [`FRAMES_PER_BATCH`] per
+/// transaction.
+async fn write_frames(
+    hub: &Hub,
+    episode: i64,
+    files: &[(String, PathBuf)],
+) -> Result<(), AppError> {
+    for (batch, chunk) in files.chunks(FRAMES_PER_BATCH).enumerate() {
+        let mut prepared = Vec::with_capacity(chunk.len());
+        for (_, path) in chunk {
+            let path = path.clone();
+            prepared.push(
+                hub.heavy()
+                    .run_waiting(move || prepare_frame(&path))
+                    .await
+                    .map_err(AppError::Invalid)?,
+            );
+        }
+        let mut tx = hub.begin_bulk().await?;
+        for (offset, ((file_name, _), frame)) in chunk.iter().zip(prepared).enumerate() {
+            let size = (frame.width, frame.height);
+            let stored = store_frame(hub, &mut tx, frame.png, size).await?;
+            let thumbnail =
+                store_frame(hub, &mut tx, frame.thumbnail, frame.thumbnail_size).await?;
+            let position = (batch * FRAMES_PER_BATCH + offset) as i64;
+            store::episodes::insert_frame(&mut tx, episode, position, file_name, stored, thumbnail)
+                .await?;
+        }
+        tx.commit().await?;
+    }
+    Ok(())
+}
+
+/// Deletes an incomplete episode and the frames only it used, a batch per transaction.
+async fn remove_incomplete(hub: &Hub, episode: i64) -> Result<(), AppError> {
+    let mut tx = hub.begin_bulk().await?;
+    store::episodes::delete(&mut tx, episode).await?;
+    tx.commit().await?;
+    loop {
+        let mut tx = hub.begin_bulk().await?;
+        let deleted = store::staged::delete_unused_frames(&mut tx, 256).await?;
+        tx.commit().await?;
+        if deleted == 0 {
+            return Ok(());
+        }
+    }
 }
 
 /// Episode names become task folder names in the export: letters, digits, `_` and `-`.

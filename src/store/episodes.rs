@@ -45,13 +45,46 @@ pub async fn insert(
 ) -> Result<i64, sqlx::Error> {
     on!(conn, |c| {
         sqlx::query_scalar(
-            "INSERT INTO episodes (name, scene, created_by) VALUES ($1, $2, $3) RETURNING id",
+            "INSERT INTO episodes (name, scene, created_by, complete) VALUES ($1, $2, $3, 0) \
+             RETURNING id",
         )
         .bind(name)
         .bind(scene)
         .bind(created_by)
         .fetch_one(&mut *c)
         .await
+    })
+}
+
+/// Marks an episode whose frames are all written complete: pages, lists and exports show it.
+pub async fn mark_complete(conn: &mut Conn, episode: i64) -> Result<(), sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query("UPDATE episodes SET complete = 1 WHERE id = $1")
+            .bind(episode)
+            .execute(&mut *c)
+            .await?;
+        Ok(())
+    })
+}
+
+/// The incomplete episode named `name` (an import still writing it, or killed), if any.
+pub async fn incomplete(conn: &mut Conn, name: &str) -> Result<Option<i64>, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_scalar("SELECT id FROM episodes WHERE name = $1 AND complete = 0")
+            .bind(name)
+            .fetch_optional(&mut *c)
+            .await
+    })
+}
+
+/// Deletes an episode with its frame list, graphs and drafts (not the frames themselves).
+pub async fn delete(conn: &mut Conn, episode: i64) -> Result<(), sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query("DELETE FROM episodes WHERE id = $1")
+            .bind(episode)
+            .execute(&mut *c)
+            .await?;
+        Ok(())
     })
 }
 
@@ -98,23 +131,27 @@ fn episode_row<R: Fields>(row: &R) -> Result<EpisodeRow, sqlx::Error> {
     })
 }
 
-/// Every episode, by name.
+/// Every complete episode, by name.
 pub async fn list(conn: &mut Conn) -> Result<Vec<EpisodeRow>, sqlx::Error> {
     on!(conn, |c| {
-        let rows = sqlx::query(&format!("SELECT {EPISODE_COLUMNS} ORDER BY e.name"))
-            .fetch_all(&mut *c)
-            .await?;
+        let rows = sqlx::query(&format!(
+            "SELECT {EPISODE_COLUMNS} WHERE e.complete = 1 ORDER BY e.name"
+        ))
+        .fetch_all(&mut *c)
+        .await?;
         rows.iter().map(episode_row).collect()
     })
 }
 
-/// The episode named `name`.
+/// The complete episode named `name`.
 pub async fn by_name(conn: &mut Conn, name: &str) -> Result<Option<EpisodeRow>, sqlx::Error> {
     on!(conn, |c| {
-        let row = sqlx::query(&format!("SELECT {EPISODE_COLUMNS} WHERE e.name = $1"))
-            .bind(name)
-            .fetch_optional(&mut *c)
-            .await?;
+        let row = sqlx::query(&format!(
+            "SELECT {EPISODE_COLUMNS} WHERE e.name = $1 AND e.complete = 1"
+        ))
+        .bind(name)
+        .fetch_optional(&mut *c)
+        .await?;
         row.as_ref().map(episode_row).transpose()
     })
 }

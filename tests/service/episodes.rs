@@ -10,7 +10,7 @@ use enact_hub::core::scene_graph::parse_action;
 use enact_hub::core::verifier::{Permutation, parse_answer_enact, parse_python_json, verify};
 use serde_json::{Value, json};
 
-use crate::helpers::{count, enact_hub, fresh_db_located};
+use crate::helpers::{count, enact_hub, fresh_db_located, tester};
 
 fn run(args: &[&str]) -> (bool, String, String) {
     let out = enact_hub()
@@ -347,5 +347,57 @@ async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
         )
         .await,
         4
+    );
+}
+
+#[tokio::test]
+async fn an_incomplete_episode_is_hidden_and_the_next_import_of_its_name_replaces_it() {
+    use enact_hub::app::{AppError, Hub, episodes};
+    let dir = tempfile::tempdir().unwrap();
+    let (pool, _) = fresh_db_located(&dir).await;
+    let hub = Hub::from(pool.clone());
+    let frames = dir.path().join("frames");
+    write_frames(&frames);
+    // What a killed import leaves: the episode row and a first batch of frames, never marked
+    // complete.
+    let mut tx = pool.begin().await.unwrap();
+    let left = enact_hub::store::episodes::insert(&mut tx, "kitchen_real", "", "killed")
+        .await
+        .unwrap();
+    let frame = enact_hub::store::frames::insert(&mut tx, &"ab".repeat(32), 4, 4, b"png")
+        .await
+        .unwrap();
+    enact_hub::store::episodes::insert_frame(&mut tx, left, 0, "frame_1.png", frame, frame)
+        .await
+        .unwrap();
+    tx.commit().await.unwrap();
+
+    assert!(episodes::list(&hub).await.unwrap().is_empty());
+    assert!(matches!(
+        episodes::get(&hub, "kitchen_real").await,
+        Err(AppError::NotFound(_))
+    ));
+
+    let summary = episodes::import(&hub, &tester(), &frames, "kitchen_real", "kitchen")
+        .await
+        .expect("the incomplete episode gives way");
+    assert_eq!(summary.frame_count, 12);
+    assert_eq!(episodes::list(&hub).await.unwrap().len(), 1);
+    assert_eq!(count(&pool, "SELECT count(*) FROM episodes").await, 1);
+    // The killed import's frame went with it; every frame left is the new episode's.
+    let killed = format!(
+        "SELECT count(*) FROM frames WHERE sha256 = '{}'",
+        "ab".repeat(32)
+    );
+    assert_eq!(count(&pool, &killed).await, 0);
+    let used = "SELECT count(*) FROM (SELECT frame AS f FROM episode_frames \
+                UNION SELECT thumbnail FROM episode_frames) u";
+    assert_eq!(
+        count(&pool, "SELECT count(*) FROM frames").await,
+        count(&pool, used).await
+    );
+    assert_eq!(
+        count(&pool, "SELECT count(*) FROM episode_frames").await,
+        12
     );
 }
