@@ -51,12 +51,14 @@ try {
   page.on("framenavigated", () => navigations++);
   await page
     .waitForFunction(
-      () => document.querySelector('[data-field="stage"]').textContent.includes("submitted"),
+      // The job's end, not the run's "submitted": the job is marked done just after the run
+      // submits, and the page keeps polling until the job has ended.
+      () => /^(done|failed|cancelled)/.test(document.querySelector('[data-field="stage"]').textContent),
       null,
       { timeout: 60000, polling: 100 }
     )
     .catch(async (e) => {
-      throw new Error(`the page never showed the run submitted: stage "${await text("stage")}", done "${await text("done")}"; console: ${consoleErrors.join("; ")}; ${e.message}`);
+      throw new Error(`the page never showed the run's job ended: stage "${await text("stage")}", done "${await text("done")}"; console: ${consoleErrors.join("; ")}; ${e.message}`);
     });
   const last = {
     stage: await text("stage"),
