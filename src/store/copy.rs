@@ -424,6 +424,7 @@ pub const TABLES: &[Table] = &[
             ("created_at", Text),
             ("resolved_graphs", Text),
             ("resolved_by", Text),
+            ("complete", Int),
         ],
         true,
     ),
