@@ -306,7 +306,7 @@ async fn write_frames(
 /// Deletes an incomplete episode and the frames only it used, a batch per transaction.
 async fn remove_incomplete(hub: &Hub, episode: i64) -> Result<(), AppError> {
     let mut tx = hub.begin_bulk().await?;
-    store::episodes::delete(&mut tx, episode).await?;
+    store::episodes::delete_incomplete(&mut tx, episode).await?;
     tx.commit().await?;
     loop {
         let mut tx = hub.begin_bulk().await?;

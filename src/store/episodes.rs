@@ -77,10 +77,11 @@ pub async fn incomplete(conn: &mut Conn, name: &str) -> Result<Option<i64>, sqlx
     })
 }
 
-/// Deletes an episode with its frame list, graphs and drafts (not the frames themselves).
-pub async fn delete(conn: &mut Conn, episode: i64) -> Result<(), sqlx::Error> {
+/// Deletes an incomplete episode with its frame list (not the frames themselves); a complete
+/// one is left as it is.
+pub async fn delete_incomplete(conn: &mut Conn, episode: i64) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
-        sqlx::query("DELETE FROM episodes WHERE id = $1")
+        sqlx::query("DELETE FROM episodes WHERE id = $1 AND complete = 0")
             .bind(episode)
             .execute(&mut *c)
             .await?;
