@@ -308,14 +308,7 @@ async fn remove_incomplete(hub: &Hub, episode: i64) -> Result<(), AppError> {
     let mut tx = hub.begin_bulk().await?;
     store::episodes::delete_incomplete(&mut tx, episode).await?;
     tx.commit().await?;
-    loop {
-        let mut tx = hub.begin_bulk().await?;
-        let deleted = store::staged::delete_unused_frames(&mut tx, 256).await?;
-        tx.commit().await?;
-        if deleted == 0 {
-            return Ok(());
-        }
-    }
+    Ok(super::import::delete_unused_frames(hub).await?)
 }
 
 /// Episode names become task folder names in the export: letters, digits, `_` and `-`.

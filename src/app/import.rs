@@ -1100,6 +1100,12 @@ async fn discard(
     let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
     store::staged::remove(&mut tx, staged).await?;
     tx.commit().await?;
+    delete_unused_frames(hub).await
+}
+
+/// Deletes every stored frame that no item or episode uses (left by a discarded import, or by
+/// an incomplete episode removed), a few hundred per transaction.
+pub(super) async fn delete_unused_frames(hub: &super::Hub) -> Result<(), sqlx::Error> {
     loop {
         let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
         let deleted = store::staged::delete_unused_frames(&mut tx, DELETE_BATCH).await?;
