@@ -346,20 +346,22 @@ async fn the_protocol_runs_once_with_csrf_and_cross_assigns_blind() {
     }
     // Each annotator's cross-assignments follow its primary queue, numbered on from its end.
     for id in &ids {
-        let positions = |kind: &str| {
-            format!(
-                "SELECT coalesce({}, 0) FROM assignments WHERE annotator = {id} AND kind = '{kind}'",
-                if kind == "primary" {
-                    "max(position)"
-                } else {
-                    "min(position) * 1000 + max(position)"
-                }
-            )
+        let of = |what: &str, kind: &str| {
+            format!("SELECT {what} FROM assignments WHERE annotator = {id} AND kind = '{kind}'")
         };
-        let primary_last = count(&server.pool, &positions("primary")).await;
-        let cross = count(&server.pool, &positions("agreement")).await;
-        assert_eq!(primary_last, 8);
-        assert_eq!(cross, 9 * 1000 + 12, "annotator {id}: positions 9..=12");
+        assert_eq!(
+            count(&server.pool, &of("max(position)", "primary")).await,
+            8
+        );
+        assert_eq!(
+            count(&server.pool, &of("min(position)", "agreement")).await,
+            9
+        );
+        assert_eq!(
+            count(&server.pool, &of("max(position)", "agreement")).await,
+            12
+        );
+        assert_eq!(count(&server.pool, &of("count(*)", "agreement")).await, 4);
     }
     // The annotator's queue and item page look like any other assignment.
     let (mut ann, _) = logged_in(&server, "ann").await;
