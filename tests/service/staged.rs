@@ -39,6 +39,26 @@ fn interrupted_after(mut options: ImportOptions, batches: usize) -> ImportOption
     options
 }
 
+/// A 40-item release in `dir/changed` whose first images are frames no other release of these
+/// tests has, so that importing it stages new frames; returns its folder.
+fn release_with_new_frames(dir: &Path) -> std::path::PathBuf {
+    let changed = dir.join("changed");
+    let records = write_balanced_release(&changed, &[3], 40);
+    let lines: Vec<String> = records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            if let Some(first) = r["images"][0].as_str() {
+                let png = crate::helpers::png_bytes(9000 + i as u32, i);
+                std::fs::write(changed.join(first), png).expect("image");
+            }
+            r.to_string()
+        })
+        .collect();
+    write_qa_file(&changed, &lines);
+    changed
+}
+
 /// Runs an import that the observer interrupts; it must not finish.
 async fn run_interrupted(pool: &Pool, root: &Path, options: ImportOptions) {
     let hub = Hub::from(pool.clone());
@@ -183,23 +203,7 @@ async fn an_unfinished_import_is_abandoned_or_discarded_for_another_file() {
     let frames = count(&pool, "SELECT count(*) FROM frames").await;
 
     // A new version whose images are new frames too: interrupted, then abandoned.
-    let changed = dir.path().join("changed");
-    let records_b = write_balanced_release(&changed, &[3], 40);
-    // Other images: drawn for other frame numbers, so new frames are staged.
-    let lines: Vec<String> = records_b
-        .iter()
-        .enumerate()
-        .map(|(i, r)| {
-            let r = r.clone();
-            if let Some(first) = r["images"][0].as_str() {
-                let path = changed.join(first);
-                std::fs::write(&path, crate::helpers::png_bytes(9000 + i as u32, i))
-                    .expect("image");
-            }
-            r.to_string()
-        })
-        .collect();
-    write_qa_file(&changed, &lines);
+    let changed = release_with_new_frames(dir.path());
     run_interrupted(&pool, &changed, interrupted_after(batched("main", 8), 2)).await;
     assert!(count(&pool, "SELECT count(*) FROM frames").await > frames);
     let gone = abandon(&hub, &tester(), "main")
@@ -426,20 +430,7 @@ async fn discarding_a_staged_import_keeps_the_frames_of_episodes() {
 
     // A new version with new frames, interrupted, then abandoned: what it staged goes, the
     // episode's frames stay.
-    let changed = dir.path().join("changed");
-    let records = write_balanced_release(&changed, &[3], 40);
-    let lines: Vec<String> = records
-        .iter()
-        .enumerate()
-        .map(|(i, r)| {
-            if let Some(first) = r["images"][0].as_str() {
-                let png = crate::helpers::png_bytes(9000 + i as u32, i);
-                std::fs::write(changed.join(first), png).expect("image");
-            }
-            r.to_string()
-        })
-        .collect();
-    write_qa_file(&changed, &lines);
+    let changed = release_with_new_frames(dir.path());
     run_interrupted(&pool, &changed, interrupted_after(batched("main", 8), 2)).await;
     assert!(count(&pool, "SELECT count(*) FROM frames").await > frames);
     abandon(&hub, &tester(), "main")
