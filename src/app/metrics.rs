@@ -1,9 +1,9 @@
 //! What an operator watches, in Prometheus' text format (`GET /metrics`): counters and
 //! histograms each instance keeps in memory from its start (requests by route and status,
 //! their latency, waits for a database connection and for a write transaction, how long write
-//! transactions held the turn to write, submissions
-//! scored, annotator answers, failed logins), and gauges read when scraped (the caches' sizes
-//! and hit counts, jobs by kind and state, and the items done by each running job).
+//! transactions held the turn to write, submissions scored, annotator answers, failed logins),
+//! and gauges read when scraped (the caches' sizes and hit counts, jobs by kind and state, and
+//! the items done by each running job).
 //!
 //! Each [`Hub`] has its own registry, so servers in one process (tests) never count each
 //! other's requests.
@@ -126,7 +126,8 @@ impl Default for Metrics {
         let write_wait = Histogram::new(seconds_buckets());
         registry.register(
             "db_write_wait_seconds",
-            "Time to begin a write transaction (a connection, then the write lock on SQLite)",
+            "Time to begin a write transaction (this instance's turn to write, a connection, then \
+             the database's write lock)",
             write_wait.clone(),
         );
         let write_held = Family::<LaneLabels, Histogram>::new_with_constructor(|| {
@@ -135,7 +136,7 @@ impl Default for Metrics {
         registry.register(
             "db_write_held_seconds",
             "Time a write transaction kept this instance's turn to write (from the turn to its \
-             commit or rollback), by lane: interactive (answers, drafts, logins, admin changes) \
+             commit or rollback), by lane: interactive (answers, drafts, quota counts, admin changes) \
              or bulk (submissions' verdicts, rescoring, import batches)",
             write_held.clone(),
         );

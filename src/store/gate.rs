@@ -19,7 +19,7 @@ use tokio::sync::oneshot;
 /// Which queue a writer waits in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Lane {
-    /// A request someone is waiting on: an answer, a draft, a login, an admin's change.
+    /// A request someone is waiting on: an answer, a draft, a quota count, an admin's change.
     Interactive,
     /// Many rows at once, where a few more milliseconds do not matter: a submission's
     /// verdicts, rescoring, an import's batches and cut-over.
