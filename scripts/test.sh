@@ -114,15 +114,15 @@ if newer:
 print("   rust-version %s" % ours)
 '
 
-echo "== cargo clippy --all-targets -- -D warnings"
-cargo clippy --all-targets --locked -- -D warnings
+echo "== cargo clippy --workspace --all-targets -- -D warnings"
+cargo clippy --workspace --all-targets --locked -- -D warnings
 
 # The live-import test bounds how long any write waits while an import runs (1 s): it is
 # marked ignored and run alone, after the rest, so that what it measures is the import's
 # locking, not two cores shared with every other test of the suite.
 LIVE=live_import::
-echo "== cargo test --all-targets"
-cargo test --all-targets --locked
+echo "== cargo test --workspace --all-targets"
+cargo test --workspace --all-targets --locked
 echo "== $LIVE alone"
 cargo test --locked --test service -- --ignored "$LIVE"
 

@@ -1,20 +1,23 @@
 //! enact-hub: a self-hosted evaluation service for the ENACT benchmark.
 //!
-//! Four layers, each allowed to use only the ones below it (a test, `tests/layers.rs`, reads
-//! every `crate::` path and fails on a step up or a cycle):
+//! Four layers, each allowed to use only the ones below it. The benchmark is a crate of its own
+//! (`crates/enact-core`), so Cargo keeps it from naming anything above it; within this crate a
+//! test, `tests/layers.rs`, reads every `crate::` path and fails on a step up or a cycle:
 //!
 //! | folder        | what lives there                                                     |
 //! |---------------|----------------------------------------------------------------------|
 //! | `src/cli/`, `src/web/` | adapters: parse arguments or requests, call one [`app`] use case, render text, JSON or HTML |
 //! | `src/app/`    | use cases: import, submit, tokens, annotators, assignment, drafts and answers, the agreement protocol and report, error analyses, leaderboards, the demo |
 //! | `src/store/`  | SQLite or PostgreSQL: connection setup, migrations, rows in and rows out, no decisions |
-//! | `src/core/`   | the benchmark, pure: dataset, scene graphs, verifier, error analysis, pipeline, agreement statistics, world |
+//! | `crates/enact-core/` ([`core`]) | the benchmark, pure: dataset, scene graphs, verifier, error analysis, pipeline, agreement statistics, world; no database, HTTP, async or command line |
 //!
 //! Start with `migrations/` for the schema, then [`core`] for the benchmark, then [`app`] for
 //! what the service does with it. `src/main.rs` only calls [`cli::main`].
 
 pub mod app;
 pub mod cli;
-pub mod core;
 pub mod store;
 pub mod web;
+
+/// The benchmark (the `enact-core` crate), named `core` here as every layer above it calls it.
+pub use enact_core as core;

@@ -3,8 +3,8 @@
 use serde::Serialize;
 
 use super::{AppError, Hub};
-use crate::core::version::{self, POSTGRES_SCHEMA, SQLITE_SCHEMA};
-use crate::store;
+use crate::core::version;
+use crate::store::{self, POSTGRES_SCHEMA, SQLITE_SCHEMA};
 
 /// The schema of the database a hub is serving from.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, schemars::JsonSchema)]
@@ -43,4 +43,17 @@ pub async fn describe(hub: &Hub) -> Result<BuildReport, AppError> {
             expected,
         },
     })
+}
+
+/// What `enact-hub --version` prints after the program's name: the version, the commit and the
+/// schema version of each backend.
+pub fn version_line() -> &'static str {
+    static LINE: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+        format!(
+            "{} (commit {}, schema sqlite {SQLITE_SCHEMA}, postgres {POSTGRES_SCHEMA})",
+            version::VERSION,
+            version::COMMIT
+        )
+    });
+    &LINE
 }

@@ -37,7 +37,7 @@ mod study;
 #[derive(Parser)]
 #[command(
     name = "enact-hub",
-    version = crate::core::version::VERSION_LINE,
+    version = crate::app::version::version_line(),
     about = "Self-hosted evaluation service for the ENACT benchmark"
 )]
 struct Cli {

@@ -33,6 +33,29 @@ use db::{Fields, on};
 use sqlx::SqlitePool;
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
 
+/// The highest SQLite migration this build applies (counted by `build.rs`).
+pub const SQLITE_SCHEMA: i64 = decimal(env!("ENACT_HUB_SCHEMA_SQLITE"));
+
+/// The highest PostgreSQL migration this build applies.
+pub const POSTGRES_SCHEMA: i64 = decimal(env!("ENACT_HUB_SCHEMA_POSTGRES"));
+
+/// A build script's decimal number, read at compile time (a stray character fails the build).
+const fn decimal(text: &str) -> i64 {
+    let bytes = text.as_bytes();
+    assert!(!bytes.is_empty(), "an empty schema version");
+    let mut value = 0;
+    let mut i = 0;
+    while i < bytes.len() {
+        assert!(
+            bytes[i].is_ascii_digit(),
+            "a schema version that is not a number"
+        );
+        value = value * 10 + (bytes[i] - b'0') as i64;
+        i += 1;
+    }
+    value
+}
+
 /// How long a write waits for the database's write lock before it is refused as busy.
 pub const WRITE_WAIT: Duration = Duration::from_secs(10);
 
@@ -266,59 +289,7 @@ pub async fn schema_version(pool: &Pool) -> Result<(&'static str, i64), sqlx::Er
     Ok((backend, applied))
 }
 
-/// Maps an enum of the benchmark to a TEXT column through its `as_str` and `parse`, so rows
-/// carry the enum and the column's CHECK constraint stays the one list of spellings on disk.
-macro_rules! text_column {
-    ($($ty:ty),* $(,)?) => {$(
-        text_column!(@in sqlx::Sqlite, $ty);
-        text_column!(@in sqlx::Postgres, $ty);
-    )*};
-    (@in $db:ty, $ty:ty) => {
-        impl sqlx::Type<$db> for $ty {
-            fn type_info() -> <$db as sqlx::Database>::TypeInfo {
-                <str as sqlx::Type<$db>>::type_info()
-            }
-
-            fn compatible(ty: &<$db as sqlx::Database>::TypeInfo) -> bool {
-                <str as sqlx::Type<$db>>::compatible(ty)
-            }
-        }
-
-        impl<'q> sqlx::Encode<'q, $db> for $ty {
-            fn encode_by_ref(
-                &self,
-                buf: &mut <$db as sqlx::Database>::ArgumentBuffer<'q>,
-            ) -> Result<sqlx::encode::IsNull, sqlx::error::BoxDynError> {
-                let text: &'static str = self.as_str();
-                <&str as sqlx::Encode<'q, $db>>::encode(text, buf)
-            }
-        }
-
-        impl<'r> sqlx::Decode<'r, $db> for $ty {
-            fn decode(
-                value: <$db as sqlx::Database>::ValueRef<'r>,
-            ) -> Result<Self, sqlx::error::BoxDynError> {
-                let text = <&str as sqlx::Decode<'r, $db>>::decode(value)?;
-                <$ty>::parse(text).ok_or_else(|| {
-                    format!("unknown {} {text:?}", stringify!($ty)).into()
-                })
-            }
-        }
-    };
-}
-
-text_column!(
-    crate::core::agreement::protocol::AssignmentKind,
-    crate::core::annotation::OutcomeKind,
-    crate::core::credentials::Role,
-    crate::core::dataset::AnswerVisibility,
-    crate::core::semantics::SignatureSource,
-    crate::core::submission::SubmissionStatus,
-    crate::core::submission::VerdictOutcome,
-    crate::core::submission::Visibility,
-    crate::core::verifier::ScoringPolicy,
-    jobs::JobState,
-);
+enact_core::text_columns!(jobs::JobState);
 
 /// Writes a consistent copy of the whole SQLite database to `out` (`VACUUM INTO`): one read
 /// transaction, so writers carry on and the copy holds exactly what was committed when it

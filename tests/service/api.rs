@@ -31,7 +31,8 @@ fn highest_migration(backend: &str) -> i64 {
 
 #[tokio::test]
 async fn version_names_the_build_and_the_schema_its_database_is_at() {
-    use enact_hub::core::version::{COMMIT, POSTGRES_SCHEMA, SQLITE_SCHEMA, VERSION};
+    use enact_hub::core::version::{COMMIT, VERSION};
+    use enact_hub::store::{POSTGRES_SCHEMA, SQLITE_SCHEMA};
     let server = spawn_app_with(|_, _| async {}).await;
     let (status, body) = server.get_json("/api/v1/version").await;
     assert_eq!(status, StatusCode::OK);

@@ -42,7 +42,7 @@ fn version_prints_the_crate_version_the_commit_and_the_schema_versions() {
     let line = stdout.trim_end();
     assert_eq!(
         line,
-        format!("enact-hub {}", enact_hub::core::version::VERSION_LINE)
+        format!("enact-hub {}", enact_hub::app::version::version_line())
     );
     let expected_start = format!("enact-hub {} (commit ", env!("CARGO_PKG_VERSION"));
     assert!(line.starts_with(&expected_start), "{line}");
