@@ -215,10 +215,12 @@ pub async fn session(hub: &Hub, token_hash: &str) -> Result<Option<(Session, i64
 
 /// Ends the session whose token hashes to `token_hash` (and any expired ones).
 pub async fn end_session(hub: &Hub, token_hash: &str) -> Result<(), AppError> {
-    let mut conn = hub.conn().await?;
-    store::annotations::delete_session(&mut conn, token_hash, now_ms()).await?;
-    hub.publish(&mut conn, &Change::SessionEnded(token_hash.to_owned()))
-        .await
+    let mut tx = hub.begin().await?;
+    store::annotations::delete_session(&mut tx, token_hash, now_ms()).await?;
+    hub.publish(&mut tx, &Change::SessionEnded(token_hash.to_owned()))
+        .await?;
+    tx.commit().await?;
+    Ok(())
 }
 
 /// Saves `locale` (a tag the pages serve) as the preference of the annotator whose session

@@ -1,8 +1,16 @@
-//! The changes server instances on one PostgreSQL database announce to each other
-//! ([`super::watch::listen`]), and their `NOTIFY` payloads.
+//! The changes processes on one database announce to each other, and their payloads: server
+//! instances on PostgreSQL with `NOTIFY` ([`super::watch::listen`]); on either database the
+//! command line to running servers, and on SQLite every process, through the change feed
+//! table ([`super::watch::follow_feed`]).
 
 /// The `LISTEN`/`NOTIFY` channel instances announce changes on.
 pub const CHANNEL: &str = "enact_hub_changes";
+
+/// A fresh name for this process in the change feed (random, so two processes started in the
+/// same instant still differ).
+pub fn new_origin() -> String {
+    format!("{:016x}", rand::random::<u64>())
+}
 
 /// A change other instances must drop from their caches.
 #[derive(Debug, Clone, PartialEq, Eq)]

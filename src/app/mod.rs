@@ -153,6 +153,8 @@ pub struct Hub {
     heavy: heavy::HeavyPool,
     /// The order this process's writers take the database's write lock in.
     gate: store::gate::WriteGate,
+    /// This process's name in the change feed, so that a server skips its own announcements.
+    origin: Arc<str>,
 }
 
 impl From<SqlitePool> for Hub {
@@ -192,6 +194,7 @@ impl Hub {
             metrics,
             heavy,
             gate,
+            origin: changes::new_origin().into(),
         }
     }
 
@@ -364,13 +367,19 @@ impl Hub {
     }
 
     /// Clears the caches whenever stored items change, also through another process's
-    /// import, and (on PostgreSQL) whatever other instances announce. Runs until the database
-    /// is closed.
+    /// import, and whatever other processes announce: other instances on PostgreSQL, the
+    /// command line on either database. Runs until the database is closed.
     pub async fn watch_content(self) {
         let caches = self.caches();
         tokio::join!(
             watch::watch_generation(self.pool.clone(), caches.clone()),
-            watch::listen(self.pool.clone(), caches, self.changes.clone()),
+            watch::listen(self.pool.clone(), caches.clone(), self.changes.clone()),
+            watch::follow_feed(
+                self.pool.clone(),
+                caches,
+                self.changes.clone(),
+                self.origin.clone()
+            ),
         );
     }
 
@@ -380,14 +389,14 @@ impl Hub {
         self.changes.subscribe()
     }
 
-    /// Announces `change` to the other instances on the database, when `conn`'s transaction
-    /// commits (PostgreSQL; nothing on SQLite).
+    /// Announces `change` to the other processes on the database (server instances, and
+    /// servers beside a command-line process), when `conn`'s transaction commits.
     async fn publish(
         &self,
         conn: &mut store::Conn,
         change: &changes::Change,
     ) -> Result<(), AppError> {
-        Ok(store::notify(conn, changes::CHANNEL, &change.payload()).await?)
+        Ok(store::announce(conn, changes::CHANNEL, &self.origin, &change.payload()).await?)
     }
 
     async fn conn(&self) -> Result<store::PooledConn, AppError> {

@@ -7,8 +7,10 @@
 //! the others change: an annotator's standing on an item, a leaderboard, a login session. Every
 //! such change is [`published`](super::Hub::publish) on the database's `NOTIFY` channel inside
 //! the transaction that makes it (so it is announced exactly when it commits), and every
-//! instance [listens](listen) and drops what it cached. Item changes keep the generation poll,
-//! which also catches imports by a command-line process.
+//! instance [listens](listen) and drops what it cached. On SQLite the other writers are
+//! command-line processes beside one server: the same announcements are rows of the change
+//! feed, written in the same transactions, which the server [reads](follow_feed) twice a second.
+//! Item changes keep the generation poll, which also catches imports by a command-line process.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -129,8 +131,99 @@ pub async fn watch_generation(pool: Pool, caches: Caches) {
     }
 }
 
-/// Applies the changes other instances announce, until the pool closes (PostgreSQL only; a
-/// SQLite database has one server). Changes are also sent on `changes` for caches outside the
+/// Drops what `change` makes stale from the caches, and passes it on to the caches outside the
+/// app layer (the web's sessions).
+fn apply(caches: &Caches, changes: &tokio::sync::broadcast::Sender<Change>, change: Change) {
+    match &change {
+        Change::Standing { annotator, item } => caches.standings.forget(*annotator, *item),
+        Change::Boards => caches.boards.changed(),
+        Change::Everything => {
+            caches.items.clear();
+            caches.standings.clear();
+            caches.boards.changed();
+        }
+        Change::SessionEnded(_) => {}
+    }
+    let _ = changes.send(change);
+}
+
+/// How many announcements one read of the change feed takes at most.
+const FEED_PAGE: i64 = 1000;
+
+/// Applies what other processes wrote to the change feed (SQLite: the command line beside a
+/// running server), within one poll interval, until the pool closes. A PostgreSQL database's
+/// instances announce with `NOTIFY` instead ([`listen`]). Announcements this process wrote
+/// itself (`origin`) were applied when they committed, and are skipped.
+pub async fn follow_feed(
+    pool: Pool,
+    caches: Caches,
+    changes: tokio::sync::broadcast::Sender<Change>,
+    origin: Arc<str>,
+) {
+    if !matches!(pool, Pool::Sqlite(_)) {
+        return;
+    }
+    // Where reading starts: what was announced before this server started is in no cache.
+    let mut last = None;
+    let mut ticker = tokio::time::interval(POLL_INTERVAL);
+    ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    loop {
+        ticker.tick().await;
+        if pool.is_closed() {
+            return;
+        }
+        let read = async {
+            let mut conn = pool.acquire().await?;
+            let (oldest, newest) = store::change_feed_span(&mut conn).await?;
+            let Some(after) = last else {
+                return Ok::<_, sqlx::Error>((newest, Vec::new(), false));
+            };
+            // Rows pruned before this server read them: what they said is unknown.
+            let missed = oldest > after + 1;
+            let mut read = Vec::new();
+            let mut from = after;
+            loop {
+                let page = store::announcements_after(&mut conn, from, FEED_PAGE).await?;
+                let full = page.len() as i64 == FEED_PAGE;
+                from = page.last().map_or(from, |a| a.id);
+                read.extend(page);
+                if !full {
+                    break;
+                }
+            }
+            Ok((from, read, missed))
+        };
+        match read.await {
+            Ok((seen, announcements, missed)) => {
+                if missed {
+                    tracing::warn!("the change feed moved past this server: caches cleared");
+                    apply(&caches, &changes, Change::Everything);
+                }
+                for announcement in announcements.iter().filter(|a| *a.origin != *origin) {
+                    match Change::parse(&announcement.payload) {
+                        Some(change) => apply(&caches, &changes, change),
+                        None => tracing::warn!(
+                            payload = announcement.payload,
+                            "unknown change in the change feed"
+                        ),
+                    }
+                }
+                last = Some(seen);
+            }
+            Err(e) => {
+                if pool.is_closed() {
+                    return;
+                }
+                // Announcements may be missed meanwhile: serve nothing stale.
+                tracing::warn!(error = %e, "cannot read the change feed");
+                apply(&caches, &changes, Change::Everything);
+            }
+        }
+    }
+}
+
+/// Applies the changes other instances announce, until the pool closes (PostgreSQL only; on
+/// SQLite, [`follow_feed`]). Changes are also sent on `changes` for caches outside the
 /// app layer (the web's sessions). When the connection drops, notifications may have been
 /// missed meanwhile: every cache is cleared.
 pub async fn listen(pool: Pool, caches: Caches, changes: tokio::sync::broadcast::Sender<Change>) {
@@ -142,10 +235,7 @@ pub async fn listen(pool: Pool, caches: Caches, changes: tokio::sync::broadcast:
             why,
             "cross-instance changes may have been missed: caches cleared"
         );
-        caches.items.clear();
-        caches.standings.clear();
-        caches.boards.changed();
-        let _ = changes.send(Change::Everything);
+        apply(&caches, &changes, Change::Everything);
     };
     let mut listener = loop {
         match sqlx::postgres::PgListener::connect_with(pg).await {
@@ -163,16 +253,7 @@ pub async fn listen(pool: Pool, caches: Caches, changes: tokio::sync::broadcast:
     loop {
         match listener.try_recv().await {
             Ok(Some(notification)) => match Change::parse(notification.payload()) {
-                Some(change) => {
-                    match &change {
-                        Change::Standing { annotator, item } => {
-                            caches.standings.forget(*annotator, *item);
-                        }
-                        Change::Boards => caches.boards.changed(),
-                        Change::SessionEnded(_) | Change::Everything => {}
-                    }
-                    let _ = changes.send(change);
-                }
+                Some(change) => apply(&caches, &changes, change),
                 None => tracing::warn!(
                     payload = notification.payload(),
                     "unknown change announced on {CHANNEL}"

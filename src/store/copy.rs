@@ -95,6 +95,11 @@ pub const TABLES: &[Table] = &[
     ),
     table("content_generation", &[("id", Int), ("value", Int)], false),
     table(
+        "change_feed",
+        &[("id", Int), ("origin", Text), ("payload", Text)],
+        true,
+    ),
+    table(
         "item_signatures",
         &[("item", Int), ("source", Text), ("signatures", Text)],
         false,

@@ -158,11 +158,35 @@ pub async fn content_generation(conn: &mut Conn) -> Result<i64, sqlx::Error> {
     })
 }
 
-/// Announces `payload` on the PostgreSQL channel `channel`, delivered when the transaction
-/// `conn` is in commits (at once outside one). Nothing on SQLite: one database, one server.
-pub async fn notify(conn: &mut Conn, channel: &str, payload: &str) -> Result<(), sqlx::Error> {
+/// How many announcements the SQLite change feed keeps: servers read it twice a second, so a
+/// reader can only miss rows pruned from under it after thousands of changes in half a second
+/// (and then drops everything it cached).
+pub const CHANGE_FEED_KEPT: i64 = 4096;
+
+/// Announces `payload` to the other processes on the database, delivered when the transaction
+/// `conn` is in commits (at once outside one): PostgreSQL's `NOTIFY` on `channel`; on SQLite a
+/// row of `change_feed` from `origin`, which running servers read ([`announcements_after`]).
+pub async fn announce(
+    conn: &mut Conn,
+    channel: &str,
+    origin: &str,
+    payload: &str,
+) -> Result<(), sqlx::Error> {
     match db::Connection::handle(conn) {
-        db::Handle::Sqlite(_) => Ok(()),
+        db::Handle::Sqlite(c) => {
+            let id: i64 = sqlx::query_scalar(
+                "INSERT INTO change_feed (origin, payload) VALUES ($1, $2) RETURNING id",
+            )
+            .bind(origin)
+            .bind(payload)
+            .fetch_one(&mut *c)
+            .await?;
+            sqlx::query("DELETE FROM change_feed WHERE id <= $1")
+                .bind(id - CHANGE_FEED_KEPT)
+                .execute(&mut *c)
+                .await?;
+            Ok(())
+        }
         db::Handle::Pg(c) => {
             sqlx::query("SELECT pg_notify($1, $2)")
                 .bind(channel)
@@ -172,6 +196,40 @@ pub async fn notify(conn: &mut Conn, channel: &str, payload: &str) -> Result<(),
             Ok(())
         }
     }
+}
+
+/// An announcement of the change feed: its id, the announcing process and the payload.
+#[derive(Debug, Clone, PartialEq, Eq, sqlx::FromRow)]
+pub struct Announcement {
+    pub id: i64,
+    pub origin: String,
+    pub payload: String,
+}
+
+/// The change feed's announcements after `after`, oldest first (at most `limit`).
+pub async fn announcements_after(
+    conn: &mut Conn,
+    after: i64,
+    limit: i64,
+) -> Result<Vec<Announcement>, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_as(
+            "SELECT id, origin, payload FROM change_feed WHERE id > $1 ORDER BY id LIMIT $2",
+        )
+        .bind(after)
+        .bind(limit)
+        .fetch_all(&mut *c)
+        .await
+    })
+}
+
+/// The oldest and newest announcement ids the change feed still holds (0 and 0 when empty).
+pub async fn change_feed_span(conn: &mut Conn) -> Result<(i64, i64), sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_as("SELECT COALESCE(MIN(id), 0), COALESCE(MAX(id), 0) FROM change_feed")
+            .fetch_one(&mut *c)
+            .await
+    })
 }
 
 /// Marks stored items as changed; call inside the transaction that changes them.

@@ -676,3 +676,128 @@ async fn the_command_line_sets_shows_and_clears_gold_and_excludes_annotators() {
     );
     server.stop().await;
 }
+
+/// Polls `name`'s Human row on the running server until `holds` says yes, for at most two
+/// seconds after the command that changed it returned: how long it took, or a failure naming
+/// the last row seen.
+async fn human_row_within_two_seconds(
+    server: &TestServer,
+    what: &str,
+    holds: impl Fn(&Value) -> bool,
+) -> std::time::Duration {
+    let since = std::time::Instant::now();
+    loop {
+        let row = human_row(server).await;
+        if holds(&row) {
+            return since.elapsed();
+        }
+        assert!(
+            since.elapsed() < std::time::Duration::from_secs(2),
+            "{what}: the running server still shows {row} after 2 s"
+        );
+        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_command_line_s_exclusions_and_gold_reach_a_running_server_within_two_seconds() {
+    // The server caches its leaderboard; a command-line process beside it announces what it
+    // changed through the database (SQLite's change feed, PostgreSQL's NOTIFY), and the
+    // server drops the board within a poll.
+    let (server, records, _) = server_with_items().await;
+    let db = server.db_path();
+    let db = db.to_str().expect("utf-8 path");
+    let gts: BTreeMap<String, Vec<u8>> = records
+        .iter()
+        .map(|r| (id(r), labels(&r["gt_answer"])))
+        .collect();
+    let ordinary: Vec<String> = records.iter().map(id).take(8).collect();
+    let hub = Hub::from(server.pool.clone());
+    let careful = annotator(&server, "careful", false).await;
+    let careless = annotator(&server, "careless", false).await;
+    for who in [careful, careless] {
+        assign_listed(&hub, who, &ordinary).await;
+    }
+    work_queue(
+        &server,
+        "careful",
+        careful,
+        |_| 30,
+        |item| gts[item].clone(),
+    )
+    .await;
+    let mut state = 0x2545_F491_4F6C_DD1D;
+    work_queue(
+        &server,
+        "careless",
+        careless,
+        |_| CARELESS_SECONDS,
+        |item| careless_order(&gts[item], &mut state),
+    )
+    .await;
+    let row = human_row(&server).await;
+    assert_eq!(row["human"]["annotators"], 2, "{row}");
+
+    // The board is cached: a change written to the database without an announcement (as no
+    // use case writes one) is not seen, so what follows is the announcement's doing.
+    db!(
+        server.pool,
+        execute,
+        sqlx::query(
+            "INSERT INTO annotator_exclusions (dataset, annotator, excluded_by) \
+             SELECT id, $1, 'test' FROM datasets WHERE name = 'mini'"
+        )
+        .bind(careless)
+    )
+    .expect("excluded behind the server's back");
+    tokio::time::sleep(std::time::Duration::from_millis(1500)).await;
+    let row = human_row(&server).await;
+    assert_eq!(
+        row["human"]["annotators"], 2,
+        "the server's board is cached, so an unannounced change stays unseen: {row}"
+    );
+    db!(
+        server.pool,
+        execute,
+        sqlx::query("DELETE FROM annotator_exclusions WHERE annotator = $1").bind(careless)
+    )
+    .expect("exclusion undone");
+
+    let on_mini =
+        |verb: &str, name: &str| run(&["annotator", verb, name, "--db", db, "--dataset", "mini"]);
+    let (ok, out, err) = on_mini("exclude", "careless");
+    assert!(
+        ok && out.contains("left out of the Human row"),
+        "{out}{err}"
+    );
+    let took = human_row_within_two_seconds(&server, "annotator exclude", |row| {
+        row["human"]["annotators"] == 1 && row["human"]["excluded_annotators"] == 1
+    })
+    .await;
+    eprintln!("annotator exclude reached the running server in {took:?}");
+
+    let (ok, out, err) = on_mini("include", "careless");
+    assert!(ok, "{out}{err}");
+    human_row_within_two_seconds(&server, "annotator include", |row| {
+        row["human"]["annotators"] == 2 && row["human"]["excluded_annotators"] == 0
+    })
+    .await;
+
+    // Gold items set from the command line leave the Human row at once too.
+    let list = server.dir().join("gold.txt");
+    std::fs::write(&list, format!("{}\n", ordinary[0])).expect("list written");
+    let (ok, out, err) = run(&[
+        "gold",
+        "set",
+        "mini",
+        "--db",
+        db,
+        "--items",
+        list.to_str().expect("utf-8 path"),
+        "--rate",
+        "5",
+    ]);
+    assert!(ok, "{out}{err}");
+    human_row_within_two_seconds(&server, "gold set", |row| row["human"]["gold_items"] == 1).await;
+    server.stop().await;
+}
