@@ -233,20 +233,29 @@ mod tests {
         }
     }
 
-    /// Long enough that no bulk writer ages during a test that does not mean it to.
-    const NEVER: Duration = Duration::from_secs(3600);
+    /// Writers queued one after the other, each noting its name when its turn comes.
+    struct Queued {
+        order: Arc<Mutex<Vec<&'static str>>>,
+        tasks: Vec<tokio::task::JoinHandle<()>>,
+    }
 
-    #[tokio::test]
-    async fn an_interactive_writer_goes_before_bulk_writers_that_waited_longer() {
-        let gate = WriteGate::default().with_bulk_age(NEVER);
-        let first = gate.enter(Lane::Bulk).await;
+    impl Queued {
+        /// The order the writers had their turns in, once all have.
+        async fn order(self) -> Vec<&'static str> {
+            for task in self.tasks {
+                task.await.unwrap();
+            }
+            self.order.lock().unwrap().clone()
+        }
+    }
+
+    async fn queue_up<const N: usize>(
+        gate: &WriteGate,
+        writers: [(&'static str, Lane); N],
+    ) -> Queued {
         let order = Arc::new(Mutex::new(Vec::new()));
         let mut tasks = Vec::new();
-        for (name, lane) in [
-            ("bulk 1", Lane::Bulk),
-            ("bulk 2", Lane::Bulk),
-            ("answer", Lane::Interactive),
-        ] {
+        for (name, lane) in writers {
             let (gate, order) = (gate.clone(), order.clone());
             tasks.push(tokio::spawn(async move {
                 let _turn = gate.enter(lane).await;
@@ -254,12 +263,28 @@ mod tests {
             }));
             settle().await;
         }
+        Queued { order, tasks }
+    }
+
+    /// Long enough that no bulk writer ages during a test that does not mean it to.
+    const NEVER: Duration = Duration::from_secs(3600);
+
+    #[tokio::test]
+    async fn an_interactive_writer_goes_before_bulk_writers_that_waited_longer() {
+        let gate = WriteGate::default().with_bulk_age(NEVER);
+        let first = gate.enter(Lane::Bulk).await;
+        let queued = queue_up(
+            &gate,
+            [
+                ("bulk 1", Lane::Bulk),
+                ("bulk 2", Lane::Bulk),
+                ("answer", Lane::Interactive),
+            ],
+        )
+        .await;
         assert_eq!(gate.waiting(), (1, 2));
         drop(first);
-        for task in tasks {
-            task.await.unwrap();
-        }
-        assert_eq!(*order.lock().unwrap(), ["answer", "bulk 1", "bulk 2"]);
+        assert_eq!(queued.order().await, ["answer", "bulk 1", "bulk 2"]);
         assert_eq!(gate.waiting(), (0, 0));
         let _again = gate.enter(Lane::Bulk).await;
     }
@@ -304,29 +329,21 @@ mod tests {
         let age = Duration::from_millis(30);
         let gate = WriteGate::default().with_bulk_age(age);
         let held = gate.enter(Lane::Interactive).await;
-        let order = Arc::new(Mutex::new(Vec::new()));
-        let mut tasks = Vec::new();
-        for (name, lane) in [
-            ("bulk 1", Lane::Bulk),
-            ("answer", Lane::Interactive),
-            ("bulk 2", Lane::Bulk),
-        ] {
-            let (gate, order) = (gate.clone(), order.clone());
-            tasks.push(tokio::spawn(async move {
-                let _turn = gate.enter(lane).await;
-                order.lock().unwrap().push(name);
-            }));
-            settle().await;
-        }
+        let queued = queue_up(
+            &gate,
+            [
+                ("bulk 1", Lane::Bulk),
+                ("answer", Lane::Interactive),
+                ("bulk 2", Lane::Bulk),
+            ],
+        )
+        .await;
         assert_eq!(gate.waiting(), (1, 2));
         tokio::time::sleep(age * 2).await;
         drop(held);
-        for task in tasks {
-            task.await.unwrap();
-        }
         // The first bulk writer had aged; the second's age counts from the end of the first's
         // turn, so the answer goes before it.
-        assert_eq!(*order.lock().unwrap(), ["bulk 1", "answer", "bulk 2"]);
+        assert_eq!(queued.order().await, ["bulk 1", "answer", "bulk 2"]);
     }
 
     /// What an unbroken stream of interactive writes did while a bulk writer waited.

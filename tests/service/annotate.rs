@@ -404,15 +404,21 @@ async fn fail_logins_from(server: &TestServer, client: impl Fn(usize) -> String)
     }
 }
 
-#[tokio::test]
-async fn behind_a_trusted_proxy_the_address_limit_counts_each_client() {
-    // The test's requests come from 127.0.0.1, which this server trusts as its proxy.
+/// A server that trusts 127.0.0.1, where the test's requests come from, as its proxy, with
+/// annotator bob.
+async fn behind_a_trusted_proxy() -> TestServer {
     let config = WebConfig {
         trusted_proxies: vec!["127.0.0.1".parse().expect("address")],
         ..WebConfig::default()
     };
     let server = spawn_app_configured(config, |_, _| async {}).await;
     annotator(&server, "bob", false).await;
+    server
+}
+
+#[tokio::test]
+async fn behind_a_trusted_proxy_the_address_limit_counts_each_client() {
+    let server = behind_a_trusted_proxy().await;
     fail_logins_from(&server, |_| "203.0.113.5".to_owned()).await;
     // That client is blocked, with the reason ...
     let r = Browser::new(&server)
@@ -436,12 +442,7 @@ async fn behind_a_trusted_proxy_the_address_limit_counts_each_client() {
 
 #[tokio::test]
 async fn ipv6_clients_count_by_their_64_network() {
-    let config = WebConfig {
-        trusted_proxies: vec!["127.0.0.1".parse().expect("address")],
-        ..WebConfig::default()
-    };
-    let server = spawn_app_configured(config, |_, _| async {}).await;
-    annotator(&server, "bob", false).await;
+    let server = behind_a_trusted_proxy().await;
     // A fresh address of one /64 for every attempt ...
     fail_logins_from(&server, |k| format!("2001:db8:1:2::{:x}", k + 1)).await;
     // ... is still one client: another address of that network is blocked,
