@@ -155,6 +155,10 @@ pub async fn follow_login_link(hub: &Hub, token: &str) -> Result<i64, AppError> 
 }
 
 /// The annotator whose password this is, if the name and password match.
+///
+/// An unknown name, or an account whose invite is still unused, is checked against
+/// [`NO_ONES_HASH`], so that it costs the same password hash as a wrong password for a real
+/// name: how long the answer takes does not tell which names exist.
 pub async fn check_password(
     hub: &Hub,
     name: &str,
@@ -163,16 +167,39 @@ pub async fn check_password(
     let mut conn = hub.conn().await?;
     let stored = store::annotations::credentials(&mut conn, name).await?;
     drop(conn);
-    let Some((id, hash)) = stored else {
-        hub.metrics.login_failed(LoginFailure::Password);
-        return Ok(None);
-    };
     let password = password.to_owned();
-    let found = password_work(move || verify_password(&password, &hash).then_some(id)).await?;
+    let found = password_work(move || match stored {
+        Some((id, hash)) => verify_password(&password, &hash).then_some(id),
+        None => {
+            // Never true: no one knows the random password behind it.
+            let _ = verify_password(&password, &NO_ONES_HASH);
+            None
+        }
+    })
+    .await?;
     if found.is_none() {
         hub.metrics.login_failed(LoginFailure::Password);
     }
     Ok(found)
+}
+
+/// The hash of a random password no one knows, made once with the parameters of every stored
+/// hash ([`hash_password`]): what [`check_password`] checks a password against when the name
+/// has none. [`prepare_login`] makes it before the first login, so that login does not pay
+/// for it.
+static NO_ONES_HASH: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+    // Hashing 64 hex characters with a fresh 16-byte salt cannot fail: the salt encodes and
+    // argon2's default parameters take any password length.
+    hash_password(&random_token()).expect("argon2 hashes a random token with a fresh salt")
+});
+
+/// Makes the hash unknown names are checked against ([`NO_ONES_HASH`]), off the request
+/// threads; the server calls it as it starts.
+pub async fn prepare_login() -> Result<(), AppError> {
+    password_work(|| {
+        std::sync::LazyLock::force(&NO_ONES_HASH);
+    })
+    .await
 }
 
 /// Password hashes computed at once: one fewer than the cores (at least one). Each is tens of

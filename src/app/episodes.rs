@@ -188,7 +188,8 @@ async fn store_frame(
 
 /// Imports the PNG and JPEG frames of `dir`, ordered by file name naturally, as episode
 /// `name`. Every file is checked before anything is stored: another kind of file or an
-/// image that does not decode is refused by name, and nothing is written.
+/// image that does not decode is refused by name, and nothing is written. One import of a
+/// name runs at a time ([`claim_name`]): a second one is refused while the first is alive.
 pub async fn import(
     hub: &Hub,
     actor: &Actor,
@@ -219,32 +220,20 @@ pub async fn import(
             })
             .await?
     };
-    // A killed import of this name left an incomplete episode: it goes first.
-    if let Some(left) = store::episodes::incomplete(&mut hub.conn().await?, name).await? {
-        remove_incomplete(hub, left).await?;
-    }
-    let mut tx = hub.begin_bulk().await?;
-    let episode = match store::episodes::insert(&mut tx, name, scene, &actor.to_string()).await {
-        Ok(id) => id,
-        Err(e) if UniqueKey::EPISODE_NAME.is_violated_by(&e) => {
-            return Err(AppError::Conflict(format!(
-                "an episode named '{name}' exists already"
-            )));
-        }
-        Err(e) => return Err(e.into()),
-    };
-    tx.commit().await?;
+    let episode = claim_name(hub, actor, name, scene).await?;
     // The frames are converted outside any transaction and written a few per transaction, so
     // a long recording never holds the write lock for long; the episode stays hidden until
     // the last is written. A failure removes what was written.
-    if let Err(e) = write_frames(hub, episode, &files).await {
+    if let Err(e) = write_frames(hub, name, episode, &files).await {
         if let Err(cleanup) = remove_incomplete(hub, episode).await {
             tracing::warn!(episode = name, error = %cleanup, "an incomplete episode was left");
         }
         return Err(e);
     }
     let mut tx = hub.begin().await?;
-    store::episodes::mark_complete(&mut tx, episode).await?;
+    if !store::episodes::mark_complete(&mut tx, episode).await? {
+        return Err(taken_over(name));
+    }
     audit::record(
         &mut tx,
         actor,
@@ -270,10 +259,74 @@ pub async fn import(
 /// Frames of an episode written per transaction.
 const FRAMES_PER_BATCH: usize = 8;
 
+/// How long an import's claim on its episode name lasts past its last batch of frames
+/// ([`claim_name`]). A batch is 8 frames converted on the heavy pool, then a wait for the
+/// turn to write (at most 10 s): far less than this, unless the import was killed or stalled.
+pub const IMPORT_CLAIM_LIFE: std::time::Duration = std::time::Duration::from_secs(60);
+
+fn claim_until() -> i64 {
+    super::annotators::now_ms() + i64::try_from(IMPORT_CLAIM_LIFE.as_millis()).unwrap_or(i64::MAX)
+}
+
+/// The refusal of an import whose claim another import took over after it had said nothing
+/// for [`IMPORT_CLAIM_LIFE`].
+fn taken_over(name: &str) -> AppError {
+    AppError::Conflict(format!(
+        "the import of episode '{name}' wrote nothing for over {} s and another import of the \
+         name took it over; this one stopped",
+        IMPORT_CLAIM_LIFE.as_secs()
+    ))
+}
+
+/// Claims `name` for this import: writes its incomplete episode, in one write transaction
+/// with the decision. Another import's incomplete episode refuses the claim while that
+/// import is alive (it renews its claim with every batch), and is removed, with the frames only
+/// it used, once its claim has lapsed: that import was killed or stalled.
+async fn claim_name(hub: &Hub, actor: &Actor, name: &str, scene: &str) -> Result<i64, AppError> {
+    let mut tx = hub.begin_bulk().await?;
+    let now = super::annotators::now_ms();
+    let left = match store::episodes::incomplete(&mut tx, name).await? {
+        Some(claim) => match claim.alive_until_ms {
+            Some(until) if until > now => {
+                return Err(AppError::Conflict(format!(
+                    "episode '{name}' is being imported since {} (by {}); if that import \
+                     was stopped, its claim on the name lapses in {} s and the next import \
+                     takes the name over",
+                    claim.created_at,
+                    claim.created_by,
+                    (until - now + 999) / 1000
+                )));
+            }
+            _ => {
+                store::episodes::delete_incomplete(&mut tx, claim.episode).await?;
+                true
+            }
+        },
+        None => false,
+    };
+    let inserted =
+        store::episodes::insert(&mut tx, name, scene, &actor.to_string(), claim_until()).await;
+    let episode = match inserted {
+        Ok(id) => id,
+        Err(e) if UniqueKey::EPISODE_NAME.is_violated_by(&e) => {
+            return Err(AppError::Conflict(format!(
+                "an episode named '{name}' exists already"
+            )));
+        }
+        Err(e) => return Err(e.into()),
+    };
+    tx.commit().await?;
+    if left {
+        super::import::delete_unused_frames(hub).await?;
+    }
+    Ok(episode)
+}
+
 /// Converts and stores the frames of an incomplete episode, [`FRAMES_PER_BATCH`] per
 /// transaction.
 async fn write_frames(
     hub: &Hub,
+    name: &str,
     episode: i64,
     files: &[(String, PathBuf)],
 ) -> Result<(), AppError> {
@@ -289,6 +342,9 @@ async fn write_frames(
             );
         }
         let mut tx = hub.begin_bulk().await?;
+        if !store::episodes::renew_claim(&mut tx, episode, claim_until()).await? {
+            return Err(taken_over(name));
+        }
         for (offset, ((file_name, _), frame)) in chunk.iter().zip(prepared).enumerate() {
             let size = (frame.width, frame.height);
             let stored = store_frame(hub, &mut tx, frame.png, size).await?;

@@ -430,6 +430,7 @@ pub const TABLES: &[Table] = &[
             ("resolved_graphs", Text),
             ("resolved_by", Text),
             ("complete", Int),
+            ("import_alive_until_ms", Int),
         ],
         true,
     ),

@@ -35,45 +35,93 @@ pub struct CuratorGraphsRow {
     pub updated_at: String,
 }
 
-/// Writes an episode. A name in use refuses the insert with a violation of
+/// Writes an incomplete episode, its import's claim on the name until `alive_until_ms`. A name
+/// in use refuses the insert with a violation of
 /// [`UniqueKey::EPISODE_NAME`](super::db::UniqueKey::EPISODE_NAME).
 pub async fn insert(
     conn: &mut Conn,
     name: &str,
     scene: &str,
     created_by: &str,
+    alive_until_ms: i64,
 ) -> Result<i64, sqlx::Error> {
     on!(conn, |c| {
         sqlx::query_scalar(
-            "INSERT INTO episodes (name, scene, created_by, complete) VALUES ($1, $2, $3, 0) \
-             RETURNING id",
+            "INSERT INTO episodes (name, scene, created_by, complete, import_alive_until_ms) \
+             VALUES ($1, $2, $3, 0, $4) RETURNING id",
         )
         .bind(name)
         .bind(scene)
         .bind(created_by)
+        .bind(alive_until_ms)
         .fetch_one(&mut *c)
         .await
     })
 }
 
-/// Marks an episode whose frames are all written complete: pages, lists and exports show it.
-pub async fn mark_complete(conn: &mut Conn, episode: i64) -> Result<(), sqlx::Error> {
+/// Extends the claim of an incomplete episode's import to `alive_until_ms`; false when the
+/// episode is gone (another import took the name over) or complete.
+pub async fn renew_claim(
+    conn: &mut Conn,
+    episode: i64,
+    alive_until_ms: i64,
+) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
-        sqlx::query("UPDATE episodes SET complete = 1 WHERE id = $1")
-            .bind(episode)
-            .execute(&mut *c)
-            .await?;
-        Ok(())
+        let done = sqlx::query(
+            "UPDATE episodes SET import_alive_until_ms = $2 WHERE id = $1 AND complete = 0",
+        )
+        .bind(episode)
+        .bind(alive_until_ms)
+        .execute(&mut *c)
+        .await?;
+        Ok(done.rows_affected() == 1)
     })
 }
 
-/// The incomplete episode named `name` (an import still writing it, or killed), if any.
-pub async fn incomplete(conn: &mut Conn, name: &str) -> Result<Option<i64>, sqlx::Error> {
+/// Marks an episode whose frames are all written complete (pages, lists and exports show it)
+/// and ends its import's claim; false when the episode is gone or complete already.
+pub async fn mark_complete(conn: &mut Conn, episode: i64) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
-        sqlx::query_scalar("SELECT id FROM episodes WHERE name = $1 AND complete = 0")
-            .bind(name)
-            .fetch_optional(&mut *c)
-            .await
+        let done = sqlx::query(
+            "UPDATE episodes SET complete = 1, import_alive_until_ms = NULL \
+             WHERE id = $1 AND complete = 0",
+        )
+        .bind(episode)
+        .execute(&mut *c)
+        .await?;
+        Ok(done.rows_affected() == 1)
+    })
+}
+
+/// An incomplete episode: an import still writing it, or one that was killed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ImportClaim {
+    pub episode: i64,
+    pub created_by: String,
+    pub created_at: String,
+    /// Until when its import last said it was alive (none: left before imports said so).
+    pub alive_until_ms: Option<i64>,
+}
+
+/// The incomplete episode named `name`, if any.
+pub async fn incomplete(conn: &mut Conn, name: &str) -> Result<Option<ImportClaim>, sqlx::Error> {
+    on!(conn, |c| {
+        let row = sqlx::query(
+            "SELECT id, created_by, created_at, import_alive_until_ms FROM episodes \
+             WHERE name = $1 AND complete = 0",
+        )
+        .bind(name)
+        .fetch_optional(&mut *c)
+        .await?;
+        row.map(|r| {
+            Ok(ImportClaim {
+                episode: r.try_get("id")?,
+                created_by: r.try_get("created_by")?,
+                created_at: r.try_get("created_at")?,
+                alive_until_ms: r.try_get("import_alive_until_ms")?,
+            })
+        })
+        .transpose()
     })
 }
 

@@ -340,6 +340,12 @@ impl Server {
         let sessions = self.state.sessions.clone();
         let changes = self.state.hub.subscribe();
         let follower = tokio::spawn(async move { sessions.follow(changes).await });
+        // The first login with an unknown name must not pay for the hash it is checked against.
+        tokio::spawn(async {
+            if let Err(e) = crate::app::annotators::prepare_login().await {
+                tracing::warn!(error = %e, "the hash unknown login names are checked against");
+            }
+        });
         // Connection info gives the login rate limit the client's address.
         let result = axum::serve(
             self.listener,

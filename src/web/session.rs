@@ -58,15 +58,30 @@ pub struct LoginLimiter {
     failures: Mutex<HashMap<String, VecDeque<Instant>>>,
 }
 
+/// The client an address counts as for the address limit. An IPv6 host is usually given a
+/// whole /64 network, so one client could try a fresh address for every attempt: IPv6
+/// addresses count by their /64. An IPv4 address written as IPv6 (`::ffff:a.b.c.d`, as a
+/// dual-stack socket reports it) counts as the IPv4 address.
+fn address_key(address: Option<IpAddr>) -> String {
+    match address {
+        None => "?".to_owned(),
+        Some(IpAddr::V4(v4)) => v4.to_string(),
+        Some(IpAddr::V6(v6)) => match v6.to_ipv4_mapped() {
+            Some(v4) => v4.to_string(),
+            None => {
+                let network = u128::from(v6) & !(u128::MAX >> 64);
+                format!("{}/64", std::net::Ipv6Addr::from(network))
+            }
+        },
+    }
+}
+
 impl LoginLimiter {
     fn keys(account: &str, address: Option<IpAddr>) -> [(String, usize); 2] {
         [
             (format!("account:{account}"), ACCOUNT_FAILURES),
             (
-                format!(
-                    "address:{}",
-                    address.map_or("?".to_owned(), |a| a.to_string())
-                ),
+                format!("address:{}", address_key(address)),
                 ADDRESS_FAILURES,
             ),
         ]
@@ -470,20 +485,28 @@ async fn login(
         return login_form(tr, &headers, StatusCode::BAD_REQUEST, name, Some(error));
     }
     if let Err(e) = state.logins.check(&name, address) {
-        let error = match &e {
+        let (error, retry_after) = match &e {
             AppError::LimitReached {
                 retry_after: Some(seconds),
                 ..
-            } => tr.t_ns(
-                "login-error-limited",
-                "minutes",
-                seconds.div_ceil(60).max(1),
-                "detail",
-                e.to_string(),
+            } => (
+                tr.t_ns(
+                    "login-error-limited",
+                    "minutes",
+                    seconds.div_ceil(60).max(1),
+                    "detail",
+                    e.to_string(),
+                ),
+                Some(*seconds),
             ),
-            _ => e.to_string(),
+            _ => (e.to_string(), None),
         };
-        return login_form(tr, &headers, e.status(), name, Some(error));
+        let mut page = login_form(tr, &headers, e.status(), name, Some(error))?;
+        if let Some(seconds) = retry_after {
+            page.headers_mut()
+                .insert(header::RETRY_AFTER, HeaderValue::from(seconds));
+        }
+        return Ok(page);
     }
     let matched = annotators::check_password(&state.hub, &name, &form.password).await?;
     let Some(annotator) = matched else {

@@ -10,7 +10,7 @@ use enact_hub::core::scene_graph::parse_action;
 use enact_hub::core::verifier::{Permutation, parse_answer_enact, parse_python_json, verify};
 use serde_json::{Value, json};
 
-use crate::helpers::{count, enact_hub, fresh_db_located, tester};
+use crate::helpers::{count, db, enact_hub, fresh_db_located, tester};
 
 fn run(args: &[&str]) -> (bool, String, String) {
     let out = enact_hub()
@@ -359,11 +359,13 @@ async fn an_incomplete_episode_is_hidden_and_the_next_import_of_its_name_replace
     let frames = dir.path().join("frames");
     write_frames(&frames);
     // What a killed import leaves: the episode row and a first batch of frames, never marked
-    // complete.
+    // complete, with its claim on the name still running for a minute.
+    let now = enact_hub::app::annotators::now_ms();
     let mut tx = pool.begin().await.unwrap();
-    let left = enact_hub::store::episodes::insert(&mut tx, "kitchen_real", "", "killed")
-        .await
-        .unwrap();
+    let left =
+        enact_hub::store::episodes::insert(&mut tx, "kitchen_real", "", "killed", now + 60_000)
+            .await
+            .unwrap();
     let frame = enact_hub::store::frames::insert(&mut tx, &"ab".repeat(32), 4, 4, b"png")
         .await
         .unwrap();
@@ -378,6 +380,28 @@ async fn an_incomplete_episode_is_hidden_and_the_next_import_of_its_name_replace
         Err(AppError::NotFound(_))
     ));
 
+    // While the claim runs, the import that holds it might be alive: the next is refused, and
+    // nothing is touched.
+    let refused = episodes::import(&hub, &tester(), &frames, "kitchen_real", "kitchen").await;
+    match refused {
+        Err(AppError::Conflict(message)) => assert!(
+            message.starts_with("episode 'kitchen_real' is being imported since ")
+                && message.contains("(by killed)")
+                && message.contains("lapses in 60 s"),
+            "{message}"
+        ),
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+    assert_eq!(count(&pool, "SELECT count(*) FROM episode_frames").await, 1);
+    // Once it has lapsed, the import that held it is taken for dead.
+    db!(
+        pool,
+        execute,
+        sqlx::query("UPDATE episodes SET import_alive_until_ms = $1 WHERE id = $2")
+            .bind(now - 1)
+            .bind(left)
+    )
+    .expect("lapse the claim");
     let summary = episodes::import(&hub, &tester(), &frames, "kitchen_real", "kitchen")
         .await
         .expect("the incomplete episode gives way");
@@ -399,5 +423,75 @@ async fn an_incomplete_episode_is_hidden_and_the_next_import_of_its_name_replace
     assert_eq!(
         count(&pool, "SELECT count(*) FROM episode_frames").await,
         12
+    );
+}
+
+/// `n` distinct PNG frames in `dir`.
+fn write_many_frames(dir: &Path, n: u32) {
+    std::fs::create_dir_all(dir).unwrap();
+    for k in 0..n {
+        let image = image::RgbImage::from_fn(64, 48, |x, y| {
+            image::Rgb([
+                (k % 256) as u8,
+                (k / 256) as u8 + (x * 4) as u8,
+                (y * 5) as u8,
+            ])
+        });
+        image
+            .save_with_format(dir.join(format!("frame_{k}.png")), image::ImageFormat::Png)
+            .unwrap();
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_second_import_of_a_name_being_imported_is_refused_and_the_first_finishes() {
+    use enact_hub::app::{AppError, Hub, episodes};
+    let dir = tempfile::tempdir().unwrap();
+    let (pool, _) = fresh_db_located(&dir).await;
+    // Two hubs: like the server and a command-line import, they share only the database.
+    let (first_hub, second_hub) = (Hub::from(pool.clone()), Hub::from(pool.clone()));
+    let (long, short) = (dir.path().join("long"), dir.path().join("short"));
+    write_many_frames(&long, 96);
+    write_many_frames(&short, 1);
+
+    let first = tokio::spawn(async move {
+        episodes::import(&first_hub, &tester(), &long, "kitchen_real", "kitchen").await
+    });
+    // The second starts once the first has claimed the name, with 96 frames (12 batches) to
+    // write.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    while count(&pool, "SELECT count(*) FROM episodes WHERE complete = 0").await == 0 {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the first import never claimed the name"
+        );
+        tokio::time::sleep(std::time::Duration::from_millis(1)).await;
+    }
+    let second = episodes::import(&second_hub, &tester(), &short, "kitchen_real", "").await;
+    let first = first.await.unwrap();
+
+    match second {
+        Err(AppError::Conflict(message)) => assert!(
+            message.starts_with("episode 'kitchen_real' is being imported since ")
+                && message.contains("(by operator tests)"),
+            "{message}"
+        ),
+        other => panic!("the second import was not refused: {other:?}"),
+    }
+    let summary = first.expect("the first import finishes");
+    assert_eq!(summary.frame_count, 96);
+    assert_eq!(count(&pool, "SELECT count(*) FROM episodes").await, 1);
+    assert_eq!(
+        count(&pool, "SELECT count(*) FROM episode_frames").await,
+        96
+    );
+    assert_eq!(
+        count(
+            &pool,
+            "SELECT count(*) FROM episodes WHERE import_alive_until_ms IS NULL AND complete = 1"
+        )
+        .await,
+        1,
+        "a finished import leaves no claim"
     );
 }
