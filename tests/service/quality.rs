@@ -110,6 +110,33 @@ async fn work_queue(
     }
 }
 
+/// Works both annotators' queues over HTTP: "careful" answers the truth and takes 20 s and
+/// more per item, "careless" a seeded wrong order in [`CARELESS_SECONDS`].
+async fn work_careful_and_careless(
+    server: &TestServer,
+    careful: i64,
+    careless: i64,
+    gts: &BTreeMap<String, Vec<u8>>,
+) {
+    work_queue(
+        server,
+        "careful",
+        careful,
+        |i| 20 + i as i64,
+        |item| gts[item].clone(),
+    )
+    .await;
+    let mut state = 0x9E37_79B9_7F4A_7C15;
+    work_queue(
+        server,
+        "careless",
+        careless,
+        |_| CARELESS_SECONDS,
+        |item| careless_order(&gts[item], &mut state),
+    )
+    .await;
+}
+
 /// One stored answer: annotator, item id, answer, time on item and the stored pairwise accuracy.
 type StoredRow = (String, String, String, i64, Option<f64>);
 
@@ -280,23 +307,7 @@ async fn gold_items_tell_a_careful_annotator_from_a_careless_one_and_exclusion_c
         }
     }
 
-    work_queue(
-        &server,
-        "careful",
-        careful,
-        |i| 20 + i as i64,
-        |item| gts[item].clone(),
-    )
-    .await;
-    let mut state = 0x9E37_79B9_7F4A_7C15;
-    work_queue(
-        &server,
-        "careless",
-        careless,
-        |_| CARELESS_SECONDS,
-        |item| careless_order(&gts[item], &mut state),
-    )
-    .await;
+    work_careful_and_careless(&server, careful, careless, &gts).await;
 
     // The API's figures against the ones computed here from the stored rows.
     let rows = stored_answers(&server).await;
@@ -718,23 +729,7 @@ async fn the_command_line_s_exclusions_and_gold_reach_a_running_server_within_tw
     for who in [careful, careless] {
         assign_listed(&hub, who, &ordinary).await;
     }
-    work_queue(
-        &server,
-        "careful",
-        careful,
-        |_| 30,
-        |item| gts[item].clone(),
-    )
-    .await;
-    let mut state = 0x2545_F491_4F6C_DD1D;
-    work_queue(
-        &server,
-        "careless",
-        careless,
-        |_| CARELESS_SECONDS,
-        |item| careless_order(&gts[item], &mut state),
-    )
-    .await;
+    work_careful_and_careless(&server, careful, careless, &gts).await;
     let row = human_row(&server).await;
     assert_eq!(row["human"]["annotators"], 2, "{row}");
 
