@@ -10,6 +10,7 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::stats::{PairedT, SignTest, paired_t_test, sign_test};
+use super::table::{PaperTable, paper_table};
 use super::{Alignment, VariantSpec};
 use crate::core::agreement::welch_t_test;
 use crate::core::dataset::{Direction, StepLength};
@@ -37,6 +38,8 @@ pub struct DatasetRef {
 pub struct ItemScore {
     pub direction: Direction,
     pub step_length: StepLength,
+    /// 1 or 0 for a model's answer, the mean over its answers for the Human row.
+    pub task_accuracy: Option<f64>,
     /// `None` where the verifier gives no pairwise accuracy.
     pub pairwise_accuracy: Option<f64>,
 }
@@ -166,6 +169,9 @@ pub struct StudyReport {
     /// (`step_length: null`) before its step lengths.
     pub cells: Vec<StudyCell>,
     pub handedness: Vec<HandednessRow>,
+    /// Task and pairwise accuracy per setting, direction and step length, in the layout of
+    /// the paper's appendix tables.
+    pub table: PaperTable,
 }
 
 /// Which items a cell covers.
@@ -276,6 +282,7 @@ pub fn build_study_report(inputs: &StudyInputs) -> Result<StudyReport, String> {
         variants,
         cells,
         handedness,
+        table: paper_table(inputs),
     })
 }
 
@@ -391,6 +398,7 @@ pub(crate) mod fixtures {
                         ItemScore {
                             direction: *d,
                             step_length: l(*n),
+                            task_accuracy: Some(if *pa == 1.0 { 1.0 } else { 0.0 }),
                             pairwise_accuracy: Some(*pa),
                         },
                     )
