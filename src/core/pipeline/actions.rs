@@ -222,45 +222,33 @@ fn encode_predicates(
     vocabulary: StateVocabulary,
 ) -> Result<String, NameError> {
     let mut parts = Vec::new();
-    for op in ChangeOp::BOTH {
-        let side = diff.side(op);
-        for node in &side.nodes {
-            // Formatted first, as the signatures do: an unformattable name fails here too.
-            let object = format_object_name(&node.name)?;
-            for state in node
-                .states
-                .iter()
-                .filter(|s| vocabulary.phrase(s).is_some())
-            {
-                parts.push(match encoding {
-                    ActionEncoding::Emoji => format!(
-                        "{}{}({})",
-                        op_emoji(op),
-                        predicate_emoji(state).unwrap_or(state),
-                        emoji_words(&object)
-                    ),
-                    _ => format!("{}({state}, {})", op.as_str(), node.name),
-                });
+    for slot in slots(diff, vocabulary) {
+        let side = diff.side(slot.op);
+        let (state, subject, object) = if slot.edge {
+            let e = &side.edges[slot.entry];
+            (&e.states[slot.state], &e.from, Some(&e.to))
+        } else {
+            let n = &side.nodes[slot.entry];
+            (&n.states[slot.state], &n.name, None)
+        };
+        parts.push(match encoding {
+            ActionEncoding::Emoji => {
+                let mut names = vec![emoji_object(subject)?];
+                if let Some(object) = object {
+                    names.push(emoji_object(object)?);
+                }
+                format!(
+                    "{}{}({})",
+                    op_emoji(slot.op),
+                    predicate_emoji(state).unwrap_or(state),
+                    names.join(", ")
+                )
             }
-        }
-        for edge in &side.edges {
-            for state in edge
-                .states
-                .iter()
-                .filter(|s| vocabulary.phrase(s).is_some())
-            {
-                parts.push(match encoding {
-                    ActionEncoding::Emoji => format!(
-                        "{}{}({}, {})",
-                        op_emoji(op),
-                        predicate_emoji(state).unwrap_or(state),
-                        emoji_object(&edge.from)?,
-                        emoji_object(&edge.to)?
-                    ),
-                    _ => format!("{}({state}, {}, {})", op.as_str(), edge.from, edge.to),
-                });
-            }
-        }
+            _ => match object {
+                Some(object) => format!("{}({state}, {subject}, {object})", slot.op.as_str()),
+                None => format!("{}({state}, {subject})", slot.op.as_str()),
+            },
+        });
     }
     for t in object_transitions(diff)? {
         parts.push(match encoding {
@@ -386,6 +374,18 @@ fn slots(diff: &StateDiff, vocabulary: StateVocabulary) -> Vec<Slot> {
     out
 }
 
+fn slot_states_mut(diff: &mut StateDiff, slot: Slot) -> &mut Vec<String> {
+    let side = match slot.op {
+        ChangeOp::Add => &mut diff.add,
+        ChangeOp::Remove => &mut diff.remove,
+    };
+    if slot.edge {
+        &mut side.edges[slot.entry].states
+    } else {
+        &mut side.nodes[slot.entry].states
+    }
+}
+
 fn slot_states(diff: &StateDiff, slot: Slot) -> &[String] {
     let side = diff.side(slot.op);
     if slot.edge {
@@ -450,15 +450,7 @@ pub fn perturb_delta<R: Rng + ?Sized>(
     // Swaps first (indices stay valid), then drops from the back.
     for (slot, decision) in slots.iter().zip(&decisions) {
         if let Some(Some(replacement)) = decision {
-            let side = match slot.op {
-                ChangeOp::Add => &mut out.add,
-                ChangeOp::Remove => &mut out.remove,
-            };
-            let states = if slot.edge {
-                &mut side.edges[slot.entry].states
-            } else {
-                &mut side.nodes[slot.entry].states
-            };
+            let states = slot_states_mut(&mut out, *slot);
             changes.push(PredicateChange::Swapped {
                 state: std::mem::replace(&mut states[slot.state], replacement.clone()),
                 replacement: replacement.clone(),
@@ -467,17 +459,8 @@ pub fn perturb_delta<R: Rng + ?Sized>(
     }
     for (slot, decision) in slots.iter().zip(&decisions).rev() {
         if let Some(None) = decision {
-            let side = match slot.op {
-                ChangeOp::Add => &mut out.add,
-                ChangeOp::Remove => &mut out.remove,
-            };
-            let states = if slot.edge {
-                &mut side.edges[slot.entry].states
-            } else {
-                &mut side.nodes[slot.entry].states
-            };
             changes.push(PredicateChange::Dropped {
-                state: states.remove(slot.state),
+                state: slot_states_mut(&mut out, *slot).remove(slot.state),
             });
         }
     }

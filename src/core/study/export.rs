@@ -338,6 +338,8 @@ mod tests {
                 "study.json",
                 "cells.csv",
                 "cells.tex",
+                "table.csv",
+                "table.tex",
                 "heatmap.svg",
                 "handedness.csv",
                 "handedness.svg"

@@ -166,13 +166,15 @@ pub fn paper_table(inputs: &StudyInputs) -> PaperTable {
 
 const METRICS: [&str; 2] = ["Task Accuracy", "Pairwise Accuracy"];
 
-fn metric_text(cell: &TableCell, metric: usize) -> String {
+/// A cell's figure for metric 0 (task) or 1 (pairwise), if it has one.
+fn metric_text(cell: Option<&TableCell>, metric: usize) -> Option<String> {
+    let cell = cell?;
     let value = if metric == 0 {
         cell.task_accuracy
     } else {
         cell.pairwise_accuracy
     };
-    value.map_or_else(|| "--".to_owned(), |v| v.percent())
+    value.map(|v| v.percent())
 }
 
 fn lengths_of(table: &PaperTable) -> Vec<u8> {
@@ -216,7 +218,7 @@ pub fn table_csv(stamp: &impl Stamp, table: &PaperTable) -> String {
             row.extend(
                 cells_in_order(setting, &lengths)
                     .into_iter()
-                    .map(|c| c.map_or_else(String::new, |c| metric_text(c, m))),
+                    .map(|c| metric_text(c, m).unwrap_or_default()),
             );
             rows.push(row);
         }
@@ -254,7 +256,7 @@ pub fn table_tex(stamp: &impl Stamp, table: &PaperTable) -> String {
             let cells: Vec<String> = cells_in_order(setting, &lengths)
                 .into_iter()
                 .map(|c| {
-                    let text = c.map_or_else(|| "--".to_owned(), |c| metric_text(c, m));
+                    let text = metric_text(c, m).unwrap_or_else(|| "--".to_owned());
                     if text.contains('±') {
                         format!("${}$", text.replace('±', "\\pm"))
                     } else {
