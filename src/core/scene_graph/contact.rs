@@ -45,9 +45,7 @@ pub fn contact_relations(graph: &SceneGraph) -> BTreeSet<(&str, &str, &str)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::core::scene_graph::diff::tests::{edge, edge_change, node};
-    use crate::core::scene_graph::diff::{DiffSide, StateDiff};
-    use crate::core::scene_graph::signature::StateVocabulary;
+    use crate::core::scene_graph::diff::tests::{edge, node};
 
     #[test]
     fn contact_relations_are_the_three_contact_states_of_edges() {
@@ -67,24 +65,5 @@ mod tests {
                 ("robot_r1", "pan_1", "LeftContact")
             ]
         );
-    }
-
-    #[test]
-    fn only_the_contact_vocabulary_describes_gripper_contact() {
-        assert_eq!(StateVocabulary::Enact.phrase("LeftContact"), None);
-        assert_eq!(
-            StateVocabulary::WithContact.phrase("RightContact"),
-            Some("using the right gripper to touch")
-        );
-        assert_eq!(StateVocabulary::Enact.phrase("Touching"), Some("touching"));
-        let contact_only = StateDiff {
-            add: DiffSide {
-                nodes: vec![],
-                edges: vec![edge_change("robot_r1", "pan_1", &["RightContact"])],
-            },
-            remove: DiffSide::default(),
-        };
-        assert!(!StateVocabulary::Enact.is_meaningful(&contact_only));
-        assert!(StateVocabulary::WithContact.is_meaningful(&contact_only));
     }
 }

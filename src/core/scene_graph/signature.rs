@@ -380,4 +380,23 @@ mod tests {
             .is_err()
         );
     }
+
+    #[test]
+    fn only_the_contact_vocabulary_describes_gripper_contact() {
+        assert_eq!(StateVocabulary::Enact.phrase("LeftContact"), None);
+        assert_eq!(
+            StateVocabulary::WithContact.phrase("RightContact"),
+            Some("using the right gripper to touch")
+        );
+        assert_eq!(StateVocabulary::Enact.phrase("Touching"), Some("touching"));
+        let contact_only = StateDiff {
+            add: DiffSide {
+                nodes: vec![],
+                edges: vec![edge("robot_r1", "pan_1", &["RightContact"])],
+            },
+            remove: DiffSide::default(),
+        };
+        assert!(!StateVocabulary::Enact.is_meaningful(&contact_only));
+        assert!(StateVocabulary::WithContact.is_meaningful(&contact_only));
+    }
 }

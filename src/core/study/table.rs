@@ -10,10 +10,28 @@
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use super::families;
-use super::report::{ItemScore, StudyInputs};
 use crate::core::bundle::{Stamp, csv_document, tex_escape, tex_stamp};
 use crate::core::dataset::{Direction, StepLength};
+
+/// One item's score for the compared row.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ItemScore {
+    pub direction: Direction,
+    pub step_length: StepLength,
+    /// 1 or 0 for a model's answer, the mean over its answers for the Human row.
+    pub task_accuracy: Option<f64>,
+    /// `None` where the verifier gives no pairwise accuracy.
+    pub pairwise_accuracy: Option<f64>,
+}
+
+/// One dataset's scores under the setting (table row group) it belongs to.
+#[derive(Debug, Clone)]
+pub struct SettingScores<'a> {
+    /// `Baseline`, or a family's name: datasets with the same one are averaged.
+    pub setting: String,
+    pub dataset: String,
+    pub scores: Vec<&'a ItemScore>,
+}
 
 /// A value over a setting's datasets: the mean, and the sample standard deviation when the
 /// setting has several.
@@ -95,44 +113,23 @@ fn means<'a>(
     (n, mean(ta, n_ta), mean(pa, n_pa))
 }
 
-/// The table of a study's inputs: step lengths that any setting has items of, both directions.
-pub fn paper_table(inputs: &StudyInputs) -> PaperTable {
-    // Each dataset's scores, over the items aligned with the baseline for a variant.
-    let baseline: Vec<&ItemScore> = inputs.baseline_row.items.values().collect();
-    let mut per_dataset: Vec<(String, String, Vec<&ItemScore>)> = vec![(
-        "Baseline".to_owned(),
-        inputs.baseline.name.clone(),
-        baseline,
-    )];
-    let specs: Vec<_> = inputs.variants.iter().map(|v| v.spec.clone()).collect();
-    for (family, members) in families(&specs) {
-        for spec in members {
-            let Some(variant) = inputs.variants.iter().find(|v| v.spec == *spec) else {
-                continue;
-            };
-            let Ok(row) = &variant.row else { continue };
-            let scores = variant
-                .pairs
-                .iter()
-                .filter_map(|(_, v)| row.items.get(v))
-                .collect();
-            per_dataset.push((family.to_owned(), spec.dataset.clone(), scores));
-        }
-    }
+/// The table of the datasets' scores, settings in the order of their first dataset; step
+/// lengths that any dataset has items of, both directions.
+pub fn paper_table(per_dataset: &[SettingScores<'_>]) -> PaperTable {
     let lengths: Vec<StepLength> = StepLength::all()
         .filter(|l| {
             per_dataset
                 .iter()
-                .any(|(_, _, s)| s.iter().any(|s| s.step_length == *l))
+                .any(|d| d.scores.iter().any(|s| s.step_length == *l))
         })
         .collect();
     let mut settings: Vec<TableSetting> = Vec::new();
-    for (setting, dataset, _) in &per_dataset {
-        match settings.iter_mut().find(|s| &s.setting == setting) {
-            Some(s) => s.datasets.push(dataset.clone()),
+    for d in per_dataset {
+        match settings.iter_mut().find(|s| s.setting == d.setting) {
+            Some(s) => s.datasets.push(d.dataset.clone()),
             None => settings.push(TableSetting {
-                setting: setting.clone(),
-                datasets: vec![dataset.clone()],
+                setting: d.setting.clone(),
+                datasets: vec![d.dataset.clone()],
                 cells: Vec::new(),
             }),
         }
@@ -140,8 +137,8 @@ pub fn paper_table(inputs: &StudyInputs) -> PaperTable {
     for setting in &mut settings {
         let members: Vec<&Vec<&ItemScore>> = per_dataset
             .iter()
-            .filter(|(s, _, _)| *s == setting.setting)
-            .map(|(_, _, scores)| scores)
+            .filter(|d| d.setting == setting.setting)
+            .map(|d| &d.scores)
             .collect();
         for direction in Direction::ALL {
             for &l in &lengths {
@@ -274,8 +271,6 @@ pub fn table_tex(stamp: &impl Stamp, table: &PaperTable) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::core::study::VariantSpec;
-    use crate::core::study::report::fixtures::{inputs, row};
 
     const F: Direction = Direction::Forward;
     const I: Direction = Direction::Inverse;
@@ -290,23 +285,47 @@ mod tests {
         assert_eq!(MeanSd::of(&[]), None);
     }
 
+    struct NoStamp;
+
+    impl Stamp for NoStamp {
+        fn stamp_fields(&self) -> Vec<String> {
+            vec!["test".to_owned()]
+        }
+    }
+
+    fn score(direction: Direction, l: usize, pa: f64) -> ItemScore {
+        ItemScore {
+            direction,
+            step_length: StepLength::new(l).unwrap(),
+            task_accuracy: Some(if pa == 1.0 { 1.0 } else { 0.0 }),
+            pairwise_accuracy: Some(pa),
+        }
+    }
+
     #[test]
     fn a_family_of_seeds_gives_mean_and_sd_per_cell() {
-        let base = row(1, &[("a", F, 3, 1.0), ("b", F, 3, 0.5), ("c", I, 4, 0.0)]);
-        let mut study = inputs(base, Ok(row(2, &[("a", F, 3, 0.5), ("b", F, 3, 0.5)])));
-        // Two more seeds of the same family.
-        let first = study.variants[0].clone();
-        for (k, pa) in [(3, 0.0), (4, 1.0)] {
-            let mut v = first.clone();
-            v.spec = VariantSpec::new("Camera", &format!("seed {k}"), &format!("d{k}")).unwrap();
-            v.row = Ok(row(k, &[("a", F, 3, pa), ("b", F, 3, pa)]));
-            study.variants.push(v);
+        let base = [score(F, 3, 1.0), score(F, 3, 0.5), score(I, 4, 0.0)];
+        let seeds: Vec<[ItemScore; 2]> = [0.5, 0.0, 1.0]
+            .iter()
+            .map(|&pa| [score(F, 3, pa), score(F, 3, pa)])
+            .collect();
+        let mut datasets = vec![SettingScores {
+            setting: "Baseline".to_owned(),
+            dataset: "base".to_owned(),
+            scores: base.iter().collect(),
+        }];
+        for (k, scores) in seeds.iter().enumerate() {
+            datasets.push(SettingScores {
+                setting: "Perturbed".to_owned(),
+                dataset: format!("seed-{k}"),
+                scores: scores.iter().collect(),
+            });
         }
-        let table = paper_table(&study);
+        let table = paper_table(&datasets);
         assert_eq!(table.settings.len(), 2);
         assert_eq!(table.settings[0].setting, "Baseline");
         let family = &table.settings[1];
-        assert_eq!(family.datasets, ["fish", "d3", "d4"]);
+        assert_eq!(family.datasets, ["seed-0", "seed-1", "seed-2"]);
         // Forward L = 3: the seeds' means are 0.5, 0.0, 1.0.
         let cell = family
             .cells
@@ -317,20 +336,23 @@ mod tests {
         assert!((pa.mean - 0.5).abs() < 1e-12);
         assert!((pa.sd.unwrap() - 0.5).abs() < 1e-12);
         assert_eq!(cell.items, [2, 2, 2]);
-        // Task accuracy is 1 exactly where pairwise accuracy is (the fixture's rule).
-        let base = &table.settings[0].cells;
-        let f3 = base
+        let f3 = table.settings[0]
+            .cells
             .iter()
             .find(|c| c.direction == F && c.step_length == 3)
             .unwrap();
         assert_eq!(f3.task_accuracy.unwrap().mean, 0.5);
-        let stamp = crate::core::study::report::build_study_report(&study)
-            .unwrap()
-            .stamp;
-        let csv = table_csv(&stamp, &table);
+        let csv = table_csv(&NoStamp, &table);
         assert!(csv.contains("setting,metric,forward_3,forward_4,inverse_3,inverse_4"));
-        assert!(csv.contains("Camera,Pairwise Accuracy,50.00 ± 50.00,,,\n"));
-        let tex = table_tex(&stamp, &table);
+        assert!(
+            csv.contains("Perturbed,Pairwise Accuracy,50.00 ± 50.00,,,\n"),
+            "{csv}"
+        );
+        assert!(
+            csv.contains("Baseline,Task Accuracy,50.00,,,0.00\n"),
+            "{csv}"
+        );
+        let tex = table_tex(&NoStamp, &table);
         assert!(tex.contains("$50.00 \\pm 50.00$"));
         assert!(tex.contains("\\textit{\\footnotesize Baseline}"));
     }
