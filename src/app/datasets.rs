@@ -1,5 +1,6 @@
 //! Reading datasets: by name, their overview and counts, whether their answers are public,
-//! and the whole dataset as a streamed ENACT release archive.
+//! and the whole dataset as a streamed ENACT release archive; and storing a stratified subset
+//! of one as a dataset of its own.
 
 use std::collections::HashSet;
 
@@ -10,6 +11,9 @@ use super::{AppError, Hub, audit};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::dataset::AnswerVisibility;
 use crate::core::release::{ArchiveWriter, QA_FILE, release_line};
+use crate::core::study::subset::{
+    Allocation, StratumCount, StratumField, SubsetCandidate, stratified_subset,
+};
 use crate::store;
 pub use crate::store::datasets::{Dataset, DatasetOverview, ItemCounts};
 
@@ -171,4 +175,102 @@ async fn stream_frames(
         }
     }
     let _ = tx.send(writer.finish().map(Bytes::from)).await;
+}
+
+/// What [`subset`] stored.
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
+pub struct SubsetReport {
+    pub source: String,
+    pub dataset: String,
+    pub items: usize,
+    pub fields: Vec<StratumField>,
+    pub allocation: Allocation,
+    pub seed: u64,
+    /// Per stratum: the source's items and the chosen.
+    pub strata: Vec<StratumCount>,
+}
+
+/// What a subset is drawn by: the stratum fields, the size, the allocation and the seed.
+#[derive(Debug, Clone)]
+pub struct SubsetRule {
+    pub fields: Vec<StratumField>,
+    pub size: usize,
+    pub allocation: Allocation,
+    pub seed: u64,
+}
+
+/// Stores a stratified subset of dataset `source` as the new dataset `into` (see
+/// [`crate::core::study::subset`]): the chosen items copied as they are (ids, questions,
+/// answers, images and signature tables), so a study pairs them with the source's. Refuses a
+/// name in use and a rule the source cannot satisfy before writing; one transaction holds the
+/// dataset, its items and the audit entry.
+pub async fn subset(
+    hub: &Hub,
+    actor: &Actor,
+    source: &str,
+    into: &str,
+    rule: &SubsetRule,
+) -> Result<SubsetReport, AppError> {
+    let into =
+        crate::core::credentials::plain_name(into, "dataset", 64).map_err(AppError::Invalid)?;
+    if rule.fields.is_empty() {
+        return Err(AppError::Invalid(
+            "a subset needs at least one stratum field".to_owned(),
+        ));
+    }
+    let from = by_name(hub, source).await?;
+    let mut conn = hub.conn().await?;
+    let items = store::items::scoring_items(&mut conn, from.id).await?;
+    drop(conn);
+    let candidates: Vec<SubsetCandidate<'_>> = items
+        .iter()
+        .map(|i| SubsetCandidate {
+            direction: i.direction,
+            step_length: i.step_length,
+            task_name: &i.task_name,
+        })
+        .collect();
+    let drawn = stratified_subset(
+        &candidates,
+        &rule.fields,
+        rule.size,
+        rule.allocation,
+        rule.seed,
+    )
+    .map_err(|e| AppError::Invalid(format!("dataset '{}': {e}", from.name)))?;
+    let rows: Vec<i64> = drawn.chosen.iter().map(|&i| items[i].row_id).collect();
+    let fields: Vec<&str> = rule.fields.iter().map(|f| f.as_str()).collect();
+    let fields = fields.join(",");
+    let description = format!(
+        "subset of {}: {} items stratified by {fields}, seed {}",
+        from.name, rule.size, rule.seed
+    );
+    let mut tx = hub.begin().await?;
+    if store::datasets::by_name(&mut tx, into).await?.is_some() {
+        return Err(AppError::Conflict(format!(
+            "a dataset named '{into}' exists already"
+        )));
+    }
+    store::datasets::insert_copy(&mut tx, &from, into, &description, &rows).await?;
+    store::bump_content_generation(&mut tx).await?;
+    audit::record(
+        &mut tx,
+        actor,
+        AuditAction::DatasetSubset,
+        format!("dataset {into}"),
+        Some(into),
+        description,
+    )
+    .await?;
+    tx.commit().await?;
+    tracing::info!(source = %from.name, dataset = into, items = rows.len(), "subset stored");
+    Ok(SubsetReport {
+        source: from.name,
+        dataset: into.to_owned(),
+        items: rows.len(),
+        fields: rule.fields.clone(),
+        allocation: rule.allocation,
+        seed: rule.seed,
+        strata: drawn.strata,
+    })
 }

@@ -1,11 +1,12 @@
 //! Making new items: ENACT's data pipeline over replays (`generate`), a variant release that
-//! keeps a baseline's items with another replay's images, and replays simulated in the built-in
+//! keeps a baseline's items with another replay's images or other action texts, and replays simulated in the built-in
 //! household world. The work is [`crate::core`]'s and runs on a blocking thread; these use
 //! cases are what the command line calls.
 
 use std::path::{Path, PathBuf};
 
 use crate::core::pipeline::PipelineError;
+use crate::core::pipeline::actions::{ActionEncoding, ActionRewrite, DeltaPerturbation};
 use crate::core::pipeline::variant::{self, VariantRelease};
 use crate::core::pipeline::{self, GenerateOptions, GenerateProgress, GenerationSummary};
 use crate::core::world::{
@@ -31,14 +32,26 @@ pub async fn generate(
     on_blocking_thread(move || pipeline::generate(&replayed, &out, &options, &progress)).await
 }
 
-/// Writes under `out` the items of the release `baseline` unchanged (ids, questions, answers,
-/// key frames), each image drawn from the replay in `replayed` instead.
+/// Writes under `out` the items of the release `baseline` (ids, answers, key frames), each image
+/// drawn from the replay in `replayed`, the action texts in `encoding` and, with a
+/// `perturbation`, written from perturbed deltas (the baseline's own texts when neither
+/// changes them).
 pub async fn variant(
     replayed: PathBuf,
     baseline: PathBuf,
     out: PathBuf,
+    encoding: ActionEncoding,
+    perturbation: Option<DeltaPerturbation>,
 ) -> Result<VariantRelease, PipelineError> {
-    on_blocking_thread(move || variant::items_from(&replayed, &baseline, &out)).await
+    on_blocking_thread(move || {
+        let rewrite = ActionRewrite {
+            encoding,
+            perturbation,
+            vocabulary: crate::core::pipeline::release::release_vocabulary(&baseline),
+        };
+        variant::items_from(&replayed, &baseline, &out, &rewrite)
+    })
+    .await
 }
 
 /// The scene graphs a variant made by [`variant`] is to be imported with: the baseline's, so

@@ -280,6 +280,13 @@ async fn row_scores(
                     dataset.name
                 ))
             })?;
+            let task = mean_by_item(
+                answers.iter().zip(
+                    entries
+                        .iter()
+                        .map(|e| Some(if e.task_accuracy { 1.0 } else { 0.0 })),
+                ),
+            );
             let items = mean_by_item(
                 answers
                     .iter()
@@ -287,11 +294,13 @@ async fn row_scores(
             )
             .into_iter()
             .map(|(id, (direction, step_length, value))| {
+                let task_accuracy = task.get(&id).map(|(_, _, t)| *t);
                 (
                     id,
                     ItemScore {
                         direction,
                         step_length,
+                        task_accuracy,
                         pairwise_accuracy: Some(value),
                     },
                 )
@@ -354,6 +363,7 @@ async fn row_scores(
                         ItemScore {
                             direction: v.direction,
                             step_length: v.step_length,
+                            task_accuracy: Some(if v.task_accuracy { 1.0 } else { 0.0 }),
                             pairwise_accuracy: v.pairwise_accuracy,
                         },
                     )

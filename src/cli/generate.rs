@@ -9,7 +9,10 @@ use anyhow::Context;
 use clap::Args;
 
 use crate::app;
-use crate::core::pipeline::{GenerateOptions, GenerateProgress, SegmentationParams, TypeNaming};
+use crate::core::pipeline::actions::{ActionEncoding, DeltaPerturbation};
+use crate::core::pipeline::{
+    GenerateOptions, GenerateProgress, KeyFrameTrigger, SegmentationParams, TypeNaming,
+};
 
 #[derive(Args)]
 pub(super) struct GenerateArgs {
@@ -19,7 +22,8 @@ pub(super) struct GenerateArgs {
     /// generation_summary.json).
     #[arg(long, value_name = "DATA_DIR")]
     out: PathBuf,
-    /// Seed of path sampling, shuffles and sentence templates.
+    /// Seed of path sampling, shuffles and sentence templates (with --perturb-deltas, of the
+    /// perturbation).
     #[arg(long, default_value_t = 42)]
     seed: u64,
     /// Paths sampled per task, step length and direction.
@@ -45,17 +49,36 @@ pub(super) struct GenerateArgs {
     /// instead of ENACT's code (`*_world_modeling_{L}_steps`).
     #[arg(long)]
     ordering_type_names: bool,
+    /// What triggers a key frame: `state` (ENACT's state changes) or `contact` (contact
+    /// changes too: `Touching` and the robot's `LeftContact`/`RightContact` edges, which are
+    /// then described in the actions and signatures).
+    #[arg(long, default_value = "state", value_name = "state|contact")]
+    key_frames: String,
     /// A variant of this release: its items unchanged (ids, questions, answers, key frames),
     /// each image drawn from the replay's frame instead. No segmentation or sampling is done.
     #[arg(
         long,
         value_name = "BASELINE_DATA_DIR",
         conflicts_with_all = [
-            "seed", "num_to_sample", "steps", "preset", "cosine_threshold", "min_gap",
-            "stability_frames", "ordering_type_names",
+            "num_to_sample", "steps", "preset", "cosine_threshold", "min_gap",
+            "stability_frames", "ordering_type_names", "key_frames",
         ]
     )]
     items_from: Option<PathBuf>,
+    /// With --items-from: the action texts written as `natural` (the baseline's sentences),
+    /// `symbolic` (`add(Inside, apple_1, fridge_1)`, one predicate per change) or `emoji`.
+    #[arg(
+        long,
+        requires = "items_from",
+        default_value = "natural",
+        value_name = "natural|symbolic|emoji"
+    )]
+    actions: String,
+    /// With --items-from: perturb each transition's predicates with this probability (dropped
+    /// or swapped for a wrong one, drawn from --seed) and write its action from the perturbed
+    /// delta; the answers stay the baseline's.
+    #[arg(long, requires = "items_from", value_name = "P")]
+    perturb_deltas: Option<f64>,
 }
 
 /// `3..10`, `3..=10` or `3,5,7` into step lengths, each checked to lie in 3..10.
@@ -84,17 +107,38 @@ fn parse_steps(text: &str) -> anyhow::Result<Vec<usize>> {
 
 /// `generate --items-from`: the baseline's items with the replay's images.
 async fn generate_variant(args: &GenerateArgs, baseline: PathBuf) -> anyhow::Result<ExitCode> {
+    let encoding = ActionEncoding::parse(&args.actions).with_context(|| {
+        format!(
+            "--actions: unknown encoding {:?} (use natural, symbolic or emoji)",
+            args.actions
+        )
+    })?;
+    let perturbation = args
+        .perturb_deltas
+        .map(|p| DeltaPerturbation::new(p, args.seed))
+        .transpose()
+        .map_err(|e| anyhow::anyhow!("--perturb-deltas: {e}"))?;
     let baseline_graphs = app::pipeline::variant_scene_graphs(&baseline);
     let started = std::time::Instant::now();
-    let done = app::pipeline::variant(args.replayed.clone(), baseline, args.out.clone()).await?;
+    let done = app::pipeline::variant(
+        args.replayed.clone(),
+        baseline,
+        args.out.clone(),
+        encoding,
+        perturbation,
+    )
+    .await?;
     eprintln!(
-        "wrote {} items of {} tasks with {} images from {} into {} in {:.1} s",
+        "wrote {} items of {} tasks with {} images from {} into {} in {:.1} s \
+         ({} action texts rewritten, {} predicates perturbed)",
         done.items,
         done.tasks,
         done.images,
         args.replayed.display(),
         args.out.display(),
-        started.elapsed().as_secs_f64()
+        started.elapsed().as_secs_f64(),
+        done.actions_rewritten,
+        done.predicates_perturbed
     );
     eprintln!(
         "import it with: enact-hub import {} --dataset NAME --scene-graphs {}",
@@ -123,6 +167,12 @@ pub(super) async fn generate(args: GenerateArgs) -> anyhow::Result<ExitCode> {
     if let Some(v) = args.stability_frames {
         segmentation.stability_frames = v;
     }
+    segmentation.key_frames = KeyFrameTrigger::parse(&args.key_frames).with_context(|| {
+        format!(
+            "--key-frames: unknown trigger {:?} (use state or contact)",
+            args.key_frames
+        )
+    })?;
     let options = GenerateOptions {
         seed: args.seed,
         num_to_sample: args.num_to_sample,

@@ -19,6 +19,7 @@ mod accounts;
 mod agreement;
 mod audit;
 mod database;
+mod dataset;
 mod doctor;
 mod episode;
 mod frames;
@@ -78,6 +79,9 @@ enum Command {
     /// The audit log: who issued and revoked tokens, submitted, changed visibility, imported,
     /// assigned, ran the protocol or finished annotations, and when.
     Audit(audit::AuditArgs),
+    /// Stored datasets: a stratified subset of one as a dataset of its own.
+    #[command(subcommand)]
+    Dataset(dataset::DatasetCommand),
     /// Ablation studies: a baseline dataset and variant datasets that ask its questions with
     /// other images; create, list, show, delete, and report a model's Δ and p per variant.
     #[command(subcommand)]
@@ -175,6 +179,7 @@ pub fn main() -> ExitCode {
             Command::Backup(args) => database::backup(args).await,
             Command::Restore(args) => database::restore(args).await,
             Command::Audit(args) => audit::audit(args).await,
+            Command::Dataset(command) => dataset::dataset(command).await,
             Command::Study(command) => study::study(command).await,
             Command::Run(args) => run::run(*args).await,
             Command::Token(command) => accounts::token(command).await,

@@ -81,8 +81,8 @@ pub struct ReportArgs {
     /// A cell per step length under each direction too.
     #[arg(long)]
     by_step_length: bool,
-    /// Write the report's files (study.json, cells.csv, cells.tex, heatmap.svg,
-    /// handedness.csv, handedness.svg) into this folder.
+    /// Write the report's files (study.json, cells.csv, cells.tex, table.csv and table.tex in
+    /// the paper's table layout, heatmap.svg, handedness.csv, handedness.svg) into this folder.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     /// Print the report as JSON instead of a table.

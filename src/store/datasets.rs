@@ -154,3 +154,59 @@ pub async fn set_origin(
         Ok(())
     })
 }
+
+/// Creates dataset `name` holding copies of the items `item_rows` (row ids in `items`, all of
+/// dataset `source`) with their images and signature tables, in the order given; its origin and
+/// scene are the source's. Returns the new dataset's id.
+pub async fn insert_copy(
+    conn: &mut Conn,
+    source: &Dataset,
+    name: &str,
+    description: &str,
+    item_rows: &[i64],
+) -> Result<i64, sqlx::Error> {
+    on!(conn, |c| {
+        let dataset: i64 = sqlx::query_scalar(
+            "INSERT INTO datasets (name, source, origin, scene) VALUES ($1, $2, $3, $4) \
+             RETURNING id",
+        )
+        .bind(name)
+        .bind(description)
+        .bind(&source.origin)
+        .bind(&source.scene)
+        .fetch_one(&mut *c)
+        .await?;
+        for &row in item_rows {
+            let copy: i64 = sqlx::query_scalar(
+                "INSERT INTO items (dataset_id, item_id, item_type, direction, step_length, \
+                 task_name, key_frame_ids, question, actions, gt_answer, content_hash, \
+                 source_line) \
+                 SELECT $1, item_id, item_type, direction, step_length, task_name, \
+                 key_frame_ids, question, actions, gt_answer, content_hash, source_line \
+                 FROM items WHERE id = $2 AND dataset_id = $3 RETURNING id",
+            )
+            .bind(dataset)
+            .bind(row)
+            .bind(source.id)
+            .fetch_one(&mut *c)
+            .await?;
+            sqlx::query(
+                "INSERT INTO item_images (item, position, path, frame) \
+                 SELECT $1, position, path, frame FROM item_images WHERE item = $2",
+            )
+            .bind(copy)
+            .bind(row)
+            .execute(&mut *c)
+            .await?;
+            sqlx::query(
+                "INSERT INTO item_signatures (item, source, signatures) \
+                 SELECT $1, source, signatures FROM item_signatures WHERE item = $2",
+            )
+            .bind(copy)
+            .bind(row)
+            .execute(&mut *c)
+            .await?;
+        }
+        Ok(dataset)
+    })
+}

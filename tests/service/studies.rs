@@ -71,7 +71,7 @@ pub async fn world_with_variants(variants: &[(&str, CameraRig)]) -> (TestServer,
             let replayed = dir.join(format!("{name}-replay"));
             replay(&replayed, *rig);
             let out = dir.join(name);
-            items_from(&replayed, &base, &out).expect("items_from");
+            items_from(&replayed, &base, &out, &Default::default()).expect("items_from");
             // Verified like the baseline: its scene graphs, so only the images differ.
             let mut variant_options = options(name);
             variant_options.scene_graphs = Some(base.join("replayed_activities"));
@@ -351,6 +351,8 @@ async fn a_study_reports_no_difference_for_the_same_answers_and_the_planted_one_
     for file in [
         "cells.csv",
         "cells.tex",
+        "table.csv",
+        "table.tex",
         "heatmap.svg",
         "handedness.csv",
         "handedness.svg",
@@ -631,5 +633,115 @@ async fn the_human_row_is_reported_like_a_model() {
         .await;
     assert_eq!(status, 400);
     assert!(both["error"].as_str().unwrap().contains("not both"));
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn a_stratified_subset_keeps_the_sources_items_and_pairs_with_it() {
+    let (server, records) = world_with_variants(&[]).await;
+    // The source's strata, counted here.
+    let mut available: std::collections::BTreeMap<(String, usize), usize> = Default::default();
+    for r in &records {
+        let direction = r["type"]
+            .as_str()
+            .expect("type")
+            .split('_')
+            .next()
+            .expect("d");
+        let l = r["key_frame_ids"].as_array().expect("frames").len();
+        *available.entry((direction.to_owned(), l)).or_default() += 1;
+    }
+    let smallest = *available.values().min().expect("strata");
+    assert!(smallest >= 2, "{available:?}");
+    let subset = |into: &str, size: usize, allocation: &str| {
+        enact_hub()
+            .args(["dataset", "subset", BASELINE, "--db"])
+            .arg(server.db_path())
+            .args(["--into", into, "--size", &size.to_string()])
+            .args(["--stratify", "direction,step_length", "--seed", "3"])
+            .args(["--allocation", allocation, "--json"])
+            .output()
+            .expect("run")
+    };
+    // Equal allocation: `smallest` items of every stratum.
+    let size = smallest * available.len();
+    let run = subset("world-equal", size, "equal");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: Value = serde_json::from_slice(&run.stdout).expect("json");
+    assert_eq!(report["items"], size);
+    let strata = report["strata"].as_array().expect("strata");
+    assert_eq!(strata.len(), available.len());
+    for s in strata {
+        let key = (
+            s["stratum"][0].as_str().expect("direction").to_owned(),
+            s["stratum"][1]
+                .as_str()
+                .expect("L")
+                .parse::<usize>()
+                .expect("L"),
+        );
+        assert_eq!(s["available"], available[&key], "{key:?}");
+        assert_eq!(s["chosen"], smallest, "{key:?}");
+    }
+    // Proportional allocation: each stratum within one item of its exact share.
+    let size = records.len() / 2;
+    let run = subset("world-half", size, "proportional");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: Value = serde_json::from_slice(&run.stdout).expect("json");
+    let mut total = 0;
+    for s in report["strata"].as_array().expect("strata") {
+        let (a, c) = (
+            s["available"].as_u64().expect("n") as f64,
+            s["chosen"].as_u64().expect("n") as f64,
+        );
+        let exact = a * size as f64 / records.len() as f64;
+        assert!((c - exact).abs() < 1.0, "{s}");
+        total += c as usize;
+    }
+    assert_eq!(total, size);
+
+    // A variant in the studies' sense: every subset item pairs with the source's by id and is
+    // judged by the same rules.
+    let token = admin(&server).await;
+    create(
+        &server,
+        &token,
+        json!({"name": "subset", "baseline": "world-equal",
+               "variants": [format!("Full/all items={BASELINE}")]}),
+    )
+    .expect(201)
+    .await;
+    let shown = enact_hub()
+        .args(["study", "show", "subset", "--json", "--db"])
+        .arg(server.db_path())
+        .output()
+        .expect("run");
+    assert!(
+        shown.status.success(),
+        "{}",
+        String::from_utf8_lossy(&shown.stderr)
+    );
+    let view: Value = serde_json::from_slice(&shown.stdout).expect("json");
+    let alignment = &view["variants"][0]["alignment"];
+    assert_eq!(view["baseline_items"], smallest * available.len());
+    assert_eq!(alignment["by_id"], smallest * available.len());
+    assert_eq!(alignment["baseline_unaligned"], 0);
+    assert_eq!(alignment["verified_differently"], 0);
+
+    // Refused before anything is written: a name in use, a size the source cannot give.
+    let again = subset("world-equal", 2, "proportional");
+    assert!(!again.status.success());
+    assert!(String::from_utf8_lossy(&again.stderr).contains("exists already"));
+    let too_many = subset("world-big", records.len() + 1, "proportional");
+    assert!(!too_many.status.success());
+    assert!(String::from_utf8_lossy(&too_many.stderr).contains("larger than the source"));
     server.stop().await;
 }

@@ -58,6 +58,8 @@ impl fmt::Display for Actor {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum AuditAction {
     DatasetImport,
+    /// A stratified subset of a dataset stored as a dataset of its own.
+    DatasetSubset,
     DatasetAnswerVisibility,
     TokenIssue,
     TokenRevoke,
@@ -94,8 +96,9 @@ pub enum AuditAction {
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 28] = [
+    pub const ALL: [AuditAction; 29] = [
         AuditAction::DatasetImport,
+        AuditAction::DatasetSubset,
         AuditAction::DatasetAnswerVisibility,
         AuditAction::TokenIssue,
         AuditAction::TokenRevoke,
@@ -128,6 +131,7 @@ impl AuditAction {
     pub fn as_str(self) -> &'static str {
         match self {
             AuditAction::DatasetImport => "dataset.import",
+            AuditAction::DatasetSubset => "dataset.subset",
             AuditAction::DatasetAnswerVisibility => "dataset.answer_visibility",
             AuditAction::TokenIssue => "token.issue",
             AuditAction::TokenRevoke => "token.revoke",

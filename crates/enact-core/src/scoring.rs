@@ -75,7 +75,12 @@ impl SceneGraphSignatures {
                     .iter()
                     .flat_map(|ids| PairSignatureMemo::item_pairs(ids))
                     .collect();
-                let memo = PairSignatureMemo::compute(&timeline, pairs);
+                // A contact run's scene graphs signal contact changes too (see `semantics`).
+                let vocabulary = replayed_dir.parent().map_or_else(
+                    Default::default,
+                    crate::pipeline::release::release_vocabulary,
+                );
+                let memo = PairSignatureMemo::compute_in(&timeline, pairs, vocabulary);
                 let tables = lines
                     .into_par_iter()
                     .map(|ids| {

@@ -18,8 +18,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::dataset::{Direction, FieldProblem, QaItem};
+use crate::pipeline::release::release_vocabulary;
 use crate::scene_graph::{
-    FrameSelection, PairSignatureMemo, SceneGraphTimeline, TimelineError, View, parse_action,
+    FrameSelection, PairSignatureMemo, SceneGraphTimeline, StateVocabulary, TimelineError, View,
+    parse_action,
 };
 use crate::verifier::{ItemSignatures, VisibleCoverage};
 
@@ -90,7 +92,14 @@ pub fn item_signatures(
 /// Problems name the field that points at the trouble: `task_name` when the task has no
 /// readable scene graph (file missing, malformed JSON: the message names the file and the
 /// place), `key_frame_ids[i]` when a key frame is not in the scene graph.
+///
+/// The scene graphs of a contact run (a `generate --key-frames contact` release's
+/// `replayed_activities/`) give signatures of its contact changes too, as its actions describe
+/// them; any other folder gives ENACT's.
 pub fn from_scene_graphs(replayed_dir: &Path, items: &[&QaItem]) -> Vec<SignaturesOrProblems> {
+    let vocabulary = replayed_dir
+        .parent()
+        .map_or(StateVocabulary::Enact, release_vocabulary);
     let mut by_task: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
     for (i, item) in items.iter().enumerate() {
         by_task.entry(item.task_name.as_str()).or_default().push(i);
@@ -116,12 +125,13 @@ pub fn from_scene_graphs(replayed_dir: &Path, items: &[&QaItem]) -> Vec<Signatur
             };
             // Each distinct pair of the task once (in parallel), then the items' tables.
             let memo = match &timeline {
-                Ok(tl) => PairSignatureMemo::compute(
+                Ok(tl) => PairSignatureMemo::compute_in(
                     tl,
                     indexes
                         .iter()
                         .flat_map(|&i| PairSignatureMemo::item_pairs(&items[i].key_frame_ids))
                         .collect(),
+                    vocabulary,
                 ),
                 Err(_) => PairSignatureMemo::default(),
             };

@@ -8,8 +8,8 @@ use rand::Rng;
 use rayon::prelude::*;
 
 use crate::scene_graph::{
-    DiffError, GraphIndex, SceneGraphTimeline, StateDiff, View, sentence_count, visible_diff,
-    visible_diff_indexed,
+    DiffError, GraphIndex, SceneGraphTimeline, StateDiff, StateVocabulary, View, sentence_count_in,
+    visible_diff, visible_diff_indexed,
 };
 
 /// Fewest and most sentences an action may have for its transition to be usable.
@@ -96,6 +96,16 @@ impl TransitionGraph {
         timeline: &SceneGraphTimeline,
         key_frames: &[String],
     ) -> Result<TransitionGraph, KftsError> {
+        Self::build_in(timeline, key_frames, StateVocabulary::Enact)
+    }
+
+    /// [`TransitionGraph::build`] with the changes and sentences of `vocabulary` (a contact
+    /// run counts and describes contact changes too).
+    pub fn build_in(
+        timeline: &SceneGraphTimeline,
+        key_frames: &[String],
+        vocabulary: StateVocabulary,
+    ) -> Result<TransitionGraph, KftsError> {
         let mut frames = key_frames.to_vec();
         frames.sort_by_key(|f| f.parse::<u64>().unwrap_or(u64::MAX));
         let n = frames.len();
@@ -119,7 +129,7 @@ impl TransitionGraph {
                         &indexes[j],
                         View::Visible,
                     )?;
-                    if is_valid_diff(timeline, &frames[i], &frames[j], &diff)? {
+                    if is_valid_diff(timeline, &frames[i], &frames[j], &diff, vocabulary)? {
                         row.push((i, j));
                     }
                 }
@@ -153,7 +163,7 @@ pub fn is_valid_transition(
     to: &str,
 ) -> Result<bool, KftsError> {
     let diff = visible_diff(timeline, from, to, View::Visible)?;
-    is_valid_diff(timeline, from, to, &diff)
+    is_valid_diff(timeline, from, to, &diff, StateVocabulary::Enact)
 }
 
 /// The test of [`is_valid_transition`] on the pair's visible diff.
@@ -162,11 +172,12 @@ fn is_valid_diff(
     from: &str,
     to: &str,
     diff: &StateDiff,
+    vocabulary: StateVocabulary,
 ) -> Result<bool, KftsError> {
-    if diff.is_empty() || !diff.has_meaningful_change() {
+    if diff.is_empty() || !vocabulary.is_meaningful(diff) {
         return Ok(false);
     }
-    let sentences = sentence_count(diff).map_err(|source| KftsError::Name {
+    let sentences = sentence_count_in(diff, vocabulary).map_err(|source| KftsError::Name {
         file: timeline.source().display().to_string(),
         from: from.to_string(),
         to: to.to_string(),

@@ -2,11 +2,13 @@
 //! KFTS transition DAG with exact path counts and uniform path sampling ([`kfts`]), forward and
 //! inverse ordering items ([`qa`]), and [`generate`], which runs all of it over a
 //! `replayed_activities/` folder and writes an ENACT-layout release ([`release`]);
-//! [`variant`] re-renders a baseline release's items from another replay of the same tasks.
+//! [`variant`] re-renders a baseline release's items from another replay of the same tasks,
+//! optionally with [`actions`] in another encoding or from perturbed deltas.
 //!
 //! Randomness is seeded ChaCha8, so a run is reproducible; it does not reproduce ENACT's
 //! Python `random` stream (which is not reproducible across Python hash seeds anyway).
 
+pub mod actions;
 pub mod kfts;
 pub(crate) mod label;
 pub mod marked;
@@ -35,7 +37,9 @@ use marked::{MARKED_KEY_FRAMES_FILE, MarkedKeyFrames, marked_segmentation};
 pub use qa::{GeneratedItem, TypeNaming};
 pub use release::TaskRelease;
 use release::write_release;
-pub use segment::{Segmentation, SegmentationError, SegmentationParams, segment_key_frames};
+pub use segment::{
+    KeyFrameTrigger, Segmentation, SegmentationError, SegmentationParams, segment_key_frames,
+};
 
 /// What [`generate`] does.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -396,7 +400,12 @@ pub fn task_items(
             .iter()
             .map(|&i| graph.frames()[i as usize].clone())
             .collect();
-        let actions = qa::action_texts(&task.key_frame_graphs, &path, &mut rng)?;
+        let actions = qa::action_texts_in(
+            &task.key_frame_graphs,
+            &path,
+            options.segmentation.key_frames.vocabulary(),
+            &mut rng,
+        )?;
         items.push(match direction {
             Direction::Forward => {
                 qa::forward_item(&task.task_name, &qa_type, &path, &actions, &mut rng)
@@ -461,9 +470,10 @@ fn run_task(
         task: task.to_string(),
         source: Box::new(source),
     };
-    let graph = TransitionGraph::build(
+    let graph = TransitionGraph::build_in(
         &segmented.key_frame_graphs,
         &segmented.segmentation.key_frames,
+        options.segmentation.key_frames.vocabulary(),
     )
     .map_err(kfts_error)?;
     progress(GenerateProgress::TransitionsBuilt {
@@ -635,6 +645,7 @@ mod tests {
                 cosine_threshold: 0.98,
                 min_gap: 10,
                 stability_frames: 2,
+                key_frames: KeyFrameTrigger::State,
             },
             ..GenerateOptions::default()
         }

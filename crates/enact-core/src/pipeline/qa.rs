@@ -9,7 +9,7 @@ use sha2::{Digest, Sha256};
 use crate::dataset::{Direction, QaItem};
 use crate::pipeline::prompt::{forward_question, inverse_question};
 use crate::scene_graph::sentence::NO_MEANINGFUL_CHANGE_TEXT;
-use crate::scene_graph::{SceneGraphTimeline, View, render_diff, visible_diff};
+use crate::scene_graph::{SceneGraphTimeline, StateVocabulary, View, render_diff_in, visible_diff};
 
 use crate::pipeline::kfts::KftsError;
 
@@ -76,15 +76,26 @@ pub fn action_texts<R: Rng + ?Sized>(
     path: &[String],
     rng: &mut R,
 ) -> Result<Vec<String>, KftsError> {
+    action_texts_in(timeline, path, StateVocabulary::Enact, rng)
+}
+
+/// [`action_texts`] describing the states of `vocabulary`.
+pub fn action_texts_in<R: Rng + ?Sized>(
+    timeline: &SceneGraphTimeline,
+    path: &[String],
+    vocabulary: StateVocabulary,
+    rng: &mut R,
+) -> Result<Vec<String>, KftsError> {
     path.windows(2)
         .map(|pair| {
             let diff = visible_diff(timeline, &pair[0], &pair[1], View::Visible)?;
-            let text = render_diff(&diff, rng).map_err(|source| KftsError::Name {
-                file: timeline.source().display().to_string(),
-                from: pair[0].clone(),
-                to: pair[1].clone(),
-                source,
-            })?;
+            let text =
+                render_diff_in(&diff, vocabulary, rng).map_err(|source| KftsError::Name {
+                    file: timeline.source().display().to_string(),
+                    from: pair[0].clone(),
+                    to: pair[1].clone(),
+                    source,
+                })?;
             Ok(text.unwrap_or_else(|| NO_MEANINGFUL_CHANGE_TEXT.to_string()))
         })
         .collect()

@@ -15,6 +15,7 @@ use crate::pipeline::qa::GeneratedItem;
 use crate::pipeline::{
     GenerationSummary, PipelineError, SegmentedTask, frame_image_path, scene_graph_path,
 };
+use crate::scene_graph::StateVocabulary;
 
 /// What one task writes.
 pub struct TaskRelease<'a> {
@@ -250,6 +251,22 @@ impl serde_json::ser::Formatter for PythonJson {
 
     fn begin_object_value<W: ?Sized + Write>(&mut self, writer: &mut W) -> std::io::Result<()> {
         writer.write_all(b": ")
+    }
+}
+
+/// The state vocabulary of the run that wrote a release: a contact run says so in its
+/// `generation_summary.json`; anything else (ENACT's own releases have no summary) is ENACT's.
+pub fn release_vocabulary(release: &Path) -> StateVocabulary {
+    let summary = std::fs::read(release.join("generation_summary.json")).ok();
+    let trigger = summary
+        .and_then(|bytes| serde_json::from_slice::<serde_json::Value>(&bytes).ok())
+        .and_then(|v| {
+            v.pointer("/options/segmentation/key_frames")
+                .and_then(|k| k.as_str().map(str::to_owned))
+        });
+    match trigger.as_deref() {
+        Some("contact") => StateVocabulary::WithContact,
+        _ => StateVocabulary::Enact,
     }
 }
 

@@ -6,7 +6,9 @@ use std::collections::HashMap;
 
 use serde_json::{Map, Value};
 
-use crate::scene_graph::{GraphDelta, SceneGraph, SceneGraphTimeline, TimelineError};
+use crate::scene_graph::{
+    GraphDelta, SceneGraph, SceneGraphTimeline, StateVocabulary, TimelineError, contact_relations,
+};
 
 /// The constants of the key-frame scan. Every field can be overridden; the presets are
 /// [`SegmentationParams::enact_code`] (the default) and [`SegmentationParams::paper`].
@@ -24,6 +26,46 @@ pub struct SegmentationParams {
     /// A differing frame is only a candidate; the saved one is the first differing frame at
     /// least this many frame numbers after the candidate (ENACT's `SKIPPING_SAVED_INTERVAL`).
     pub stability_frames: u64,
+    /// What makes a frame differ: ENACT's state bags only, or contact changes too. Left out
+    /// of `generation_summary.json` for ENACT's own, so a default run writes what it always did.
+    #[serde(skip_serializing_if = "KeyFrameTrigger::is_state")]
+    pub key_frames: KeyFrameTrigger,
+}
+
+/// What triggers a key frame (`generate --key-frames`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum KeyFrameTrigger {
+    /// ENACT's: the cosine similarity of the state bags drops below the threshold.
+    #[default]
+    State,
+    /// The paper's contact ablation: that, or a contact relation (see
+    /// [`crate::scene_graph::contact`]) appeared or disappeared since the last key frame.
+    /// Contact changes are then described in sentences and signatures too.
+    Contact,
+}
+
+impl KeyFrameTrigger {
+    /// `state` or `contact`.
+    pub fn parse(name: &str) -> Option<KeyFrameTrigger> {
+        match name {
+            "state" => Some(KeyFrameTrigger::State),
+            "contact" => Some(KeyFrameTrigger::Contact),
+            _ => None,
+        }
+    }
+
+    fn is_state(&self) -> bool {
+        *self == KeyFrameTrigger::State
+    }
+
+    /// The states the run's transitions describe.
+    pub fn vocabulary(self) -> StateVocabulary {
+        match self {
+            KeyFrameTrigger::State => StateVocabulary::Enact,
+            KeyFrameTrigger::Contact => StateVocabulary::WithContact,
+        }
+    }
 }
 
 impl Default for SegmentationParams {
@@ -41,6 +83,7 @@ impl SegmentationParams {
             cosine_threshold: 0.98,
             min_gap: 200,
             stability_frames: 10,
+            key_frames: KeyFrameTrigger::State,
         }
     }
 
@@ -211,9 +254,10 @@ pub fn segment_key_frames(
         let bag = StateBag::of(&graph);
         let cosine = prev_bag.cosine(&bag);
         let cur_n = number(current);
-        if !(cosine < params.cosine_threshold
-            && cur_n.saturating_sub(number(&prev)) > params.min_gap)
-        {
+        let differs = cosine < params.cosine_threshold
+            || (params.key_frames == KeyFrameTrigger::Contact
+                && contact_relations(&graph) != contact_relations(&prev_graph));
+        if !(differs && cur_n.saturating_sub(number(&prev)) > params.min_gap) {
             continue;
         }
         let delta = GraphDelta::between(&prev_graph, &graph).ok_or_else(|| {
@@ -347,6 +391,7 @@ mod tests {
             cosine_threshold: 0.98,
             min_gap: 10,
             stability_frames: 4,
+            key_frames: KeyFrameTrigger::State,
         }
     }
 
@@ -414,6 +459,62 @@ mod tests {
         let t = timeline(60, |n| graph((20..22).contains(&n), true));
         let s = segment_key_frames(&t, &small()).unwrap();
         assert_eq!(s.key_frames, vec!["4", "20"]);
+    }
+
+    /// 40 steady node states, the robot's left gripper touching the apple from frame 20 (one
+    /// feature: too small a change for the cosine), the fridge opening with the apple inside it
+    /// from frame 40 (three features).
+    fn contact_world(n: u64) -> SceneGraph {
+        let mut nodes: Vec<SceneNode> = (0..40)
+            .map(|k| node(&format!("thing_{k}"), &["Clean"]))
+            .collect();
+        nodes.push(node("robot_r1", &[]));
+        nodes.push(node("apple_1", &[]));
+        nodes.push(node("fridge_2", if n >= 40 { &["Open"] } else { &[] }));
+        let mut edges = Vec::new();
+        if n >= 20 {
+            edges.push(SceneEdge {
+                from: "robot_r1".into(),
+                to: "apple_1".into(),
+                states: vec!["LeftContact".into()],
+            });
+        }
+        if n >= 40 {
+            edges.push(SceneEdge {
+                from: "apple_1".into(),
+                to: "fridge_2".into(),
+                states: vec!["Inside".into(), "Touching".into()],
+            });
+        }
+        SceneGraph { nodes, edges }
+    }
+
+    #[test]
+    fn contact_changes_trigger_key_frames_only_in_contact_runs() {
+        let t = timeline(60, contact_world);
+        let state = segment_key_frames(&t, &small()).unwrap();
+        assert_eq!(state.key_frames, vec!["4", "44"]);
+        let contact = KeyFrameTrigger::parse("contact").unwrap();
+        let params = SegmentationParams {
+            key_frames: contact,
+            ..small()
+        };
+        let with_contact = segment_key_frames(&t, &params).unwrap();
+        // The contact at 20 is a candidate, saved after the same stability interval.
+        assert_eq!(with_contact.key_frames, vec!["4", "24", "44"]);
+        let relations = |f: &str| {
+            let g = t.scene_graph(f).unwrap().into_owned();
+            contact_relations(&g)
+                .into_iter()
+                .map(|(a, b, s)| format!("{a}->{b}:{s}"))
+                .collect::<Vec<_>>()
+        };
+        assert_ne!(relations("24"), relations("4"));
+        // A state run's summary says nothing of the trigger; a contact run's does.
+        let json = |p: &SegmentationParams| serde_json::to_string(p).unwrap();
+        assert!(!json(&small()).contains("key_frames"));
+        assert!(json(&params).contains("\"key_frames\":\"contact\""));
+        assert_eq!(KeyFrameTrigger::parse("touch"), None);
     }
 
     #[test]

@@ -1,11 +1,13 @@
 //! Scene graphs of replayed tasks and what changed between two frames, bit-exact with ENACT:
 //! records and reconstruction ([`timeline`]), the transient filter ([`transient`]), the
 //! state-centric diff ([`diff`]), what the camera sees ([`visibility`]), object names
-//! ([`names`]), signatures ([`signature`]) and action sentences ([`sentence`]).
+//! ([`names`]), signatures ([`signature`]) and action sentences ([`sentence`]); [`contact`]
+//! names the contact relations a contact run also describes.
 //!
 //! Start with [`SceneGraphTimeline::load`] and [`pair_signatures`] /
 //! [`transition_signatures`]: the evaluator's C (visible) and F (full) sets.
 
+pub mod contact;
 pub mod diff;
 pub mod names;
 pub mod record;
@@ -22,6 +24,7 @@ use std::path::PathBuf;
 
 use rayon::prelude::*;
 
+pub use contact::{CONTACT_STATES, contact_relations};
 pub use diff::{
     ChangeOp, DiffFault, DiffSide, EdgeChange, GraphIndex, NodeChange, StateDiff,
     state_centric_diff, state_centric_diff_indexed,
@@ -29,9 +32,10 @@ pub use diff::{
 pub use names::{NameError, format_object_name};
 pub use record::{FrameRecord, GraphDelta, SceneEdge, SceneGraph, SceneNode};
 pub use sentence::{
-    SentenceParseError, parse_action, render_diff, render_diff_first_templates, sentence_count,
+    SentenceParseError, parse_action, render_diff, render_diff_first_templates, render_diff_in,
+    sentence_count, sentence_count_in,
 };
-pub use signature::diff_signatures;
+pub use signature::{StateVocabulary, diff_signatures, diff_signatures_in};
 pub use timeline::{FrameSelection, SceneGraphTimeline, TimelineError, TransientFilter};
 pub use visibility::{EVALUATION_SENSORS, View, restrict_to_view, restrict_to_view_indexed};
 
@@ -133,8 +137,20 @@ pub fn pair_signatures(
     to: &str,
     view: View,
 ) -> Result<BTreeSet<String>, DiffError> {
+    pair_signatures_in(timeline, from, to, view, StateVocabulary::Enact)
+}
+
+/// [`pair_signatures`] of the states `vocabulary` describes.
+pub fn pair_signatures_in(
+    timeline: &SceneGraphTimeline,
+    from: &str,
+    to: &str,
+    view: View,
+    vocabulary: StateVocabulary,
+) -> Result<BTreeSet<String>, DiffError> {
     let diff = visible_diff(timeline, from, to, view)?;
-    diff_signatures(&diff).map_err(|e| pair_fault(timeline, from, to)(DiffFault::Name(e)))
+    diff_signatures_in(&diff, vocabulary)
+        .map_err(|e| pair_fault(timeline, from, to)(DiffFault::Name(e)))
 }
 
 /// Both views' signature sets of the change from `from` to `to`, from one state-centric diff:
@@ -143,6 +159,16 @@ pub fn pair_signature_views(
     timeline: &SceneGraphTimeline,
     from: &str,
     to: &str,
+) -> [Result<BTreeSet<String>, String>; 2] {
+    pair_signature_views_in(timeline, from, to, StateVocabulary::Enact)
+}
+
+/// [`pair_signature_views`] of the states `vocabulary` describes.
+fn pair_signature_views_in(
+    timeline: &SceneGraphTimeline,
+    from: &str,
+    to: &str,
+    vocabulary: StateVocabulary,
 ) -> [Result<BTreeSet<String>, String>; 2] {
     let graphs = timeline
         .scene_graph(from)
@@ -154,6 +180,7 @@ pub fn pair_signature_views(
             to,
             &GraphIndex::new(&a),
             &GraphIndex::new(&b),
+            vocabulary,
         ),
         Err(e) => {
             let message = DiffError::from(e).to_string();
@@ -169,6 +196,7 @@ fn indexed_signature_views(
     to: &str,
     a: &GraphIndex<'_>,
     b: &GraphIndex<'_>,
+    vocabulary: StateVocabulary,
 ) -> ViewSets {
     let fault = pair_fault(timeline, from, to);
     let full = match state_centric_diff_indexed(a, b) {
@@ -181,7 +209,9 @@ fn indexed_signature_views(
     [View::Visible, View::Full].map(|view| {
         restrict_to_view_indexed(a, b, &full, view, &EVALUATION_SENSORS)
             .map_err(&fault)
-            .and_then(|diff| diff_signatures(&diff).map_err(|e| fault(DiffFault::Name(e))))
+            .and_then(|diff| {
+                diff_signatures_in(&diff, vocabulary).map_err(|e| fault(DiffFault::Name(e)))
+            })
             .map_err(|e| e.to_string())
     })
 }
@@ -197,11 +227,22 @@ type ViewSets = [Result<BTreeSet<String>, String>; 2];
 #[derive(Debug, Default)]
 pub struct PairSignatureMemo {
     sets: HashMap<(String, String), ViewSets>,
+    vocabulary: StateVocabulary,
 }
 
 impl PairSignatureMemo {
     /// Computes both views of every pair in `pairs`.
     pub fn compute(timeline: &SceneGraphTimeline, pairs: BTreeSet<(String, String)>) -> Self {
+        Self::compute_in(timeline, pairs, StateVocabulary::Enact)
+    }
+
+    /// [`PairSignatureMemo::compute`] with the signatures of the states `vocabulary` describes
+    /// (a contact run's items signal their contact changes too).
+    pub fn compute_in(
+        timeline: &SceneGraphTimeline,
+        pairs: BTreeSet<(String, String)>,
+        vocabulary: StateVocabulary,
+    ) -> Self {
         // Each frame's graph is indexed once for all the pairs it is in.
         let frames: BTreeSet<&str> = pairs
             .iter()
@@ -219,14 +260,16 @@ impl PairSignatureMemo {
             .par_iter()
             .map(|(from, to)| {
                 let sets = match (indexes.get(from.as_str()), indexes.get(to.as_str())) {
-                    (Some(a), Some(b)) => indexed_signature_views(timeline, from, to, a, b),
+                    (Some(a), Some(b)) => {
+                        indexed_signature_views(timeline, from, to, a, b, vocabulary)
+                    }
                     // A frame that cannot be rebuilt: the same error as for the pair alone.
-                    _ => pair_signature_views(timeline, from, to),
+                    _ => pair_signature_views_in(timeline, from, to, vocabulary),
                 };
                 ((from.clone(), to.clone()), sets)
             })
             .collect();
-        PairSignatureMemo { sets }
+        PairSignatureMemo { sets, vocabulary }
     }
 
     /// Every ordered pair of `key_frame_ids`, the diagonal included: what an item's table
@@ -253,7 +296,8 @@ impl PairSignatureMemo {
         };
         match self.sets.get(&(from.to_owned(), to.to_owned())) {
             Some(sets) => sets[slot].clone(),
-            None => pair_signatures(timeline, from, to, view).map_err(|e| e.to_string()),
+            None => pair_signatures_in(timeline, from, to, view, self.vocabulary)
+                .map_err(|e| e.to_string()),
         }
     }
 }

@@ -10,8 +10,8 @@ use crate::scene_graph::diff::{ChangeOp, StateDiff};
 use crate::scene_graph::names::NameError;
 use crate::scene_graph::names::format_object_name;
 use crate::scene_graph::signature::{
-    ObjectTransition, STATE_PHRASES, StateArity, cooked_transition_signature, edge_signature,
-    node_signature, object_transitions, state_phrase, transition_signature,
+    ObjectTransition, STATE_PHRASES, StateArity, StateVocabulary, cooked_transition_signature,
+    edge_signature, node_signature, object_transitions, transition_signature,
 };
 
 /// What ENACT writes for an empty diff (no final period, so it counts as zero sentences).
@@ -81,12 +81,15 @@ pub fn diff_sentences<R: Rng + ?Sized>(
     diff: &StateDiff,
     rng: &mut R,
 ) -> Result<Vec<String>, NameError> {
-    sentences_with(diff, &mut |n| rng.random_range(0..n))
+    sentences_with(diff, StateVocabulary::Enact, &mut |n| {
+        rng.random_range(0..n)
+    })
 }
 
 /// [`diff_sentences`] with the template index chosen by `pick(number_of_templates)`.
 fn sentences_with(
     diff: &StateDiff,
+    vocabulary: StateVocabulary,
     pick: &mut dyn FnMut(usize) -> usize,
 ) -> Result<Vec<String>, NameError> {
     let mut out = Vec::new();
@@ -96,7 +99,7 @@ fn sentences_with(
         for node in &side.nodes {
             let object = format_object_name(&node.name)?;
             for state in &node.states {
-                if let Some(phrase) = state_phrase(state) {
+                if let Some(phrase) = vocabulary.phrase(state) {
                     let verb = templates[pick(templates.len())];
                     out.push(format!("{object} {verb} {phrase}"));
                 }
@@ -106,7 +109,7 @@ fn sentences_with(
             let from = format_object_name(&edge.from)?;
             let to = format_object_name(&edge.to)?;
             for state in &edge.states {
-                if let Some(phrase) = state_phrase(state) {
+                if let Some(phrase) = vocabulary.phrase(state) {
                     let verb = templates[pick(templates.len())];
                     out.push(format!("{from} {verb} {phrase} {to}"));
                 }
@@ -129,24 +132,36 @@ pub fn render_diff<R: Rng + ?Sized>(
     diff: &StateDiff,
     rng: &mut R,
 ) -> Result<Option<String>, NameError> {
-    render_with(diff, &mut |n| rng.random_range(0..n))
+    render_with(diff, StateVocabulary::Enact, &mut |n| {
+        rng.random_range(0..n)
+    })
+}
+
+/// [`render_diff`] describing the states of `vocabulary`.
+pub fn render_diff_in<R: Rng + ?Sized>(
+    diff: &StateDiff,
+    vocabulary: StateVocabulary,
+    rng: &mut R,
+) -> Result<Option<String>, NameError> {
+    render_with(diff, vocabulary, &mut |n| rng.random_range(0..n))
 }
 
 /// [`render_diff`] with every sentence in its first template ("now becomes", "is no longer"):
 /// one fixed rendering to show what the pipeline will write. The pipeline picks each verb at
 /// random among four (gained) or two (lost) templates; the signatures do not depend on it.
 pub fn render_diff_first_templates(diff: &StateDiff) -> Result<Option<String>, NameError> {
-    render_with(diff, &mut |_| 0)
+    render_with(diff, StateVocabulary::Enact, &mut |_| 0)
 }
 
 fn render_with(
     diff: &StateDiff,
+    vocabulary: StateVocabulary,
     pick: &mut dyn FnMut(usize) -> usize,
 ) -> Result<Option<String>, NameError> {
     if diff.is_empty() {
         return Ok(Some(NO_CHANGE_TEXT.to_string()));
     }
-    let sentences = sentences_with(diff, pick)?;
+    let sentences = sentences_with(diff, vocabulary, pick)?;
     if sentences.is_empty() {
         return Ok(None);
     }
@@ -158,12 +173,20 @@ fn render_with(
 /// diff or no text). The QA generator keeps transitions with 1 to 5. Templates contain no
 /// period, so the count does not depend on the random choice.
 pub fn sentence_count(diff: &StateDiff) -> Result<usize, NameError> {
+    sentence_count_in(diff, StateVocabulary::Enact)
+}
+
+/// [`sentence_count`] describing the states of `vocabulary`.
+pub fn sentence_count_in(
+    diff: &StateDiff,
+    vocabulary: StateVocabulary,
+) -> Result<usize, NameError> {
     if diff.is_empty() {
         return Ok(NO_CHANGE_TEXT.matches('.').count());
     }
     // The periods of the rendered text, without rendering it: one after each sentence plus
     // any inside one (capitalising adds or removes none). KFTS asks this of every key-frame pair.
-    let sentences = sentences_with(diff, &mut |_| 0)?;
+    let sentences = sentences_with(diff, vocabulary, &mut |_| 0)?;
     Ok(sentences.len()
         + sentences
             .iter()

@@ -6,6 +6,8 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
+use serde::Serialize;
+
 use crate::scene_graph::diff::{ChangeOp, StateDiff};
 use crate::scene_graph::names::{NameError, format_object_name};
 
@@ -68,6 +70,42 @@ pub fn state_phrase(state: &str) -> Option<&'static str> {
         .iter()
         .find(|(name, _, _)| *name == state)
         .map(|(_, phrase, _)| *phrase)
+}
+
+/// Which states a run describes (in sentences and signatures) and counts as a change.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StateVocabulary {
+    /// ENACT's: the states of its template table; contact-only edges are not a change.
+    #[default]
+    Enact,
+    /// ENACT's plus the robot's `LeftContact` and `RightContact`, and every edge change counts.
+    WithContact,
+}
+
+impl StateVocabulary {
+    /// The sentence phrase of a state, if this vocabulary describes it.
+    pub fn phrase(self, state: &str) -> Option<&'static str> {
+        state_phrase(state).or_else(|| match self {
+            StateVocabulary::Enact => None,
+            StateVocabulary::WithContact => crate::scene_graph::contact::CONTACT_PHRASES
+                .iter()
+                .find(|(name, _)| *name == state)
+                .map(|(_, phrase)| *phrase),
+        })
+    }
+
+    /// Whether a diff holds a change worth a transition (ENACT's `_has_meaningful_changes` for
+    /// [`StateVocabulary::Enact`]; with contact, any node or edge entry).
+    pub fn is_meaningful(self, diff: &StateDiff) -> bool {
+        match self {
+            StateVocabulary::Enact => diff.has_meaningful_change(),
+            StateVocabulary::WithContact => ChangeOp::BOTH.iter().any(|&op| {
+                let side = diff.side(op);
+                !side.nodes.is_empty() || side.edges.iter().any(|e| !e.states.is_empty())
+            }),
+        }
+    }
 }
 
 /// `node_{op}_{object}_{State}`.
@@ -173,6 +211,15 @@ pub fn object_transitions(diff: &StateDiff) -> Result<BTreeSet<ObjectTransition>
 
 /// Every signature of a diff. An empty diff gives the empty set.
 pub fn diff_signatures(diff: &StateDiff) -> Result<BTreeSet<String>, NameError> {
+    diff_signatures_in(diff, StateVocabulary::Enact)
+}
+
+/// [`diff_signatures`] of the states `vocabulary` describes (contact runs add the grippers'
+/// contact states).
+pub fn diff_signatures_in(
+    diff: &StateDiff,
+    vocabulary: StateVocabulary,
+) -> Result<BTreeSet<String>, NameError> {
     let mut out = BTreeSet::new();
     if diff.is_empty() {
         return Ok(out);
@@ -184,7 +231,7 @@ pub fn diff_signatures(diff: &StateDiff) -> Result<BTreeSet<String>, NameError> 
             // fails even when no state would be described.
             let object = format_object_name(&node.name)?;
             for state in &node.states {
-                if state_phrase(state).is_some() {
+                if vocabulary.phrase(state).is_some() {
                     out.insert(node_signature(op, &object, state));
                 }
             }
@@ -193,7 +240,7 @@ pub fn diff_signatures(diff: &StateDiff) -> Result<BTreeSet<String>, NameError> 
             let from = format_object_name(&edge.from)?;
             let to = format_object_name(&edge.to)?;
             for state in &edge.states {
-                if state_phrase(state).is_some() {
+                if vocabulary.phrase(state).is_some() {
                     out.insert(edge_signature(op, &from, &to, state));
                 }
             }
@@ -332,5 +379,24 @@ mod tests {
             })
             .is_err()
         );
+    }
+
+    #[test]
+    fn only_the_contact_vocabulary_describes_gripper_contact() {
+        assert_eq!(StateVocabulary::Enact.phrase("LeftContact"), None);
+        assert_eq!(
+            StateVocabulary::WithContact.phrase("RightContact"),
+            Some("using the right gripper to touch")
+        );
+        assert_eq!(StateVocabulary::Enact.phrase("Touching"), Some("touching"));
+        let contact_only = StateDiff {
+            add: DiffSide {
+                nodes: vec![],
+                edges: vec![edge("robot_r1", "pan_1", &["RightContact"])],
+            },
+            remove: DiffSide::default(),
+        };
+        assert!(!StateVocabulary::Enact.is_meaningful(&contact_only));
+        assert!(StateVocabulary::WithContact.is_meaningful(&contact_only));
     }
 }

@@ -7,6 +7,7 @@ use askama::Template;
 
 use super::figure::study_heatmap;
 use super::report::{StudyReport, StudyStamp};
+use super::table::{table_csv, table_tex};
 use crate::bundle::{BundleFile, Stamp, csv_document, fixed, stamp_text, tex_escape, tex_stamp};
 use crate::dataset::Direction;
 use crate::error_analysis::HandFigures;
@@ -283,6 +284,14 @@ pub fn study_files(report: &StudyReport) -> Result<Vec<BundleFile>, String> {
             bytes: cells_tex(report).into_bytes(),
         },
         BundleFile {
+            name: "table.csv",
+            bytes: table_csv(&report.stamp, &report.table).into_bytes(),
+        },
+        BundleFile {
+            name: "table.tex",
+            bytes: table_tex(&report.stamp, &report.table).into_bytes(),
+        },
+        BundleFile {
             name: "heatmap.svg",
             bytes: heatmap_svg(report).map_err(|e| e.to_string())?.into_bytes(),
         },
@@ -327,6 +336,8 @@ mod tests {
                 "study.json",
                 "cells.csv",
                 "cells.tex",
+                "table.csv",
+                "table.tex",
                 "heatmap.svg",
                 "handedness.csv",
                 "handedness.svg"

@@ -183,6 +183,9 @@ mod tests {
                 .collect(),
             cells,
             handedness: Vec::new(),
+            table: crate::study::table::PaperTable {
+                settings: Vec::new(),
+            },
         }
     }
 

@@ -7,12 +7,17 @@
 //!   which pairs a variant's items with the baseline's;
 //! - [`stats`]: the paired t and sign tests reported beside the paper's Welch test;
 //! - [`report`]: the report's cells and handedness rows; [`figure`] the heatmap's panels;
-//!   [`export`] its files (JSON, CSV, LaTeX, SVG).
+//!   [`export`] its files (JSON, CSV, LaTeX, SVG);
+//! - [`subset`]: stratified subsets of a dataset, variants that keep the source's items;
+//! - [`table`]: the report in the layout of the paper's appendix tables (TA and PA per
+//!   setting, direction and step length; mean ± sd over a family's seeds).
 
 pub mod export;
 pub mod figure;
 pub mod report;
 pub mod stats;
+pub mod subset;
+pub mod table;
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 

@@ -10,6 +10,8 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::stats::{PairedT, SignTest, paired_t_test, sign_test};
+pub use super::table::ItemScore;
+use super::table::{PaperTable, SettingScores, paper_table};
 use super::{Alignment, VariantSpec};
 use crate::agreement::welch_t_test;
 use crate::dataset::{Direction, StepLength};
@@ -30,15 +32,6 @@ pub struct DatasetRef {
     pub name: String,
     /// `dataset_content_hash` of its items.
     pub hash: String,
-}
-
-/// One item's score for the compared row.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ItemScore {
-    pub direction: Direction,
-    pub step_length: StepLength,
-    /// `None` where the verifier gives no pairwise accuracy.
-    pub pairwise_accuracy: Option<f64>,
 }
 
 /// The compared row on one dataset.
@@ -166,6 +159,9 @@ pub struct StudyReport {
     /// (`step_length: null`) before its step lengths.
     pub cells: Vec<StudyCell>,
     pub handedness: Vec<HandednessRow>,
+    /// Task and pairwise accuracy per setting, direction and step length, in the layout of
+    /// the paper's appendix tables.
+    pub table: PaperTable,
 }
 
 /// Which items a cell covers.
@@ -276,7 +272,37 @@ pub fn build_study_report(inputs: &StudyInputs) -> Result<StudyReport, String> {
         variants,
         cells,
         handedness,
+        table: paper_table(&table_inputs(inputs)),
     })
+}
+
+/// Each dataset of the study as a setting of the paper's table: the baseline's scores, then
+/// each variant's over its items aligned with the baseline's, under its family's name.
+fn table_inputs(inputs: &StudyInputs) -> Vec<SettingScores<'_>> {
+    let mut out = vec![SettingScores {
+        setting: "Baseline".to_owned(),
+        dataset: inputs.baseline.name.clone(),
+        scores: inputs.baseline_row.items.values().collect(),
+    }];
+    let specs: Vec<VariantSpec> = inputs.variants.iter().map(|v| v.spec.clone()).collect();
+    for (family, members) in super::families(&specs) {
+        for spec in members {
+            let Some(variant) = inputs.variants.iter().find(|v| v.spec == *spec) else {
+                continue;
+            };
+            let Ok(row) = &variant.row else { continue };
+            out.push(SettingScores {
+                setting: family.to_owned(),
+                dataset: spec.dataset.clone(),
+                scores: variant
+                    .pairs
+                    .iter()
+                    .filter_map(|(_, v)| row.items.get(v))
+                    .collect(),
+            });
+        }
+    }
+    out
 }
 
 fn push_hands(
@@ -391,6 +417,7 @@ pub(crate) mod fixtures {
                         ItemScore {
                             direction: *d,
                             step_length: l(*n),
+                            task_accuracy: Some(if *pa == 1.0 { 1.0 } else { 0.0 }),
                             pairwise_accuracy: Some(*pa),
                         },
                     )
