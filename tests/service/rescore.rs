@@ -290,6 +290,113 @@ async fn an_older_metric_version_is_marked_until_rescored_and_rescoring_changes_
     );
 }
 
+/// Every number in a stored scores document moved (integers by one, fractions by a half): a
+/// document of the same shape that no scoring of these answers produces.
+fn tampered(scores: &str) -> String {
+    fn nudge(value: &mut Value) {
+        match value {
+            Value::Number(n) => {
+                *value = match n.as_u64() {
+                    Some(n) => Value::from(n + 1),
+                    None => Value::from(n.as_f64().expect("number") + 0.5),
+                }
+            }
+            Value::Array(items) => items.iter_mut().for_each(nudge),
+            Value::Object(fields) => fields.values_mut().for_each(nudge),
+            _ => {}
+        }
+    }
+    let mut value: Value = serde_json::from_str(scores).expect("scores are JSON");
+    nudge(&mut value);
+    let text = value.to_string();
+    assert_ne!(text, scores, "the scores hold no number to tamper with");
+    text
+}
+
+#[tokio::test]
+async fn rescoring_rewrites_stored_results_the_current_metric_disagrees_with_and_counts_them() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let reply = submit_to(
+        &server,
+        "mini",
+        "model=m",
+        &token,
+        answers(&records, &[1, 2]),
+    )
+    .await;
+    assert_eq!(reply.status, 201, "{}", reply.text);
+    let id = reply.id();
+    annotate(&server, &records, 3).await;
+    let scores_before = scores_text(&server.pool, id).await;
+    let verdicts_before = verdict_rows(&server.pool, id).await;
+    let human_before = human_verdicts(&server.pool).await;
+
+    // As an older metric that judged differently would have left them: the stored scores, every
+    // item's verdict and one human verdict are not what the current metric computes.
+    db!(
+        server.pool,
+        execute,
+        sqlx::query("UPDATE submissions SET metric_version = 1, scores = $1 WHERE id = $2")
+            .bind(tampered(&scores_before))
+            .bind(id)
+    )
+    .expect("tamper the scores");
+    db!(
+        server.pool,
+        execute,
+        sqlx::query(
+            "UPDATE submission_items SET exact_match = NOT exact_match, \
+             task_accuracy = NOT task_accuracy WHERE submission = $1"
+        )
+        .bind(id)
+    )
+    .expect("tamper the item verdicts");
+    db!(
+        server.pool,
+        execute,
+        sqlx::query(
+            "UPDATE annotations SET metric_version = 1, exact_match = NOT exact_match, \
+             task_accuracy = NOT task_accuracy WHERE item = (SELECT min(item) FROM annotations)"
+        )
+    )
+    .expect("tamper a human verdict");
+    assert_ne!(verdict_rows(&server.pool, id).await, verdicts_before);
+    assert_ne!(human_verdicts(&server.pool).await, human_before);
+
+    let summary = rescore::rescore(
+        &Hub::from(server.pool.clone()),
+        &operator(),
+        Some("mini"),
+        &|_| {},
+    )
+    .await
+    .expect("rescored");
+    assert_eq!((summary.submissions, summary.submissions_changed), (1, 1));
+    assert_eq!(
+        (summary.human_answers, summary.human_answers_changed),
+        (1, 1)
+    );
+    assert!(summary.failures.is_empty(), "{:?}", summary.failures);
+
+    // What the current metric computes, byte for byte: what was stored on submission.
+    assert_eq!(scores_text(&server.pool, id).await, scores_before);
+    assert_eq!(verdict_rows(&server.pool, id).await, verdicts_before);
+    assert_eq!(human_verdicts(&server.pool).await, human_before);
+    let detail = db!(
+        server.pool,
+        fetch_one,
+        sqlx::query_scalar::<_, String>(
+            "SELECT detail FROM audit_log WHERE action = 'metric.rescore'"
+        )
+    )
+    .expect("audit");
+    assert!(
+        detail.contains("1 submissions (1 changed), 1 human answers (1 changed), 0 failed"),
+        "{detail}"
+    );
+}
+
 #[tokio::test]
 async fn answers_without_a_stored_verdict_are_judged_on_the_fly_until_rescored() {
     let (server, records) = spawn_app_with_release().await;
