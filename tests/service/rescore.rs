@@ -516,24 +516,80 @@ async fn the_rescore_job_stops_when_asked_and_resumes_from_the_top() {
 
 #[tokio::test]
 async fn reimported_signatures_judge_the_human_answers_again_in_the_import() {
-    let Some(fixtures) = shared_fixtures() else {
-        eprintln!("shared fixtures not present, skipping");
+    // Under CI the fixtures must be here (the one rule of `fixtures::must_not_skip`).
+    let Some(parity) = crate::fixtures::parity_dir() else {
         return;
     };
-    let parity = fixtures.join("enact-parity");
+    let reference = parity.join("reference/eval_analyze/detailed_eval");
     let dir = tempfile::tempdir().expect("tempdir");
     let pool = fresh_db(&dir).await;
     import(&pool, &parity, &options("parity")).await;
     let items = db!(
         pool,
         fetch_all,
-        sqlx::query_as::<_, (String, String)>(
-            "SELECT item_id, gt_answer FROM items ORDER BY id LIMIT 24"
-        )
+        sqlx::query_scalar::<_, String>("SELECT item_id FROM items ORDER BY id")
     )
     .expect("items");
+    // Each item answered as one of ENACT's prediction sets answered it, with ENACT's own verdict
+    // on that answer (its evaluator, signatures on) to hold the hub's to: the semantically
+    // equivalent orders where that set has one, else in turn the truth, two adjacent steps
+    // swapped and a random order.
+    let enact: Vec<std::collections::HashMap<String, Value>> =
+        ["semequiv", "perfect", "adjswap", "random"]
+            .iter()
+            .map(|set| {
+                let path = reference.join(format!("enact_ordering_{set}.jsonl"));
+                std::fs::read_to_string(&path)
+                    .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+                    .lines()
+                    .map(|line| serde_json::from_str::<Value>(line).expect("ENACT's row"))
+                    .map(|row| (row["id"].as_str().expect("id").to_owned(), row))
+                    .collect()
+            })
+            .collect();
+    let mut chosen = Vec::new();
+    for (i, id) in items.iter().enumerate() {
+        let row = enact[0]
+            .get(id)
+            .or_else(|| enact[1 + i % 3].get(id))
+            .or_else(|| enact[1].get(id))
+            .unwrap_or_else(|| panic!("ENACT judged no answer for {id}"));
+        let mut answer: Vec<u64> = row["model_answer"]
+            .as_array()
+            .map(|labels| labels.iter().filter_map(Value::as_u64).collect())
+            .unwrap_or_default();
+        let truth: Vec<u64> = row["ground_truth"]
+            .as_array()
+            .expect("ground truth")
+            .iter()
+            .map(|l| l.as_u64().expect("label"))
+            .collect();
+        answer.sort_unstable();
+        let mut sorted_truth = truth.clone();
+        sorted_truth.sort_unstable();
+        if answer != sorted_truth {
+            continue; // not an order of the steps: a person cannot give it
+        }
+        chosen.push((id.clone(), row.clone()));
+    }
+    let wrong = chosen
+        .iter()
+        .filter(|(_, row)| row["eval_metrics"]["exact_match"] == false)
+        .count();
+    let equivalent = chosen
+        .iter()
+        .filter(|(_, r)| {
+            r["eval_metrics"]["exact_match"] == false && r["eval_metrics"]["semantic_match"] == true
+        })
+        .count();
+    assert!(
+        wrong >= 20 && equivalent >= 10 && chosen.len() >= 80,
+        "{} answers, {wrong} wrong, {equivalent} equivalent orders",
+        chosen.len()
+    );
+
     let ann = crate::annotate::annotator_on(&pool, "ann", false).await;
-    let ids: Vec<&str> = items.iter().map(|(id, _)| id.as_str()).collect();
+    let ids: Vec<&str> = chosen.iter().map(|(id, _)| id.as_str()).collect();
     crate::annotate::assign_on(&pool, "parity", ann, &ids).await;
     let hub = Hub::from(pool.clone());
     let session = Session {
@@ -542,16 +598,14 @@ async fn reimported_signatures_judge_the_human_answers_again_in_the_import() {
         is_admin: false,
         csrf_token: String::new(),
     };
-    for (i, (id, gt)) in items.iter().enumerate() {
-        let mut labels: Vec<u8> = serde_json::from_str(gt).expect("gt");
-        // Some right, some with two steps swapped, some reversed.
-        match i % 3 {
-            0 => {}
-            1 => labels.swap(0, 1),
-            _ => labels.reverse(),
-        }
+    for (id, row) in &chosen {
         let draft = Draft {
-            slots: labels.into_iter().map(Some).collect(),
+            slots: row["model_answer"]
+                .as_array()
+                .expect("answer")
+                .iter()
+                .map(|l| Some(l.as_u64().expect("label") as u8))
+                .collect(),
             counts: InteractionCounts::default(),
             history: Vec::new(),
         };
@@ -566,29 +620,52 @@ async fn reimported_signatures_judge_the_human_answers_again_in_the_import() {
     let report = import(&pool, &parity, &with_graphs).await;
     assert_eq!(report.signatures_updated, 96);
     let rejudged = human_verdicts(&pool).await;
-    assert_eq!(rejudged.len(), items.len());
+    assert_eq!(rejudged.len(), chosen.len());
     assert!(
         rejudged
             .iter()
             .all(|v| v.5 == Some(i64::from(METRIC_VERSION)))
     );
     assert_ne!(rejudged, exact_only, "scene graphs give pairwise accuracy");
-    // What the import stored is what judging the answers now gives.
-    let rows = app::leaderboard::of(&Hub::from(pool.clone()), "parity")
-        .await
-        .expect("board")
-        .1;
-    db!(
+
+    // What the import stored is ENACT's verdict on each answer, metric by metric.
+    let stored = db!(
         pool,
-        execute,
-        sqlx::query("UPDATE annotations SET metric_version = NULL")
+        fetch_all,
+        sqlx::query_as::<
+            _,
+            (
+                String,
+                Option<bool>,
+                Option<bool>,
+                Option<bool>,
+                Option<f64>
+            ),
+        >(
+            "SELECT i.item_id, a.exact_match, a.semantic_match, a.task_accuracy, \
+             a.pairwise_accuracy FROM annotations a JOIN items i ON i.id = a.item \
+             WHERE a.outcome = 'answered'"
+        )
     )
-    .expect("forget the verdicts");
-    let judged = app::leaderboard::of(&Hub::from(pool.clone()), "parity")
-        .await
-        .expect("board")
-        .1;
-    assert_eq!(rows, judged);
+    .expect("stored verdicts");
+    assert_eq!(stored.len(), chosen.len());
+    let by_id: std::collections::HashMap<&str, &Value> =
+        chosen.iter().map(|(id, row)| (id.as_str(), row)).collect();
+    for (id, exact, semantic, task, pairwise) in &stored {
+        let metrics = &by_id[id.as_str()]["eval_metrics"];
+        let want = (
+            metrics["exact_match"].as_bool(),
+            metrics["semantic_match"].as_bool(),
+            metrics["task_accuracy"].as_bool(),
+        );
+        assert_eq!((*exact, *semantic, *task), want, "{id}: {metrics}");
+        let want_pairwise = metrics["pairwise_accuracy"].as_f64().expect("pairwise");
+        let pairwise = pairwise.unwrap_or_else(|| panic!("{id}: no pairwise accuracy"));
+        assert!(
+            (pairwise - want_pairwise).abs() < 1e-9,
+            "{id}: pairwise {pairwise}, ENACT {want_pairwise}"
+        );
+    }
 }
 
 #[tokio::test]
