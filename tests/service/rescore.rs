@@ -134,8 +134,9 @@ async fn board(pool: &Pool) -> Vec<enact_hub::core::leaderboard::LeaderboardRow>
         .1
 }
 
-#[tokio::test]
-async fn an_older_metric_version_is_marked_until_rescored_and_rescoring_changes_no_byte() {
+/// A hub with one submission (two answers wrong), scored at the current metric version, and
+/// three human answers (see [`annotate`]); the submission's id.
+async fn submitted_and_annotated() -> (TestServer, i64) {
     let (server, records) = spawn_app_with_release().await;
     let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
     let reply = submit_to(
@@ -147,10 +148,15 @@ async fn an_older_metric_version_is_marked_until_rescored_and_rescoring_changes_
     )
     .await;
     assert_eq!(reply.status, 201, "{}", reply.text);
-    let id = reply.id();
     assert_eq!(reply.json()["metric_version"], METRIC_VERSION);
     assert_eq!(reply.json()["outdated"], false);
     annotate(&server, &records, 3).await;
+    (server, reply.id())
+}
+
+#[tokio::test]
+async fn an_older_metric_version_is_marked_until_rescored_and_rescoring_changes_no_byte() {
+    let (server, id) = submitted_and_annotated().await;
 
     // Verdicts were stored when the answers were finished, at the current version.
     let human_before = human_verdicts(&server.pool).await;
@@ -315,19 +321,7 @@ fn tampered(scores: &str) -> String {
 
 #[tokio::test]
 async fn rescoring_rewrites_stored_results_the_current_metric_disagrees_with_and_counts_them() {
-    let (server, records) = spawn_app_with_release().await;
-    let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
-    let reply = submit_to(
-        &server,
-        "mini",
-        "model=m",
-        &token,
-        answers(&records, &[1, 2]),
-    )
-    .await;
-    assert_eq!(reply.status, 201, "{}", reply.text);
-    let id = reply.id();
-    annotate(&server, &records, 3).await;
+    let (server, id) = submitted_and_annotated().await;
     let scores_before = scores_text(&server.pool, id).await;
     let verdicts_before = verdict_rows(&server.pool, id).await;
     let human_before = human_verdicts(&server.pool).await;
