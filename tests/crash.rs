@@ -153,7 +153,10 @@ fn release(dir: &Path, per_cell: u32) -> Vec<Value> {
 
 /// Imports killed at random moments, alternating two versions of the same release into one
 /// dataset with `--replace`: after each kill the dataset is wholly the old version or wholly
-/// the new one, never a mix, and its audit entries count exactly the imports that finished.
+/// the new one, never a mix, and each import adds exactly one audit entry when it committed
+/// (it exited successfully or its version is now there) and none when it is seen to have
+/// changed nothing (killed before its commit, or after committing what was there already:
+/// then one or none).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn imports_killed_at_random_are_all_or_nothing() {
     let mut rng = rng("imports");
@@ -189,6 +192,9 @@ async fn imports_killed_at_random_are_all_or_nothing() {
     let whole = started.elapsed();
     let mut current = 'b';
     let mut finished_imports = 2;
+    let mut logged = import_entries(&db).await;
+    assert_eq!(logged, 2, "the two imports that finished");
+    let mut killed_before_landing = 0;
     for k in 0..kills() {
         let (version, from) = if k % 2 == 0 { ('a', &a) } else { ('b', &b) };
         let mut child = import(from);
@@ -220,29 +226,61 @@ async fn imports_killed_at_random_are_all_or_nothing() {
         } else {
             panic!("{after}: {new_version} of {items} items are of the new version");
         };
+        let landed = seen != current || finished || status.success();
         if seen != current {
             assert!(!finished, "{after}: a finished import is not there");
             current = seen;
             finished_imports += 1;
         }
-        let logged: i64 = sqlx::query_scalar(
-            "SELECT count(*) FROM audit_log WHERE action = 'dataset.import' AND dataset = 'main'",
-        )
-        .fetch_one(&pool)
-        .await
-        .expect("audit");
-        // Imports that changed nothing (killed ones that had committed included) are logged
-        // too, so the log has at least one entry per change seen.
-        assert!(
-            logged >= finished_imports,
-            "{after}: {logged} import entries"
-        );
         pool.close().await;
+        // One entry for an import that committed, none for one killed before its commit; an
+        // import of the version already there may have committed before its kill unseen.
+        let now = import_entries(&db).await;
+        if landed {
+            assert_eq!(
+                now,
+                logged + 1,
+                "{after}: an import that landed, {now} entries"
+            );
+        } else if seen != version {
+            killed_before_landing += 1;
+            assert_eq!(
+                now, logged,
+                "{after}: an import killed before its commit is logged"
+            );
+        } else {
+            assert!(
+                now == logged || now == logged + 1,
+                "{after}: {} entries added by one import",
+                now - logged
+            );
+        }
+        logged = now;
     }
     eprintln!(
-        "crash imports: {} kills, {finished_imports} imports landed",
+        "crash imports: {} kills, {finished_imports} imports landed, {killed_before_landing} \
+         killed before landing",
         kills()
     );
+    // The trial tried both ends of the window: imports that landed and (over enough kills
+    // for one to fall early, about one in seven does) imports it cut short.
+    assert!(
+        finished_imports > 2 && (killed_before_landing > 0 || kills() < 20),
+        "{finished_imports} imports landed, {killed_before_landing} were killed before landing"
+    );
+}
+
+/// How many imports of dataset `main` the audit log holds.
+async fn import_entries(db: &Path) -> i64 {
+    let pool = open(db).await;
+    let logged: i64 = sqlx::query_scalar(
+        "SELECT count(*) FROM audit_log WHERE action = 'dataset.import' AND dataset = 'main'",
+    )
+    .fetch_one(&pool)
+    .await
+    .expect("audit");
+    pool.close().await;
+    logged
 }
 
 /// [`dataset_digest`] of dataset `main`.
@@ -465,6 +503,7 @@ async fn submissions_acknowledged_before_a_kill_survive_it() {
     // id -> (model, body hash, the JSON the 201 carried)
     let mut acknowledged: BTreeMap<i64, (String, String, Value)> = BTreeMap::new();
     let mut sent = 0;
+    let mut rounds_acknowledged = 0;
     for k in 0..kills() {
         let server = Server::start(&db).await;
         // What the last round acknowledged reads back the same through the restarted server.
@@ -519,6 +558,7 @@ async fn submissions_acknowledged_before_a_kill_survive_it() {
         tokio::time::sleep(at).await;
         server.kill();
         let done = writer.await.expect("writer");
+        rounds_acknowledged += usize::from(!done.is_empty());
         sent += done.len() + 1;
         for (id, model, hash, json) in done {
             acknowledged.insert(id, (model, hash, json));
@@ -568,9 +608,15 @@ async fn submissions_acknowledged_before_a_kill_survive_it() {
         pool.close().await;
     }
     eprintln!(
-        "crash submissions: {} kills, {} submissions acknowledged and found",
+        "crash submissions: {} kills, {} submissions acknowledged and found, {rounds_acknowledged} \
+         rounds acknowledged some",
         kills(),
         acknowledged.len()
+    );
+    // The survival checks above held something: kills fell after acknowledged submissions.
+    assert!(
+        rounds_acknowledged > 0 && !acknowledged.is_empty(),
+        "no submission was acknowledged before any kill: nothing was checked"
     );
 }
 
@@ -811,5 +857,13 @@ async fn annotation_saves_and_answers_acknowledged_before_a_kill_survive_it() {
         kills(),
         answered.len(),
         drafts.len()
+    );
+    // The survival checks above held something: answers and draft saves were acknowledged
+    // before kills.
+    let acked_drafts = drafts.values().filter(|(_, acked)| *acked > 0).count();
+    assert!(
+        !answered.is_empty() && acked_drafts > 0,
+        "{} answers and {acked_drafts} draft saves acknowledged: nothing was checked",
+        answered.len()
     );
 }

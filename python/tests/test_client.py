@@ -17,7 +17,7 @@ import pytest
 import enact_hub
 from enact_hub import Hub, HubError
 
-from conftest import Server, serve
+from conftest import Server, import_or_skip, serve
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -72,7 +72,7 @@ def test_items_without_frames_and_as_pil_images(demo: Server) -> None:
     hub = Hub(demo.url)
     bare = next(hub.items("demo", frames="none"))
     assert all(image.data is None for image in bare.images)
-    pil = pytest.importorskip("PIL.Image")
+    pil = import_or_skip("PIL.Image")
     item = next(hub.items("demo", frames="pil"))
     assert item.id == bare.id
     assert all(isinstance(image.data, pil.Image) and image.data.size[0] > 0 for image in item.images)

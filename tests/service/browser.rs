@@ -19,10 +19,9 @@ fn browser_dir() -> PathBuf {
 
 /// Whether Chromium and playwright-core are here (they must be in CI; elsewhere the test skips).
 pub(crate) fn browser_available() -> bool {
-    let in_ci = std::env::var("CI").is_ok_and(|v| v == "true");
     if !Path::new(CHROMIUM).exists() {
         assert!(
-            !in_ci,
+            !crate::fixtures::must_not_skip(),
             "{CHROMIUM} is missing in CI: scripts/test.sh installs it"
         );
         eprintln!("skipping: {CHROMIUM} is absent (install chromium, or run scripts/test.sh)");

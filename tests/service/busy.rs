@@ -2,7 +2,11 @@
 //! `Retry-After` and a message saying the database is busy, on the API and on pages, on
 //! both databases; nothing is half-written and the same request succeeds once the lock is free.
 
+use std::future::Future;
+use std::time::{Duration, Instant};
+
 use enact_hub::core::credentials::Role;
+use enact_hub::store::WRITE_WAIT;
 use reqwest::StatusCode;
 use serde_json::json;
 
@@ -29,14 +33,24 @@ async fn writes_wait_out_the_lock_then_answer_503_with_retry_after() {
     let draft_rows = "SELECT count(*) FROM drafts WHERE slots LIKE '%1%'";
     assert_eq!(count(&server.pool, draft_rows).await, 0);
     let held = server.pool.begin().await.expect("the write lock");
-    let started = std::time::Instant::now();
     let draft_path = format!("/annotate/mini/{item}/draft");
-    let (submission, saved, login) = tokio::join!(
-        submit_to(&server, "mini", "model=m", &token, body.clone()),
-        alice.post_json(&draft_path, Some(&csrf), &draft),
-        bob.login("bob", PASSWORD),
+    let ((submission, submission_waited), (saved, saved_waited), (login, login_waited)) = tokio::join!(
+        timed(submit_to(&server, "mini", "model=m", &token, body.clone())),
+        timed(alice.post_json(&draft_path, Some(&csrf), &draft)),
+        timed(bob.login("bob", PASSWORD)),
     );
-    eprintln!("refused after {:?}", started.elapsed());
+    // Each refused write waited out the lock first (SQLite's busy timeout, PostgreSQL's
+    // lock_timeout, both WRITE_WAIT) rather than giving up at once; a tenth of it is left to
+    // the timers' granularity.
+    let waited_out = WRITE_WAIT - WRITE_WAIT / 10;
+    assert!(
+        submission_waited >= waited_out,
+        "the submission was refused after {submission_waited:?}, not after waiting out the lock"
+    );
+    assert!(
+        saved_waited >= waited_out,
+        "the draft was refused after {saved_waited:?}, not after waiting out the lock"
+    );
     assert_eq!(
         submission.status,
         StatusCode::SERVICE_UNAVAILABLE,
@@ -61,6 +75,10 @@ async fn writes_wait_out_the_lock_then_answer_503_with_retry_after() {
     // written without the write lock, which serialises only the use cases' checked writes,
     // so a login does not wait there.)
     if on_sqlite() {
+        assert!(
+            login_waited >= waited_out,
+            "login refused after {login_waited:?}"
+        );
         assert_eq!(login.status(), StatusCode::SERVICE_UNAVAILABLE);
         assert_eq!(login.headers()["retry-after"], "1");
         let page = login.text().await.expect("page");
@@ -80,9 +98,23 @@ async fn writes_wait_out_the_lock_then_answer_503_with_retry_after() {
         "the refused draft was not saved"
     );
 
-    // Retried once the lock is free, each succeeds.
-    let submission = submit_to(&server, "mini", "model=m", &token, body).await;
+    // Retried while the lock is held for a moment, the submission waits for it and succeeds
+    // once it is free.
+    let held = server.pool.begin().await.expect("the write lock");
+    let hold = Duration::from_secs(1);
+    let release = async {
+        tokio::time::sleep(hold).await;
+        held.rollback().await.expect("released");
+    };
+    let ((submission, waited), ()) = tokio::join!(
+        timed(submit_to(&server, "mini", "model=m", &token, body)),
+        release
+    );
     assert!(submission.status.is_success(), "{}", submission.text);
+    assert!(
+        waited >= hold,
+        "the submission was answered after {waited:?}, while the lock was still held"
+    );
     assert_eq!(
         count(&server.pool, "SELECT count(*) FROM submissions").await,
         1
@@ -93,4 +125,11 @@ async fn writes_wait_out_the_lock_then_answer_503_with_retry_after() {
         bob.login("bob", PASSWORD).await.status(),
         StatusCode::SEE_OTHER
     );
+}
+
+/// `request`'s answer and how long it took.
+async fn timed<T>(request: impl Future<Output = T>) -> (T, Duration) {
+    let started = Instant::now();
+    let answer = request.await;
+    (answer, started.elapsed())
 }

@@ -349,15 +349,51 @@ async fn two_instances_on_one_database_and_bucket_behave_as_one_server() {
         .await;
     }
 
-    // Killing A loses nothing it acknowledged: B serves every submission A answered 201 to.
+    // Killing A with writes in flight loses nothing it acknowledged and leaves nothing
+    // half-written: a writer posts to A without pause, A is killed once it has acknowledged
+    // three, and B serves every submission A answered 201 to, each with all its verdicts.
     let (_, token) = api_token(&pool, "crash", Role::Submitter, None, None).await;
+    let last_before = count(&pool, "SELECT coalesce(max(id), 0) FROM submissions").await;
+    let (acked, mut acknowledgements) = tokio::sync::mpsc::unbounded_channel();
+    let writer = {
+        let (client, url, token, body) = (
+            client.clone(),
+            a.url("/api/v1/datasets/mini/submissions?model=m"),
+            token.clone(),
+            body.clone(),
+        );
+        tokio::spawn(async move {
+            let mut sent = 0_i64;
+            loop {
+                sent += 1;
+                let reply = client.post(&url).bearer_auth(&token).body(body.clone());
+                // A refused connection or a cut reply is the kill; any other status is not.
+                let Ok(reply) = reply.send().await else { break };
+                assert_eq!(reply.status(), StatusCode::CREATED, "submission {sent}");
+                let Ok(json) = reply.json::<Value>().await else {
+                    break;
+                };
+                if acked.send(json["id"].clone()).is_err() {
+                    break;
+                }
+            }
+            sent
+        })
+    };
     let mut acknowledged = Vec::new();
-    for _ in 0..5 {
-        let (status, reply) = submit(&client, &a, &token, &body, None).await;
-        assert_eq!(status, StatusCode::CREATED);
-        acknowledged.push(reply["id"].clone());
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while acknowledged.len() < 3 {
+        let id = tokio::time::timeout_at(deadline.into(), acknowledgements.recv())
+            .await
+            .expect("A acknowledged three submissions within a minute")
+            .expect("the writer stopped before A was killed");
+        acknowledged.push(id);
     }
     a.kill();
+    let sent = writer.await.expect("the writer");
+    while let Ok(id) = acknowledgements.try_recv() {
+        acknowledged.push(id);
+    }
     for id in &acknowledged {
         let r = client
             .get(b.url(&format!("/api/v1/submissions/{id}")))
@@ -367,5 +403,26 @@ async fn two_instances_on_one_database_and_bucket_behave_as_one_server() {
             .expect("GET submission");
         assert_eq!(r.status(), StatusCode::OK, "submission {id}");
     }
+    // The write the kill cut landed whole or not at all.
+    let since = format!("FROM submissions s WHERE s.id > {last_before}");
+    let stored = count(&pool, &format!("SELECT count(*) {since}")).await;
+    let acknowledged = acknowledged.len() as i64;
+    assert!(
+        (acknowledged..=sent).contains(&stored),
+        "{stored} submissions stored, {acknowledged} acknowledged, {sent} sent"
+    );
+    assert_eq!(
+        count(
+            &pool,
+            &format!(
+                "SELECT count(*) {since} AND (SELECT count(*) FROM submission_items i \
+                 WHERE i.submission = s.id) != (SELECT count(*) FROM items i \
+                 WHERE i.dataset_id = s.dataset)"
+            )
+        )
+        .await,
+        0,
+        "a submission without all its verdicts"
+    );
     drop(b);
 }

@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use enact_hub::app::jobs::{
     JobContext, JobControl, JobHandlers, JobId, JobKind, JobSettings, JobState, Worker,
@@ -37,7 +37,9 @@ async fn enqueue(pool: &Pool, payload: serde_json::Value) -> JobId {
 }
 
 async fn wait_for(hub: &Hub, id: JobId, state: JobState) -> jobs::JobRow {
-    for _ in 0..500 {
+    // A deadline in time, not a number of polls: each poll is slower on a loaded machine.
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while Instant::now() < deadline {
         let job = jobs::get(hub, id).await.expect("read").expect("the job");
         if job.state == state {
             return job;
@@ -45,7 +47,15 @@ async fn wait_for(hub: &Hub, id: JobId, state: JobState) -> jobs::JobRow {
         tokio::time::sleep(Duration::from_millis(20)).await;
     }
     let job = jobs::get(hub, id).await.expect("read").expect("the job");
-    panic!("{id} never became {state:?}; it is {job:?}");
+    panic!("{id} did not become {state:?} within 30 s; it is {job:?}");
+}
+
+/// The wall clock in milliseconds, as job leases count it.
+fn now_ms() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_millis() as i64
 }
 
 /// Handlers under which each job counts its starts by owner-less key (its `n`), and does what
@@ -132,12 +142,8 @@ async fn a_dead_instances_job_is_taken_over_when_its_lease_runs_out() {
     let pool = fresh_db(&dir).await;
     let hub = Hub::from(pool.clone());
     let id = enqueue(&pool, json!({"n": 3, "do": "finish"})).await;
-    // An instance that claimed it and died: its lease runs out in 300 ms and is never renewed.
-    let until = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap()
-        .as_millis() as i64
-        + 300;
+    // An instance that claimed it and died: its lease runs out in 2 s and is never renewed.
+    let until = now_ms() + 2000;
     db!(
         pool,
         execute,
@@ -151,11 +157,20 @@ async fn a_dead_instances_job_is_taken_over_when_its_lease_runs_out() {
     .unwrap();
     let starts = Arc::new(Mutex::new(BTreeMap::new()));
     let worker = Worker::spawn(hub.clone(), recording(Arc::clone(&starts)), fast());
-    tokio::time::sleep(Duration::from_millis(150)).await;
-    assert!(
-        starts.lock().unwrap().is_empty(),
-        "taken before the lease ran out"
-    );
+    // Until the lease runs out nobody has started it: each look at the starts is checked
+    // against the clock read after it, so a slow machine only makes fewer looks, never a
+    // false alarm. At least one look falls inside the lease (it is 2 s long).
+    let mut looks = 0;
+    loop {
+        let taken = !starts.lock().unwrap().is_empty();
+        if now_ms() >= until {
+            break;
+        }
+        assert!(!taken, "taken before the lease ran out");
+        looks += 1;
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    assert!(looks > 0, "no look fell inside the lease");
     let job = wait_for(&hub, id, JobState::Done).await;
     worker.stop().await;
     assert_eq!(job.attempts, 2);

@@ -134,8 +134,9 @@ async fn board(pool: &Pool) -> Vec<enact_hub::core::leaderboard::LeaderboardRow>
         .1
 }
 
-#[tokio::test]
-async fn an_older_metric_version_is_marked_until_rescored_and_rescoring_changes_no_byte() {
+/// A hub with one submission (two answers wrong), scored at the current metric version, and
+/// three human answers (see [`annotate`]); the submission's id.
+async fn submitted_and_annotated() -> (TestServer, i64) {
     let (server, records) = spawn_app_with_release().await;
     let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
     let reply = submit_to(
@@ -147,10 +148,15 @@ async fn an_older_metric_version_is_marked_until_rescored_and_rescoring_changes_
     )
     .await;
     assert_eq!(reply.status, 201, "{}", reply.text);
-    let id = reply.id();
     assert_eq!(reply.json()["metric_version"], METRIC_VERSION);
     assert_eq!(reply.json()["outdated"], false);
     annotate(&server, &records, 3).await;
+    (server, reply.id())
+}
+
+#[tokio::test]
+async fn an_older_metric_version_is_marked_until_rescored_and_rescoring_changes_no_byte() {
+    let (server, id) = submitted_and_annotated().await;
 
     // Verdicts were stored when the answers were finished, at the current version.
     let human_before = human_verdicts(&server.pool).await;
@@ -290,6 +296,101 @@ async fn an_older_metric_version_is_marked_until_rescored_and_rescoring_changes_
     );
 }
 
+/// Every number in a stored scores document moved (integers by one, fractions by a half): a
+/// document of the same shape that no scoring of these answers produces.
+fn tampered(scores: &str) -> String {
+    fn nudge(value: &mut Value) {
+        match value {
+            Value::Number(n) => {
+                *value = match n.as_u64() {
+                    Some(n) => Value::from(n + 1),
+                    None => Value::from(n.as_f64().expect("number") + 0.5),
+                }
+            }
+            Value::Array(items) => items.iter_mut().for_each(nudge),
+            Value::Object(fields) => fields.values_mut().for_each(nudge),
+            _ => {}
+        }
+    }
+    let mut value: Value = serde_json::from_str(scores).expect("scores are JSON");
+    nudge(&mut value);
+    let text = value.to_string();
+    assert_ne!(text, scores, "the scores hold no number to tamper with");
+    text
+}
+
+#[tokio::test]
+async fn rescoring_rewrites_stored_results_the_current_metric_disagrees_with_and_counts_them() {
+    let (server, id) = submitted_and_annotated().await;
+    let scores_before = scores_text(&server.pool, id).await;
+    let verdicts_before = verdict_rows(&server.pool, id).await;
+    let human_before = human_verdicts(&server.pool).await;
+
+    // As an older metric that judged differently would have left them: the stored scores, every
+    // item's verdict and one human verdict are not what the current metric computes.
+    db!(
+        server.pool,
+        execute,
+        sqlx::query("UPDATE submissions SET metric_version = 1, scores = $1 WHERE id = $2")
+            .bind(tampered(&scores_before))
+            .bind(id)
+    )
+    .expect("tamper the scores");
+    db!(
+        server.pool,
+        execute,
+        sqlx::query(
+            "UPDATE submission_items SET exact_match = NOT exact_match, \
+             task_accuracy = NOT task_accuracy WHERE submission = $1"
+        )
+        .bind(id)
+    )
+    .expect("tamper the item verdicts");
+    db!(
+        server.pool,
+        execute,
+        sqlx::query(
+            "UPDATE annotations SET metric_version = 1, exact_match = NOT exact_match, \
+             task_accuracy = NOT task_accuracy WHERE item = (SELECT min(item) FROM annotations)"
+        )
+    )
+    .expect("tamper a human verdict");
+    assert_ne!(verdict_rows(&server.pool, id).await, verdicts_before);
+    assert_ne!(human_verdicts(&server.pool).await, human_before);
+
+    let summary = rescore::rescore(
+        &Hub::from(server.pool.clone()),
+        &operator(),
+        Some("mini"),
+        &|_| {},
+    )
+    .await
+    .expect("rescored");
+    assert_eq!((summary.submissions, summary.submissions_changed), (1, 1));
+    assert_eq!(
+        (summary.human_answers, summary.human_answers_changed),
+        (1, 1)
+    );
+    assert!(summary.failures.is_empty(), "{:?}", summary.failures);
+
+    // What the current metric computes, byte for byte: what was stored on submission.
+    assert_eq!(scores_text(&server.pool, id).await, scores_before);
+    assert_eq!(verdict_rows(&server.pool, id).await, verdicts_before);
+    assert_eq!(human_verdicts(&server.pool).await, human_before);
+    let detail = db!(
+        server.pool,
+        fetch_one,
+        sqlx::query_scalar::<_, String>(
+            "SELECT detail FROM audit_log WHERE action = 'metric.rescore'"
+        )
+    )
+    .expect("audit");
+    assert!(
+        detail.contains("1 submissions (1 changed), 1 human answers (1 changed), 0 failed"),
+        "{detail}"
+    );
+}
+
 #[tokio::test]
 async fn answers_without_a_stored_verdict_are_judged_on_the_fly_until_rescored() {
     let (server, records) = spawn_app_with_release().await;
@@ -409,24 +510,80 @@ async fn the_rescore_job_stops_when_asked_and_resumes_from_the_top() {
 
 #[tokio::test]
 async fn reimported_signatures_judge_the_human_answers_again_in_the_import() {
-    let Some(fixtures) = shared_fixtures() else {
-        eprintln!("shared fixtures not present, skipping");
+    // Under CI the fixtures must be here (the one rule of `fixtures::must_not_skip`).
+    let Some(parity) = crate::fixtures::parity_dir() else {
         return;
     };
-    let parity = fixtures.join("enact-parity");
+    let reference = parity.join("reference/eval_analyze/detailed_eval");
     let dir = tempfile::tempdir().expect("tempdir");
     let pool = fresh_db(&dir).await;
     import(&pool, &parity, &options("parity")).await;
     let items = db!(
         pool,
         fetch_all,
-        sqlx::query_as::<_, (String, String)>(
-            "SELECT item_id, gt_answer FROM items ORDER BY id LIMIT 24"
-        )
+        sqlx::query_scalar::<_, String>("SELECT item_id FROM items ORDER BY id")
     )
     .expect("items");
+    // Each item answered as one of ENACT's prediction sets answered it, with ENACT's own verdict
+    // on that answer (its evaluator, signatures on) to hold the hub's to: the semantically
+    // equivalent orders where that set has one, else in turn the truth, two adjacent steps
+    // swapped and a random order.
+    let enact: Vec<std::collections::HashMap<String, Value>> =
+        ["semequiv", "perfect", "adjswap", "random"]
+            .iter()
+            .map(|set| {
+                let path = reference.join(format!("enact_ordering_{set}.jsonl"));
+                std::fs::read_to_string(&path)
+                    .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+                    .lines()
+                    .map(|line| serde_json::from_str::<Value>(line).expect("ENACT's row"))
+                    .map(|row| (row["id"].as_str().expect("id").to_owned(), row))
+                    .collect()
+            })
+            .collect();
+    let mut chosen = Vec::new();
+    for (i, id) in items.iter().enumerate() {
+        let row = enact[0]
+            .get(id)
+            .or_else(|| enact[1 + i % 3].get(id))
+            .or_else(|| enact[1].get(id))
+            .unwrap_or_else(|| panic!("ENACT judged no answer for {id}"));
+        let mut answer: Vec<u64> = row["model_answer"]
+            .as_array()
+            .map(|labels| labels.iter().filter_map(Value::as_u64).collect())
+            .unwrap_or_default();
+        let truth: Vec<u64> = row["ground_truth"]
+            .as_array()
+            .expect("ground truth")
+            .iter()
+            .map(|l| l.as_u64().expect("label"))
+            .collect();
+        answer.sort_unstable();
+        let mut sorted_truth = truth.clone();
+        sorted_truth.sort_unstable();
+        if answer != sorted_truth {
+            continue; // not an order of the steps: a person cannot give it
+        }
+        chosen.push((id.clone(), row.clone()));
+    }
+    let wrong = chosen
+        .iter()
+        .filter(|(_, row)| row["eval_metrics"]["exact_match"] == false)
+        .count();
+    let equivalent = chosen
+        .iter()
+        .filter(|(_, r)| {
+            r["eval_metrics"]["exact_match"] == false && r["eval_metrics"]["semantic_match"] == true
+        })
+        .count();
+    assert!(
+        wrong >= 20 && equivalent >= 10 && chosen.len() >= 80,
+        "{} answers, {wrong} wrong, {equivalent} equivalent orders",
+        chosen.len()
+    );
+
     let ann = crate::annotate::annotator_on(&pool, "ann", false).await;
-    let ids: Vec<&str> = items.iter().map(|(id, _)| id.as_str()).collect();
+    let ids: Vec<&str> = chosen.iter().map(|(id, _)| id.as_str()).collect();
     crate::annotate::assign_on(&pool, "parity", ann, &ids).await;
     let hub = Hub::from(pool.clone());
     let session = Session {
@@ -435,16 +592,14 @@ async fn reimported_signatures_judge_the_human_answers_again_in_the_import() {
         is_admin: false,
         csrf_token: String::new(),
     };
-    for (i, (id, gt)) in items.iter().enumerate() {
-        let mut labels: Vec<u8> = serde_json::from_str(gt).expect("gt");
-        // Some right, some with two steps swapped, some reversed.
-        match i % 3 {
-            0 => {}
-            1 => labels.swap(0, 1),
-            _ => labels.reverse(),
-        }
+    for (id, row) in &chosen {
         let draft = Draft {
-            slots: labels.into_iter().map(Some).collect(),
+            slots: row["model_answer"]
+                .as_array()
+                .expect("answer")
+                .iter()
+                .map(|l| Some(l.as_u64().expect("label") as u8))
+                .collect(),
             counts: InteractionCounts::default(),
             history: Vec::new(),
         };
@@ -459,29 +614,52 @@ async fn reimported_signatures_judge_the_human_answers_again_in_the_import() {
     let report = import(&pool, &parity, &with_graphs).await;
     assert_eq!(report.signatures_updated, 96);
     let rejudged = human_verdicts(&pool).await;
-    assert_eq!(rejudged.len(), items.len());
+    assert_eq!(rejudged.len(), chosen.len());
     assert!(
         rejudged
             .iter()
             .all(|v| v.5 == Some(i64::from(METRIC_VERSION)))
     );
     assert_ne!(rejudged, exact_only, "scene graphs give pairwise accuracy");
-    // What the import stored is what judging the answers now gives.
-    let rows = app::leaderboard::of(&Hub::from(pool.clone()), "parity")
-        .await
-        .expect("board")
-        .1;
-    db!(
+
+    // What the import stored is ENACT's verdict on each answer, metric by metric.
+    let stored = db!(
         pool,
-        execute,
-        sqlx::query("UPDATE annotations SET metric_version = NULL")
+        fetch_all,
+        sqlx::query_as::<
+            _,
+            (
+                String,
+                Option<bool>,
+                Option<bool>,
+                Option<bool>,
+                Option<f64>
+            ),
+        >(
+            "SELECT i.item_id, a.exact_match, a.semantic_match, a.task_accuracy, \
+             a.pairwise_accuracy FROM annotations a JOIN items i ON i.id = a.item \
+             WHERE a.outcome = 'answered'"
+        )
     )
-    .expect("forget the verdicts");
-    let judged = app::leaderboard::of(&Hub::from(pool.clone()), "parity")
-        .await
-        .expect("board")
-        .1;
-    assert_eq!(rows, judged);
+    .expect("stored verdicts");
+    assert_eq!(stored.len(), chosen.len());
+    let by_id: std::collections::HashMap<&str, &Value> =
+        chosen.iter().map(|(id, row)| (id.as_str(), row)).collect();
+    for (id, exact, semantic, task, pairwise) in &stored {
+        let metrics = &by_id[id.as_str()]["eval_metrics"];
+        let want = (
+            metrics["exact_match"].as_bool(),
+            metrics["semantic_match"].as_bool(),
+            metrics["task_accuracy"].as_bool(),
+        );
+        assert_eq!((*exact, *semantic, *task), want, "{id}: {metrics}");
+        let want_pairwise = metrics["pairwise_accuracy"].as_f64().expect("pairwise");
+        let pairwise = pairwise.unwrap_or_else(|| panic!("{id}: no pairwise accuracy"));
+        assert!(
+            (pairwise - want_pairwise).abs() < 1e-9,
+            "{id}: pairwise {pairwise}, ENACT {want_pairwise}"
+        );
+    }
 }
 
 #[tokio::test]

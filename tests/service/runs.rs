@@ -149,7 +149,9 @@ fn settings(concurrency: usize) -> CallSettings {
     CallSettings {
         concurrency,
         max_retries: 3,
-        timeout: Duration::from_millis(500),
+        // Long enough that a prompt reply is never timed out on a loaded two-core machine
+        // (attempt counts are asserted exactly), short enough that the 6 s slow reply always is.
+        timeout: Duration::from_secs(2),
         backoff_base: Duration::from_millis(10),
         api_key: ApiKey::new(SECRET_KEY),
     }
@@ -172,7 +174,7 @@ async fn a_run_keeps_every_reply_stores_failures_as_failures_and_submits_its_sco
             0 => vec![Step::Status(500, "boom".into()), right],
             1 => vec![Step::RetryAfterSeconds(1), right],
             2 => vec![Step::RetryAfterDate(1), right],
-            3 => vec![Step::Slow(Duration::from_secs(3), "[1, 2]".into()), right],
+            3 => vec![Step::Slow(Duration::from_secs(6), "[1, 2]".into()), right],
             4 => vec![Step::Cut(answer_text(r, true))],
             5 => vec![Step::Empty],
             6 => vec![Step::Status(400, "image too large for this model".into())],

@@ -1,7 +1,7 @@
 //! Model runs started on the server: worked as jobs by the serving instance's worker, with
 //! the API key named only by an allowed environment variable.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use enact_hub::app::jobs::{self, JobControl, JobId, JobSettings, JobState, Worker};
 use enact_hub::app::runs::{self, EndpointKeys, RunCalls};
@@ -44,8 +44,13 @@ fn calls(concurrency: usize) -> RunCalls {
     }
 }
 
+/// How long a wait for the job or the endpoint may take before the test fails, saying what
+/// it waited for: far beyond what any step needs on a loaded two-core machine.
+const DEADLINE: Duration = Duration::from_secs(60);
+
 async fn wait_until(hub: &Hub, id: JobId, what: &str, done: impl Fn(&jobs::JobRow) -> bool) {
-    for _ in 0..1500 {
+    let deadline = Instant::now() + DEADLINE;
+    while Instant::now() < deadline {
         let job = jobs::get(hub, id).await.expect("read").expect("the job");
         if done(&job) {
             return;
@@ -53,7 +58,23 @@ async fn wait_until(hub: &Hub, id: JobId, what: &str, done: impl Fn(&jobs::JobRo
         tokio::time::sleep(Duration::from_millis(20)).await;
     }
     let job = jobs::get(hub, id).await.expect("read").expect("the job");
-    panic!("{id} never got {what}: {job:?} {:?}", job.progress);
+    panic!(
+        "{id} never got {what} within {DEADLINE:?}: {job:?} {:?}",
+        job.progress
+    );
+}
+
+/// Waits until the stand-in has been asked `n` times in all.
+async fn asked_at_least(standin: &StandIn, n: usize) {
+    let deadline = Instant::now() + DEADLINE;
+    while standin.total_requests() < n {
+        assert!(
+            Instant::now() < deadline,
+            "the endpoint was asked {} times within {DEADLINE:?}, not {n}",
+            standin.total_requests()
+        );
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
 }
 
 async fn progress(hub: &Hub, id: JobId) -> Value {
@@ -142,9 +163,7 @@ async fn a_server_run_stopped_paused_and_resumed_never_asks_an_answered_item_aga
 
     // The first instance stops gracefully part-way: the job is released, not failed.
     let first = Worker::spawn(hub.clone(), enact_hub::app::job_handlers(), fast());
-    while standin.total_requests() < 4 {
-        tokio::time::sleep(Duration::from_millis(10)).await;
-    }
+    asked_at_least(&standin, 4).await;
     first.stop().await;
     let released = jobs::get(&hub, job).await.expect("read").expect("job");
     assert_eq!(released.state, JobState::Queued, "{released:?}");
@@ -153,9 +172,7 @@ async fn a_server_run_stopped_paused_and_resumed_never_asks_an_answered_item_aga
 
     // A second instance on the same database carries on; an admin pauses and resumes it.
     let second = Worker::spawn(hub.clone(), enact_hub::app::job_handlers(), fast());
-    while standin.total_requests() < asked + 4 {
-        tokio::time::sleep(Duration::from_millis(10)).await;
-    }
+    asked_at_least(&standin, asked + 4).await;
     jobs::control(&hub, &tester(), job, JobControl::Pause)
         .await
         .expect("paused");

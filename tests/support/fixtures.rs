@@ -2,6 +2,9 @@
 //! what a test does when they are missing: on a developer's machine it says so and skips; under
 //! CI (`CI` set, as CI services do) it fails, since CI runs with `shared/fixtures` beside the
 //! clone and a skip there would pass without having compared anything.
+//!
+//! [`must_not_skip`] is the one rule for every test that would otherwise skip for want of
+//! something outside the crate (fixtures, Chromium, python3 with `requests`, an S3 server).
 
 // Every test binary includes this file and uses its own share of it.
 #![allow(dead_code)]
@@ -29,16 +32,20 @@ pub fn shared_fixtures() -> Option<PathBuf> {
     None
 }
 
-/// Whether a missing fixture fails the test: `CI` is set to anything but empty, `0` or
-/// `false`.
-pub fn required() -> bool {
-    std::env::var("CI").is_ok_and(|v| !matches!(v.trim(), "" | "0" | "false" | "FALSE"))
+/// Whether this run must not skip: `CI` is set to anything but empty, `0` or `false` (any
+/// case). `.ci/run` sets `CI=true` when its caller has not. A test missing a prerequisite
+/// panics when this holds and skips (saying so) otherwise.
+pub fn must_not_skip() -> bool {
+    std::env::var("CI").is_ok_and(|v| {
+        let v = v.trim();
+        !(v.is_empty() || v == "0" || v.eq_ignore_ascii_case("false"))
+    })
 }
 
-/// Says that `what` is missing and the test skips, or panics when [`required`].
+/// Says that `what` is missing and the test skips, or panics when [`must_not_skip`].
 pub fn missing(what: &str) {
     assert!(
-        !required(),
+        !must_not_skip(),
         "{what} is missing and CI is set: CI runs with shared/fixtures beside the clone \
          (or ENACT_FIXTURES naming it), so this test must not skip"
     );
