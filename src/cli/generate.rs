@@ -22,10 +22,10 @@ pub(super) struct GenerateArgs {
     /// generation_summary.json).
     #[arg(long, value_name = "DATA_DIR")]
     out: PathBuf,
-    /// Seed of path sampling, shuffles and sentence templates (with --perturb-deltas, of the
-    /// perturbation).
-    #[arg(long, default_value_t = 42)]
-    seed: u64,
+    /// Seed of path sampling, shuffles and sentence templates (with --items-from, only of
+    /// --perturb-deltas's perturbation) [default: 42].
+    #[arg(long)]
+    seed: Option<u64>,
     /// Paths sampled per task, step length and direction.
     #[arg(long, default_value_t = 5)]
     num_to_sample: usize,
@@ -115,7 +115,7 @@ async fn generate_variant(args: &GenerateArgs, baseline: PathBuf) -> anyhow::Res
     })?;
     let perturbation = args
         .perturb_deltas
-        .map(|p| DeltaPerturbation::new(p, args.seed))
+        .map(|p| DeltaPerturbation::new(p, args.seed.unwrap_or(DEFAULT_SEED)))
         .transpose()
         .map_err(|e| anyhow::anyhow!("--perturb-deltas: {e}"))?;
     let baseline_graphs = app::pipeline::variant_scene_graphs(&baseline);
@@ -148,8 +148,19 @@ async fn generate_variant(args: &GenerateArgs, baseline: PathBuf) -> anyhow::Res
     Ok(ExitCode::SUCCESS)
 }
 
+/// The seed when `--seed` is not given.
+const DEFAULT_SEED: u64 = 42;
+
 pub(super) async fn generate(args: GenerateArgs) -> anyhow::Result<ExitCode> {
     if let Some(baseline) = args.items_from.clone() {
+        // A variant keeps the baseline's sampled items: a seed means something only for the
+        // perturbation.
+        if args.seed.is_some() && args.perturb_deltas.is_none() {
+            anyhow::bail!(
+                "--seed cannot be used with --items-from without --perturb-deltas: a variant \
+                 keeps the baseline's sampled items"
+            );
+        }
         return generate_variant(&args, baseline).await;
     }
     let mut segmentation = SegmentationParams::preset(&args.preset).with_context(|| {
@@ -174,7 +185,7 @@ pub(super) async fn generate(args: GenerateArgs) -> anyhow::Result<ExitCode> {
         )
     })?;
     let options = GenerateOptions {
-        seed: args.seed,
+        seed: args.seed.unwrap_or(DEFAULT_SEED),
         num_to_sample: args.num_to_sample,
         step_lengths: parse_steps(&args.steps)?,
         segmentation,
