@@ -5,8 +5,11 @@
 //!
 //! - this file: the types ([`Metric`], [`Category`], [`CellKey`], [`ReportedModel`],
 //!   [`PaperTable`]) and reading them;
+//! - [`mark`]: best and second-best within each category, the paper's rule;
 //!
 //! Values are percentages as printed (84.62), never fractions.
+
+pub mod mark;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -223,7 +226,32 @@ pub fn enact_paper_results() -> Vec<ReportedModel> {
         .expect("data/enact-paper-results.json is a list of reported models")
 }
 
-/// A `metric` table of `models` (unmarked).
+/// The rows of the paper's main-text table (`tab:main_pair_acc`, pairwise accuracy), in its
+/// order: the models a `--models` list names to regenerate it.
+pub const ENACT_PAPER_MAIN_TABLE_MODELS: [&str; 20] = [
+    "GPT-5",
+    "GPT-5 mini",
+    "GPT-5 nano",
+    "Gemini 2.5 Pro",
+    "Gemini 2.5 Flash",
+    "Gemini 2.5 Flash-Lite",
+    "Claude Sonnet 4",
+    "GLM-4.5V",
+    "Llama-4-Mav-17B-128E-Ins",
+    "InternVL3.5-241B-A28B",
+    "Gemma-3-27b-it",
+    "QVQ-72B-Preview",
+    "Qwen2.5-VL-72B-Ins",
+    "Qwen2.5-VL-32B-Ins",
+    "Ovis2.5-9B",
+    "MiniCPM-V-4.5",
+    "Idefics3-8B-Llama3",
+    "Cosmos-Reason1",
+    "BAGEL",
+    "Human Performance",
+];
+
+/// A `metric` table of `models` (unmarked; see [`mark::mark`]).
 pub fn table_of(metric: Metric, models: &[ReportedModel]) -> PaperTable {
     PaperTable {
         metric,
