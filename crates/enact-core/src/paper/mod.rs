@@ -6,9 +6,11 @@
 //! - this file: the types ([`Metric`], [`Category`], [`CellKey`], [`ReportedModel`],
 //!   [`PaperTable`]) and reading them;
 //! - [`mark`]: best and second-best within each category, the paper's rule;
+//! - [`hub`]: the hub's own rows, where each cell came from, and the reproduction check;
 //!
 //! Values are percentages as printed (84.62), never fractions.
 
+pub mod hub;
 pub mod mark;
 
 use std::collections::BTreeMap;
