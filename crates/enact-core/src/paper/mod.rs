@@ -6,10 +6,12 @@
 //! - this file: the types ([`Metric`], [`Category`], [`CellKey`], [`ReportedModel`],
 //!   [`PaperTable`]) and reading them;
 //! - [`mark`]: best and second-best within each category, the paper's rule;
+//! - [`write`]: the table as LaTeX (booktabs), CSV, Markdown and JSON;
 //!
 //! Values are percentages as printed (84.62), never fractions.
 
 pub mod mark;
+pub mod write;
 
 use std::collections::BTreeMap;
 use std::fmt;
