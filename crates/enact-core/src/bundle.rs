@@ -43,7 +43,7 @@ pub fn fixed(value: Option<f64>, decimals: usize) -> String {
 }
 
 /// One CSV field, quoted when it must be.
-fn csv_field(text: &str) -> String {
+pub(crate) fn csv_field(text: &str) -> String {
     // A spreadsheet runs a cell that starts with = + - @ (or a tab or CR) as a formula, and
     // model names, descriptions and reasons are anyone's text: such a cell gets a leading `'`
     // (OWASP's advice), unless it is a number or the lone `-` of a missing value.

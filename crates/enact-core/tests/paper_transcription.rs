@@ -1,13 +1,15 @@
 //! The ENACT paper's results in `data/enact-paper-results.json` checked against the paper's
 //! own LaTeX (`../shared/seed/*.txt` beside the workspace): every model of its three result
-//! tables, every value, and every best/second-best mark recomputed from the numbers.
+//! tables, every value, every best/second-best mark recomputed from the numbers, and every row
+//! as `to_tex` writes it.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use enact_core::paper::mark::mark;
+use enact_core::paper::write::to_tex;
 use enact_core::paper::{
-    Category, CellKey, ENACT_PAPER_MAIN_TABLE_MODELS, Mark, Metric, ReportedModel,
+    Category, CellKey, ENACT_PAPER_MAIN_TABLE_MODELS, Mark, Metric, PaperTable, ReportedModel,
     enact_paper_results, table_of,
 };
 
@@ -51,14 +53,9 @@ type TexRow = (String, Category, Vec<(String, Option<Mark>)>);
 
 /// The rows of the tabular labelled `label`, with the category of the group they stand in.
 fn tex_table(tex: &str, label: &str) -> Vec<TexRow> {
-    let end = tex
-        .find(&format!("\\label{{{label}}}"))
-        .unwrap_or_else(|| panic!("no table {label}"));
-    let start = tex[..end].rfind("\\begin{tabular}").expect("a tabular");
-    let body = &tex[start..start + tex[start..].find("\\end{tabular}").expect("its end")];
     let mut category = None;
     let mut rows = Vec::new();
-    for line in body.lines().map(str::trim) {
+    for line in tabular_lines(tex, label) {
         if let Some(heading) = line.split("\\footnotesize ").nth(1) {
             category = Some(match heading.split('}').next() {
                 Some("Proprietary Models") => Category::Proprietary,
@@ -67,7 +64,7 @@ fn tex_table(tex: &str, label: &str) -> Vec<TexRow> {
             });
             continue;
         }
-        if !line.starts_with("& ") || line.starts_with("& &") || line.contains("\\multirow") {
+        if !is_model_row(line) {
             continue;
         }
         let fields: Vec<&str> = line
@@ -98,6 +95,43 @@ fn tex_table(tex: &str, label: &str) -> Vec<TexRow> {
         rows.push((model.to_owned(), row_category, cells));
     }
     rows
+}
+
+/// The lines of the tabular labelled `label`, trimmed.
+fn tabular_lines<'a>(tex: &'a str, label: &str) -> Vec<&'a str> {
+    let end = tex
+        .find(&format!("\\label{{{label}}}"))
+        .unwrap_or_else(|| panic!("no table {label}"));
+    let start = tex[..end].rfind("\\begin{tabular}").expect("a tabular");
+    let body = &tex[start..start + tex[start..].find("\\end{tabular}").expect("its end")];
+    body.lines().map(str::trim).collect()
+}
+
+/// A model's (or the humans') row, not the column headings.
+fn is_model_row(line: &str) -> bool {
+    line.starts_with("& ") && !line.starts_with("& &") && !line.contains("\\multirow")
+}
+
+/// A line without its white space, to compare LaTeX that differs only in spacing.
+fn squash(line: &str) -> String {
+    line.split_whitespace().collect()
+}
+
+/// Every model row of the paper's table `label` is a row that [`to_tex`] writes for `table`.
+fn check_tex_rows(tex: &str, label: &str, table: &PaperTable) {
+    let ours = to_tex(table, false);
+    let ours: BTreeSet<String> = ours.lines().map(squash).collect();
+    let paper: Vec<&str> = tabular_lines(tex, label)
+        .into_iter()
+        .filter(|l| is_model_row(l))
+        .collect();
+    assert_eq!(paper.len(), table.rows.len(), "{label}");
+    for line in paper {
+        assert!(
+            ours.contains(&squash(line)),
+            "{label}: to_tex writes no row\n{line}"
+        );
+    }
 }
 
 /// `inner` of `command{inner}`.
@@ -133,7 +167,12 @@ fn check_values(tex: &[TexRow], models: &[ReportedModel], metric: Metric, label:
 }
 
 /// The marks the rule gives `rows` of the data file equal the marks of the LaTeX table.
-fn check_marks(tex: &[TexRow], models: &[ReportedModel], metric: Metric, label: &str) -> usize {
+fn check_marks(
+    tex: &[TexRow],
+    models: &[ReportedModel],
+    metric: Metric,
+    label: &str,
+) -> (usize, PaperTable) {
     let mut table = table_of(metric, models);
     mark(&mut table);
     let mut marks = 0;
@@ -147,7 +186,7 @@ fn check_marks(tex: &[TexRow], models: &[ReportedModel], metric: Metric, label: 
             marks += usize::from(tex_mark.is_some());
         }
     }
-    marks
+    (marks, table)
 }
 
 #[test]
@@ -157,11 +196,14 @@ fn the_data_file_equals_the_papers_tables_and_the_rule_gives_their_marks() {
 
     let task = tex_table(&tex, "tab:app_task_acc");
     check_values(&task, &models, Metric::TaskAccuracy, "tab:app_task_acc");
-    let task_marks = check_marks(&task, &models, Metric::TaskAccuracy, "tab:app_task_acc");
+    let (task_marks, table) = check_marks(&task, &models, Metric::TaskAccuracy, "tab:app_task_acc");
+    check_tex_rows(&tex, "tab:app_task_acc", &table);
 
     let pair = tex_table(&tex, "tab:app_pair_acc");
     check_values(&pair, &models, Metric::PairwiseAccuracy, "tab:app_pair_acc");
-    let pair_marks = check_marks(&pair, &models, Metric::PairwiseAccuracy, "tab:app_pair_acc");
+    let (pair_marks, table) =
+        check_marks(&pair, &models, Metric::PairwiseAccuracy, "tab:app_pair_acc");
+    check_tex_rows(&tex, "tab:app_pair_acc", &table);
 
     // The main table is a selection of the appendix's rows, marked within that selection.
     let main = tex_table(&tex, "tab:main_pair_acc");
@@ -178,12 +220,13 @@ fn the_data_file_equals_the_papers_tables_and_the_rule_gives_their_marks() {
         Metric::PairwiseAccuracy,
         "tab:main_pair_acc",
     );
-    let main_marks = check_marks(
+    let (main_marks, table) = check_marks(
         &main,
         &selected,
         Metric::PairwiseAccuracy,
         "tab:main_pair_acc",
     );
+    check_tex_rows(&tex, "tab:main_pair_acc", &table);
 
     // The checks above saw the paper's marks, not empty tables: 16 columns, two categories,
     // first and second each, give about 64 marks per table (ties add, all-zero columns remove).

@@ -7,11 +7,13 @@
 //!   [`PaperTable`]) and reading them;
 //! - [`mark`]: best and second-best within each category, the paper's rule;
 //! - [`hub`]: the hub's own rows, where each cell came from, and the reproduction check;
+//! - [`write`]: the table as LaTeX (booktabs), CSV, Markdown and JSON;
 //!
 //! Values are percentages as printed (84.62), never fractions.
 
 pub mod hub;
 pub mod mark;
+pub mod write;
 
 use std::collections::BTreeMap;
 use std::fmt;
