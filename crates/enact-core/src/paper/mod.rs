@@ -7,10 +7,12 @@
 //!   [`PaperTable`]) and reading them;
 //! - [`mark`]: best and second-best within each category, the paper's rule;
 //! - [`hub`]: the hub's own rows, where each cell came from, and the reproduction check;
+//! - [`export`]: the folder `enact-hub paper` writes;
 //! - [`write`]: the table as LaTeX (booktabs), CSV, Markdown and JSON;
 //!
 //! Values are percentages as printed (84.62), never fractions.
 
+pub mod export;
 pub mod hub;
 pub mod mark;
 pub mod write;
