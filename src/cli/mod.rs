@@ -27,6 +27,7 @@ mod generate;
 mod gold;
 mod import;
 mod quality;
+mod paper;
 mod rescore;
 mod run;
 mod scoring;
@@ -86,6 +87,9 @@ enum Command {
     /// other images; create, list, show, delete, and report a model's Δ and p per variant.
     #[command(subcommand)]
     Study(study::StudyCommand),
+    /// ENACT's result tables from a dataset's rows beside the results papers published, marked
+    /// as the paper marks them, with where each cell came from (.tex, .csv, .md, .json).
+    Paper(paper::PaperArgs),
     /// Ask an OpenAI-compatible model every item of a dataset (resumable: each reply is kept
     /// as it arrives) and submit its answers.
     Run(Box<run::RunArgs>),
@@ -181,6 +185,7 @@ pub fn main() -> ExitCode {
             Command::Audit(args) => audit::audit(args).await,
             Command::Dataset(command) => dataset::dataset(command).await,
             Command::Study(command) => study::study(command).await,
+            Command::Paper(args) => paper::paper(args).await,
             Command::Run(args) => run::run(*args).await,
             Command::Token(command) => accounts::token(command).await,
             Command::Annotator(command) => accounts::annotator(command).await,

@@ -18,7 +18,7 @@ pub struct DbArg {
     /// SQLite database file, or a PostgreSQL URL
     /// (postgres://user:password@host/db; also ENACT_HUB_DATABASE_URL).
     #[arg(long, visible_alias = "database-url", env = "ENACT_HUB_DB", default_value = DEFAULT_DB)]
-    db: PathBuf,
+    pub(super) db: PathBuf,
 }
 
 #[derive(Subcommand)]

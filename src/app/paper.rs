@@ -1,0 +1,155 @@
+//! The paper regenerated from this hub's data: ENACT's result tables (task and pairwise accuracy
+//! by direction and step length) with the hub's own rows beside the results papers published,
+//! marked as the paper marks them, where every cell came from, and the reproduction check of a
+//! published model the hub also scored. The tables and files are `core::paper`'s; this module
+//! gathers the rows.
+
+use crate::core::bundle::BundleFile;
+use crate::core::leaderboard::{LeaderboardRow, RowSource, one_per_model};
+use crate::core::paper::export::{PaperBundle, files as bundle_files};
+use crate::core::paper::hub::{
+    AssembledTable, HubRow, ReproducedCell, RowMetadata, assemble, reproduction,
+};
+use crate::core::paper::{Category, CellKey, Metric, ReportedModel};
+use crate::core::version::BUILD;
+use crate::store;
+
+use super::{AppError, Hub, leaderboard, models, reported};
+
+/// What to put in the tables.
+#[derive(Debug, Clone)]
+pub struct PaperOptions {
+    /// The rows, in this order (a main-text table like the paper's Table 1); every row when
+    /// `None`.
+    pub models: Option<Vec<String>>,
+    /// The tables to make.
+    pub metrics: Vec<Metric>,
+    /// Print the hub rows' bootstrap intervals under their values.
+    pub intervals: bool,
+}
+
+impl Default for PaperOptions {
+    fn default() -> Self {
+        PaperOptions {
+            models: None,
+            metrics: Metric::ALL.to_vec(),
+            intervals: false,
+        }
+    }
+}
+
+/// A dataset's paper tables.
+#[derive(Debug, Clone)]
+pub struct Paper {
+    pub dataset: String,
+    pub tables: Vec<AssembledTable>,
+    /// Every published model the hub also scored, cell by cell, with the hub's interval.
+    pub reproduction: Vec<ReproducedCell>,
+}
+
+impl Paper {
+    /// The folder's files; the reproduction check among them when `with_reproduction`.
+    pub fn files(&self, with_reproduction: bool) -> Result<Vec<BundleFile>, AppError> {
+        bundle_files(&PaperBundle {
+            dataset: &self.dataset,
+            hub_version: BUILD,
+            tables: &self.tables,
+            reproduction: with_reproduction.then_some(self.reproduction.as_slice()),
+        })
+        .map_err(|e| AppError::internal(format!("paper of '{}': {e}", self.dataset)))
+    }
+}
+
+/// The metadata an admin or the submitter gave a model, as the paper's rows take it. A
+/// category the core does not take (none should be stored) leaves the hub's own.
+fn row_metadata(entry: Option<&models::ModelMetadataEntry>) -> RowMetadata {
+    let Some(entry) = entry else {
+        return RowMetadata::default();
+    };
+    RowMetadata {
+        category: entry
+            .metadata
+            .category
+            .as_deref()
+            .and_then(|c| Category::new(c).ok()),
+        family: entry.metadata.family.clone(),
+        size: entry.metadata.size.clone(),
+    }
+}
+
+/// The per-item results of a submission, by column: what its intervals are drawn from.
+async fn column_results(
+    hub: &Hub,
+    submission: i64,
+) -> Result<Vec<(CellKey, bool, Option<f64>)>, AppError> {
+    let mut conn = hub.conn().await?;
+    let verdicts = store::submissions::verdicts(&mut conn, submission).await?;
+    Ok(verdicts
+        .into_iter()
+        .map(|v| {
+            (
+                CellKey {
+                    direction: v.direction,
+                    step_length: v.step_length,
+                },
+                v.task_accuracy,
+                v.pairwise_accuracy,
+            )
+        })
+        .collect())
+}
+
+/// The tables of the dataset named `dataset`: its published results (`reported`), every
+/// model's latest published submission (the leaderboard's rows, one per account and model;
+/// baselines, which the leaderboard shows for reference, are left out) and its Human row, each
+/// hub row in the category its metadata names or the hub's own. Intervals are computed for
+/// the rows that print them and for every model a paper also published (the reproduction
+/// check says whether the published value lies inside).
+pub async fn paper(hub: &Hub, dataset: &str, options: &PaperOptions) -> Result<Paper, AppError> {
+    let (dataset, rows) = leaderboard::of(hub, dataset).await?;
+    let metadata = models::of_dataset(hub, &dataset.name).await?;
+    let published: Vec<ReportedModel> = reported::list(hub, &dataset.name)
+        .await?
+        .into_iter()
+        .map(|r| r.reported)
+        .collect();
+    let rows: Vec<LeaderboardRow> = one_per_model(&rows)
+        .into_iter()
+        .filter(|r| r.source == RowSource::Human || !r.baseline)
+        .collect();
+    let mut own = Vec::with_capacity(rows.len());
+    for row in &rows {
+        let hub_row = HubRow::of_leaderboard(row, row_metadata(metadata.get(&row.model)), BUILD);
+        let reproduced = published
+            .iter()
+            .any(|p| p.model.eq_ignore_ascii_case(&hub_row.model));
+        let hub_row = match row.submission {
+            Some(submission) if row.source == RowSource::Submission
+                && (options.intervals || reproduced) =>
+            {
+                hub_row.with_intervals(&column_results(hub, submission).await?)
+            }
+            _ => hub_row,
+        };
+        own.push(hub_row);
+    }
+    let tables = options
+        .metrics
+        .iter()
+        .map(|metric| {
+            assemble(
+                *metric,
+                &published,
+                &own,
+                options.models.as_deref(),
+                options.intervals,
+            )
+            .map_err(|e| AppError::Invalid(format!("models: {e}")))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Paper {
+        reproduction: reproduction(&published, &own),
+        dataset: dataset.name,
+        tables,
+    })
+}
