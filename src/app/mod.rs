@@ -56,6 +56,7 @@ pub mod jobs;
 pub mod leaderboard;
 pub mod metrics;
 pub mod migrate_db;
+pub mod models;
 pub mod pipeline;
 pub mod quality;
 pub mod rescore;

@@ -19,6 +19,7 @@ pub mod gate;
 pub mod gold;
 pub mod items;
 pub mod jobs;
+pub mod model_metadata;
 pub mod runs;
 pub mod staged;
 pub mod studies;

@@ -22,6 +22,7 @@ use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
 use crate::app::leaderboard::{self, Board};
+use crate::app::models::ModelMetadata;
 use crate::core::dataset::StepLength;
 use crate::core::leaderboard::{
     AccuracyCell, AccuracyChart, BoardPage, BoardQuery, ColumnGroup, Interval, LeaderboardRow,
@@ -248,6 +249,9 @@ struct RowView {
     row: LeaderboardRow,
     /// Every published submission of this account and model.
     history: Option<String>,
+    /// The model's category, family, size and link on this dataset, when set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    metadata: Option<ModelMetadata>,
 }
 
 #[derive(Serialize, JsonSchema)]
@@ -322,6 +326,9 @@ fn leaderboard_view<'a>(board: &'a Board, request: &BoardRequest) -> Leaderboard
             .into_iter()
             .map(|row| RowView {
                 history: history(&path, &row),
+                metadata: (row.source == RowSource::Submission)
+                    .then(|| board.metadata.get(&row.model).cloned())
+                    .flatten(),
                 row,
             })
             .collect(),
