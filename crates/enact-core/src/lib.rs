@@ -12,6 +12,8 @@
 //!   accepted-but-incomplete answers, per step of every analysed answer.
 //! - [`metric`]: the metric's version, recorded with every stored result it computed.
 //! - [`submission`]: reading, refusing and scoring a leaderboard submission.
+//! - [`paper`]: the paper's result tables and figures, its published results as data, and
+//!   other papers' numbers in the same shape.
 //! - [`heatmap`]: the significance heatmap both reports draw (the paper's ablation figures).
 //! - [`leaderboard`]: leaderboard rows (Table 1 layout) and the TA-vs-L chart geometry.
 //! - [`model_run`]: asking a model an item: the versioned prompt, reading replies, retry
@@ -52,6 +54,7 @@ pub mod heatmap;
 pub mod leaderboard;
 pub mod metric;
 pub mod model_run;
+pub mod paper;
 pub mod pipeline;
 pub mod quality;
 pub mod release;
