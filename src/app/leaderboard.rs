@@ -15,6 +15,7 @@ use bytes::Bytes;
 
 use super::cache::{BoundedCache, CacheLimits, CacheStats};
 use super::models::{self, ModelMetadata};
+use super::reported::{self, ReportedResult};
 use super::{AppError, Hub, datasets};
 use crate::core::annotation::{self, HumanFigures};
 use crate::core::leaderboard::{LeaderboardRow, RowIdentity, rank};
@@ -112,6 +113,9 @@ pub struct Board {
     pub rows: Vec<LeaderboardRow>,
     /// The hub's own models' metadata on the dataset, by model name.
     pub metadata: BTreeMap<String, ModelMetadata>,
+    /// Results papers published for the dataset, shown beside the rows when asked for and
+    /// never ranked with them.
+    pub reported: Vec<ReportedResult>,
     /// Unique per build in this process: a response's entity tag starts with it.
     pub version: u64,
     views: RwLock<HashMap<String, Bytes>>,
@@ -277,10 +281,12 @@ async fn build(hub: &Hub, name: &str, ticket: u64) -> Result<Arc<Board>, AppErro
         .into_iter()
         .map(|(model, entry)| (model, entry.metadata))
         .collect();
+    let reported = reported::list(hub, &dataset.name).await?;
     let board = Arc::new(Board {
         dataset,
         rows,
         metadata,
+        reported,
         version: cache.builds.fetch_add(1, Ordering::SeqCst) + 1,
         views: RwLock::default(),
     });

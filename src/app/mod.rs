@@ -59,6 +59,7 @@ pub mod migrate_db;
 pub mod models;
 pub mod pipeline;
 pub mod quality;
+pub mod reported;
 pub mod rescore;
 pub mod runs;
 pub mod scoring;

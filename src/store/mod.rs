@@ -20,6 +20,7 @@ pub mod gold;
 pub mod items;
 pub mod jobs;
 pub mod model_metadata;
+pub mod reported;
 pub mod runs;
 pub mod staged;
 pub mod studies;
