@@ -237,6 +237,17 @@ leaderboard-human-excluded = ; { $count ->
   } excluded by an admin
 leaderboard-human-unranked = ; not ranked
 leaderboard-human-note = The Human row is a reference, never ranked among models; a figure marked † rests on fewer than five human answers. Answers on gold items (items with a known answer mixed into annotators' queues to check their work) never count in it, nor do the answers of annotators an admin excluded.
+leaderboard-reported-count = { $count ->
+    [one] This dataset has { $count } result a paper published (a reported row).
+   *[other] This dataset has { $count } results papers published (reported rows).
+}
+leaderboard-reported-show = Show reported rows
+leaderboard-reported-hide = Hide reported rows
+leaderboard-reported-badge = reported
+leaderboard-reported-source = source: { $source }
+leaderboard-reported-unranked = not ranked: a reported row
+leaderboard-reported-note = Reported rows are numbers a paper published, entered as data: not scored by this hub, with no interval and no per-item data, and never ranked against the hub's rows (their rank is left empty). The paper's appendix tables give step-length cells only, so their overall, forward and inverse totals are empty.
+leaderboard-model-link = about the model
 leaderboard-page-of = page { $page } of { $pages }
 leaderboard-ranked-rows = { $count ->
     [one] { $count } ranked row

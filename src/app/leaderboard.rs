@@ -7,13 +7,15 @@
 //! or announced by another instance) or the stored items change (an import, seen by the
 //! content watcher). Readers that miss at once share one build.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, RwLock};
 
 use bytes::Bytes;
 
 use super::cache::{BoundedCache, CacheLimits, CacheStats};
+use super::models::{self, ModelMetadata};
+use super::reported::{self, ReportedResult};
 use super::{AppError, Hub, datasets};
 use crate::core::annotation::{self, HumanFigures};
 use crate::core::leaderboard::{LeaderboardRow, RowIdentity, rank};
@@ -109,6 +111,11 @@ pub async fn of(hub: &Hub, name: &str) -> Result<(Dataset, Vec<LeaderboardRow>),
 pub struct Board {
     pub dataset: Dataset,
     pub rows: Vec<LeaderboardRow>,
+    /// The hub's own models' metadata on the dataset, by model name.
+    pub metadata: BTreeMap<String, ModelMetadata>,
+    /// Results papers published for the dataset, shown beside the rows when asked for and
+    /// never ranked with them.
+    pub reported: Vec<ReportedResult>,
     /// Unique per build in this process: a response's entity tag starts with it.
     pub version: u64,
     views: RwLock<HashMap<String, Bytes>>,
@@ -269,9 +276,17 @@ async fn build(hub: &Hub, name: &str, ticket: u64) -> Result<Arc<Board>, AppErro
         return Ok(board);
     }
     let (dataset, rows) = of(hub, name).await?;
+    let metadata = models::of_dataset(hub, &dataset.name)
+        .await?
+        .into_iter()
+        .map(|(model, entry)| (model, entry.metadata))
+        .collect();
+    let reported = reported::list(hub, &dataset.name).await?;
     let board = Arc::new(Board {
         dataset,
         rows,
+        metadata,
+        reported,
         version: cache.builds.fetch_add(1, Ordering::SeqCst) + 1,
         views: RwLock::default(),
     });

@@ -28,6 +28,7 @@ mod gold;
 mod import;
 mod quality;
 mod paper;
+mod reported;
 mod rescore;
 mod run;
 mod scoring;
@@ -112,6 +113,10 @@ enum Command {
     /// every annotator's queue to check their work.
     #[command(subcommand)]
     Gold(gold::GoldCommand),
+    /// Results papers published (the ENACT paper's own, or another paper's tables), attached
+    /// to a dataset and shown on its leaderboard as reported rows, never ranked.
+    #[command(subcommand)]
+    Reported(reported::ReportedCommand),
     /// A checkup of the database for its operator: schema against this build, unfinished and
     /// stale imports, stuck or failed jobs, the write-ahead log's size, optionally integrity.
     /// Exits 1 when something needs action.
@@ -193,6 +198,7 @@ pub fn main() -> ExitCode {
             Command::MigrateDb(args) => database::migrate_db(args).await,
             Command::Rescore(args) => rescore::rescore(args).await,
             Command::Gold(command) => gold::gold(command).await,
+            Command::Reported(command) => reported::reported(command).await,
             Command::Doctor(args) => doctor::doctor(args).await,
             Command::Episode(command) => episode::episode(command).await,
         }

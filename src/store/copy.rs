@@ -231,6 +231,37 @@ pub const TABLES: &[Table] = &[
     ),
     table("gold_items", &[("item", Int), ("dataset", Int)], false),
     table(
+        "reported_results",
+        &[
+            ("id", Int),
+            ("dataset", Int),
+            ("model", Text),
+            ("source", Text),
+            ("category", Text),
+            ("family", Text),
+            ("size", Text),
+            ("task_accuracy", Text),
+            ("pairwise_accuracy", Text),
+            ("added_by", Text),
+            ("created_at", Text),
+        ],
+        true,
+    ),
+    table(
+        "model_metadata",
+        &[
+            ("dataset", Int),
+            ("model", Text),
+            ("category", Text),
+            ("family", Text),
+            ("size", Text),
+            ("link", Text),
+            ("updated_by", Text),
+            ("updated_at", Text),
+        ],
+        false,
+    ),
+    table(
         "annotator_exclusions",
         &[
             ("dataset", Int),

@@ -421,13 +421,18 @@ impl UniqueKey {
         table: "episodes",
         constraint: "episodes_name_key",
     };
+    pub const REPORTED_MODEL_SOURCE: UniqueKey = UniqueKey {
+        table: "reported_results",
+        constraint: "reported_results_model_source",
+    };
     /// Every key a use case recognises; `store::tests` checks each against both schemas.
-    pub const ALL: [UniqueKey; 5] = [
+    pub const ALL: [UniqueKey; 6] = [
         UniqueKey::SUBMISSION_IDEMPOTENCY_KEY,
         UniqueKey::ANNOTATOR_NAME,
         UniqueKey::STUDY_NAME,
         UniqueKey::AGREEMENT_ROUND,
         UniqueKey::EPISODE_NAME,
+        UniqueKey::REPORTED_MODEL_SOURCE,
     ];
 
     /// Whether `e`, returned by an INSERT into this key's table, is a duplicate of this key.

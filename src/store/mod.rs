@@ -19,6 +19,8 @@ pub mod gate;
 pub mod gold;
 pub mod items;
 pub mod jobs;
+pub mod model_metadata;
+pub mod reported;
 pub mod runs;
 pub mod staged;
 pub mod studies;

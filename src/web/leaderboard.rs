@@ -22,12 +22,15 @@ use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
 use crate::app::leaderboard::{self, Board};
-use crate::core::dataset::StepLength;
+use crate::app::models::ModelMetadata;
+use crate::app::reported::ReportedResult;
+use crate::core::dataset::{Direction, StepLength};
 use crate::core::leaderboard::{
     AccuracyCell, AccuracyChart, BoardPage, BoardQuery, ColumnGroup, Interval, LeaderboardRow,
     MIN_HUMAN_ANSWERS, RowSource, SortKey, board_page, chart_rows,
 };
 use crate::core::metric::METRIC_VERSION;
+use crate::core::paper::{CellKey, Metric};
 
 /// Rows a page may ask for at once.
 const MAX_PER_PAGE: usize = 1000;
@@ -77,6 +80,13 @@ pub fn api_routes() -> Vec<ApiRoute> {
         )
         .query("model", false, "Only this model (exact name).")
         .query("account", false, "Only this account (exact name).")
+        .query_with(
+            "reported",
+            false,
+            json!({"enum": ["", "0", "1", "false", "true"]}),
+            "`1` adds `reported`: the results papers published for the dataset (values in \
+             percent as printed), never ranked against the hub's rows.",
+        )
         .responds_json::<LeaderboardView<'static>>(
             200,
             "The page of rows, with `next` and `prev` links.",
@@ -97,6 +107,8 @@ pub fn page_router() -> Router<AppState> {
 /// A board request as typed in a URL.
 struct BoardRequest {
     query: BoardQuery,
+    /// Show the results papers published beside the hub's rows.
+    reported: bool,
     /// Submission ids the reader picked for the chart.
     chart: Option<Vec<i64>>,
 }
@@ -107,6 +119,7 @@ impl BoardRequest {
             .map_err(|e| AppError::Invalid(format!("query string: {e}")))?;
         let mut query = BoardQuery::default();
         let mut chart: Option<Vec<i64>> = None;
+        let mut reported = false;
         let number = |name: &str, text: &str, max: usize| {
             text.trim()
                 .parse::<usize>()
@@ -118,6 +131,13 @@ impl BoardRequest {
                     ))
                 })
         };
+        let switch = |name: &str, value: &str| match value {
+            "1" | "true" => Ok(true),
+            "0" | "false" => Ok(false),
+            other => Err(AppError::Invalid(format!(
+                "{name} must be 1 or 0, not {other:?}"
+            ))),
+        };
         for (key, value) in &pairs {
             let value = value.trim();
             match key.as_str() {
@@ -125,17 +145,8 @@ impl BoardRequest {
                 "sort" => query.sort = SortKey::parse(value).map_err(AppError::Invalid)?,
                 "page" => query.page = number("page", value, 1_000_000)?,
                 "per_page" => query.per_page = number("per_page", value, MAX_PER_PAGE)?,
-                "all" => {
-                    query.every_submission = match value {
-                        "1" | "true" => true,
-                        "0" | "false" => false,
-                        other => {
-                            return Err(AppError::Invalid(format!(
-                                "all must be 1 or 0, not {other:?}"
-                            )));
-                        }
-                    }
-                }
+                "all" => query.every_submission = switch("all", value)?,
+                "reported" => reported = switch("reported", value)?,
                 "model" => query.model = Some(value.to_owned()),
                 "account" => query.account = Some(value.to_owned()),
                 "chart" => {
@@ -150,14 +161,27 @@ impl BoardRequest {
                 _ => {}
             }
         }
-        Ok(BoardRequest { query, chart })
+        Ok(BoardRequest {
+            query,
+            reported,
+            chart,
+        })
     }
 
     /// The query string of this request with `page` and other changes applied by `edit`.
     fn link(&self, dataset_path: &str, edit: impl FnOnce(&mut BoardQuery)) -> String {
         let mut q = self.query.clone();
         edit(&mut q);
-        format!("{dataset_path}?{}", query_string(&q))
+        format!("{dataset_path}?{}", self.query_string(&q, self.reported))
+    }
+
+    /// `q` as a query string, with the reported rows' switch.
+    fn query_string(&self, q: &BoardQuery, reported: bool) -> String {
+        let mut text = query_string(q);
+        if reported {
+            text.push_str("&reported=1");
+        }
+        text
     }
 
     /// What this request asks for in `kind` (json or page), normalized: the key of its
@@ -165,7 +189,7 @@ impl BoardRequest {
     fn key(&self, kind: &str) -> String {
         format!(
             "{kind}?{}&chart={:?}",
-            query_string(&self.query),
+            self.query_string(&self.query, self.reported),
             self.chart
         )
     }
@@ -248,6 +272,9 @@ struct RowView {
     row: LeaderboardRow,
     /// Every published submission of this account and model.
     history: Option<String>,
+    /// The model's category, family, size and link on this dataset, when set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    metadata: Option<ModelMetadata>,
 }
 
 #[derive(Serialize, JsonSchema)]
@@ -266,6 +293,10 @@ struct LeaderboardView<'a> {
     entries: usize,
     step_lengths: Vec<u8>,
     rows: Vec<RowView>,
+    /// With `reported=1`: the results papers published for the dataset (values in percent as
+    /// printed), never ranked against `rows` (a paper's numbers, no interval, no per-item data).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    reported: Option<&'a [ReportedResult]>,
     next: Option<String>,
     prev: Option<String>,
 }
@@ -322,9 +353,13 @@ fn leaderboard_view<'a>(board: &'a Board, request: &BoardRequest) -> Leaderboard
             .into_iter()
             .map(|row| RowView {
                 history: history(&path, &row),
+                metadata: (row.source == RowSource::Submission)
+                    .then(|| board.metadata.get(&row.model).cloned())
+                    .flatten(),
                 row,
             })
             .collect(),
+        reported: request.reported.then_some(board.reported.as_slice()),
         next,
         prev,
     }
@@ -413,6 +448,12 @@ struct RowText {
     human_note: Option<String>,
     /// Set when the row was computed with an older metric version: which, and what to do.
     outdated: Option<String>,
+    /// A reported row (a paper's published numbers): where they were published.
+    reported: Option<String>,
+    /// The model's category, family and size, as the hub's metadata or the paper gives them.
+    about: Option<String>,
+    /// The model's link, from its metadata.
+    link: Option<String>,
 }
 
 /// A column header that sorts the board by its column.
@@ -445,6 +486,13 @@ struct LeaderboardPage {
     inverse_steps: Vec<SortPair>,
     every_submission: bool,
     toggle: String,
+    /// The reported rows (when shown), after the hub's rows.
+    reported_rows: Vec<RowText>,
+    /// How many reported rows the dataset has, shown or not.
+    reported_count: usize,
+    show_reported: bool,
+    /// The page with the reported rows shown if hidden, hidden if shown.
+    reported_toggle: String,
     filter: Option<String>,
     unfiltered: String,
     page: usize,
@@ -501,8 +549,34 @@ impl LeaderboardPage {
             rows: page
                 .rows
                 .iter()
-                .map(|r| row_text(&tr, r, history(&path, r), &drawn_ids))
+                .map(|r| {
+                    let mut text = row_text(&tr, r, history(&path, r), &drawn_ids);
+                    if let Some(m) = (r.source == RowSource::Submission)
+                        .then(|| board.metadata.get(&r.model))
+                        .flatten()
+                    {
+                        text.about = about(
+                            m.category.as_deref(),
+                            m.family.as_deref(),
+                            m.size.as_deref(),
+                        );
+                        text.link.clone_from(&m.link);
+                    }
+                    text
+                })
                 .collect(),
+            reported_rows: if request.reported {
+                board
+                    .reported
+                    .iter()
+                    .map(|r| reported_text(&tr, r))
+                    .collect()
+            } else {
+                Vec::new()
+            },
+            reported_count: board.reported.len(),
+            show_reported: request.reported,
+            reported_toggle: format!("{path}?{}", request.query_string(query, !request.reported)),
             chart: AccuracyChart::task_accuracy_by_step_length(&drawn),
             picked: request.chart.is_some(),
             sort_label: sort_label(&tr, &query.sort),
@@ -527,7 +601,8 @@ impl LeaderboardPage {
             entries: page.matching,
             prev,
             next,
-            hidden: serde_urlencoded::from_str(&query_string(query)).unwrap_or_default(),
+            hidden: serde_urlencoded::from_str(&request.query_string(query, request.reported))
+                .unwrap_or_default(),
             tr,
         }
     }
@@ -600,6 +675,67 @@ fn row_text(tr: &Tr, r: &LeaderboardRow, history: Option<String>, drawn: &[i64])
                 METRIC_VERSION,
             )
         }),
+        reported: None,
+        about: None,
+        link: None,
+    }
+}
+
+/// "open-weight · Qwen2.5-VL · 7B", from what is known.
+fn about(category: Option<&str>, family: Option<&str>, size: Option<&str>) -> Option<String> {
+    let known: Vec<&str> = [category, family, size].into_iter().flatten().collect();
+    (!known.is_empty()).then(|| known.join(" · "))
+}
+
+/// A reported row as the table prints it: its per-step cells (the paper's percentages), no
+/// totals (the paper's appendix tables give none), no interval, no rank.
+fn reported_text(tr: &Tr, r: &ReportedResult) -> RowText {
+    let m = &r.reported;
+    let value = |metric: Metric, key: CellKey| m.values(metric).get(&key).map(|v| v / 100.0);
+    let steps = |direction| {
+        CellKey::all()
+            .filter(|k| k.direction == direction)
+            .map(|k| CellText {
+                ta: tr.percent_figure(value(Metric::TaskAccuracy, k)),
+                pa: tr.percent_figure(value(Metric::PairwiseAccuracy, k)),
+                few: None,
+            })
+            .collect()
+    };
+    let none = || CellText {
+        ta: tr.percent_figure(None),
+        pa: tr.percent_figure(None),
+        few: None,
+    };
+    RowText {
+        rank: String::new(),
+        model: m.model.clone(),
+        account: String::new(),
+        baseline: false,
+        human: false,
+        attempts: 0,
+        history: None,
+        submission: None,
+        drawn: false,
+        submitted_on: String::new(),
+        overall: none(),
+        ta_ci: String::new(),
+        pa_ci: String::new(),
+        forward: none(),
+        inverse: none(),
+        forward_steps: steps(Direction::Forward),
+        inverse_steps: steps(Direction::Inverse),
+        coverage: String::new(),
+        parse_failures: String::new(),
+        human_note: None,
+        outdated: None,
+        reported: Some(m.source.clone()),
+        about: about(
+            Some(m.category.as_str()),
+            m.family.as_deref(),
+            m.size.as_deref(),
+        ),
+        link: None,
     }
 }
 

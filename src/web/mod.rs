@@ -36,6 +36,7 @@ mod metrics;
 pub mod openapi;
 mod pages;
 mod quality;
+mod reported;
 mod rescore;
 mod run_pages;
 mod runs;
@@ -154,6 +155,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(rescore::routes());
     routes.extend(runs::routes());
     routes.extend(quality::routes());
+    routes.extend(reported::routes());
     routes.push(
         openapi::ApiRoute::new(
             openapi::Verb::Get,

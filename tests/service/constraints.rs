@@ -195,12 +195,16 @@ async fn unique_keys_are_the_only_ones_on_their_tables() {
     // SQLite reports no constraint name, so `UniqueKey::is_violated_by` takes any unique
     // violation on these tables for the key: that holds only while each has no other unique
     // key an INSERT can collide with (generated ids and hashes of random bytes cannot).
-    let expected: [(&str, &[&[&str]]); 5] = [
+    let expected: [(&str, &[&[&str]]); 6] = [
         ("submissions", &[&["id"], &["idempotency_key", "token"]]),
         ("annotators", &[&["id"], &["invite_hash"], &["name"]]),
         ("studies", &[&["id"], &["name"]]),
         ("agreement_rounds", &[&["dataset"]]),
         ("episodes", &[&["id"], &["name"]]),
+        (
+            "reported_results",
+            &[&["dataset", "model", "source"], &["id"]],
+        ),
     ];
     for key in UniqueKey::ALL {
         assert!(

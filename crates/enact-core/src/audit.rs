@@ -93,10 +93,15 @@ pub enum AuditAction {
     EpisodeGraphs,
     /// The graphs an episode exports chosen by an admin.
     EpisodeResolve,
+    /// Results a paper published attached to a dataset (an import or one row).
+    ReportedAdd,
+    ReportedRemove,
+    /// A model's category, family, size or link on a dataset set.
+    ModelMetadata,
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 29] = [
+    pub const ALL: [AuditAction; 32] = [
         AuditAction::DatasetImport,
         AuditAction::DatasetSubset,
         AuditAction::DatasetAnswerVisibility,
@@ -126,6 +131,9 @@ impl AuditAction {
         AuditAction::EpisodeImport,
         AuditAction::EpisodeGraphs,
         AuditAction::EpisodeResolve,
+        AuditAction::ReportedAdd,
+        AuditAction::ReportedRemove,
+        AuditAction::ModelMetadata,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -159,6 +167,9 @@ impl AuditAction {
             AuditAction::EpisodeImport => "episode.import",
             AuditAction::EpisodeGraphs => "episode.graphs",
             AuditAction::EpisodeResolve => "episode.resolve",
+            AuditAction::ReportedAdd => "reported.add",
+            AuditAction::ReportedRemove => "reported.remove",
+            AuditAction::ModelMetadata => "model.metadata",
         }
     }
 
