@@ -124,8 +124,8 @@ pub async fn paper(hub: &Hub, dataset: &str, options: &PaperOptions) -> Result<P
             .iter()
             .any(|p| p.model.eq_ignore_ascii_case(&hub_row.model));
         let hub_row = match row.submission {
-            Some(submission) if row.source == RowSource::Submission
-                && (options.intervals || reproduced) =>
+            Some(submission)
+                if row.source == RowSource::Submission && (options.intervals || reproduced) =>
             {
                 hub_row.with_intervals(&column_results(hub, submission).await?)
             }

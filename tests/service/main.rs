@@ -38,6 +38,7 @@ mod metrics;
 mod migrate_db;
 mod openapi;
 mod pages;
+mod paper;
 mod quality;
 mod remote_runs;
 mod rescore;

@@ -1,0 +1,238 @@
+//! `enact-hub paper`: the paper's tables regenerated from a dataset holding the paper's published
+//! results and a scored submission of this hub.
+
+use std::path::Path;
+
+use enact_hub::core::credentials::Role;
+use enact_hub::core::paper::mark::mark;
+use enact_hub::core::paper::{
+    CellKey, ENACT_PAPER_MAIN_TABLE_MODELS, Metric, PaperTable, enact_paper_results, table_of,
+};
+use reqwest::Method;
+use serde_json::Value;
+
+use crate::helpers::*;
+
+fn run(args: &[&str], db: &Path) -> std::process::Output {
+    enact_hub()
+        .args(args)
+        .arg("--db")
+        .arg(db)
+        .output()
+        .expect("enact-hub runs")
+}
+
+fn succeeded(out: &std::process::Output) {
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn table(dir: &Path, name: &str) -> PaperTable {
+    let text = std::fs::read_to_string(dir.join(name)).expect(name);
+    PaperTable::from_json(&text).expect("the JSON table reads back")
+}
+
+/// The paper's own table of `metric`, marked by the rule.
+fn published(metric: Metric) -> PaperTable {
+    let mut table = table_of(metric, &enact_paper_results());
+    mark(&mut table);
+    table
+}
+
+/// A leaderboard row's figure at `key`, in percent as printed.
+fn board_percent(row: &Value, key: CellKey, field: &str) -> Option<f64> {
+    let direction = key.direction.as_str();
+    row[direction]["per_step"]
+        .as_array()
+        .expect("per_step")
+        .iter()
+        .find(|cell| cell[0] == u64::from(key.step_length.get()))
+        .and_then(|cell| cell[1][field].as_f64())
+        .map(|v| (v * 10_000.0).round() / 100.0)
+}
+
+#[tokio::test]
+async fn the_papers_tables_come_back_with_a_submissions_row_in_its_own_category() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, alice) = api_token(&server.pool, "alice", Role::Submitter, None, None).await;
+    let reply = submit_to(
+        &server,
+        "mini",
+        "model=GPT-5",
+        &alice,
+        answers(&records, &[0, 3]),
+    )
+    .await;
+    assert_eq!(reply.status, 201, "{}", reply.text);
+    let submission = reply.id();
+    let db = server.db_path();
+    succeeded(&run(
+        &["reported", "import", "--paper", "--dataset", "mini"],
+        &db,
+    ));
+
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("paper");
+    let written = run(
+        &[
+            "paper",
+            "--dataset",
+            "mini",
+            "--compare-reported",
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        &db,
+    );
+    succeeded(&written);
+    for name in [
+        "task_accuracy.tex",
+        "task_accuracy_standalone.tex",
+        "task_accuracy.csv",
+        "task_accuracy.md",
+        "pairwise_accuracy.tex",
+        "pairwise_accuracy_standalone.tex",
+        "pairwise_accuracy.csv",
+        "pairwise_accuracy.md",
+        "reproduction.csv",
+    ] {
+        assert!(dir.join(name).is_file(), "{name} is written");
+    }
+
+    let board = server
+        .call(Method::GET, "/api/v1/datasets/mini/leaderboard")
+        .expect(200)
+        .await
+        .json();
+    let board_row = board["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["submission"] == submission)
+        .expect("the submission's leaderboard row")
+        .clone();
+    for (metric, field) in [
+        (Metric::TaskAccuracy, "task_accuracy"),
+        (Metric::PairwiseAccuracy, "pairwise_accuracy"),
+    ] {
+        let name = format!("{}.json", metric.as_str());
+        let table = table(&dir, &name);
+        // The paper's rows, values and marks, unchanged by the hub's row beside them.
+        let paper_rows: Vec<_> = table
+            .rows
+            .iter()
+            .filter(|r| !r.source.starts_with("enact-hub"))
+            .cloned()
+            .collect();
+        assert_eq!(paper_rows, published(metric).rows, "{name}");
+        // The submission's row, in the hub's own category, with the leaderboard's figures.
+        let ours = table
+            .rows
+            .iter()
+            .find(|r| r.source == format!("enact-hub submission {submission}"))
+            .expect("the submission's row");
+        assert_eq!(ours.model, "GPT-5");
+        assert_eq!(ours.category.as_str(), "enact-hub");
+        for key in CellKey::all() {
+            assert_eq!(
+                ours.value(key),
+                board_percent(&board_row, key, field),
+                "{name} {key}"
+            );
+        }
+        // Humans last.
+        assert_eq!(table.rows.last().unwrap().model, "Human Performance");
+    }
+
+    let provenance: Value =
+        serde_json::from_slice(&std::fs::read(dir.join("provenance.json")).unwrap()).unwrap();
+    let cells = provenance["cells"].as_array().unwrap();
+    let ours: Vec<&Value> = cells
+        .iter()
+        .filter(|c| c["from"]["kind"] == "submission")
+        .collect();
+    assert!(!ours.is_empty());
+    assert!(ours.iter().all(|c| c["from"]["submission"] == submission
+        && c["model"] == "GPT-5"
+        && c["from"]["metric_version"].is_u64()
+        && c["from"]["hub_version"].is_string()));
+    assert!(cells.iter().any(|c| {
+        c["from"]["kind"] == "reported"
+            && c["from"]["source"]
+                .as_str()
+                .unwrap()
+                .contains("tab:app_task_acc")
+    }));
+
+    // The reproduction check pairs the paper's GPT-5 with the hub's, cell by cell.
+    let reproduction = std::fs::read_to_string(dir.join("reproduction.csv")).unwrap();
+    let lines: Vec<&str> = reproduction.lines().skip(1).collect();
+    assert!(!lines.is_empty());
+    assert!(
+        lines
+            .iter()
+            .all(|l| l.starts_with("GPT-5,") && l.contains(&format!(",{submission},"))),
+        "{reproduction}"
+    );
+    let stdout = String::from_utf8_lossy(&written.stdout);
+    let gpt5 = enact_paper_results()
+        .into_iter()
+        .find(|m| m.model == "GPT-5")
+        .unwrap();
+    let f3 = CellKey::parse("forward_3").unwrap();
+    let expected = format!(
+        "GPT-5 task_accuracy forward_3: reported {:.2}, hub ",
+        gpt5.task_accuracy[&f3]
+    );
+    assert!(stdout.contains(&expected), "{stdout}");
+
+    // The main-text table: the rows named, in that order.
+    let main = out.path().join("main");
+    let models = ENACT_PAPER_MAIN_TABLE_MODELS.join(",");
+    succeeded(&run(
+        &[
+            "paper",
+            "--dataset",
+            "mini",
+            "--metric",
+            "pa",
+            "--models",
+            &models,
+            "--out",
+            main.to_str().unwrap(),
+        ],
+        &db,
+    ));
+    assert!(!main.join("task_accuracy.json").exists());
+    let table = table(&main, "pairwise_accuracy.json");
+    let names: Vec<&str> = table
+        .rows
+        .iter()
+        .filter(|r| !r.source.starts_with("enact-hub"))
+        .map(|r| r.model.as_str())
+        .collect();
+    assert_eq!(names, ENACT_PAPER_MAIN_TABLE_MODELS);
+
+    // A name no row has is refused, saying which.
+    let refused = run(
+        &[
+            "paper",
+            "--dataset",
+            "mini",
+            "--models",
+            "GPT-5,GPT-6",
+            "--out",
+            out.path().join("refused").to_str().unwrap(),
+        ],
+        &db,
+    );
+    assert!(!refused.status.success());
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(stderr.contains("no row is named 'GPT-6'"), "{stderr}");
+    assert!(!out.path().join("refused").exists());
+    server.stop().await;
+}
