@@ -7,9 +7,11 @@
 //!   [`PaperTable`]) and reading them;
 //! - [`mark`]: best and second-best within each category, the paper's rule;
 //! - [`write`]: the table as LaTeX (booktabs), CSV, Markdown and JSON;
+//! - [`figure`]: accuracy by step length per direction, the paper's teaser style, as SVG and PNG.
 //!
 //! Values are percentages as printed (84.62), never fractions.
 
+pub mod figure;
 pub mod mark;
 pub mod write;
 
