@@ -7,6 +7,7 @@
 use askama::Template;
 use serde::Serialize;
 
+use super::canvas::{Canvas, rgb};
 use super::write::grouped;
 use super::{Category, CellKey, PaperTable};
 use crate::dataset::{Direction, StepLength};
@@ -23,6 +24,8 @@ pub const FONT_SIZE: f64 = 16.0;
 pub const TITLE_SIZE: f64 = 20.0;
 const LEGEND_COLUMNS: usize = 4;
 const LEGEND_ROW: f64 = 26.0;
+/// Between the x axes' names and the legend's first baseline.
+const LEGEND_GAP: f64 = 28.0;
 
 /// Line colours (the Okabe–Ito palette without black, which is the humans', and three more
 /// distinct ones), cycled; each pass through them uses the next dash pattern.
@@ -33,6 +36,8 @@ const PALETTE: [&str; 10] = [
 /// SVG `stroke-dasharray`s (empty: solid).
 const DASHES: [&str; 4] = ["", "8 4", "2 4", "10 4 2 4"];
 const HUMAN_COLOUR: &str = "#000000";
+const GRID: &str = "#e0e0e0";
+const AXIS: &str = "#000000";
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Tick {
@@ -75,6 +80,27 @@ pub struct Panel {
     pub x_ticks: Vec<Tick>,
     pub y_ticks: Vec<Tick>,
     pub series: Vec<Series>,
+}
+
+/// A piece of text; `y` is its baseline, `anchor` SVG's `text-anchor`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Label {
+    pub x: f64,
+    pub y: f64,
+    pub text: String,
+    pub anchor: &'static str,
+    pub size: f64,
+    pub bold: bool,
+}
+
+/// A straight line.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Rule {
+    pub x1: f64,
+    pub y1: f64,
+    pub x2: f64,
+    pub y2: f64,
+    pub style: LineStyle,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -213,7 +239,7 @@ impl StepChart {
             .enumerate()
             .map(|(i, ((_, row), style))| LegendEntry {
                 x: round1(MARGIN_LEFT + column_width * (i % LEGEND_COLUMNS) as f64),
-                y: PANEL_HEIGHT + LEGEND_ROW * (i / LEGEND_COLUMNS) as f64,
+                y: PANEL_HEIGHT + LEGEND_GAP + LEGEND_ROW * (i / LEGEND_COLUMNS) as f64,
                 model: row.model.clone(),
                 style: style.clone(),
             })
@@ -221,7 +247,7 @@ impl StepChart {
         let legend_rows = rows.len().div_ceil(LEGEND_COLUMNS);
         StepChart {
             width: WIDTH,
-            height: PANEL_HEIGHT + LEGEND_ROW * legend_rows as f64 + 16.0,
+            height: PANEL_HEIGHT + LEGEND_GAP + LEGEND_ROW * legend_rows as f64,
             y_label: format!("{} (%)", table.metric.title()),
             description: format!(
                 "{} (%) against step length L, forward and inverse world modeling, one line \
@@ -234,10 +260,145 @@ impl StepChart {
         }
     }
 
+    /// Every piece of text: panel titles, axis names, tick labels and the legend's names.
+    pub fn labels(&self) -> Vec<Label> {
+        let mut labels = Vec::new();
+        let text = |x: f64, y: f64, text: &str, anchor: &'static str| Label {
+            x,
+            y,
+            text: text.to_owned(),
+            anchor,
+            size: FONT_SIZE,
+            bold: false,
+        };
+        for p in &self.panels {
+            let middle = round1((p.plot_left + p.plot_right) / 2.0);
+            labels.push(Label {
+                size: TITLE_SIZE,
+                bold: true,
+                ..text(middle, 26.0, p.title, "middle")
+            });
+            labels.push(text(p.plot_left, p.plot_top - 14.0, &self.y_label, "start"));
+            labels.push(text(
+                middle,
+                p.plot_bottom + 48.0,
+                "Step length L",
+                "middle",
+            ));
+            for t in &p.y_ticks {
+                labels.push(text(p.plot_left - 8.0, t.position + 5.0, &t.label, "end"));
+            }
+            for t in &p.x_ticks {
+                labels.push(text(t.position, p.plot_bottom + 22.0, &t.label, "middle"));
+            }
+        }
+        for l in &self.legend {
+            labels.push(text(l.x + 44.0, l.y, &l.model, "start"));
+        }
+        labels
+    }
+
+    /// Every straight line that is not a row's: grid lines, axes and the legend's samples.
+    pub fn rules(&self) -> Vec<Rule> {
+        let mut rules = Vec::new();
+        let plain = |x1: f64, y1: f64, x2: f64, y2: f64, colour: &'static str| Rule {
+            x1,
+            y1,
+            x2,
+            y2,
+            style: LineStyle {
+                colour,
+                dash: "",
+                width: 1.0,
+            },
+        };
+        for p in &self.panels {
+            for t in &p.y_ticks {
+                rules.push(plain(
+                    p.plot_left,
+                    t.position,
+                    p.plot_right,
+                    t.position,
+                    GRID,
+                ));
+            }
+            rules.push(plain(
+                p.plot_left,
+                p.plot_bottom,
+                p.plot_right,
+                p.plot_bottom,
+                AXIS,
+            ));
+            rules.push(plain(
+                p.plot_left,
+                p.plot_top,
+                p.plot_left,
+                p.plot_bottom,
+                AXIS,
+            ));
+        }
+        for l in &self.legend {
+            rules.push(Rule {
+                style: l.style.clone(),
+                ..plain(l.x, l.y - 5.0, l.x + 36.0, l.y - 5.0, AXIS)
+            });
+        }
+        rules
+    }
+
+    /// The figure as a PNG, `width` × `height` pixels, painted from the same geometry as
+    /// [`StepChart::svg`] (text in the core's bundled DejaVu Sans Bold).
+    pub fn png(&self) -> Result<Vec<u8>, FigureError> {
+        self.canvas()?
+            .png()
+            .map_err(|e| FigureError::Png(e.to_string()))
+    }
+
+    fn canvas(&self) -> Result<Canvas, FigureError> {
+        // Whole pixels: the geometry is laid out in them.
+        let (width, height) = (self.width.ceil() as u32, self.height.ceil() as u32);
+        let mut canvas =
+            Canvas::new(width, height).map_err(|e| FigureError::Font(e.to_string()))?;
+        for r in self.rules() {
+            canvas.polyline(
+                &[(r.x1, r.y1), (r.x2, r.y2)],
+                rgb(r.style.colour),
+                r.style.width,
+                r.style.dash,
+            );
+        }
+        for l in self.labels() {
+            canvas.text(&l.text, (l.x, l.y), l.anchor, l.size, [0, 0, 0]);
+        }
+        for p in &self.panels {
+            for s in &p.series {
+                let colour = rgb(s.style.colour);
+                for run in &s.runs {
+                    let points: Vec<(f64, f64)> = run.iter().map(|m| (m.x, m.y)).collect();
+                    canvas.polyline(&points, colour, s.style.width, s.style.dash);
+                    for point in points {
+                        canvas.disc(point, s.style.width + 1.0, colour);
+                    }
+                }
+            }
+        }
+        Ok(canvas)
+    }
+
     /// The figure as a standalone SVG file, `stamp` in its `<metadata>`.
     pub fn svg(&self, stamp: &str) -> Result<String, askama::Error> {
         StepChartSvg { chart: self, stamp }.render()
     }
+}
+
+/// Why a figure could not be painted: the bundled font or PNG encoding failed (a build
+/// defect, not the data's fault).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum FigureError {
+    #[error("the bundled font does not load: {0}")]
+    Font(String),
+    #[error("the PNG could not be encoded: {0}")]
+    Png(String),
 }
 
 #[derive(Template)]
@@ -329,5 +490,35 @@ mod tests {
         assert!(svg.contains("<title>&#60;A &#38; B&#62;</title>"));
         assert!(!svg.contains("<A & B>"));
         assert!(svg.contains("stroke-dasharray=\"8 4\""));
+    }
+
+    #[test]
+    fn the_png_paints_the_same_geometry_at_1280_pixels() {
+        let chart = papers_chart();
+        let png = chart.png().unwrap();
+        let image = image::load_from_memory_with_format(&png, image::ImageFormat::Png)
+            .unwrap()
+            .to_rgb8();
+        assert_eq!(image.width(), 1280);
+        assert_eq!(f64::from(image.height()), chart.height.ceil());
+        // The Human row's first point (black), a row's line colour, and white background.
+        let human = &chart.panels[0].series[30].runs[0][0];
+        assert_eq!(image.get_pixel(human.x as u32, human.y as u32).0, [0, 0, 0]);
+        // The last row before the humans is drawn over every other.
+        let bagel = &chart.panels[1].series[29];
+        assert_eq!(bagel.model, "BAGEL");
+        let point = &bagel.runs[0][0];
+        assert_eq!(
+            image.get_pixel(point.x as u32, point.y as u32).0,
+            rgb(bagel.style.colour)
+        );
+        assert_eq!(image.get_pixel(2, 2).0, [255, 255, 255]);
+        // Text is painted: the panel title's middle is inked.
+        let title = &chart.labels()[0];
+        let inked = (0..40)
+            .flat_map(|y| (title.x as u32 - 100..title.x as u32 + 100).map(move |x| (x, y)))
+            .filter(|(x, y)| image.get_pixel(*x, *y).0 != [255, 255, 255])
+            .count();
+        assert!(inked > 200, "{inked}");
     }
 }

@@ -11,6 +11,7 @@
 //!
 //! Values are percentages as printed (84.62), never fractions.
 
+mod canvas;
 pub mod figure;
 pub mod mark;
 pub mod write;
