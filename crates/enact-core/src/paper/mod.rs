@@ -9,9 +9,12 @@
 //! - [`hub`]: the hub's own rows, where each cell came from, and the reproduction check;
 //! - [`export`]: the folder `enact-hub paper` writes;
 //! - [`write`]: the table as LaTeX (booktabs), CSV, Markdown and JSON;
+//! - [`figure`]: accuracy by step length per direction, the paper's teaser style, as SVG and PNG.
 //!
 //! Values are percentages as printed (84.62), never fractions.
 
+mod canvas;
+pub mod figure;
 pub mod export;
 pub mod hub;
 pub mod mark;
@@ -263,6 +266,87 @@ pub fn table_of(metric: Metric, models: &[ReportedModel]) -> PaperTable {
         metric,
         rows: models.iter().map(|m| m.row(metric)).collect(),
     }
+}
+
+/// The reported models that `tables` hold (e.g. another paper's task- and pairwise-accuracy
+/// tables, as [`PaperTable::from_json`] reads them): one per model name, in order of first
+/// appearance, with each table's values under its metric. The same model in two tables must
+/// agree on category, family, size and source, and a metric may come from one table only.
+pub fn reported_models(tables: &[PaperTable]) -> Result<Vec<ReportedModel>, PaperError> {
+    let mut models: Vec<ReportedModel> = Vec::new();
+    let mut filled: Vec<Vec<Metric>> = Vec::new();
+    for table in tables {
+        for (i, row) in table.rows.iter().enumerate() {
+            let problem = |field: &str, message: String| PaperError::Row {
+                row: i + 1,
+                model: row.model.clone(),
+                field: field.to_owned(),
+                message,
+            };
+            let position = match models.iter().position(|m| m.model == row.model) {
+                Some(position) => position,
+                None => {
+                    models.push(ReportedModel {
+                        model: row.model.clone(),
+                        category: row.category.clone(),
+                        family: row.family.clone(),
+                        size: row.size.clone(),
+                        source: row.source.clone(),
+                        task_accuracy: BTreeMap::new(),
+                        pairwise_accuracy: BTreeMap::new(),
+                    });
+                    filled.push(Vec::new());
+                    models.len() - 1
+                }
+            };
+            let model = &mut models[position];
+            let disagree = |field: &str, earlier: String, now: String| {
+                problem(
+                    field,
+                    format!("{now:?} here, {earlier:?} in an earlier row"),
+                )
+            };
+            if model.category != row.category {
+                return Err(disagree(
+                    "category",
+                    model.category.to_string(),
+                    row.category.to_string(),
+                ));
+            }
+            for (field, earlier, now) in [
+                ("family", &model.family, &row.family),
+                ("size", &model.size, &row.size),
+            ] {
+                if earlier != now {
+                    return Err(disagree(
+                        field,
+                        earlier.clone().unwrap_or_default(),
+                        now.clone().unwrap_or_default(),
+                    ));
+                }
+            }
+            if model.source != row.source {
+                return Err(disagree("source", model.source.clone(), row.source.clone()));
+            }
+            if filled[position].contains(&table.metric) {
+                return Err(problem(
+                    "model",
+                    format!("has {} twice", table.metric.as_str()),
+                ));
+            }
+            filled[position].push(table.metric);
+            let values = match table.metric {
+                Metric::TaskAccuracy => &mut model.task_accuracy,
+                Metric::PairwiseAccuracy => &mut model.pairwise_accuracy,
+            };
+            values.extend(
+                row.cells
+                    .iter()
+                    .filter_map(|(key, cell)| cell.value.map(|v| (*key, v))),
+            );
+        }
+    }
+    Ok(models)
 }
 
 /// Best or second-best within its category.
@@ -539,5 +623,38 @@ mod tests {
             PaperTable::from_json(r#"{"metric": "accuracy", "rows": []}"#),
             Err(PaperError::Table(_))
         ));
+    }
+
+    #[test]
+    fn tables_give_back_the_reported_models_they_were_made_of() {
+        let models = enact_paper_results();
+        let tables: Vec<PaperTable> = Metric::ALL.map(|m| table_of(m, &models)).to_vec();
+        assert_eq!(reported_models(&tables), Ok(models.clone()));
+        // Through JSON, as another paper's numbers arrive.
+        let read: Vec<PaperTable> = tables
+            .iter()
+            .map(|t| PaperTable::from_json(&write::to_json(t)).unwrap())
+            .collect();
+        assert_eq!(reported_models(&read), Ok(models));
+    }
+
+    #[test]
+    fn tables_that_disagree_about_a_model_are_refused() {
+        let models = enact_paper_results();
+        let task = table_of(Metric::TaskAccuracy, &models);
+        let mut pair = table_of(Metric::PairwiseAccuracy, &models);
+        pair.rows[2].category = Category::OpenWeight;
+        assert_eq!(
+            reported_models(&[task.clone(), pair])
+                .unwrap_err()
+                .to_string(),
+            "row 3 (GPT-5 nano): category: \"open-weight\" here, \"proprietary\" in an earlier row"
+        );
+        assert_eq!(
+            reported_models(&[task.clone(), task])
+                .unwrap_err()
+                .to_string(),
+            "row 1 (GPT-5): model: has task_accuracy twice"
+        );
     }
 }

@@ -8,7 +8,7 @@ use image::RgbImage;
 type Colour = [u8; 3];
 
 /// The label font, embedded so that generation reads no file at run time.
-const FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-Bold.ttf");
+pub(crate) const FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-Bold.ttf");
 
 /// How ENACT draws a state label onto a frame.
 struct LabelStyle {
