@@ -4,6 +4,7 @@
 use serde::Serialize;
 
 use super::Metric;
+use super::figure::{FigureError, StepChart};
 use super::hub::{AssembledTable, CellProvenance, ReproducedCell};
 use super::write::{to_csv, to_json, to_markdown, to_tex};
 use crate::bundle::{BundleFile, csv_field};
@@ -33,8 +34,19 @@ struct Reproduction<'a> {
     cells: &'a [ReproducedCell],
 }
 
-/// File names per table: `(tex, standalone tex, csv, md, json)`.
-fn names(metric: Metric) -> [&'static str; 5] {
+/// Why the folder could not be written (a defect, not the data's fault).
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    #[error("JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    #[error("figure: {0}")]
+    Svg(#[from] askama::Error),
+    #[error("figure: {0}")]
+    Png(#[from] FigureError),
+}
+
+/// File names per table: tex, standalone tex, csv, md, json, and the figure as svg and png.
+fn names(metric: Metric) -> [&'static str; 7] {
     match metric {
         Metric::TaskAccuracy => [
             "task_accuracy.tex",
@@ -42,6 +54,8 @@ fn names(metric: Metric) -> [&'static str; 5] {
             "task_accuracy.csv",
             "task_accuracy.md",
             "task_accuracy.json",
+            "task_accuracy_by_step_length.svg",
+            "task_accuracy_by_step_length.png",
         ],
         Metric::PairwiseAccuracy => [
             "pairwise_accuracy.tex",
@@ -49,8 +63,20 @@ fn names(metric: Metric) -> [&'static str; 5] {
             "pairwise_accuracy.csv",
             "pairwise_accuracy.md",
             "pairwise_accuracy.json",
+            "pairwise_accuracy_by_step_length.svg",
+            "pairwise_accuracy_by_step_length.png",
         ],
     }
+}
+
+/// The figure of a table: accuracy by step length per direction.
+pub fn figure(table: &super::PaperTable) -> StepChart {
+    StepChart::accuracy_by_step_length(table)
+}
+
+/// What a figure's `<metadata>` says it was made from.
+pub fn figure_stamp(dataset: &str, hub_version: &str) -> String {
+    format!("dataset: {dataset}; enact-hub {hub_version}")
 }
 
 fn interval_text(interval: Option<(f64, f64)>) -> [String; 2] {
@@ -86,11 +112,12 @@ pub fn reproduction_csv(cells: &[ReproducedCell]) -> String {
 }
 
 /// Every file of the folder, in a fixed order.
-pub fn files(bundle: &PaperBundle<'_>) -> Result<Vec<BundleFile>, serde_json::Error> {
+pub fn files(bundle: &PaperBundle<'_>) -> Result<Vec<BundleFile>, ExportError> {
     let mut files = Vec::new();
+    let stamp = figure_stamp(bundle.dataset, bundle.hub_version);
     for assembled in bundle.tables {
         let table = &assembled.table;
-        let [tex, standalone, csv, md, json] = names(table.metric);
+        let [tex, standalone, csv, md, json, svg, png] = names(table.metric);
         files.push(BundleFile {
             name: tex,
             bytes: to_tex(table, false).into_bytes(),
@@ -110,6 +137,15 @@ pub fn files(bundle: &PaperBundle<'_>) -> Result<Vec<BundleFile>, serde_json::Er
         files.push(BundleFile {
             name: json,
             bytes: to_json(table).into_bytes(),
+        });
+        let chart = figure(table);
+        files.push(BundleFile {
+            name: svg,
+            bytes: chart.svg(&stamp)?.into_bytes(),
+        });
+        files.push(BundleFile {
+            name: png,
+            bytes: chart.png()?,
         });
     }
     let provenance = Provenance {
@@ -210,11 +246,15 @@ mod tests {
                 "task_accuracy.csv",
                 "task_accuracy.md",
                 "task_accuracy.json",
+                "task_accuracy_by_step_length.svg",
+                "task_accuracy_by_step_length.png",
                 "pairwise_accuracy.tex",
                 "pairwise_accuracy_standalone.tex",
                 "pairwise_accuracy.csv",
                 "pairwise_accuracy.md",
                 "pairwise_accuracy.json",
+                "pairwise_accuracy_by_step_length.svg",
+                "pairwise_accuracy_by_step_length.png",
                 "provenance.json",
                 "reproduction.json",
                 "reproduction.csv",
@@ -225,6 +265,17 @@ mod tests {
         };
         // The JSON table reads back as the table it was written from.
         let back = PaperTable::from_json(&text("task_accuracy.json")).unwrap();
+        let svg = text("task_accuracy_by_step_length.svg");
+        assert!(
+            svg.starts_with("<svg") && svg.contains("dataset: enact"),
+            "{svg}"
+        );
+        let png = &files
+            .iter()
+            .find(|f| f.name == "task_accuracy_by_step_length.png")
+            .unwrap()
+            .bytes;
+        assert!(png.starts_with(b"\x89PNG"));
         assert_eq!(back, tables[0].table);
         let provenance: serde_json::Value = serde_json::from_str(&text("provenance.json")).unwrap();
         let cells = provenance["cells"].as_array().unwrap();

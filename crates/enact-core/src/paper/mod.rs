@@ -14,8 +14,8 @@
 //! Values are percentages as printed (84.62), never fractions.
 
 mod canvas;
-pub mod figure;
 pub mod export;
+pub mod figure;
 pub mod hub;
 pub mod mark;
 pub mod write;
