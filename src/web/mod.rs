@@ -35,6 +35,7 @@ mod locale_switch;
 mod metrics;
 pub mod openapi;
 mod pages;
+mod paper;
 mod quality;
 mod reported;
 mod rescore;
@@ -280,6 +281,7 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(episodes::router())
         .merge(admin_pages(&state))
         .merge(studies::page_router())
+        .merge(paper::page_router())
         .merge(run_pages::page_router())
         .merge(assets::router())
         .merge(openapi::page_router())

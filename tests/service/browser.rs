@@ -545,6 +545,22 @@ impl PublicWorld {
                 }
             }
         }
+        // Three of the paper's published rows, so that the paper page marks cells and checks
+        // a reproduction ("exact" is not among them; GPT-5 is compared with nothing).
+        for model in enact_hub::core::paper::enact_paper_results()
+            .into_iter()
+            .filter(|m| {
+                ["GPT-5", "GPT-5 mini", "GPT-5 nano", "Human Performance"]
+                    .contains(&m.model.as_str())
+            })
+        {
+            server
+                .call(reqwest::Method::POST, "/api/v1/datasets/mini/reported")
+                .bearer(&admin)
+                .json(&serde_json::to_value(&model).expect("json"))
+                .expect(201)
+                .await;
+        }
         PublicWorld {
             server,
             records,
@@ -574,6 +590,7 @@ impl PublicWorld {
             format!("/datasets/mini/items/{}", self.item(0)),
             format!("/datasets/mini/items/{}", self.item(1)),
             "/leaderboard/mini".to_owned(),
+            "/datasets/mini/paper?intervals=1".to_owned(),
             "/leaderboard/mini/errors".to_owned(),
             format!("/leaderboard/mini/errors/{}", self.submissions[2]),
             "/studies".to_owned(),

@@ -236,3 +236,109 @@ async fn the_papers_tables_come_back_with_a_submissions_row_in_its_own_category(
     assert!(!out.path().join("refused").exists());
     server.stop().await;
 }
+
+#[tokio::test]
+async fn the_paper_page_shows_the_tables_in_both_languages_and_downloads_the_folder() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, alice) = api_token(&server.pool, "alice", Role::Submitter, None, None).await;
+    let reply = submit_to(
+        &server,
+        "mini",
+        "model=GPT-5",
+        &alice,
+        answers(&records, &[1]),
+    )
+    .await;
+    assert_eq!(reply.status, 201, "{}", reply.text);
+    let submission = reply.id();
+    succeeded(&run(
+        &["reported", "import", "--paper", "--dataset", "mini"],
+        &server.db_path(),
+    ));
+
+    let english = server
+        .call(Method::GET, "/datasets/mini/paper?intervals=1")
+        .header("accept-language", "en")
+        .expect(200)
+        .await
+        .text;
+    assert!(english.contains("Pairwise accuracy") && english.contains("Proprietary models"));
+    assert!(english.contains("Gemini 2.5 Pro") && english.contains("Human Performance"));
+    assert!(english.contains(&format!("enact-hub submission {submission}")));
+    assert!(english.contains("paper-mark-first") && english.contains("paper-mark-second"));
+    assert!(english.contains("Reproduction check"));
+    // The figures and the download keep the page's choices.
+    assert!(
+        english.contains("/datasets/mini/paper/files/task_accuracy_by_step_length.svg?intervals=1")
+    );
+    assert!(english.contains("/datasets/mini/paper.tar?intervals=1"));
+
+    let chinese = server
+        .call(Method::GET, "/datasets/mini/paper?metric=pa")
+        .header("accept-language", "zh-CN")
+        .expect(200)
+        .await
+        .text;
+    assert!(
+        chinese.contains("成对准确率") && chinese.contains("闭源模型"),
+        "{chinese}"
+    );
+    assert!(!chinese.contains("id=\"paper-task_accuracy\""));
+
+    let svg = server
+        .get("/datasets/mini/paper/files/pairwise_accuracy_by_step_length.svg")
+        .await;
+    assert_eq!(svg.headers()["content-type"], "image/svg+xml");
+    assert!(svg.text().await.unwrap().contains("Gemini 2.5 Pro"));
+    let tar = server.get("/datasets/mini/paper.tar").await;
+    assert_eq!(tar.status(), 200);
+    assert_eq!(tar.headers()["content-type"], "application/x-tar");
+    let bytes = tar.bytes().await.unwrap();
+    let mut names = Vec::new();
+    let mut archive = tar::Archive::new(bytes.as_ref());
+    for entry in archive.entries().unwrap() {
+        names.push(entry.unwrap().path().unwrap().display().to_string());
+    }
+    for name in [
+        "provenance.json",
+        "task_accuracy.tex",
+        "pairwise_accuracy_by_step_length.png",
+        "reproduction.csv",
+    ] {
+        assert!(
+            names
+                .iter()
+                .any(|n| n == &format!("enact-hub-paper-mini/{name}")),
+            "{name} in {names:?}"
+        );
+    }
+
+    // Bad choices say what was wrong.
+    let refused = server
+        .call(Method::GET, "/datasets/mini/paper?metric=xx")
+        .send()
+        .await;
+    assert_eq!(refused.status, 400);
+    assert!(refused.text.contains("metric"), "{}", refused.text);
+    let missing = server
+        .call(Method::GET, "/datasets/mini/paper/files/secrets.txt")
+        .send()
+        .await;
+    assert_eq!(missing.status, 404);
+    assert!(
+        missing.text.contains("no file 'secrets.txt'"),
+        "{}",
+        missing.text
+    );
+    let unknown = server
+        .call(Method::GET, "/datasets/mini/paper?models=GPT-6")
+        .send()
+        .await;
+    assert_eq!(unknown.status, 400);
+    assert!(
+        unknown.text.contains("no row is named") && unknown.text.contains("GPT-6"),
+        "{}",
+        unknown.text
+    );
+    server.stop().await;
+}
