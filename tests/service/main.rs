@@ -40,6 +40,7 @@ mod openapi;
 mod pages;
 mod quality;
 mod remote_runs;
+mod reported;
 mod rescore;
 mod run_instances;
 mod run_pages;
