@@ -24,7 +24,8 @@ const MAX_TEXT: usize = 300;
 /// A reported result on a dataset as the API shows it; values in percent as printed.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 pub struct ReportedResult {
-    /// Its id on this hub (what `DELETE /api/v1/datasets/{dataset}/reported/{id}` takes).
+    /// Its id on this hub (what `DELETE /api/v1/datasets/{dataset}/reported/{reported_id}`
+    /// takes).
     pub id: i64,
     pub dataset: String,
     #[serde(flatten)]
@@ -36,8 +37,10 @@ pub struct ReportedResult {
 }
 
 /// The shape of [`ReportedModel`] in JSON, for the API's documentation (the core type has no
-/// JSON Schema: its cell keys are parsed from text, `forward_3` .. `inverse_10`).
+/// JSON Schema: its cell keys are parsed from text, `forward_3` .. `inverse_10`). Unknown fields
+/// are refused, as the core type's reading refuses them.
 #[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
 #[allow(dead_code)]
 pub struct ReportedModelSchema {
     pub model: String,
@@ -47,11 +50,34 @@ pub struct ReportedModelSchema {
     pub size: Option<String>,
     /// Where the numbers were published: paper and table label, or a URL.
     pub source: String,
-    /// Task accuracy in percent by cell: `forward_3` .. `forward_10`, `inverse_3` ..
-    /// `inverse_10`.
-    pub task_accuracy: BTreeMap<String, f64>,
+    /// Task accuracy in percent by cell.
+    pub task_accuracy: Option<CellsSchema>,
     /// Pairwise accuracy in percent, by the same cells.
-    pub pairwise_accuracy: BTreeMap<String, f64>,
+    pub pairwise_accuracy: Option<CellsSchema>,
+}
+
+/// The cells of a reported result in JSON, for the API's documentation: the paper's 16 columns,
+/// each optional.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+#[allow(dead_code)]
+pub struct CellsSchema {
+    pub forward_3: Option<f64>,
+    pub forward_4: Option<f64>,
+    pub forward_5: Option<f64>,
+    pub forward_6: Option<f64>,
+    pub forward_7: Option<f64>,
+    pub forward_8: Option<f64>,
+    pub forward_9: Option<f64>,
+    pub forward_10: Option<f64>,
+    pub inverse_3: Option<f64>,
+    pub inverse_4: Option<f64>,
+    pub inverse_5: Option<f64>,
+    pub inverse_6: Option<f64>,
+    pub inverse_7: Option<f64>,
+    pub inverse_8: Option<f64>,
+    pub inverse_9: Option<f64>,
+    pub inverse_10: Option<f64>,
 }
 
 fn shown(dataset: &str, stored: StoredReported) -> ReportedResult {

@@ -71,11 +71,12 @@ pub fn routes() -> Vec<ApiRoute> {
         .errors(&[400, 401, 403, 404, 409, 415, 422]),
         ApiRoute::new(
             Verb::Delete,
-            "/datasets/{dataset}/reported/{id}",
+            "/datasets/{dataset}/reported/{reported_id}",
             remove_reported_api,
             "Remove a reported result",
         )
-        .describe("Removes the dataset's reported result `id`. Audited (`reported.remove`).")
+        .describe("Removes the dataset's reported result `reported_id` (its `id` in the list). Audited \
+             (`reported.remove`).")
         .bearer(Scope::Admin)
         .responds(204, None, "Removed.")
         .errors(&[400, 401, 403, 404]),

@@ -58,6 +58,8 @@ fn expected(access: Access, path: &str, caller: Caller) -> Expected {
         Caller::Owner | Caller::Stranger if scope == Scope::Admin => Expected::Status(403),
         // Another account's submission is answered like a missing one.
         Caller::Stranger if path.contains("/submissions/{id}") => Expected::Status(404),
+        // Only the account that submitted the model (or an admin) sets its metadata.
+        Caller::Stranger if path == "/datasets/{dataset}/models/{model}" => Expected::Status(403),
         Caller::Owner | Caller::Stranger => Expected::Success,
     }
 }
@@ -105,6 +107,19 @@ fn body_of(verb: Verb, path: &str, records: &[Value], n: usize) -> Option<(Strin
             json!({"rate": 5, "share": 0.25, "seed": n}).to_string(),
             "application/json",
         )),
+        (Verb::Post, "/datasets/{dataset}/reported") => Some((
+            json!({"model": "M", "category": "proprietary", "source": format!("source-{n}"),
+                   "task_accuracy": {"forward_3": 50.0}})
+            .to_string(),
+            "application/json",
+        )),
+        (Verb::Delete, "/datasets/{dataset}/reported/{reported_id}") => {
+            Some((String::new(), "text/plain"))
+        }
+        (Verb::Put, "/datasets/{dataset}/models/{model}") => Some((
+            json!({"category": "open-weight", "family": format!("family-{n}")}).to_string(),
+            "application/json",
+        )),
         (Verb::Delete, "/admin/datasets/{dataset}/gold")
         | (
             Verb::Put | Verb::Delete,
@@ -114,6 +129,24 @@ fn body_of(verb: Verb, path: &str, records: &[Value], n: usize) -> Option<(Strin
             panic!("the authorization matrix has no request for {verb:?} {path}: add it to body_of")
         }
     }
+}
+
+/// A new reported row on "mini"; its id.
+pub async fn reported_row(server: &TestServer, n: usize) -> i64 {
+    let row: enact_hub::core::paper::ReportedModel = serde_json::from_value(json!({
+        "model": "Reported", "category": "open-weight", "source": format!("row-{n}"),
+        "task_accuracy": {"forward_3": 40.0},
+    }))
+    .expect("a reported row");
+    enact_hub::app::reported::add(
+        &enact_hub::app::Hub::from(server.pool.clone()),
+        &tester(),
+        "mini",
+        &row,
+    )
+    .await
+    .expect("added")
+    .id
 }
 
 fn method(verb: Verb) -> Method {
@@ -247,6 +280,10 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                     .0
                     .to_string(),
                     "change" => "cancel".to_owned(),
+                    // The owner's model.
+                    "model" => "m".to_owned(),
+                    // A fresh reported row for every call, so that removing it succeeds.
+                    "reported_id" => reported_row(&server, n).await.to_string(),
                     // The annotator behind the callers' session.
                     "annotator" => "ann".to_owned(),
                     other => panic!(

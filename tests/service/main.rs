@@ -41,6 +41,7 @@ mod pages;
 mod paper;
 mod quality;
 mod remote_runs;
+mod reported;
 mod rescore;
 mod run_instances;
 mod run_pages;

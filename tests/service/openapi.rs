@@ -70,6 +70,9 @@ async fn every_api_route_is_documented_and_every_documented_route_answers() {
     );
     assert!(documented.len() >= 15, "{documented:?}");
 
+    let reported = crate::authorization::reported_row(&server, 0)
+        .await
+        .to_string();
     crate::annotate::annotator(&server, "matrix-annotator", false).await;
     mini_study(&server, "kept").await;
     mini_study(&server, "doomed").await;
@@ -83,6 +86,8 @@ async fn every_api_route_is_documented_and_every_documented_route_answers() {
             .replace("{id}", &submission)
             .replace("{token_id_or_prefix}", &throwaway.to_string())
             .replace("{annotator}", "matrix-annotator")
+            .replace("{model}", "m")
+            .replace("{reported_id}", &reported)
     };
     for (method, path) in &documented {
         let url = server.url(&fill(method, path));
