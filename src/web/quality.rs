@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use super::error::PageError;
-use super::extract::{Json, Path, Query, required_whole_number};
+use super::extract::{Json, MOST_WHOLE_NUMBER, Path, Query, required_whole_number};
 use super::openapi::{ApiRoute, Verb};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
@@ -186,12 +186,35 @@ struct GoldRequest {
     #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 1))]
     share: Option<f64>,
     /// The seed of the share's draw (0 when absent).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "whole_seed")]
+    #[schemars(with = "Option<u64>", range(max = u64::MAX))]
     seed: Option<u64>,
     /// Item ids, each once.
     #[serde(default)]
     #[schemars(length(min = 1), inner(regex(pattern = r"^[^#\s]\S*$")), extend("uniqueItems" = true))]
     items: Option<Vec<String>>,
+}
+
+/// A seed: a whole number from 0 to `u64::MAX`, or a whole float up to
+/// [`MOST_WHOLE_NUMBER`] (`7.0` is a JSON Schema integer; schemathesis sent one and got 422).
+fn whole_seed<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
+    let Some(number) = Option::<serde_json::Number>::deserialize(d)? else {
+        return Ok(None);
+    };
+    number
+        .as_u64()
+        .or_else(|| {
+            number
+                .as_f64()
+                .filter(|f| f.fract() == 0.0 && (0.0..=MOST_WHOLE_NUMBER as f64).contains(f))
+                .map(|f| f as u64)
+        })
+        .map(Some)
+        .ok_or_else(|| {
+            serde::de::Error::custom(format!(
+                "{number} is not a seed (a whole number of 0 or more)"
+            ))
+        })
 }
 
 impl GoldRequest {
