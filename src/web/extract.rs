@@ -6,7 +6,7 @@ use axum::extract::rejection::{JsonRejection, PathRejection, QueryRejection};
 use axum::extract::{FromRequest, FromRequestParts};
 use axum::http::request::Parts;
 use axum::response::{IntoResponse, Response};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::AppError;
 
@@ -84,4 +84,31 @@ impl<S: Send + Sync> FromRequestParts<S> for IdempotencyKey {
                 )
             })
     }
+}
+
+/// The largest whole number [`whole_number`] reads from a float: beyond it, floats skip whole
+/// numbers.
+pub const MOST_WHOLE_NUMBER: i64 = 9_000_000_000_000_000;
+
+/// A JSON number that is a whole number: `5` or `5.0`, both JSON Schema integers (serde's
+/// `i64` alone would refuse the second).
+pub fn whole_number<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<i64>, D::Error> {
+    let Some(number) = Option::<serde_json::Number>::deserialize(d)? else {
+        return Ok(None);
+    };
+    number
+        .as_i64()
+        .or_else(|| {
+            number
+                .as_f64()
+                .filter(|f| f.fract() == 0.0 && f.abs() <= MOST_WHOLE_NUMBER as f64)
+                .map(|f| f as i64)
+        })
+        .map(Some)
+        .ok_or_else(|| serde::de::Error::custom(format!("{number} is not a whole number")))
+}
+
+/// A required [`whole_number`].
+pub fn required_whole_number<'de, D: serde::Deserializer<'de>>(d: D) -> Result<i64, D::Error> {
+    whole_number(d)?.ok_or_else(|| serde::de::Error::custom("null is not a whole number"))
 }

@@ -3,7 +3,7 @@
 //! `POST /api/v1/admin/jobs/{job}/{change}`).
 
 use axum::Router;
-use axum::extract::{Path, State};
+use axum::extract::State;
 use axum::http::StatusCode;
 use axum::response::Html;
 use axum::routing::post;
@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::admin::render_admin;
 use super::error::PageError;
-use super::extract::Json;
+use super::extract::{Json, Path};
 use super::openapi::{ApiRoute, Verb};
 use super::session::Protected;
 use super::{AppError, AppState};
@@ -54,7 +54,7 @@ pub fn routes() -> Vec<ApiRoute> {
             )
             .bearer(Scope::Admin)
             .responds_json::<JobView>(200, "The job.")
-            .errors(&[401, 403, 404]),
+            .errors(&[400, 401, 403, 404]),
         ApiRoute::new(
             Verb::Post,
             "/admin/jobs/{job}/{change}",
@@ -96,16 +96,29 @@ async fn queue_import(
     ))
 }
 
+/// A job's path, read through the JSON-error `Path` with named fields: a path that is not an
+/// id is refused with the `Error` body naming `job` (axum's own extractor answered plain text).
+#[derive(Deserialize)]
+struct JobPath {
+    job: i64,
+}
+
+#[derive(Deserialize)]
+struct JobChange {
+    job: i64,
+    change: String,
+}
+
 async fn get_job(
     State(state): State<AppState>,
-    Path(job): Path<i64>,
+    Path(JobPath { job }): Path<JobPath>,
 ) -> Result<axum::Json<JobView>, AppError> {
     Ok(axum::Json(jobs::view(&state.hub, JobId(job)).await?))
 }
 
 async fn change_job(
     State(state): State<AppState>,
-    Path((job, change)): Path<(i64, String)>,
+    Path(JobChange { job, change }): Path<JobChange>,
     caller: Caller,
 ) -> Result<axum::Json<JobView>, AppError> {
     let change = JobControl::parse(&change)?;

@@ -365,7 +365,21 @@ fn path_param_description(name: &str) -> &'static str {
         "id" => "Submission id, as returned when it was posted.",
         // Not `token`: the secret a client holds is not what revokes it.
         "token_id_or_prefix" => "A token's id or its public prefix (never its secret).",
+        "run" => "A model run's id, as returned when it was started.",
+        "job" => "A background job's id, as returned when it was queued.",
+        "change" => "`pause`, `resume` or `cancel`.",
         _ => "Path parameter.",
+    }
+}
+
+/// The values a path parameter takes. A number is an id the handler reads as an `i64`, so the
+/// document says so (a schemathesis run found `/admin/runs/abc` answered with an undocumented
+/// 400 when every path parameter was documented as any string).
+fn path_param_schema(name: &str) -> Value {
+    match name {
+        "run" | "job" => json!({"type": "integer", "minimum": 1, "maximum": i64::MAX}),
+        "change" => json!({"enum": ["pause", "resume", "cancel"]}),
+        _ => json!({"type": "string", "minLength": 1}),
     }
 }
 
@@ -394,8 +408,13 @@ fn operation_json(
         .path_params()
         .into_iter()
         .map(|p| {
-            let schema = json!({"type": "string", "minLength": 1});
-            parameter_json(p, "path", true, path_param_description(p), &schema)
+            parameter_json(
+                p,
+                "path",
+                true,
+                path_param_description(p),
+                &path_param_schema(p),
+            )
         })
         .collect();
     parameters.extend(

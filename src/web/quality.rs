@@ -10,9 +10,10 @@ use axum::response::{Html, IntoResponse, Redirect, Response};
 use axum::routing::{get, post};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
+use serde_json::json;
 
 use super::error::PageError;
-use super::extract::{Json, Path, Query};
+use super::extract::{Json, MOST_WHOLE_NUMBER, Path, Query, required_whole_number};
 use super::openapi::{ApiRoute, Verb};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
@@ -43,10 +44,12 @@ pub fn routes() -> Vec<ApiRoute> {
         )
         .bearer(Scope::Admin)
         .query("dataset", true, "The dataset's name.")
-        .query(
+        .query_with(
             "fast_seconds",
             false,
-            "Items answered in under this many seconds count as fast (default 5).",
+            json!({"type": "number", "exclusiveMinimum": 0, "maximum": 3600}),
+            "Items answered in under this many seconds count as fast: above 0, at most 3600 \
+             (default 5).",
         )
         .responds_json::<QualityReport>(200, "The figures.")
         .errors(&[400, 401, 403, 404]),
@@ -168,21 +171,50 @@ async fn gold_api(
     Ok(axum::Json(GoldOfDataset { dataset, gold }))
 }
 
-/// A gold set to choose: `rate` and either `share` (and `seed`) or `items`.
+/// A gold set to choose: `rate` and either `share` (and `seed`) or `items`. The schema states
+/// each field's own range; that `share` and `items` exclude each other, and that the items
+/// must be the dataset's, are checked with a 400 naming the field.
 #[derive(Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct GoldRequest {
     /// One gold item in every `rate` queue items (2 to 1000).
+    #[serde(deserialize_with = "required_whole_number")]
+    #[schemars(with = "i64", range(min = 2, max = GoldRate::MAX))]
     rate: i64,
     /// A share of the items, above 0 and below 1.
     #[serde(default)]
+    #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 1))]
     share: Option<f64>,
     /// The seed of the share's draw (0 when absent).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "whole_seed")]
+    #[schemars(with = "Option<u64>", range(max = u64::MAX))]
     seed: Option<u64>,
-    /// Item ids.
+    /// Item ids, each once.
     #[serde(default)]
+    #[schemars(length(min = 1), inner(regex(pattern = r"^[^#\s]\S*$")), extend("uniqueItems" = true))]
     items: Option<Vec<String>>,
+}
+
+/// A seed: a whole number from 0 to `u64::MAX`, or a whole float up to
+/// [`MOST_WHOLE_NUMBER`] (`7.0` is a JSON Schema integer; schemathesis sent one and got 422).
+fn whole_seed<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
+    let Some(number) = Option::<serde_json::Number>::deserialize(d)? else {
+        return Ok(None);
+    };
+    number
+        .as_u64()
+        .or_else(|| {
+            number
+                .as_f64()
+                .filter(|f| f.fract() == 0.0 && (0.0..=MOST_WHOLE_NUMBER as f64).contains(f))
+                .map(|f| f as u64)
+        })
+        .map(Some)
+        .ok_or_else(|| {
+            serde::de::Error::custom(format!(
+                "{number} is not a seed (a whole number of 0 or more)"
+            ))
+        })
 }
 
 impl GoldRequest {

@@ -51,11 +51,30 @@ pub fn router() -> Router<AppState> {
     Router::new().route("/admin/rescore", post(rescore_page))
 }
 
-#[derive(Deserialize, JsonSchema)]
+/// What to rescore. Read from a JSON object only: serde's derive would also read it from an
+/// array of its fields, and schemathesis found `[]` queued a rescore of every dataset.
+#[derive(JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct RescoreRequest {
     #[serde(default)]
     dataset: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RescoreFields {
+    #[serde(default)]
+    dataset: Option<String>,
+}
+
+impl<'de> Deserialize<'de> for RescoreRequest {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let object = serde_json::Map::<String, serde_json::Value>::deserialize(d)?;
+        let RescoreFields { dataset } =
+            RescoreFields::deserialize(serde_json::Value::Object(object))
+                .map_err(serde::de::Error::custom)?;
+        Ok(RescoreRequest { dataset })
+    }
 }
 
 #[derive(Serialize, JsonSchema)]

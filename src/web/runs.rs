@@ -9,7 +9,7 @@ use axum::response::{IntoResponse, Response};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::extract::{Json, Path};
+use super::extract::{Json, Path, whole_number};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
 use crate::app::jobs::JobControl;
@@ -62,7 +62,7 @@ pub fn routes() -> Vec<ApiRoute> {
         )
         .bearer(Scope::Admin)
         .responds_json::<ServerRunView>(200, "The run.")
-        .errors(&[401, 403, 404]),
+        .errors(&[400, 401, 403, 404]),
         ApiRoute::new(
             Verb::Post,
             "/admin/runs/{run}/{change}",
@@ -86,7 +86,7 @@ pub fn routes() -> Vec<ApiRoute> {
         .describe(RESPONSES_DESCRIPTION)
         .bearer(Scope::Admin)
         .responds(200, Some(JSONL), "The answers, one JSON object a line.")
-        .errors(&[401, 403, 404]),
+        .errors(&[400, 401, 403, 404]),
         ApiRoute::new(
             Verb::Get,
             "/runs/{run}/responses",
@@ -98,7 +98,7 @@ pub fn routes() -> Vec<ApiRoute> {
              has public answers (404 otherwise).",
         )
         .responds(200, Some(JSONL), "The answers, one JSON object a line.")
-        .errors(&[404]),
+        .errors(&[400, 404]),
     ]
 }
 
@@ -129,7 +129,7 @@ pub(super) fn responses_download(output: RunOutput) -> Response {
 
 async fn admin_responses(
     State(state): State<AppState>,
-    Path(run): Path<i64>,
+    Path(RunPath { run }): Path<RunPath>,
 ) -> Result<Response, AppError> {
     let output = runs::output(&state.hub, run, Audience::Admin).await?;
     Ok(responses_download(output))
@@ -137,35 +137,90 @@ async fn admin_responses(
 
 async fn public_responses(
     State(state): State<AppState>,
-    Path(run): Path<i64>,
+    Path(RunPath { run }): Path<RunPath>,
 ) -> Result<Response, AppError> {
     let output = runs::output(&state.hub, run, Audience::Public).await?;
     Ok(responses_download(output))
 }
 
-/// A run to start.
+/// A run's path: named fields, so a path that is not an id is refused naming `run`.
+#[derive(Deserialize)]
+struct RunPath {
+    run: i64,
+}
+
+#[derive(Deserialize)]
+struct RunChange {
+    run: i64,
+    change: String,
+}
+
+/// A run to start. The schema states every rule the server checks on its own (ranges,
+/// non-blank names); what it cannot state is checked with a 400 naming the field: `endpoint`
+/// must be an http(s) URL without credentials, query or fragment, and `key_variable` one the
+/// server was started with. Counts are whole numbers, `5` or `5.0` (JSON Schema integers).
 #[derive(Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RunRequest {
     pub(super) dataset: String,
     pub(super) endpoint: String,
+    #[schemars(regex(pattern = r"\S"))]
     pub(super) model: String,
+    /// 1 to 200 characters once trimmed.
+    #[schemars(length(max = 200), regex(pattern = r"\S"))]
     pub(super) name: Option<String>,
     pub(super) temperature: Option<f64>,
-    pub(super) max_tokens: Option<u32>,
-    pub(super) limit: Option<usize>,
+    #[serde(default, deserialize_with = "whole_number")]
+    #[schemars(with = "Option<i64>", range(min = 0, max = MOST_U32))]
+    pub(super) max_tokens: Option<i64>,
+    #[serde(default, deserialize_with = "whole_number")]
+    #[schemars(with = "Option<i64>", range(min = 1, max = MOST_WHOLE))]
+    pub(super) limit: Option<i64>,
     #[serde(default)]
     pub(super) retry_failed: bool,
     /// The leaderboard's model name; the model's when not given.
+    #[schemars(regex(pattern = r"\S"))]
     pub(super) submit_as: Option<String>,
     #[serde(default)]
+    #[schemars(range(min = 0))]
     pub(super) price_input: f64,
     #[serde(default)]
+    #[schemars(range(min = 0))]
     pub(super) price_output: f64,
     pub(super) key_variable: Option<String>,
-    pub(super) concurrency: Option<usize>,
-    pub(super) max_retries: Option<u32>,
+    #[serde(default, deserialize_with = "whole_number")]
+    #[schemars(with = "Option<i64>", range(min = 1, max = MOST_CONCURRENCY))]
+    pub(super) concurrency: Option<i64>,
+    #[serde(default, deserialize_with = "whole_number")]
+    #[schemars(with = "Option<i64>", range(min = 0, max = MOST_U32))]
+    pub(super) max_retries: Option<i64>,
+    /// Seconds, above 0 and at most 3600.
+    #[schemars(range(max = 3600), extend("exclusiveMinimum" = 0))]
     pub(super) timeout_s: Option<f64>,
+}
+
+const MOST_U32: i64 = u32::MAX as i64;
+const MOST_WHOLE: i64 = super::extract::MOST_WHOLE_NUMBER;
+const MOST_CONCURRENCY: i64 = runs::MOST_CONCURRENCY as i64;
+
+/// `value` as the type a field is used as, or a 400 naming the field and the range.
+fn counted<T: TryFrom<i64>>(
+    field: &str,
+    value: Option<i64>,
+    least: i64,
+    most: i64,
+) -> Result<Option<T>, AppError> {
+    value
+        .map(|v| {
+            (least..=most)
+                .contains(&v)
+                .then(|| T::try_from(v).ok())
+                .flatten()
+                .ok_or_else(|| {
+                    AppError::Invalid(format!("{field} must be {least} to {most}, not {v}"))
+                })
+        })
+        .transpose()
 }
 
 #[derive(Serialize, JsonSchema)]
@@ -206,6 +261,10 @@ impl RunRequest {
                 )));
             }
         }
+        let max_tokens = counted("max_tokens", self.max_tokens, 0, MOST_U32)?;
+        let limit = counted("limit", self.limit, 1, MOST_WHOLE)?;
+        let concurrency = counted("concurrency", self.concurrency, 1, MOST_CONCURRENCY)?;
+        let max_retries = counted("max_retries", self.max_retries, 0, MOST_U32)?;
         let defaults = RunCalls::default();
         let spec = RunSpec {
             dataset: self.dataset,
@@ -215,9 +274,9 @@ impl RunRequest {
             name: self.name,
             params: GenerationParams {
                 temperature: self.temperature,
-                max_tokens: self.max_tokens,
+                max_tokens,
             },
-            limit: self.limit,
+            limit,
             retry_failed: self.retry_failed,
             prices: Prices {
                 input_usd_per_mtok: self.price_input,
@@ -226,8 +285,8 @@ impl RunRequest {
         };
         let calls = RunCalls {
             key_variable: self.key_variable,
-            concurrency: self.concurrency.unwrap_or(defaults.concurrency),
-            max_retries: self.max_retries.unwrap_or(defaults.max_retries),
+            concurrency: concurrency.unwrap_or(defaults.concurrency),
+            max_retries: max_retries.unwrap_or(defaults.max_retries),
             timeout_s: self.timeout_s.unwrap_or(defaults.timeout_s),
         };
         Ok((spec, calls))
@@ -240,14 +299,14 @@ async fn list_runs(State(state): State<AppState>) -> Result<Json<Vec<ServerRunVi
 
 async fn get_run(
     State(state): State<AppState>,
-    Path(run): Path<i64>,
+    Path(RunPath { run }): Path<RunPath>,
 ) -> Result<Json<ServerRunView>, AppError> {
     Ok(Json(runs::view(&state.hub, run).await?))
 }
 
 async fn change_run(
     State(state): State<AppState>,
-    Path((run, change)): Path<(i64, String)>,
+    Path(RunChange { run, change }): Path<RunChange>,
     caller: Caller,
 ) -> Result<Json<ServerRunView>, AppError> {
     let change = JobControl::parse(&change)?;

@@ -9,7 +9,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 
-use super::extract::{IdempotencyKey, Json, Path, Query};
+use super::extract::{IdempotencyKey, Json, Path, Query, whole_number};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
 use crate::app::datasets;
@@ -412,24 +412,6 @@ struct TokenRequest {
     #[serde(default, deserialize_with = "whole_number")]
     #[schemars(with = "Option<i64>", range(min = 0))]
     total_quota: Option<i64>,
-}
-
-/// A JSON number that is a whole number: `5` or `5.0`, both JSON Schema integers (serde's
-/// `i64` alone would refuse the second).
-fn whole_number<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<i64>, D::Error> {
-    let Some(number) = Option::<serde_json::Number>::deserialize(d)? else {
-        return Ok(None);
-    };
-    number
-        .as_i64()
-        .or_else(|| {
-            number
-                .as_f64()
-                .filter(|f| f.fract() == 0.0 && f.abs() <= 9.0e15)
-                .map(|f| f as i64)
-        })
-        .map(Some)
-        .ok_or_else(|| serde::de::Error::custom(format!("{number} is not a whole number")))
 }
 
 async fn create_token(

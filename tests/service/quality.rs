@@ -796,3 +796,60 @@ async fn the_command_line_s_exclusions_and_gold_reach_a_running_server_within_tw
     human_row_within_two_seconds(&server, "gold set", |row| row["human"]["gold_items"] == 1).await;
     server.stop().await;
 }
+
+/// Found by scripts/schemathesis.sh: `fast_seconds` was documented as any string (an empty
+/// one drew a 400), the gold body's fields had no ranges (an empty item id drew a 400), and a
+/// `rate` of `5.0`, an integer to JSON Schema, was refused with 422. The document now states
+/// what the handlers accept, and a whole float is a rate.
+#[tokio::test]
+async fn quality_and_gold_parameters_are_documented_as_the_handlers_read_them() {
+    let (server, records, admin) = server_with_items().await;
+    let doc = server
+        .call(Method::GET, "/api/v1/openapi.json")
+        .expect(200)
+        .await
+        .json();
+    let fast = doc["paths"]["/api/v1/admin/annotators/quality"]["get"]["parameters"]
+        .as_array()
+        .and_then(|ps| ps.iter().find(|p| p["name"] == "fast_seconds"))
+        .expect("fast_seconds is documented");
+    assert_eq!(fast["schema"]["type"], "number", "{fast}");
+    assert_eq!(fast["schema"]["exclusiveMinimum"], 0, "{fast}");
+    let gold = &doc["components"]["schemas"]["GoldRequest"]["properties"];
+    assert_eq!(gold["rate"]["minimum"], 2, "{gold}");
+    assert_eq!(gold["rate"]["maximum"], 1000, "{gold}");
+    assert_eq!(gold["share"]["exclusiveMaximum"], 1, "{gold}");
+    assert_eq!(gold["items"]["minItems"], 1, "{gold}");
+    assert_eq!(gold["items"]["uniqueItems"], true, "{gold}");
+    assert!(gold["items"]["items"]["pattern"].is_string(), "{gold}");
+
+    let set = server
+        .call(Method::PUT, "/api/v1/admin/datasets/mini/gold")
+        .bearer(&admin)
+        .json(&json!({"rate": 5.0, "items": [id(&records[0])]}))
+        .expect(200)
+        .await
+        .json();
+    assert_eq!(set["gold"]["rate"], 5);
+    let refused = server
+        .call(Method::PUT, "/api/v1/admin/datasets/mini/gold")
+        .bearer(&admin)
+        .json(&json!({"rate": 5.5, "items": [id(&records[0])]}))
+        .expect(422)
+        .await;
+    assert!(refused.error().contains("rate"), "{}", refused.error());
+    // A seed sent as a whole float (schemathesis sent one and got 422) draws as the integer.
+    let mut drawn = Vec::new();
+    for seed in [json!(11), json!(11.0)] {
+        let set = server
+            .call(Method::PUT, "/api/v1/admin/datasets/mini/gold")
+            .bearer(&admin)
+            .json(&json!({"rate": 3, "share": 0.25, "seed": seed}))
+            .expect(200)
+            .await
+            .json();
+        drawn.push(set["gold"]["items"].clone());
+    }
+    assert_eq!(drawn[0], drawn[1]);
+    server.stop().await;
+}

@@ -343,3 +343,122 @@ async fn a_run_started_over_the_api_finishes_and_its_errors_name_the_field() {
     assert!(replies.iter().all(|r| !r.contains(SECRET_KEY)));
     server.stop().await;
 }
+
+/// The parameter `name` of `method path` in the OpenAPI document.
+fn documented_param<'a>(doc: &'a Value, path: &str, method: &str, name: &str) -> &'a Value {
+    doc["paths"][path][method]["parameters"]
+        .as_array()
+        .and_then(|ps| ps.iter().find(|p| p["name"] == name))
+        .unwrap_or_else(|| panic!("{method} {path} documents no parameter {name}"))
+}
+
+/// Found by scripts/schemathesis.sh: run and job ids were documented as any string, so
+/// `/admin/runs/abc` drew an undocumented 400 (and `/admin/jobs/abc` a plain-text one, from
+/// axum's own extractor); `{change}` was any string; and a count sent as `3.0`, an integer to
+/// JSON Schema, was refused with 422. Now the document says what the handlers read, a path
+/// that is not an id is refused with the JSON `Error` body naming the parameter, and whole
+/// floats are counts.
+#[tokio::test]
+async fn run_and_job_paths_and_counts_are_read_as_the_document_says() {
+    let (dir, pool, _) = run_fixture(1).await;
+    let hub = keyed(Hub::from(pool.clone()));
+    let server = serve_hub(hub.clone(), pool.clone(), dir, &Default::default()).await;
+    let (_, admin) = api_token(&pool, "root", Role::Admin, None, None).await;
+    let doc = server
+        .call(Method::GET, "/api/v1/openapi.json")
+        .expect(200)
+        .await
+        .json();
+
+    for (path, method, id) in [
+        ("/api/v1/admin/runs/{run}", "get", "run"),
+        ("/api/v1/admin/runs/{run}/responses", "get", "run"),
+        ("/api/v1/runs/{run}/responses", "get", "run"),
+        ("/api/v1/admin/runs/{run}/{change}", "post", "run"),
+        ("/api/v1/admin/jobs/{job}", "get", "job"),
+        ("/api/v1/admin/jobs/{job}/{change}", "post", "job"),
+    ] {
+        let schema = &documented_param(&doc, path, method, id)["schema"];
+        assert_eq!(schema["type"], "integer", "{method} {path}: {schema}");
+        assert!(
+            doc["paths"][path][method]["responses"]["400"].is_object(),
+            "{method} {path} documents its 400"
+        );
+        if method == "post" {
+            let change = &documented_param(&doc, path, method, "change")["schema"];
+            assert_eq!(
+                change["enum"],
+                json!(["pause", "resume", "cancel"]),
+                "{path}"
+            );
+        }
+    }
+    for (method, path, named) in [
+        (Method::GET, "/api/v1/admin/runs/abc", "`run`"),
+        (Method::GET, "/api/v1/admin/runs/abc/responses", "`run`"),
+        (Method::GET, "/api/v1/runs/abc/responses", "`run`"),
+        (Method::POST, "/api/v1/admin/runs/abc/pause", "`run`"),
+        (Method::GET, "/api/v1/admin/jobs/abc", "`job`"),
+        (Method::POST, "/api/v1/admin/jobs/abc/pause", "`job`"),
+    ] {
+        let reply = server
+            .call(method.clone(), path)
+            .bearer(&admin)
+            .expect(400)
+            .await;
+        assert_eq!(
+            reply.headers["content-type"], "application/json",
+            "{method} {path}: {}",
+            reply.text
+        );
+        let error = reply.json()["error"]
+            .as_str()
+            .unwrap_or_default()
+            .to_owned();
+        assert!(error.contains(named), "{method} {path}: {error}");
+    }
+
+    let body = |change: Value| {
+        let mut body = json!({
+            "dataset": "mini", "endpoint": "http://127.0.0.1:9/v1", "model": "standin-vl",
+            "name": "whole-floats", "key_variable": KEY_VARIABLE,
+        });
+        for (k, v) in change.as_object().expect("an object") {
+            body[k] = v.clone();
+        }
+        body
+    };
+    for (change, status, named) in [
+        (json!({"concurrency": 1.5}), 422, "concurrency"),
+        (json!({"max_retries": -1}), 400, "max_retries"),
+        (json!({"limit": 0.0}), 400, "limit"),
+        (json!({"name": " "}), 400, "name"),
+    ] {
+        let reply = server
+            .call(Method::POST, "/api/v1/admin/runs")
+            .bearer(&admin)
+            .json(&body(change))
+            .expect(status)
+            .await;
+        assert!(reply.text.contains(named), "{named}: {}", reply.text);
+    }
+    let started = server
+        .call(Method::POST, "/api/v1/admin/runs")
+        .bearer(&admin)
+        .json(&body(json!({
+            "concurrency": 2.0, "max_retries": 3.0, "limit": 1.0, "max_tokens": 64.0,
+        })))
+        .expect(202)
+        .await
+        .json();
+    let job = started["job"].as_i64().expect("a job id");
+    let row = jobs::get(&hub, JobId(job))
+        .await
+        .expect("read the job")
+        .expect("the job");
+    let payload: Value = serde_json::from_str(&row.payload).expect("a JSON payload");
+    assert_eq!(payload["calls"]["concurrency"], 2, "{payload}");
+    assert_eq!(payload["calls"]["max_retries"], 3, "{payload}");
+    assert_eq!(payload["limit"], 1, "{payload}");
+    assert_eq!(payload["params"]["max_tokens"], 64, "{payload}");
+}

@@ -31,7 +31,9 @@ pub use responses::{
     Audience, RESPONSES_PER_PAGE, ResponsePage, RunOutput, output, public_runs, response_page,
     visible_run,
 };
-pub use server::{EndpointKeys, RunCalls, ServerRunView, control, start, view, views, work};
+pub use server::{
+    EndpointKeys, MOST_CONCURRENCY, RunCalls, ServerRunView, control, start, view, views, work,
+};
 
 use super::submissions::{self, SubmissionRow, Submitted};
 use super::tokens::{self, Caller};

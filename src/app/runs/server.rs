@@ -117,7 +117,7 @@ impl Default for RunCalls {
 }
 
 /// The most requests in flight a server-side run may ask for.
-const MOST_CONCURRENCY: usize = 256;
+pub const MOST_CONCURRENCY: usize = 256;
 
 impl RunCalls {
     fn check(&self, hub: &Hub) -> Result<(), AppError> {
