@@ -449,6 +449,9 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("GET", "/leaderboard/{dataset}", Page::Public),
     ("GET", "/leaderboard/{dataset}/errors", Page::Public),
     ("GET", "/leaderboard/{dataset}/errors/{entry}", Page::Public),
+    ("GET", "/datasets/{dataset}/paper", Page::Public),
+    ("GET", "/datasets/{dataset}/paper.tar", Page::Public),
+    ("GET", "/datasets/{dataset}/paper/files/{file}", Page::Public),
     ("GET", "/api/docs", Page::Public),
     ("GET", "/static/app.css", Page::Public),
     ("GET", "/static/annotate.js", Page::Public),
@@ -585,7 +588,8 @@ async fn every_page_route_answers_every_caller_as_the_matrix_says() {
             .replace("{item_id}", &item)
             .replace("{entry}", &submission.to_string())
             .replace("{token}", "not-a-real-secret")
-            .replace("{study}", "pages");
+            .replace("{study}", "pages")
+            .replace("{file}", "task_accuracy.csv");
         let post = verb == "POST";
         // Anonymous, API tokens (which pages do not take), annotator and admin (both with the
         // page's CSRF token), and for forms an admin without it or with another one. Sessions
