@@ -23,6 +23,13 @@ if [ ! -d tests/browser/node_modules/playwright-core ] || [ ! -d tests/browser/n
   (cd tests/browser && npm ci --no-audit --no-fund)
 fi
 
+# The paper's tables are checked by compiling their standalone .tex with pdflatex (Debian's
+# texlive-latex-recommended; the tables do without texlive-latex-extra's multirow).
+if ! command -v pdflatex >/dev/null 2>&1; then
+  echo "== installing texlive-latex-recommended (Debian package, for pdflatex)"
+  apt-get update && apt-get install -y --no-install-recommends texlive-latex-recommended
+fi
+
 # The example client's end-to-end test runs clients/enact_client.py with python3 and requests.
 if ! command -v python3 >/dev/null 2>&1 || ! python3 -c 'import requests' >/dev/null 2>&1; then
   echo "== installing python3 and python3-requests (Debian packages)"

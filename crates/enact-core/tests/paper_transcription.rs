@@ -243,3 +243,50 @@ fn the_data_file_equals_the_papers_tables_and_the_rule_gives_their_marks() {
         assert!(n > 50, "{label}: only {n} marks read from the LaTeX");
     }
 }
+
+/// The standalone `.tex` compiles with `pdflatex` (scripts/test.sh installs Debian's
+/// texlive-latex-recommended when it is missing): both of the paper's tables, marked, plus a
+/// row whose name holds every character LaTeX treats specially and cells with intervals.
+#[test]
+fn the_standalone_tables_compile_with_pdflatex() {
+    let found = std::process::Command::new("pdflatex")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !found {
+        assert!(
+            !must_not_skip(),
+            "pdflatex is missing and CI is set: install texlive-latex-recommended \
+             (scripts/test.sh does)"
+        );
+        eprintln!("SKIPPING the pdflatex check: no pdflatex on PATH");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for metric in Metric::ALL {
+        let mut table = table_of(metric, &enact_paper_results());
+        let mut odd = table.rows[0].clone();
+        odd.model = "Odd & 50% #1 $x$ _y_ {z} ~ ^ \\ model".to_owned();
+        odd.category = Category::Named("enact-hub".to_owned());
+        for cell in odd.cells.values_mut() {
+            cell.interval = cell.value.map(|v| (v - 1.5, v + 1.5));
+        }
+        table.rows.insert(table.rows.len() - 1, odd);
+        mark(&mut table);
+        let name = format!("{}.tex", metric.as_str());
+        std::fs::write(dir.path().join(&name), to_tex(&table, true)).unwrap();
+        let run = std::process::Command::new("pdflatex")
+            .args(["-interaction=nonstopmode", "-halt-on-error", "-no-shell-escape"])
+            .arg(&name)
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "pdflatex refused {name}:\n{}",
+            String::from_utf8_lossy(&run.stdout)
+        );
+        let pdf = dir.path().join(format!("{}.pdf", metric.as_str()));
+        assert!(std::fs::metadata(&pdf).is_ok_and(|m| m.len() > 1000), "{pdf:?}");
+    }
+}
