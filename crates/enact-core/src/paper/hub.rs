@@ -546,7 +546,14 @@ mod tests {
         assert!(low < 25.0 && 25.0 < high, "{low}..{high}");
         let (low, high) = row.intervals[&(Metric::PairwiseAccuracy, f3)];
         assert!(low < 75.0 && 75.0 < high, "{low}..{high}");
-        let plain = assemble(Metric::TaskAccuracy, &[], &[row.clone()], None, false).unwrap();
+        let plain = assemble(
+            Metric::TaskAccuracy,
+            &[],
+            std::slice::from_ref(&row),
+            None,
+            false,
+        )
+        .unwrap();
         assert_eq!(plain.table.rows[0].cells[&f3].interval, None);
         let shown = assemble(Metric::TaskAccuracy, &[], &[row], None, true).unwrap();
         assert!(shown.table.rows[0].cells[&f3].interval.is_some());
