@@ -6,15 +6,17 @@
 
 use crate::core::bundle::BundleFile;
 use crate::core::leaderboard::{LeaderboardRow, RowSource, one_per_model};
-use crate::core::paper::export::{PaperBundle, files as bundle_files};
+use crate::core::paper::error_figure::AnalysedRow;
+use crate::core::paper::export::{PaperBundle, StudyFigure, files as bundle_files};
 use crate::core::paper::hub::{
-    AssembledTable, HubRow, ReproducedCell, RowMetadata, assemble, reproduction,
+    AssembledTable, HubRow, Origin, ReproducedCell, RowMetadata, assemble, reproduction,
 };
 use crate::core::paper::{Category, CellKey, Metric, ReportedModel};
 use crate::core::version::BUILD;
 use crate::store;
 
-use super::{AppError, Hub, leaderboard, models, reported};
+use super::studies::{self, StudyRowChoice};
+use super::{AppError, Hub, error_analysis, leaderboard, models, reported};
 
 /// What to put in the tables.
 #[derive(Debug, Clone)]
@@ -45,6 +47,13 @@ pub struct Paper {
     pub tables: Vec<AssembledTable>,
     /// Every published model the hub also scored, cell by cell, with the hub's interval.
     pub reproduction: Vec<ReproducedCell>,
+    /// The error analyses of the chosen hub rows (published rows have no per-item answers to
+    /// analyse); empty when the tables have no hub row.
+    pub error_analyses: Vec<AnalysedRow>,
+    /// The studies whose baseline is this dataset, each reported for the Human row when it is
+    /// chosen and has answers, else for the first chosen submission the study can report;
+    /// a study no chosen row can report is left out.
+    pub studies: Vec<StudyFigure>,
 }
 
 impl Paper {
@@ -55,6 +64,8 @@ impl Paper {
             hub_version: BUILD,
             tables: &self.tables,
             reproduction: with_reproduction.then_some(self.reproduction.as_slice()),
+            error_analyses: &self.error_analyses,
+            studies: &self.studies,
         })
         .map_err(|e| AppError::internal(format!("paper of '{}': {e}", self.dataset)))
     }
@@ -97,6 +108,97 @@ async fn column_results(
             )
         })
         .collect())
+}
+
+/// The hub rows the tables show: every one without `models`, else those named, in the order
+/// named; the Human row last, as the tables print it.
+fn chosen_rows<'a>(own: &'a [HubRow], models: Option<&[String]>) -> Vec<&'a HubRow> {
+    let position = |row: &HubRow| match models {
+        None => Some(0),
+        Some(names) => names.iter().position(|n| *n == row.model),
+    };
+    let mut chosen: Vec<(bool, usize, &HubRow)> = own
+        .iter()
+        .filter_map(|row| position(row).map(|p| (row.category == Category::Human, p, row)))
+        .collect();
+    chosen.sort_by_key(|(human, p, _)| (*human, *p));
+    chosen.into_iter().map(|(_, _, row)| row).collect()
+}
+
+/// The error analyses of the `chosen` hub rows, in their order. A submission's is its stored
+/// analysis (computed on first request); the Human row's is of the current answers.
+async fn analysed_rows(
+    hub: &Hub,
+    dataset: &store::datasets::Dataset,
+    chosen: &[&HubRow],
+) -> Result<Vec<AnalysedRow>, AppError> {
+    let mut rows = Vec::with_capacity(chosen.len());
+    for row in chosen {
+        let analysis = match &row.origin {
+            Origin::Submission { submission, .. } => {
+                let mut conn = hub.conn().await?;
+                let stored = store::submissions::by_id(&mut conn, *submission).await?;
+                drop(conn);
+                match stored {
+                    Some(stored) => Some(error_analysis::submission_analysis(hub, &stored).await?),
+                    None => None,
+                }
+            }
+            Origin::Annotations { .. } => error_analysis::of_humans(hub, dataset).await?,
+            Origin::Reported { .. } => None,
+        };
+        if let Some(analysis) = analysis {
+            rows.push(AnalysedRow {
+                model: row.model.clone(),
+                analysis,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// The heat map of every study whose baseline is `dataset`, for the Human row when it is among
+/// the `chosen` rows and the study can report it, else for the first chosen submission's model
+/// (of its account) the study can report. A study none of them can be reported for is left
+/// out.
+async fn study_figures(
+    hub: &Hub,
+    dataset: &str,
+    chosen: &[&HubRow],
+) -> Result<Vec<StudyFigure>, AppError> {
+    let choices: Vec<StudyRowChoice> = chosen
+        .iter()
+        .filter(|row| matches!(row.origin, Origin::Annotations { .. }))
+        .map(|_| StudyRowChoice::Human)
+        .chain(chosen.iter().filter_map(|row| match &row.origin {
+            Origin::Submission { account, .. } => Some(StudyRowChoice::Model {
+                model: row.model.clone(),
+                account: Some(account.clone()),
+            }),
+            _ => None,
+        }))
+        .collect();
+    let mut figures = Vec::new();
+    for study in studies::list(hub).await? {
+        if study.baseline != dataset {
+            continue;
+        }
+        for choice in &choices {
+            match studies::report(hub, &study.name, choice, false).await {
+                Ok(report) => {
+                    figures.push(StudyFigure {
+                        study: study.name.clone(),
+                        report,
+                    });
+                    break;
+                }
+                // This row has no answers the study can compare: try the next.
+                Err(AppError::NotFound(_) | AppError::Invalid(_)) => {}
+                Err(e) => return Err(e),
+            }
+        }
+    }
+    Ok(figures)
 }
 
 /// The tables of the dataset named `dataset`: its published results (`reported`), every
@@ -147,7 +249,12 @@ pub async fn paper(hub: &Hub, dataset: &str, options: &PaperOptions) -> Result<P
             .map_err(|e| AppError::Invalid(format!("models: {e}")))
         })
         .collect::<Result<Vec<_>, _>>()?;
+    let chosen = chosen_rows(&own, options.models.as_deref());
+    let error_analyses = analysed_rows(hub, &dataset, &chosen).await?;
+    let studies = study_figures(hub, &dataset.name, &chosen).await?;
     Ok(Paper {
+        error_analyses,
+        studies,
         reproduction: reproduction(&published, &own),
         dataset: dataset.name,
         tables,

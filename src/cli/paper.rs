@@ -69,7 +69,7 @@ pub async fn paper(args: PaperArgs) -> anyhow::Result<ExitCode> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     for file in &files {
-        let path = args.out.join(file.name);
+        let path = args.out.join(&file.name);
         std::fs::write(&path, &file.bytes)
             .with_context(|| format!("cannot write {}", path.display()))?;
     }

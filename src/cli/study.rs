@@ -243,7 +243,7 @@ async fn report(args: ReportArgs) -> anyhow::Result<ExitCode> {
         let files = in_database(app::studies::files(&report), &args.db.db)?;
         std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
         for file in &files {
-            let path = out.join(file.name);
+            let path = out.join(&file.name);
             std::fs::write(&path, &file.bytes)
                 .with_context(|| format!("cannot write {}", path.display()))?;
         }

@@ -19,6 +19,7 @@ use super::{AppError, AppState};
 use crate::app::paper::{self, Paper, PaperOptions};
 use crate::core::bundle::tar_archive;
 use crate::core::dataset::StepLength;
+use crate::core::paper::export::study_heatmap_names;
 use crate::core::paper::hub::ReproducedCell;
 use crate::core::paper::write::grouped;
 use crate::core::paper::{Category, CellKey, Mark, Metric, PaperTable};
@@ -98,6 +99,15 @@ struct TableView {
     figure_png: String,
 }
 
+/// A study's heat map on the page.
+struct StudyFigureView {
+    study: String,
+    /// The row it is reported for.
+    row: String,
+    svg: String,
+    png: String,
+}
+
 struct ReproductionView {
     model: String,
     metric: String,
@@ -123,6 +133,9 @@ struct PaperPage {
     query: String,
     step_lengths: Vec<u8>,
     tables: Vec<TableView>,
+    /// The error-analysis figure's SVG and PNG addresses; `None` when no hub row is chosen.
+    error_figure: Option<(String, String)>,
+    studies: Vec<StudyFigureView>,
     reproduction: Vec<ReproductionView>,
 }
 
@@ -242,6 +255,27 @@ async fn paper_page(
             .iter()
             .map(|c| reproduction_view(&tr, c))
             .collect(),
+        error_figure: (!paper.error_analyses.is_empty()).then(|| {
+            let base = format!("/datasets/{}/paper/files/error_analysis", paper.dataset);
+            (
+                format!("{base}.svg{query_text}"),
+                format!("{base}.png{query_text}"),
+            )
+        }),
+        studies: paper
+            .studies
+            .iter()
+            .map(|f| {
+                let [svg, png] = study_heatmap_names(&f.study);
+                let base = format!("/datasets/{}/paper/files", paper.dataset);
+                StudyFigureView {
+                    study: f.study.clone(),
+                    row: f.report.stamp.row.clone(),
+                    svg: format!("{base}/{svg}{query_text}"),
+                    png: format!("{base}/{png}{query_text}"),
+                }
+            })
+            .collect(),
         step_lengths: StepLength::all().map(StepLength::get).collect(),
         models: query.models.clone().unwrap_or_default(),
         metric: query.metric.clone().unwrap_or_default(),
@@ -300,7 +334,7 @@ async fn paper_file(
 ) -> Result<Response, AppError> {
     let paper = made(&state, &dataset, &query).await?;
     let files = paper.files(true)?;
-    let names: Vec<&str> = files.iter().map(|f| f.name).collect();
+    let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
     let Some(found) = files.iter().find(|f| f.name == file) else {
         return Err(AppError::NotFound(format!(
             "the paper folder of dataset '{}' has no file '{file}' (it has {})",
@@ -311,7 +345,7 @@ async fn paper_file(
     Ok((
         [(
             header::CONTENT_TYPE,
-            HeaderValue::from_static(media_type(found.name)),
+            HeaderValue::from_static(media_type(&found.name)),
         )],
         found.bytes.clone(),
     )

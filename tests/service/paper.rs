@@ -99,9 +99,20 @@ async fn the_papers_tables_come_back_with_a_submissions_row_in_its_own_category(
         "pairwise_accuracy.csv",
         "pairwise_accuracy.md",
         "reproduction.csv",
+        "error_analysis.svg",
+        "error_analysis.png",
     ] {
         assert!(dir.join(name).is_file(), "{name} is written");
     }
+    // The error-analysis figure is of the hub's rows only: the submission's, not the paper's.
+    let errors = std::fs::read_to_string(dir.join("error_analysis.svg")).unwrap();
+    assert!(errors.contains("<title>GPT-5</title>"), "{errors}");
+    assert!(!errors.contains("Gemini 2.5 Pro"));
+    assert!(
+        std::fs::read(dir.join("error_analysis.png"))
+            .unwrap()
+            .starts_with(b"\x89PNG")
+    );
 
     let board = server
         .call(Method::GET, "/api/v1/datasets/mini/leaderboard")
@@ -234,6 +245,24 @@ async fn the_papers_tables_come_back_with_a_submissions_row_in_its_own_category(
     let stderr = String::from_utf8_lossy(&refused.stderr);
     assert!(stderr.contains("no row is named 'GPT-6'"), "{stderr}");
     assert!(!out.path().join("refused").exists());
+
+    // Without a hub row among the chosen ones, there is no error-analysis figure.
+    let published_only = out.path().join("published_only");
+    succeeded(&run(
+        &[
+            "paper",
+            "--dataset",
+            "mini",
+            "--models",
+            "Gemini 2.5 Pro",
+            "--out",
+            published_only.to_str().unwrap(),
+        ],
+        &db,
+    ));
+    assert!(published_only.join("task_accuracy.json").is_file());
+    assert!(!published_only.join("error_analysis.svg").exists());
+    assert!(!published_only.join("error_analysis.png").exists());
     server.stop().await;
 }
 
@@ -272,6 +301,19 @@ async fn the_paper_page_shows_the_tables_in_both_languages_and_downloads_the_fol
         english.contains("/datasets/mini/paper/files/task_accuracy_by_step_length.svg?intervals=1")
     );
     assert!(english.contains("/datasets/mini/paper.tar?intervals=1"));
+    assert!(english.contains("/datasets/mini/paper/files/error_analysis.svg?intervals=1"));
+    assert!(english.contains("/datasets/mini/paper/files/error_analysis.png?intervals=1"));
+    let without_hub_rows = server
+        .call(
+            Method::GET,
+            "/datasets/mini/paper?models=Gemini%202.5%20Pro",
+        )
+        .header("accept-language", "en")
+        .expect(200)
+        .await
+        .text;
+    assert!(without_hub_rows.contains("there is no error-analysis figure"));
+    assert!(!without_hub_rows.contains("files/error_analysis.svg"));
 
     let chinese = server
         .call(Method::GET, "/datasets/mini/paper?metric=pa")
@@ -303,6 +345,8 @@ async fn the_paper_page_shows_the_tables_in_both_languages_and_downloads_the_fol
         "provenance.json",
         "task_accuracy.tex",
         "pairwise_accuracy_by_step_length.png",
+        "error_analysis.svg",
+        "error_analysis.png",
         "reproduction.csv",
     ] {
         assert!(
@@ -340,5 +384,108 @@ async fn the_paper_page_shows_the_tables_in_both_languages_and_downloads_the_fol
         "{}",
         unknown.text
     );
+    server.stop().await;
+}
+
+/// A study whose baseline is the dataset puts its heat map in the folder and on the page,
+/// reported for the chosen submission (there is no Human row); the error-analysis figure is
+/// of that submission.
+#[tokio::test]
+async fn the_folder_holds_the_datasets_study_heat_maps_and_the_error_analysis_figure() {
+    use enact_hub::core::world::CameraRig;
+
+    use crate::studies::{BASELINE, world_with_variants};
+
+    let rig = CameraRig {
+        image_size: 96,
+        fov_deg: 30.0,
+        ..CameraRig::default()
+    };
+    let (server, records) = world_with_variants(&[("world-fov30", rig)]).await;
+    let (_, admin) = api_token(&server.pool, "admin", Role::Admin, None, None).await;
+    let (_, alice) = api_token(&server.pool, "alice", Role::Submitter, None, None).await;
+    server
+        .call(Method::POST, "/api/v1/admin/studies")
+        .bearer(&admin)
+        .json(&serde_json::json!({"name": "camera", "baseline": BASELINE,
+               "variants": ["Camera FOV/Aperture 30=world-fov30"]}))
+        .expect(201)
+        .await;
+    // Every other item answered right, so the model makes errors to analyse.
+    let body: String = records
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| i % 2 == 0)
+        .map(|(_, r)| {
+            serde_json::json!({"id": r["id"], "answer": r["gt_answer"]}).to_string() + "\n"
+        })
+        .collect();
+    for dataset in [BASELINE, "world-fov30"] {
+        server
+            .call(
+                Method::POST,
+                &format!("/api/v1/datasets/{dataset}/submissions?model=m"),
+            )
+            .bearer(&alice)
+            .body(body.clone())
+            .expect(201)
+            .await;
+    }
+
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("paper");
+    succeeded(&run(
+        &[
+            "paper",
+            "--dataset",
+            BASELINE,
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        &server.db_path(),
+    ));
+    for name in [
+        "error_analysis.svg",
+        "error_analysis.png",
+        "study-camera-heatmap.svg",
+        "study-camera-heatmap.png",
+    ] {
+        assert!(dir.join(name).is_file(), "{name} is written");
+    }
+    let heatmap = std::fs::read_to_string(dir.join("study-camera-heatmap.svg")).unwrap();
+    assert!(
+        heatmap.contains("study-heatmap") && heatmap.contains("Aperture 30"),
+        "{heatmap}"
+    );
+    // Reported for the submission's model of its account.
+    assert!(
+        heatmap.contains("m (alice): Δ mean pairwise accuracy"),
+        "{heatmap}"
+    );
+    assert!(
+        std::fs::read(dir.join("study-camera-heatmap.png"))
+            .unwrap()
+            .starts_with(b"\x89PNG")
+    );
+    let errors = std::fs::read_to_string(dir.join("error_analysis.svg")).unwrap();
+    assert!(errors.contains("<title>m</title>"), "{errors}");
+
+    let page = server
+        .call(Method::GET, &format!("/datasets/{BASELINE}/paper"))
+        .header("accept-language", "en")
+        .expect(200)
+        .await
+        .text;
+    assert!(page.contains("Studies of this dataset"), "{page}");
+    assert!(page.contains(&format!(
+        "/datasets/{BASELINE}/paper/files/study-camera-heatmap.png"
+    )));
+    let png = server
+        .get(&format!(
+            "/datasets/{BASELINE}/paper/files/study-camera-heatmap.png"
+        ))
+        .await;
+    assert_eq!(png.status(), 200);
+    assert_eq!(png.headers()["content-type"], "image/png");
     server.stop().await;
 }

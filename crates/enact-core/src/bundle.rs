@@ -6,7 +6,8 @@
 /// One file of a bundle.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct BundleFile {
-    pub name: &'static str,
+    /// The file's name in the folder (a study's heat map carries the study's name).
+    pub name: String,
     pub bytes: Vec<u8>,
 }
 

@@ -141,6 +141,24 @@ impl Canvas {
         }
     }
 
+    /// A filled axis-aligned rectangle, its edges anti-aliased by how much of each pixel
+    /// they cover.
+    pub(crate) fn rect(
+        &mut self,
+        (x, y): (f64, f64),
+        (width, height): (f64, f64),
+        colour: [u8; 3],
+    ) {
+        let (x1, y1) = (x + width, y + height);
+        for py in y.floor() as i64..y1.ceil() as i64 {
+            let cover_y = (y1.min(py as f64 + 1.0) - y.max(py as f64)).clamp(0.0, 1.0);
+            for px in x.floor() as i64..x1.ceil() as i64 {
+                let cover_x = (x1.min(px as f64 + 1.0) - x.max(px as f64)).clamp(0.0, 1.0);
+                self.blend(px, py, colour, cover_x * cover_y);
+            }
+        }
+    }
+
     /// The advance width of `text` at `size` px per em.
     pub(crate) fn text_width(&self, text: &str, size: f64) -> f64 {
         let scaled = self.font.as_scaled(self.scale(size));

@@ -4,10 +4,15 @@
 use serde::Serialize;
 
 use super::Metric;
+use super::error_figure::{AnalysedRow, ErrorChart};
 use super::figure::{FigureError, StepChart};
+use super::heatmap_png::heatmap_png;
 use super::hub::{AssembledTable, CellProvenance, ReproducedCell};
 use super::write::{to_csv, to_json, to_markdown, to_tex};
 use crate::bundle::{BundleFile, csv_field};
+use crate::study::export::heatmap_svg;
+use crate::study::figure::study_heatmap;
+use crate::study::report::StudyReport;
 
 /// What the folder is made from.
 #[derive(Debug, Clone)]
@@ -18,6 +23,27 @@ pub struct PaperBundle<'a> {
     pub tables: &'a [AssembledTable],
     /// The published models the hub also scored, cell by cell; `None` when not asked for.
     pub reproduction: Option<&'a [ReproducedCell]>,
+    /// The error analyses of the chosen hub rows (submissions and the Human row), in table
+    /// order; the error-analysis figure is left out when there are none.
+    pub error_analyses: &'a [AnalysedRow],
+    /// The studies whose baseline is the dataset, each reported for one row.
+    pub studies: &'a [StudyFigure],
+}
+
+/// A study of the dataset and its report for the row its heat map shows.
+#[derive(Debug, Clone)]
+pub struct StudyFigure {
+    /// The study's name (plain: letters, digits, `.`, `_` and `-`, so safe in a file name).
+    pub study: String,
+    pub report: StudyReport,
+}
+
+/// The file names of a study's heat map, SVG and PNG.
+pub fn study_heatmap_names(study: &str) -> [String; 2] {
+    [
+        format!("study-{study}-heatmap.svg"),
+        format!("study-{study}-heatmap.png"),
+    ]
 }
 
 #[derive(Serialize)]
@@ -111,7 +137,8 @@ pub fn reproduction_csv(cells: &[ReproducedCell]) -> String {
     out
 }
 
-/// Every file of the folder, in a fixed order.
+/// Every file of the folder, in a fixed order: each table's files, the error-analysis figure,
+/// the studies' heat maps, provenance and the reproduction check.
 pub fn files(bundle: &PaperBundle<'_>) -> Result<Vec<BundleFile>, ExportError> {
     let mut files = Vec::new();
     let stamp = figure_stamp(bundle.dataset, bundle.hub_version);
@@ -119,33 +146,55 @@ pub fn files(bundle: &PaperBundle<'_>) -> Result<Vec<BundleFile>, ExportError> {
         let table = &assembled.table;
         let [tex, standalone, csv, md, json, svg, png] = names(table.metric);
         files.push(BundleFile {
-            name: tex,
+            name: tex.into(),
             bytes: to_tex(table, false).into_bytes(),
         });
         files.push(BundleFile {
-            name: standalone,
+            name: standalone.into(),
             bytes: to_tex(table, true).into_bytes(),
         });
         files.push(BundleFile {
-            name: csv,
+            name: csv.into(),
             bytes: to_csv(table).into_bytes(),
         });
         files.push(BundleFile {
-            name: md,
+            name: md.into(),
             bytes: to_markdown(table).into_bytes(),
         });
         files.push(BundleFile {
-            name: json,
+            name: json.into(),
             bytes: to_json(table).into_bytes(),
         });
         let chart = figure(table);
         files.push(BundleFile {
-            name: svg,
+            name: svg.into(),
             bytes: chart.svg(&stamp)?.into_bytes(),
         });
         files.push(BundleFile {
-            name: png,
+            name: png.into(),
             bytes: chart.png()?,
+        });
+    }
+    if !bundle.error_analyses.is_empty() {
+        let chart = ErrorChart::of(bundle.error_analyses);
+        files.push(BundleFile {
+            name: "error_analysis.svg".into(),
+            bytes: chart.svg(&stamp)?.into_bytes(),
+        });
+        files.push(BundleFile {
+            name: "error_analysis.png".into(),
+            bytes: chart.png()?,
+        });
+    }
+    for figure in bundle.studies {
+        let [svg, png] = study_heatmap_names(&figure.study);
+        files.push(BundleFile {
+            name: svg,
+            bytes: heatmap_svg(&figure.report)?.into_bytes(),
+        });
+        files.push(BundleFile {
+            name: png,
+            bytes: heatmap_png(&study_heatmap(&figure.report))?,
         });
     }
     let provenance = Provenance {
@@ -158,7 +207,7 @@ pub fn files(bundle: &PaperBundle<'_>) -> Result<Vec<BundleFile>, ExportError> {
             .collect(),
     };
     files.push(BundleFile {
-        name: "provenance.json",
+        name: "provenance.json".into(),
         bytes: serde_json::to_vec_pretty(&provenance)?,
     });
     if let Some(cells) = bundle.reproduction {
@@ -168,11 +217,11 @@ pub fn files(bundle: &PaperBundle<'_>) -> Result<Vec<BundleFile>, ExportError> {
             cells,
         };
         files.push(BundleFile {
-            name: "reproduction.json",
+            name: "reproduction.json".into(),
             bytes: serde_json::to_vec_pretty(&reproduction)?,
         });
         files.push(BundleFile {
-            name: "reproduction.csv",
+            name: "reproduction.csv".into(),
             bytes: reproduction_csv(cells).into_bytes(),
         });
     }
@@ -180,13 +229,23 @@ pub fn files(bundle: &PaperBundle<'_>) -> Result<Vec<BundleFile>, ExportError> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use std::collections::BTreeMap;
 
     use super::*;
     use crate::dataset::{Direction, StepLength};
     use crate::paper::hub::{HUB_CATEGORY, HubRow, Origin, assemble, reproduction};
     use crate::paper::{Category, CellKey, PaperTable, ReportedModel};
+
+    /// A study with one variant, reported for one row.
+    pub(crate) fn camera_study() -> StudyReport {
+        use crate::study::report::build_study_report;
+        use crate::study::report::fixtures::{inputs, row};
+        let (f, i) = (Direction::Forward, Direction::Inverse);
+        let baseline = row(1, &[("a", f, 3, 1.0), ("b", f, 3, 0.5), ("c", i, 4, 0.0)]);
+        let variant = row(2, &[("a", f, 3, 0.5), ("b", f, 3, 0.5), ("c", i, 4, 1.0)]);
+        build_study_report(&inputs(baseline, Ok(variant))).unwrap()
+    }
 
     fn f3() -> CellKey {
         CellKey {
@@ -235,9 +294,17 @@ mod tests {
             hub_version: "0.1.0+abc",
             tables: &tables,
             reproduction: Some(&cells),
+            error_analyses: &[AnalysedRow {
+                model: "GPT-5".to_owned(),
+                analysis: crate::error_analysis::analyse(std::iter::empty()),
+            }],
+            studies: &[StudyFigure {
+                study: "camera".to_owned(),
+                report: camera_study(),
+            }],
         };
         let files = files(&bundle).unwrap();
-        let names: Vec<&str> = files.iter().map(|f| f.name).collect();
+        let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
         assert_eq!(
             names,
             [
@@ -255,6 +322,10 @@ mod tests {
                 "pairwise_accuracy.json",
                 "pairwise_accuracy_by_step_length.svg",
                 "pairwise_accuracy_by_step_length.png",
+                "error_analysis.svg",
+                "error_analysis.png",
+                "study-camera-heatmap.svg",
+                "study-camera-heatmap.png",
                 "provenance.json",
                 "reproduction.json",
                 "reproduction.csv",
@@ -277,6 +348,11 @@ mod tests {
             .bytes;
         assert!(png.starts_with(b"\x89PNG"));
         assert_eq!(back, tables[0].table);
+        let heatmap = text("study-camera-heatmap.svg");
+        assert!(
+            heatmap.contains("study-heatmap") && heatmap.contains("Fisheye"),
+            "{heatmap}"
+        );
         let provenance: serde_json::Value = serde_json::from_str(&text("provenance.json")).unwrap();
         let cells = provenance["cells"].as_array().unwrap();
         assert_eq!(cells.len(), 4);

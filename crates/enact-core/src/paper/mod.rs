@@ -9,13 +9,18 @@
 //! - [`hub`]: the hub's own rows, where each cell came from, and the reproduction check;
 //! - [`export`]: the folder `enact-hub paper` writes;
 //! - [`write`]: the table as LaTeX (booktabs), CSV, Markdown and JSON;
-//! - [`figure`]: accuracy by step length per direction, the paper's teaser style, as SVG and PNG.
+//! - [`figure`]: accuracy by step length per direction, the paper's teaser style, as SVG and PNG;
+//! - [`error_figure`]: the shares of structural error classes per hub row and direction (the
+//!   paper's error-distribution figure), as SVG and PNG;
+//! - [`heatmap_png`]: a study heat map (or any [`crate::heatmap::Heatmap`]) painted as a PNG.
 //!
 //! Values are percentages as printed (84.62), never fractions.
 
 mod canvas;
+pub mod error_figure;
 pub mod export;
 pub mod figure;
+pub mod heatmap_png;
 pub mod hub;
 pub mod mark;
 pub mod write;

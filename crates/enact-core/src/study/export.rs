@@ -272,39 +272,39 @@ pub fn study_files(report: &StudyReport) -> Result<Vec<BundleFile>, String> {
     let json = serde_json::to_string_pretty(report).map_err(|e| e.to_string())?;
     let mut files = vec![
         BundleFile {
-            name: "study.json",
+            name: "study.json".into(),
             bytes: json.into_bytes(),
         },
         BundleFile {
-            name: "cells.csv",
+            name: "cells.csv".into(),
             bytes: cells_csv(report).into_bytes(),
         },
         BundleFile {
-            name: "cells.tex",
+            name: "cells.tex".into(),
             bytes: cells_tex(report).into_bytes(),
         },
         BundleFile {
-            name: "table.csv",
+            name: "table.csv".into(),
             bytes: table_csv(&report.stamp, &report.table).into_bytes(),
         },
         BundleFile {
-            name: "table.tex",
+            name: "table.tex".into(),
             bytes: table_tex(&report.stamp, &report.table).into_bytes(),
         },
         BundleFile {
-            name: "heatmap.svg",
+            name: "heatmap.svg".into(),
             bytes: heatmap_svg(report).map_err(|e| e.to_string())?.into_bytes(),
         },
     ];
     if !report.handedness.is_empty() {
         files.push(BundleFile {
-            name: "handedness.csv",
+            name: "handedness.csv".into(),
             bytes: handedness_csv(report).into_bytes(),
         });
     }
     if let Some(svg) = handedness_svg(report).map_err(|e| e.to_string())? {
         files.push(BundleFile {
-            name: "handedness.svg",
+            name: "handedness.svg".into(),
             bytes: svg.into_bytes(),
         });
     }
@@ -329,7 +329,7 @@ mod tests {
         with_hands.baseline_row.hands = Some([hands.clone(), hands]);
         let report = build_study_report(&with_hands).unwrap();
         let files = super::study_files(&report).unwrap();
-        let names: Vec<&str> = files.iter().map(|f| f.name).collect();
+        let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
         assert_eq!(
             names,
             [

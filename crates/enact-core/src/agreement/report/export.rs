@@ -562,29 +562,29 @@ pub fn latex(report: &AgreementReport) -> String {
 pub fn bundle_files(report: &AgreementReport) -> Result<Vec<BundleFile>, askama::Error> {
     let json = serde_json::to_string_pretty(report).map_err(|e| askama::Error::Custom(e.into()))?;
     let mut files = vec![BundleFile {
-        name: "report.json",
+        name: "report.json".into(),
         bytes: (json + "\n").into_bytes(),
     }];
     for (name, text) in csv_files(report) {
         files.push(BundleFile {
-            name,
+            name: name.into(),
             bytes: text.into_bytes(),
         });
     }
     files.push(BundleFile {
-        name: "report.md",
+        name: "report.md".into(),
         bytes: markdown(report).into_bytes(),
     });
     files.push(BundleFile {
-        name: "tables.tex",
+        name: "tables.tex".into(),
         bytes: latex(report).into_bytes(),
     });
     files.push(BundleFile {
-        name: "heatmap.svg",
+        name: "heatmap.svg".into(),
         bytes: heatmap_svg(report)?.into_bytes(),
     });
     files.push(BundleFile {
-        name: "task_accuracy.svg",
+        name: "task_accuracy.svg".into(),
         bytes: accuracy_chart_svg(report)?.into_bytes(),
     });
     Ok(files)
@@ -622,11 +622,11 @@ pub fn error_files(
     let header: Vec<&str> = header.iter().map(String::as_str).collect();
     Ok(vec![
         BundleFile {
-            name: "errors.json",
+            name: "errors.json".into(),
             bytes: (json + "\n").into_bytes(),
         },
         BundleFile {
-            name: "errors.csv",
+            name: "errors.csv".into(),
             bytes: csv_document(stamp, &header, &lines).into_bytes(),
         },
     ])
@@ -662,7 +662,7 @@ pub fn audit_file(stamp: &ReportStamp, entries: &[AuditEntry]) -> BundleFile {
         })
         .collect();
     BundleFile {
-        name: "audit.csv",
+        name: "audit.csv".into(),
         bytes: csv_document(stamp, &header, &rows).into_bytes(),
     }
 }

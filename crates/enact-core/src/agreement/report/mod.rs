@@ -757,7 +757,7 @@ mod tests {
     fn bundle_files_are_stamped() {
         let report = build_report(&inputs()).unwrap();
         let files = export::bundle_files(&report).unwrap();
-        let names: Vec<&str> = files.iter().map(|f| f.name).collect();
+        let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
         assert_eq!(
             names,
             [
