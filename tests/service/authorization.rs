@@ -451,7 +451,11 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("GET", "/leaderboard/{dataset}/errors/{entry}", Page::Public),
     ("GET", "/datasets/{dataset}/paper", Page::Public),
     ("GET", "/datasets/{dataset}/paper.tar", Page::Public),
-    ("GET", "/datasets/{dataset}/paper/files/{file}", Page::Public),
+    (
+        "GET",
+        "/datasets/{dataset}/paper/files/{file}",
+        Page::Public,
+    ),
     ("GET", "/api/docs", Page::Public),
     ("GET", "/static/app.css", Page::Public),
     ("GET", "/static/annotate.js", Page::Public),

@@ -276,7 +276,11 @@ fn the_standalone_tables_compile_with_pdflatex() {
         let name = format!("{}.tex", metric.as_str());
         std::fs::write(dir.path().join(&name), to_tex(&table, true)).unwrap();
         let run = std::process::Command::new("pdflatex")
-            .args(["-interaction=nonstopmode", "-halt-on-error", "-no-shell-escape"])
+            .args([
+                "-interaction=nonstopmode",
+                "-halt-on-error",
+                "-no-shell-escape",
+            ])
             .arg(&name)
             .current_dir(dir.path())
             .output()
@@ -287,6 +291,9 @@ fn the_standalone_tables_compile_with_pdflatex() {
             String::from_utf8_lossy(&run.stdout)
         );
         let pdf = dir.path().join(format!("{}.pdf", metric.as_str()));
-        assert!(std::fs::metadata(&pdf).is_ok_and(|m| m.len() > 1000), "{pdf:?}");
+        assert!(
+            std::fs::metadata(&pdf).is_ok_and(|m| m.len() > 1000),
+            "{pdf:?}"
+        );
     }
 }
