@@ -210,3 +210,11 @@ pub async fn of_dataset(
         .map(|s| (s.model.clone(), entry(&dataset.name, s)))
         .collect())
 }
+
+/// The models submitted to the dataset (listed or not), by name: the models whose metadata
+/// [`set`] takes.
+pub async fn submitted(hub: &Hub, dataset: &str) -> Result<Vec<String>, AppError> {
+    let dataset = datasets::by_name(hub, dataset).await?;
+    let mut conn = hub.conn().await?;
+    Ok(store::model_metadata::submitted_models(&mut conn, dataset.id).await?)
+}

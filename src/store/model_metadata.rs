@@ -90,3 +90,18 @@ pub async fn submitters(
         .await
     })
 }
+
+/// The models submitted to the dataset (listed or not, by any account), by name.
+pub async fn submitted_models(
+    conn: &mut Conn,
+    dataset_id: i64,
+) -> Result<Vec<String>, sqlx::Error> {
+    on!(conn, |c| {
+        sqlx::query_scalar(
+            "SELECT DISTINCT model FROM submissions WHERE dataset = $1 ORDER BY model",
+        )
+        .bind(dataset_id)
+        .fetch_all(&mut *c)
+        .await
+    })
+}

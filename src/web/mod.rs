@@ -235,6 +235,7 @@ fn admin_pages(state: &AppState) -> Router<AppState> {
         .merge(admin_tokens::router())
         .merge(admin_audit::router())
         .merge(studies::admin_router())
+        .merge(reported::admin_router())
         .merge(imports::router())
         .merge(rescore::router())
         .merge(quality::router())

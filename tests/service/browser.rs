@@ -602,7 +602,10 @@ impl PublicWorld {
 }
 
 /// Admin pages the layout and accessibility checks cover (English only, as admin pages are).
-const ADMIN_PAGES: [&str; 1] = ["/admin/datasets/mini/report"];
+const ADMIN_PAGES: [&str; 2] = [
+    "/admin/datasets/mini/report",
+    "/admin/datasets/mini/reported",
+];
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn axe_finds_no_wcag_violation_on_the_pages_in_either_language() {

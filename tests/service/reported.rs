@@ -479,3 +479,213 @@ async fn a_model_s_metadata_is_set_by_its_submitter_or_an_admin_and_carried_in_t
     assert_eq!(entries[1].target, "model model-a");
     server.stop().await;
 }
+
+/// The admin page of a dataset's reported results and model metadata: lists the rows, imports
+/// the paper's results or a pasted table, removes a row, sets a model's metadata, every change
+/// audited; a refused table names its row and field and stores nothing; anyone but an admin
+/// with the page's CSRF token is refused.
+#[tokio::test]
+async fn the_admin_page_imports_removes_and_sets_metadata_audited() {
+    use crate::annotate::{Browser, annotator, logged_in_on};
+
+    let (server, records) = spawn_app_with_release().await;
+    annotator(&server, "root", true).await;
+    annotator(&server, "ann", false).await;
+    let (_, team) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let reply = submit_to(
+        &server,
+        "mini",
+        "model=model-a",
+        &team,
+        answers(&records, &[0]),
+    )
+    .await;
+    assert_eq!(reply.status, 201, "{}", reply.text);
+    let stored = || count(&server.pool, "SELECT count(*) FROM reported_results");
+    let path = "/admin/datasets/mini/reported";
+    let (mut admin, csrf) = logged_in_on(&server, "root", "/admin").await;
+
+    let (status, home) = admin.text("/admin").await;
+    assert_eq!(status, 200);
+    assert!(
+        home.contains(r#"<a href="/admin/datasets/mini/reported">"#),
+        "{home}"
+    );
+    let (status, empty) = admin.text(path).await;
+    assert_eq!(status, 200, "{empty}");
+    assert!(empty.contains("No reported result yet."), "{empty}");
+    assert!(empty.contains("<option>model-a</option>"), "{empty}");
+
+    // The ENACT paper's results, from the page's button.
+    let r = admin
+        .post_form(&format!("{path}/paper"), &[("csrf", &csrf)])
+        .await;
+    assert_eq!(r.status(), 200);
+    let html = r.text().await.expect("body");
+    assert!(
+        html.contains("Stored 31 reported rows on &#39;mini&#39; (0 replacing"),
+        "{html}"
+    );
+    assert!(
+        html.contains("<td>GPT-5</td><td>proprietary</td>"),
+        "{html}"
+    );
+    assert_eq!(stored().await, 31);
+    let added = audit_of(&server, "reported.add").await;
+    assert_eq!(added.len(), 1);
+    assert_eq!(added[0].actor, "root");
+    assert_eq!(added[0].target, "reported results from the ENACT paper");
+
+    // One row removed by its button.
+    let listed = server
+        .call(Method::GET, "/api/v1/datasets/mini/reported")
+        .expect(200)
+        .await
+        .json();
+    let first = &listed["reported"][0];
+    assert_eq!(first["model"], "GPT-5", "{listed}");
+    let id = first["id"].as_i64().expect("id").to_string();
+    let r = admin
+        .post_form(&format!("{path}/remove"), &[("csrf", &csrf), ("id", &id)])
+        .await;
+    assert_eq!(r.status(), 200);
+    let html = r.text().await.expect("body");
+    assert!(
+        html.contains(&format!("Removed reported result {id}.")),
+        "{html}"
+    );
+    assert!(
+        !html.contains("<td>GPT-5</td><td>proprietary</td>"),
+        "{html}"
+    );
+    assert_eq!(stored().await, 30);
+    let removed = audit_of(&server, "reported.remove").await;
+    assert_eq!(removed.len(), 1);
+    assert_eq!(removed[0].target, format!("reported result {id} (GPT-5)"));
+
+    // A pasted table with a bad value: refused whole, naming row and field, kept in the form.
+    let bad = table(
+        "pairwise_accuracy",
+        &[("Model-A", json!(60.5)), ("Model-B", json!(120))],
+    );
+    let r = admin
+        .post_form(
+            &format!("{path}/tables"),
+            &[("csrf", &csrf), ("table", &bad)],
+        )
+        .await;
+    assert_eq!(r.status(), 400);
+    let html = r.text().await.expect("body");
+    assert!(
+        html.contains(
+            "Nothing was stored: pasted.json: row 2 (Model-B): cells.forward_3.value: 120 is \
+             not a percentage"
+        ),
+        "{html}"
+    );
+    assert!(
+        html.contains("Another paper, Table 2"),
+        "the table stays in its field"
+    );
+    assert_eq!(stored().await, 30);
+    assert_eq!(audit_of(&server, "reported.add").await.len(), 1);
+
+    // A good one.
+    let good = table("task_accuracy", &[("Model-A", json!(41.0))]);
+    let r = admin
+        .post_form(
+            &format!("{path}/tables"),
+            &[("csrf", &csrf), ("table", &good)],
+        )
+        .await;
+    assert_eq!(r.status(), 200);
+    let html = r.text().await.expect("body");
+    assert!(html.contains("Stored 1 reported rows"), "{html}");
+    assert!(html.contains("<td>Model-A</td>"), "{html}");
+    assert_eq!(stored().await, 31);
+    let added = audit_of(&server, "reported.add").await;
+    assert_eq!(added[0].target, "reported results from pasted.json");
+
+    // A submitted model's metadata, any category for an admin; a bad link refused.
+    let metadata = |link: &'static str| {
+        [
+            ("csrf", csrf.clone()),
+            ("model", "model-a".to_owned()),
+            ("category", "hub baselines".to_owned()),
+            ("family", "Qwen2.5-VL".to_owned()),
+            ("size", "7B".to_owned()),
+            ("link", link.to_owned()),
+        ]
+    };
+    let fields = metadata("javascript:alert(1)");
+    let fields: Vec<(&str, &str)> = fields.iter().map(|(k, v)| (*k, v.as_str())).collect();
+    let r = admin
+        .post_form("/admin/datasets/mini/models", &fields)
+        .await;
+    assert_eq!(r.status(), 400);
+    let html = r.text().await.expect("body");
+    assert!(html.contains("Nothing was stored: `link`"), "{html}");
+    assert!(audit_of(&server, "model.metadata").await.is_empty());
+    let fields = metadata("https://example.org/model-a");
+    let fields: Vec<(&str, &str)> = fields.iter().map(|(k, v)| (*k, v.as_str())).collect();
+    let r = admin
+        .post_form("/admin/datasets/mini/models", &fields)
+        .await;
+    assert_eq!(r.status(), 200);
+    let html = r.text().await.expect("body");
+    assert!(
+        html.contains("Set the metadata of model &#39;model-a&#39;."),
+        "{html}"
+    );
+    assert!(
+        html.contains("<tr><td>model-a</td><td>hub baselines</td><td>Qwen2.5-VL</td><td>7B</td>"),
+        "{html}"
+    );
+    let shown = board(&server, "").await;
+    assert_eq!(
+        shown["rows"][0]["metadata"],
+        json!({"category": "hub baselines", "family": "Qwen2.5-VL", "size": "7B",
+               "link": "https://example.org/model-a"}),
+        "{shown}"
+    );
+    let set = audit_of(&server, "model.metadata").await;
+    assert_eq!(set.len(), 1);
+    assert_eq!(
+        (set[0].actor.as_str(), set[0].target.as_str()),
+        ("root", "model model-a")
+    );
+
+    // Refused: a wrong CSRF token, an annotator, anyone without a session.
+    let wrong = "0".repeat(64);
+    let r = admin
+        .post_form(&format!("{path}/paper"), &[("csrf", &wrong)])
+        .await;
+    assert_eq!(r.status(), 403);
+    let r = admin
+        .post_form(&format!("{path}/remove"), &[("id", &id)])
+        .await;
+    assert_eq!(r.status(), 403);
+    let (mut ann, ann_csrf) = logged_in_on(&server, "ann", "/annotate").await;
+    assert_eq!(ann.get(path).await.status(), 403);
+    let r = ann
+        .post_form(&format!("{path}/paper"), &[("csrf", &ann_csrf)])
+        .await;
+    assert_eq!(r.status(), 403);
+    let mut anonymous = Browser::new(&server);
+    let r = anonymous.get(path).await;
+    assert_eq!(r.status(), 303);
+    assert!(
+        r.headers()
+            .get("location")
+            .and_then(|l| l.to_str().ok())
+            .is_some_and(|l| l.starts_with("/login")),
+        "{r:?}"
+    );
+    let r = anonymous
+        .post_form(&format!("{path}/paper"), &[("csrf", &csrf)])
+        .await;
+    assert_eq!(r.status(), 401);
+    assert_eq!(stored().await, 31, "nothing refused was stored");
+    assert_eq!(audit_of(&server, "reported.add").await.len(), 2);
+    server.stop().await;
+}
