@@ -4,8 +4,7 @@
 use askama::Template;
 use axum::Router;
 use axum::extract::{RawQuery, State};
-use axum::http::{HeaderValue, header};
-use axum::response::{Html, IntoResponse, Response};
+use axum::response::{Html, Response};
 use axum::routing::{get, post};
 use serde::Deserialize;
 
@@ -22,7 +21,7 @@ use crate::core::agreement::{
     BootstrapConfig, DEFAULT_BOOTSTRAP_SEED, DEFAULT_CONFIDENCE_LEVEL, DEFAULT_REPLICATES,
     MeasurementLevel, OrderingEncoding, PAPER_COMPARABLE_ENCODING, WelchComparison,
 };
-use crate::core::bundle::{BundleFile, tar_archive};
+use crate::core::bundle::BundleFile;
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::heatmap::Heatmap;
 use crate::core::leaderboard::{AccuracyChart, LeaderboardRow, RowSource};
@@ -219,20 +218,7 @@ async fn report_bundle(
 ) -> Result<Response, PageError> {
     let (report, files) = dataset_bundle(&state, &name, raw.as_deref()).await?;
     let folder = bundle_folder(&report);
-    let archive = tar_archive(&folder, &files).map_err(AppError::from)?;
-    let disposition = HeaderValue::from_str(&format!("attachment; filename=\"{folder}.tar\""))
-        .map_err(anyhow::Error::from)?;
-    Ok((
-        [
-            (
-                header::CONTENT_TYPE,
-                HeaderValue::from_static("application/x-tar"),
-            ),
-            (header::CONTENT_DISPOSITION, disposition),
-        ],
-        archive,
-    )
-        .into_response())
+    Ok(super::archive::bundle_download(&folder, &files)?)
 }
 
 /// `enact-hub-report-{dataset}-{first 12 hex digits of its hash}`, with anything outside

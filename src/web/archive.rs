@@ -38,6 +38,28 @@ fn archive_file_name(dataset: &str) -> String {
     format!("{}.tar", super::file_name_safe(dataset))
 }
 
+/// A report's files as one tar download: `{folder}/…` inside, `{folder}.tar` as its name
+/// (`folder` already safe in a quoted header).
+pub(super) fn bundle_download(
+    folder: &str,
+    files: &[crate::core::bundle::BundleFile],
+) -> Result<Response, AppError> {
+    let archive = crate::core::bundle::tar_archive(folder, files).map_err(AppError::from)?;
+    let disposition = HeaderValue::from_str(&format!("attachment; filename=\"{folder}.tar\""))
+        .map_err(anyhow::Error::from)?;
+    Ok((
+        [
+            (
+                header::CONTENT_TYPE,
+                HeaderValue::from_static("application/x-tar"),
+            ),
+            (header::CONTENT_DISPOSITION, disposition),
+        ],
+        archive,
+    )
+        .into_response())
+}
+
 /// A tar stream as a download named `file_name` (already safe in a quoted header).
 pub(super) fn tar_download(
     chunks: tokio::sync::mpsc::Receiver<Result<bytes::Bytes, std::io::Error>>,

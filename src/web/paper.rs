@@ -17,7 +17,6 @@ use super::extract::{Path, Query};
 use super::i18n::Tr;
 use super::{AppError, AppState};
 use crate::app::paper::{self, Paper, PaperOptions};
-use crate::core::bundle::tar_archive;
 use crate::core::dataset::StepLength;
 use crate::core::paper::export::study_heatmap_names;
 use crate::core::paper::hub::ReproducedCell;
@@ -299,20 +298,7 @@ async fn paper_tar(
 ) -> Result<Response, AppError> {
     let paper = made(&state, &dataset, &query).await?;
     let folder = folder(&paper.dataset);
-    let archive = tar_archive(&folder, &paper.files(true)?).map_err(AppError::from)?;
-    let disposition = HeaderValue::from_str(&format!("attachment; filename=\"{folder}.tar\""))
-        .map_err(anyhow::Error::from)?;
-    Ok((
-        [
-            (
-                header::CONTENT_TYPE,
-                HeaderValue::from_static("application/x-tar"),
-            ),
-            (header::CONTENT_DISPOSITION, disposition),
-        ],
-        archive,
-    )
-        .into_response())
+    super::archive::bundle_download(&folder, &paper.files(true)?)
 }
 
 fn media_type(file: &str) -> &'static str {

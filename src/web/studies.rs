@@ -24,7 +24,6 @@ use crate::app::studies::{self, StudyRowChoice, StudyView};
 use crate::app::tokens::Caller;
 use crate::app::{datasets, studies::files};
 use crate::core::annotation::Session;
-use crate::core::bundle::tar_archive;
 use crate::core::credentials::Scope;
 use crate::core::study::VariantSpec;
 use crate::core::study::export::{cells_csv, cells_tex, handedness_svg, heatmap_svg};
@@ -320,21 +319,7 @@ async fn study_report(
         },
         "tar" => {
             let folder = bundle_folder(&report);
-            let archive = tar_archive(&folder, &files(&report)?).map_err(AppError::from)?;
-            let disposition =
-                HeaderValue::from_str(&format!("attachment; filename=\"{folder}.tar\""))
-                    .map_err(anyhow::Error::from)?;
-            (
-                [
-                    (
-                        header::CONTENT_TYPE,
-                        HeaderValue::from_static("application/x-tar"),
-                    ),
-                    (header::CONTENT_DISPOSITION, disposition),
-                ],
-                archive,
-            )
-                .into_response()
+            super::archive::bundle_download(&folder, &files(&report)?)?
         }
         _ => Json(report).into_response(),
     })
