@@ -229,23 +229,14 @@ pub fn files(bundle: &PaperBundle<'_>) -> Result<Vec<BundleFile>, ExportError> {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use std::collections::BTreeMap;
 
     use super::*;
     use crate::dataset::{Direction, StepLength};
+    use crate::paper::heatmap_png::tests::camera_study;
     use crate::paper::hub::{HUB_CATEGORY, HubRow, Origin, assemble, reproduction};
     use crate::paper::{Category, CellKey, PaperTable, ReportedModel};
-
-    /// A study with one variant, reported for one row.
-    pub(crate) fn camera_study() -> StudyReport {
-        use crate::study::report::build_study_report;
-        use crate::study::report::fixtures::{inputs, row};
-        let (f, i) = (Direction::Forward, Direction::Inverse);
-        let baseline = row(1, &[("a", f, 3, 1.0), ("b", f, 3, 0.5), ("c", i, 4, 0.0)]);
-        let variant = row(2, &[("a", f, 3, 0.5), ("b", f, 3, 0.5), ("c", i, 4, 1.0)]);
-        build_study_report(&inputs(baseline, Ok(variant))).unwrap()
-    }
 
     fn f3() -> CellKey {
         CellKey {

@@ -108,10 +108,20 @@ pub fn heatmap_png(heatmap: &Heatmap) -> Result<Vec<u8>, FigureError> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
-    use crate::paper::export::tests::camera_study;
+    use crate::dataset::Direction;
     use crate::study::figure::study_heatmap;
+
+    /// A study with one variant, reported for one row (also the paper folder's test study).
+    pub(crate) fn camera_study() -> crate::study::report::StudyReport {
+        use crate::study::report::build_study_report;
+        use crate::study::report::fixtures::{inputs, row};
+        let (f, i) = (Direction::Forward, Direction::Inverse);
+        let baseline = row(1, &[("a", f, 3, 1.0), ("b", f, 3, 0.5), ("c", i, 4, 0.0)]);
+        let variant = row(2, &[("a", f, 3, 0.5), ("b", f, 3, 0.5), ("c", i, 4, 1.0)]);
+        build_study_report(&inputs(baseline, Ok(variant))).unwrap()
+    }
 
     #[test]
     fn the_png_paints_the_svgs_cells_at_twice_the_size_or_more() {
