@@ -376,7 +376,12 @@ impl Hub {
         let caches = self.caches();
         tokio::join!(
             watch::watch_generation(self.pool.clone(), caches.clone()),
-            watch::listen(self.pool.clone(), caches.clone(), self.changes.clone()),
+            watch::listen(
+                self.pool.clone(),
+                caches.clone(),
+                self.changes.clone(),
+                self.origin.clone()
+            ),
             watch::follow_feed(
                 self.pool.clone(),
                 caches,

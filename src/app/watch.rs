@@ -223,10 +223,16 @@ pub async fn follow_feed(
 }
 
 /// Applies the changes other instances announce, until the pool closes (PostgreSQL only; on
-/// SQLite, [`follow_feed`]). Changes are also sent on `changes` for caches outside the
+/// SQLite, [`follow_feed`]). What this process announced itself (`origin`) was applied when
+/// it committed and is skipped: applied again on arrival, it would drop caches filled since. Changes are also sent on `changes` for caches outside the
 /// app layer (the web's sessions). When the connection drops, notifications may have been
 /// missed meanwhile: every cache is cleared.
-pub async fn listen(pool: Pool, caches: Caches, changes: tokio::sync::broadcast::Sender<Change>) {
+pub async fn listen(
+    pool: Pool,
+    caches: Caches,
+    changes: tokio::sync::broadcast::Sender<Change>,
+    origin: Arc<str>,
+) {
     let Pool::Pg(pg) = &pool else {
         return;
     };
@@ -252,12 +258,12 @@ pub async fn listen(pool: Pool, caches: Caches, changes: tokio::sync::broadcast:
     };
     loop {
         match listener.try_recv().await {
-            Ok(Some(notification)) => match Change::parse(notification.payload()) {
-                Some(change) => apply(&caches, &changes, change),
-                None => tracing::warn!(
-                    payload = notification.payload(),
-                    "unknown change announced on {CHANNEL}"
-                ),
+            Ok(Some(notification)) => match store::notification_parts(notification.payload()) {
+                (Some(from), _) if *from == *origin => {}
+                (_, payload) => match Change::parse(payload) {
+                    Some(change) => apply(&caches, &changes, change),
+                    None => tracing::warn!(payload, "unknown change announced on {CHANNEL}"),
+                },
             },
             // The connection was lost and is back.
             Ok(None) => clear_all("the listening connection was re-established"),

@@ -165,9 +165,25 @@ pub async fn content_generation(conn: &mut Conn) -> Result<i64, sqlx::Error> {
 /// (and then drops everything it cached).
 pub const CHANGE_FEED_KEPT: i64 = 4096;
 
-/// Announces `payload` to the other processes on the database, delivered when the transaction
-/// `conn` is in commits (at once outside one): PostgreSQL's `NOTIFY` on `channel`; on SQLite a
-/// row of `change_feed` from `origin`, which running servers read ([`announcements_after`]).
+/// A `NOTIFY` text: the announcing process's origin, a tab, the payload. The origin lets a
+/// listener skip what it announced itself, which it applied when it committed.
+pub fn notification_text(origin: &str, payload: &str) -> String {
+    format!("{origin}\t{payload}")
+}
+
+/// A `NOTIFY` text's origin and payload; a text without an origin (from a hub before origins
+/// were sent) is all payload.
+pub fn notification_parts(text: &str) -> (Option<&str>, &str) {
+    match text.split_once('\t') {
+        Some((origin, payload)) => (Some(origin), payload),
+        None => (None, text),
+    }
+}
+
+/// Announces `payload` from `origin` to the other processes on the database, delivered when the
+/// transaction `conn` is in commits (at once outside one): PostgreSQL's `NOTIFY` on `channel`
+/// (its text framed by [`notification_text`]); on SQLite a row of `change_feed`, which running
+/// servers read ([`announcements_after`]).
 pub async fn announce(
     conn: &mut Conn,
     channel: &str,
@@ -192,7 +208,7 @@ pub async fn announce(
         db::Handle::Pg(c) => {
             sqlx::query("SELECT pg_notify($1, $2)")
                 .bind(channel)
-                .bind(payload)
+                .bind(notification_text(origin, payload))
                 .execute(c)
                 .await?;
             Ok(())
