@@ -18,6 +18,7 @@ const MIB: u64 = 1024 * 1024;
 mod accounts;
 mod agreement;
 mod audit;
+mod compare;
 mod database;
 mod dataset;
 mod doctor;
@@ -91,6 +92,10 @@ enum Command {
     /// ENACT's result tables from a dataset's rows beside the results papers published, marked
     /// as the paper marks them, with where each cell came from (.tex, .csv, .md, .json).
     Paper(paper::PaperArgs),
+    /// Two leaderboard rows of a dataset compared item by item: each side's task and pairwise
+    /// accuracy per direction and step length, the difference with a paired bootstrap interval
+    /// (resampling activities), McNemar's exact test, and the items only one gets right.
+    Compare(compare::CompareArgs),
     /// Ask an OpenAI-compatible model every item of a dataset (resumable: each reply is kept
     /// as it arrives) and submit its answers.
     Run(Box<run::RunArgs>),
@@ -191,6 +196,7 @@ pub fn main() -> ExitCode {
             Command::Dataset(command) => dataset::dataset(command).await,
             Command::Study(command) => study::study(command).await,
             Command::Paper(args) => paper::paper(args).await,
+            Command::Compare(args) => compare::compare(args).await,
             Command::Run(args) => run::run(*args).await,
             Command::Token(command) => accounts::token(command).await,
             Command::Annotator(command) => accounts::annotator(command).await,

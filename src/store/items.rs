@@ -114,6 +114,22 @@ pub async fn list(
     })
 }
 
+/// Every item's activity (`task_name`), by item id.
+pub async fn activities(
+    conn: &mut Conn,
+    dataset_id: i64,
+) -> Result<Vec<(String, String)>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query("SELECT item_id, task_name FROM items WHERE dataset_id = $1")
+            .bind(dataset_id)
+            .fetch_all(&mut *c)
+            .await?;
+        rows.iter()
+            .map(|row| Ok((row.try_get("item_id")?, row.try_get("task_name")?)))
+            .collect()
+    })
+}
+
 /// The distinct task names of a dataset, sorted.
 pub async fn task_names(conn: &mut Conn, dataset_id: i64) -> Result<Vec<String>, sqlx::Error> {
     on!(conn, |c| {

@@ -14,6 +14,8 @@
 //! - [`submission`]: reading, refusing and scoring a leaderboard submission.
 //! - [`paper`]: the paper's result tables and figures, its published results as data, and
 //!   other papers' numbers in the same shape.
+//! - [`paired`]: two leaderboard rows compared item by item: McNemar's exact test and a paired
+//!   bootstrap of the difference, resampling activities.
 //! - [`heatmap`]: the significance heatmap both reports draw (the paper's ablation figures).
 //! - [`leaderboard`]: leaderboard rows (Table 1 layout) and the TA-vs-L chart geometry.
 //! - [`model_run`]: asking a model an item: the versioned prompt, reading replies, retry
@@ -54,6 +56,7 @@ pub mod heatmap;
 pub mod leaderboard;
 pub mod metric;
 pub mod model_run;
+pub mod paired;
 pub mod paper;
 pub mod pipeline;
 pub mod quality;

@@ -51,7 +51,7 @@ pub fn bootstrap_mean_ci(
 }
 
 /// Quantile `q` of sorted, non-empty `sorted` (numpy's default "linear" method).
-fn quantile(sorted: &[f64], q: f64) -> f64 {
+pub(crate) fn quantile(sorted: &[f64], q: f64) -> f64 {
     let position = q.clamp(0.0, 1.0) * (sorted.len() - 1) as f64;
     let below = position.floor() as usize;
     let above = position.ceil() as usize;
