@@ -822,6 +822,52 @@ fn stored_verdict(r: &impl Fields) -> Result<Option<(HumanVerdict, u32)>, sqlx::
     Ok(Some((verdict, version)))
 }
 
+/// A submitted answer on one item, with who gave it and whether the Human row counts it.
+#[derive(Debug, Clone)]
+pub struct ItemAnswer {
+    pub annotator_name: String,
+    pub answer: KeyedAnswer,
+    /// The annotator's answers on this dataset are left out of the Human row.
+    pub excluded: bool,
+    pub finished_at: String,
+}
+
+/// Every submitted answer on the item (row id `item`), in the order they were finished.
+pub async fn answers_on_item(conn: &mut Conn, item: i64) -> Result<Vec<ItemAnswer>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT n.annotator, n.item, i.item_id, i.direction, i.step_length, i.gt_answer, \
+             n.answer, s.signatures, n.exact_match, n.semantic_match, n.task_accuracy, \
+             n.pairwise_accuracy, n.metric_version, n.finished_at, a.name AS annotator_name \
+             FROM annotations n JOIN items i ON i.id = n.item \
+             JOIN annotators a ON a.id = n.annotator \
+             LEFT JOIN item_signatures s ON s.item = i.id \
+             WHERE n.item = $1 AND n.outcome = 'answered' ORDER BY n.finished_at, n.annotator",
+        )
+        .bind(item)
+        .fetch_all(&mut *c)
+        .await?;
+        let excluded: Vec<i64> = sqlx::query_scalar(
+            "SELECT x.annotator FROM annotator_exclusions x JOIN items i ON i.dataset_id = x.dataset \
+             WHERE i.id = $1",
+        )
+        .bind(item)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter()
+            .map(|r| {
+                let answer = keyed_answer_from_row(r)?;
+                Ok(ItemAnswer {
+                    annotator_name: r.try_get("annotator_name")?,
+                    excluded: excluded.contains(&answer.annotator),
+                    finished_at: r.try_get("finished_at")?,
+                    answer,
+                })
+            })
+            .collect()
+    })
+}
+
 /// The annotator's submitted answer on `item`, with what judging it needs.
 pub async fn answer_to_judge(
     conn: &mut Conn,

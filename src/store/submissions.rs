@@ -265,36 +265,60 @@ pub struct StoredVerdict {
     pub gt_answer: String,
 }
 
+const VERDICT_COLUMNS: &str = "i.item_id, i.direction, i.step_length, i.gt_answer, v.line, \
+    v.raw_answer, v.permutation, v.outcome, v.failure, v.exact_match, v.semantic_match, \
+    v.task_accuracy, v.pairwise_accuracy";
+
+fn verdict_from_row(row: &impl Fields) -> Result<StoredVerdict, sqlx::Error> {
+    let (direction, step_length) = kind_from_row(row)?;
+    Ok(StoredVerdict {
+        id: row.try_get("item_id")?,
+        direction,
+        step_length,
+        line: row.try_get("line")?,
+        raw_answer: row.try_get("raw_answer")?,
+        permutation: row.try_get("permutation")?,
+        outcome: row.try_get("outcome")?,
+        failure: row.try_get("failure")?,
+        exact_match: row.try_get("exact_match")?,
+        semantic_match: row.try_get("semantic_match")?,
+        task_accuracy: row.try_get("task_accuracy")?,
+        pairwise_accuracy: row.try_get("pairwise_accuracy")?,
+        gt_answer: row.try_get("gt_answer")?,
+    })
+}
+
 pub async fn verdicts(conn: &mut Conn, submission: i64) -> Result<Vec<StoredVerdict>, sqlx::Error> {
     on!(conn, |c| {
-        let rows = sqlx::query(
-            "SELECT i.item_id, i.direction, i.step_length, i.gt_answer, v.line, v.raw_answer, \
-         v.permutation, v.outcome, v.failure, v.exact_match, v.semantic_match, v.task_accuracy, \
-         v.pairwise_accuracy FROM submission_items v JOIN items i ON i.id = v.item \
-         WHERE v.submission = $1 ORDER BY i.id",
-        )
+        let rows = sqlx::query(&format!(
+            "SELECT {VERDICT_COLUMNS} FROM submission_items v JOIN items i ON i.id = v.item \
+             WHERE v.submission = $1 ORDER BY i.id"
+        ))
         .bind(submission)
         .fetch_all(&mut *c)
         .await?;
+        rows.iter().map(verdict_from_row).collect()
+    })
+}
+
+/// The verdicts every published submission of the item's dataset has for the item (row id
+/// `item`), by submission id. Each is one lookup of the verdicts' key (submission, item).
+pub async fn published_verdicts_of_item(
+    conn: &mut Conn,
+    item: i64,
+) -> Result<Vec<(i64, StoredVerdict)>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(&format!(
+            "SELECT v.submission, {VERDICT_COLUMNS} FROM items i \
+             JOIN submissions s ON s.dataset = i.dataset_id AND s.visibility = 'published' \
+             JOIN submission_items v ON v.submission = s.id AND v.item = i.id \
+             WHERE i.id = $1 ORDER BY s.id"
+        ))
+        .bind(item)
+        .fetch_all(&mut *c)
+        .await?;
         rows.iter()
-            .map(|row| {
-                let (direction, step_length) = kind_from_row(row)?;
-                Ok(StoredVerdict {
-                    id: row.try_get("item_id")?,
-                    direction,
-                    step_length,
-                    line: row.try_get("line")?,
-                    raw_answer: row.try_get("raw_answer")?,
-                    permutation: row.try_get("permutation")?,
-                    outcome: row.try_get("outcome")?,
-                    failure: row.try_get("failure")?,
-                    exact_match: row.try_get("exact_match")?,
-                    semantic_match: row.try_get("semantic_match")?,
-                    task_accuracy: row.try_get("task_accuracy")?,
-                    pairwise_accuracy: row.try_get("pairwise_accuracy")?,
-                    gt_answer: row.try_get("gt_answer")?,
-                })
-            })
+            .map(|row| Ok((row.try_get("submission")?, verdict_from_row(row)?)))
             .collect()
     })
 }

@@ -15,6 +15,7 @@ use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
 use crate::app::datasets::{self, DatasetOverview};
 use crate::app::frames;
+use crate::app::item_answers::{self, ItemAnswers};
 use crate::app::items::{self, ItemFilter, ItemSummary, StoredItem};
 use crate::core::dataset::{Direction, StepLength};
 
@@ -78,6 +79,24 @@ pub fn routes() -> Vec<ApiRoute> {
         )
         .responds_json::<ItemView>(200, "The item.")
         .errors(&[404]),
+        ApiRoute::new(
+            Verb::Get,
+            "/datasets/{dataset}/items/{item_id}/answers",
+            get_item_answers,
+            "Every answer to an item",
+        )
+        .describe(
+            "The item's true order; every leaderboard row's answer (each account's latest \
+             published submission of a model) with the order read from it, `task_correct`, \
+             `pairwise_accuracy`, the `verdict` (`exact`, `equivalent`: another order the \
+             verifier accepts, `wrong`, `unparseable`, `missing`) and, for a wrong answer on an \
+             item with state changes, `why`: each step judged, with the changes the answer \
+             implies that the true step lacks and those it misses (ENACT's sentences), and the \
+             pairs of labels out of order; then every annotator's answer, pseudonymous. Only \
+             for a dataset whose answers are public (404 otherwise, as for its ground truth).",
+        )
+        .responds_json::<ItemAnswers>(200, "The item's answers.")
+        .errors(&[404, 503]),
         ApiRoute::new(Verb::Get, "/frames/{sha256}", get_frame, "A frame")
             .describe(
                 "A key frame as PNG, with a strong ETag and `Cache-Control: immutable`; \
@@ -376,6 +395,15 @@ impl ItemView {
                 .collect(),
         }
     }
+}
+
+async fn get_item_answers(
+    State(state): State<AppState>,
+    Path((name, item_id)): Path<(String, String)>,
+) -> Result<axum::Json<ItemAnswers>, AppError> {
+    Ok(axum::Json(
+        item_answers::of(&state.hub, &name, &item_id, false).await?,
+    ))
 }
 
 async fn get_item(

@@ -201,7 +201,7 @@ async fn dataset_errors(
 }
 
 /// Whether the reader is a logged-in admin (pages show them examples of hidden datasets).
-struct ReaderIsAdmin(bool);
+pub(super) struct ReaderIsAdmin(pub(super) bool);
 
 impl FromRequestParts<AppState> for ReaderIsAdmin {
     type Rejection = std::convert::Infallible;

@@ -22,6 +22,7 @@ mod api;
 mod archive;
 mod assets;
 mod auth;
+mod compare;
 mod cookies;
 mod episodes;
 pub mod error;
@@ -157,6 +158,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(runs::routes());
     routes.extend(quality::routes());
     routes.extend(reported::routes());
+    routes.extend(compare::routes());
     routes.push(
         openapi::ApiRoute::new(
             openapi::Verb::Get,
@@ -283,6 +285,7 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(admin_pages(&state))
         .merge(studies::page_router())
         .merge(paper::page_router())
+        .merge(compare::page_router())
         .merge(run_pages::page_router())
         .merge(assets::router())
         .merge(openapi::page_router())

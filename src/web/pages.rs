@@ -10,11 +10,15 @@ use super::AppState;
 use super::annotate::direction_key;
 use super::api::{ItemQuery, frame_url};
 use super::error::PageError;
+use super::error_analysis::ReaderIsAdmin;
 use super::extract::{Path, Query};
-use super::i18n::Tr;
+use super::i18n::{Tr, msg};
 use crate::app::datasets;
+use crate::app::item_answers::{self, ItemAnswers};
 use crate::app::items::{self, StoredItem};
-use crate::core::dataset::{Direction, StepLength};
+use crate::core::dataset::{AnswerVisibility, Direction, StepLength};
+use crate::core::error_analysis::why::AnswerWhy;
+use crate::core::submission::AnswerVerdict;
 
 pub fn router() -> Router<AppState> {
     Router::new()
@@ -222,15 +226,182 @@ struct ItemPage {
     actions: Vec<ActionLine>,
     images: Vec<ImageCard>,
     dataset_href: String,
+    /// Every answer to the item; `None` where they are not shown to this reader.
+    answers: Option<AnswersView>,
+}
+
+/// A judged answer on the item page.
+struct AnswerLine {
+    /// The row (model and account) or the annotator.
+    who: String,
+    /// The order as read ("2 → 1 → 3"), or the raw answer when it could not be read.
+    answer: String,
+    verdict: &'static str,
+    verdict_name: String,
+    pairwise: String,
+    why: Option<WhyView>,
+    /// A note for admins: excluded annotator, baseline row.
+    note: String,
+}
+
+struct WhyStep {
+    heading: String,
+    implied: Vec<String>,
+    missed: Vec<String>,
+}
+
+struct WhyView {
+    steps: Vec<WhyStep>,
+    pairs: String,
+}
+
+/// The rows' answers or the annotators'.
+struct AnswerSection {
+    id: &'static str,
+    heading: String,
+    lines: Vec<AnswerLine>,
+    /// Said when there is no line.
+    none: String,
+}
+
+struct AnswersView {
+    truth: String,
+    sections: Vec<AnswerSection>,
+    gold: bool,
+    json: String,
+}
+
+fn order(labels: &[u8]) -> String {
+    labels
+        .iter()
+        .map(u8::to_string)
+        .collect::<Vec<_>>()
+        .join(" → ")
+}
+
+fn verdict_view(tr: &Tr, verdict: AnswerVerdict) -> (&'static str, String) {
+    let key = match verdict {
+        AnswerVerdict::Exact => msg("item-verdict-exact"),
+        AnswerVerdict::Equivalent => msg("item-verdict-equivalent"),
+        AnswerVerdict::Wrong => msg("item-verdict-wrong"),
+        AnswerVerdict::Unparseable => msg("item-verdict-unparseable"),
+        AnswerVerdict::Missing => msg("item-verdict-missing"),
+    };
+    (verdict.as_str(), tr.t(key))
+}
+
+fn why_view(tr: &Tr, why: &AnswerWhy) -> WhyView {
+    WhyView {
+        steps: why
+            .steps
+            .iter()
+            .filter(|s| !s.accepted)
+            .map(|s| WhyStep {
+                heading: tr.t_nn("item-why-step", "step", s.step, "label", s.label),
+                implied: s.implied.clone(),
+                missed: s.missed.clone(),
+            })
+            .collect(),
+        pairs: why
+            .pairs_out_of_order
+            .iter()
+            .map(|[x, y]| format!("{x} ↔ {y}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+    }
+}
+
+fn pairwise_text(value: Option<f64>) -> String {
+    value.map_or_else(|| "–".to_owned(), |v| format!("{:.2}", 100.0 * v))
+}
+
+fn answers_view(tr: &Tr, answers: &ItemAnswers) -> AnswersView {
+    let models = answers
+        .models
+        .iter()
+        .map(|m| {
+            let (verdict, verdict_name) = verdict_view(tr, m.verdict);
+            AnswerLine {
+                who: format!("{} (#{}, {})", m.model, m.submission, m.account),
+                answer: match (&m.parsed, &m.answer) {
+                    (Some(p), _) => order(p),
+                    (None, Some(raw)) => raw.clone(),
+                    (None, None) => "–".to_owned(),
+                },
+                verdict,
+                verdict_name,
+                pairwise: pairwise_text(m.pairwise_accuracy),
+                why: m.why.as_ref().map(|w| why_view(tr, w)),
+                note: if m.baseline {
+                    tr.t("item-answer-baseline")
+                } else {
+                    String::new()
+                },
+            }
+        })
+        .collect();
+    let humans = answers
+        .humans
+        .iter()
+        .map(|h| {
+            let (verdict, verdict_name) = verdict_view(tr, h.verdict);
+            AnswerLine {
+                who: h.annotator.clone(),
+                answer: order(&h.answer),
+                verdict,
+                verdict_name,
+                pairwise: pairwise_text(h.pairwise_accuracy),
+                why: h.why.as_ref().map(|w| why_view(tr, w)),
+                note: if h.excluded == Some(true) {
+                    tr.t("item-answer-excluded")
+                } else {
+                    String::new()
+                },
+            }
+        })
+        .collect();
+    AnswersView {
+        truth: order(&answers.truth),
+        sections: vec![
+            AnswerSection {
+                id: "models",
+                heading: tr.t("item-answers-models"),
+                lines: models,
+                none: tr.t("item-answers-no-models"),
+            },
+            AnswerSection {
+                id: "humans",
+                heading: tr.t("item-answers-humans"),
+                lines: humans,
+                none: tr.t("item-answers-no-humans"),
+            },
+        ],
+        gold: answers.gold == Some(true),
+        json: format!(
+            "/api/v1/datasets/{}/items/{}/answers",
+            answers.dataset, answers.item.id
+        ),
+    }
 }
 
 async fn item(
     State(state): State<AppState>,
     Path((name, item_id)): Path<(String, String)>,
+    ReaderIsAdmin(admin): ReaderIsAdmin,
     tr: Tr,
 ) -> Result<Html<String>, PageError> {
     let item = StoredItem::clone(&*items::get(&state.hub, &name, &item_id).await?);
+    let dataset = datasets::by_name(&state.hub, &name).await?;
+    let shown = admin
+        || datasets::answer_visibility(&state.hub, &dataset).await? == AnswerVisibility::Public;
+    let answers = if shown {
+        let answers = item_answers::of(&state.hub, &name, &item_id, admin).await?;
+        Some(answers_view(&tr, &answers))
+    } else {
+        None
+    };
     let page = ItemPage {
+        answers,
         direction_name: tr.t(direction_key(item.summary.direction)),
         tr,
         dataset_href: format!(

@@ -212,6 +212,44 @@ impl VerdictOutcome {
     }
 }
 
+/// How one answer fared, as the item page and its API name it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum AnswerVerdict {
+    /// The true order.
+    Exact,
+    /// Another order whose state changes the verifier accepts as the truth's.
+    Equivalent,
+    /// Read, and not accepted.
+    Wrong,
+    /// Not a reading of the item's labels.
+    Unparseable,
+    /// No answer to the item.
+    Missing,
+}
+
+impl AnswerVerdict {
+    pub fn of(outcome: VerdictOutcome, exact_match: bool, task_accuracy: bool) -> AnswerVerdict {
+        match outcome {
+            VerdictOutcome::Missing => AnswerVerdict::Missing,
+            VerdictOutcome::Unparseable => AnswerVerdict::Unparseable,
+            VerdictOutcome::Scored if exact_match => AnswerVerdict::Exact,
+            VerdictOutcome::Scored if task_accuracy => AnswerVerdict::Equivalent,
+            VerdictOutcome::Scored => AnswerVerdict::Wrong,
+        }
+    }
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            AnswerVerdict::Exact => "exact",
+            AnswerVerdict::Equivalent => "equivalent",
+            AnswerVerdict::Wrong => "wrong",
+            AnswerVerdict::Unparseable => "unparseable",
+            AnswerVerdict::Missing => "missing",
+        }
+    }
+}
+
 /// One dataset item's verdict, with the answer as submitted.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ItemVerdict {

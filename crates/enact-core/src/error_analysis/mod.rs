@@ -18,6 +18,7 @@ pub mod handedness;
 pub mod present;
 pub mod semantic;
 pub mod steps;
+pub mod why;
 
 use schemars::JsonSchema;
 use std::collections::BTreeMap;
