@@ -21,8 +21,14 @@ if ! command -v wrk >/dev/null 2>&1; then
   apt-get install -y wrk >/dev/null 2>&1 || { apt-get update >/dev/null && apt-get install -y wrk >/dev/null; }
 fi
 
-cargo build --release --locked --bin enact-hub >&2
-BIN=${CARGO_TARGET_DIR:-target}/release/enact-hub
+# ENACT_HUB_BIN: a built binary to measure instead of this checkout's release build (e.g. the
+# `dist` profile's, target/dist/enact-hub).
+if [ -n "${ENACT_HUB_BIN:-}" ]; then
+  BIN=$ENACT_HUB_BIN
+else
+  cargo build --release --locked --bin enact-hub >&2
+  BIN=${CARGO_TARGET_DIR:-target}/release/enact-hub
+fi
 DB="$OUT/bench.db"
 rm -f "$DB" "$DB-wal" "$DB-shm"
 

@@ -22,12 +22,16 @@ OUT=bench-out/submissions
 [ -d "$PARITY" ] || { echo "error: $PARITY not found" >&2; exit 1; }
 mkdir -p "$OUT"
 
-if [ "$PROFILE" = release ]; then
+# ENACT_HUB_BIN: a built binary to measure instead of building one (e.g. target/dist/enact-hub).
+if [ -n "${ENACT_HUB_BIN:-}" ]; then
+  BIN=$ENACT_HUB_BIN
+elif [ "$PROFILE" = release ]; then
   cargo build --release --locked --bin enact-hub >&2
+  BIN=${CARGO_TARGET_DIR:-target}/release/enact-hub
 else
   cargo build --locked --bin enact-hub >&2
+  BIN=${CARGO_TARGET_DIR:-target}/debug/enact-hub
 fi
-BIN=target/$PROFILE/enact-hub
 DB="$OUT/bench.db"
 rm -f "$DB" "$DB-wal" "$DB-shm"
 

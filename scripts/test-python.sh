@@ -8,7 +8,7 @@
 #
 # The wheel and the install are built with the `dev` profile in the test suite's own target dir,
 # so they reuse the dependencies `cargo test` just built (an optimised build of the whole tree
-# would add more than ten minutes on CI's two cores); ENACT_HUB_WHEEL_PROFILE=release builds what
+# would add more than ten minutes on CI's two cores); ENACT_HUB_WHEEL_PROFILE=dist builds what
 # ships instead. What is checked here is the packaging, not the optimiser.
 set -euo pipefail
 cd "$(dirname "$0")/.."

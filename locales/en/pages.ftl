@@ -184,6 +184,7 @@ leaderboard-metrics = TA = task accuracy, PA = pairwise accuracy, in percent. Th
 leaderboard-metric-version = Metric version { $version }; a row computed with an older one is marked
 leaderboard-older-metric = older metric
 leaderboard-error-analysis = Error analysis
+leaderboard-compare = Compare two rows
 leaderboard-empty = No submission has been published for this dataset yet.
 leaderboard-how-to-submit = Submit ENACT model-output JSONL with an API token:
 leaderboard-ranked-by = Ranked by
@@ -409,3 +410,76 @@ paper-interval = Hub interval
 paper-inside = Published value inside?
 paper-inside-yes = inside
 paper-inside-no = outside
+
+## Two leaderboard rows compared item by item (/datasets/{dataset}/compare)
+compare-title = Compare two rows
+compare-heading = Compare two rows: { $dataset }
+compare-explanation = Two rows of the leaderboard, compared on the items both answered. Overlapping leaderboard intervals say little about which is better; a paired comparison asks on how many items one succeeds where the other fails. Each difference (A − B, in points) comes with a paired bootstrap interval, and task success with McNemar's exact test.
+compare-leaderboard = Leaderboard
+compare-row-a = Row A
+compare-row-b = Row B
+compare-rows-hint = A model name (its leaderboard row) or a submission number.
+compare-resample = Intervals resample
+compare-resampling-activities = whole activities with their items
+compare-resampling-items = items one by one
+compare-apply = Compare
+compare-no-rows = This leaderboard has no published submission yet.
+compare-result = { $a } against { $b }
+compare-method = Intervals: { $level } % paired percentile bootstrap, resampling { $resampling }.
+compare-resamples = { $count ->
+    [one] { $count } resample.
+   *[other] { $count } resamples.
+}
+compare-metric-versions = The two rows were scored under different metric versions ({ $a } and { $b }): rescoring the older one makes them comparable.
+compare-unpaired = { $count ->
+    [one] { $count } item has a verdict in only one of the rows and is left out.
+   *[other] { $count } items have a verdict in only one of the rows and are left out.
+}
+compare-table = Task and pairwise accuracy of both rows, their differences and McNemar's test
+compare-cell = Items
+compare-n = Count
+compare-ta-a = TA A
+compare-ta-b = TA B
+compare-ta-difference = TA A − B [interval]
+compare-a-only = Only A right
+compare-b-only = Only B right
+compare-mcnemar = McNemar p
+compare-pa-a = PA A
+compare-pa-b = PA B
+compare-pa-difference = PA A − B [interval]
+compare-significant = under 0.05
+compare-reading = An interval that excludes 0 and a McNemar p under 0.05 (in bold) say the difference is unlikely to be chance. With items from few activities, resampling activities gives the honest, wider interval.
+compare-overall = Every item
+compare-forward = Forward
+compare-inverse = Inverse
+compare-only-a = Items only { $row } gets right
+compare-only-b = Items only { $row } gets right
+compare-none = None.
+compare-items-hidden = This dataset's answers are hidden: per-item verdicts are shown to admins only.
+
+## The item page's answers
+item-answers = Answers
+item-truth = The true order:
+item-gold = gold item
+item-answers-models = Leaderboard rows
+item-answers-humans = Annotators
+item-answers-no-models = No published submission has answered this item.
+item-answers-no-humans = No annotator has answered this item yet.
+item-answers-hidden = This dataset's answers are hidden: the answers to its items are shown to admins only.
+item-answer-who = Who
+item-answer-order = Answer
+item-answer-verdict = Verdict
+item-answer-pairwise = Pairwise accuracy
+item-answer-why = Why
+item-answer-baseline = baseline
+item-answer-excluded = excluded from the Human row
+item-verdict-exact = exact
+item-verdict-equivalent = accepted as equivalent
+item-verdict-wrong = wrong
+item-verdict-unparseable = unparseable
+item-verdict-missing = missing
+item-why = Steps the verifier rejects
+item-why-step = Step { $step } (label { $label })
+item-why-implied = The answer implies, and the truth does not:
+item-why-missed = The true step has, and the answer does not:
+item-why-pairs = Pairs in the wrong order:

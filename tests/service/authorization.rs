@@ -219,6 +219,19 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
         assert_eq!(reply.status, 201, "{}", reply.text);
         reply.id()
     };
+    // A second row, for the comparison of two.
+    let second = {
+        let reply = submit_to(
+            &server,
+            "mini",
+            "model=m2",
+            &callers.owner,
+            answers(&records, &[1]),
+        )
+        .await;
+        assert_eq!(reply.status, 201, "{}", reply.text);
+        reply.id()
+    };
     mini_study(&server, "matrix").await;
     let item = records[0]["id"].as_str().expect("id").to_owned();
     let (_, item_json) = server
@@ -294,7 +307,7 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                 path = path.replace(&format!("{{{param}}}"), &value);
             }
             // The required query parameters among the routes: a submission's model, a report's,
-            // the quality figures' dataset.
+            // the quality figures' dataset, the two rows of a comparison.
             if route.path == "/admin/annotators/quality" {
                 path.push_str("?dataset=mini");
             }
@@ -303,6 +316,18 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
             }
             if route.path == "/studies/{study}/report" {
                 path.push_str("?model=m");
+            }
+            // An item's answers are public only while its dataset's are (another route of the
+            // matrix hides them).
+            if route.path == "/datasets/{dataset}/items/{item_id}/answers" {
+                set_mini_answers(
+                    &server.pool,
+                    enact_hub::core::dataset::AnswerVisibility::Public,
+                )
+                .await;
+            }
+            if route.path == "/datasets/{dataset}/compare" {
+                path.push_str(&format!("?a={submission}&b={second}"));
             }
             let mut call = callers.credential(
                 server.call(method(route.verb), &format!("/api/v1{path}")),
@@ -447,6 +472,7 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("GET", "/datasets/{dataset}", Page::Public),
     ("GET", "/datasets/{dataset}/items/{item_id}", Page::Public),
     ("GET", "/datasets/{dataset}/paper", Page::Public),
+    ("GET", "/datasets/{dataset}/compare", Page::Public),
     ("GET", "/datasets/{dataset}/paper.tar", Page::Public),
     (
         "GET",

@@ -561,6 +561,12 @@ impl PublicWorld {
                 .expect(201)
                 .await;
         }
+        // Public answers: the item pages show every row's answer, with the verifier's reasons.
+        set_mini_answers(
+            &server.pool,
+            enact_hub::core::dataset::AnswerVisibility::Public,
+        )
+        .await;
         PublicWorld {
             server,
             records,
@@ -582,7 +588,8 @@ impl PublicWorld {
         ]
     }
 
-    /// The public pages: home, dataset and items, leaderboard, error analyses, studies.
+    /// The public pages: home, dataset and items (with every answer), leaderboard, a
+    /// comparison of two rows, error analyses, studies.
     fn public_pages(&self) -> Vec<String> {
         vec![
             "/".to_owned(),
@@ -591,6 +598,7 @@ impl PublicWorld {
             format!("/datasets/mini/items/{}", self.item(1)),
             "/leaderboard/mini".to_owned(),
             "/datasets/mini/paper?intervals=1".to_owned(),
+            "/datasets/mini/compare?a=exact&b=reversed".to_owned(),
             "/leaderboard/mini/errors".to_owned(),
             format!("/leaderboard/mini/errors/{}", self.submissions[2]),
             "/studies".to_owned(),

@@ -348,6 +348,21 @@ pub async fn spawn_app_with_release_as(datasets: &[&str]) -> (TestServer, Vec<Va
     (server, records)
 }
 
+impl TestServer {
+    /// A page asked for in `language` (an `Accept-Language` value): its status and text.
+    pub async fn page_in(&self, path: &str, language: &str) -> (reqwest::StatusCode, String) {
+        let page = self
+            .client
+            .get(self.url(path))
+            .header("accept-language", language)
+            .send()
+            .await
+            .unwrap_or_else(|e| panic!("GET {path}: {e}"));
+        let status = page.status();
+        (status, page.text().await.expect("a page's text"))
+    }
+}
+
 /// A request to the test server, built step by step and sent once.
 pub struct Call {
     what: String,

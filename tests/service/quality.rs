@@ -71,7 +71,7 @@ fn careless_order(gt: &[u8], state: &mut u64) -> Vec<u8> {
 
 /// Works `name`'s whole queue in order over HTTP, each item taking `seconds(i)` (the draft's
 /// start moved back by that much before the answer), answering with `answer(item)`.
-async fn work_queue(
+pub(crate) async fn work_queue(
     server: &TestServer,
     name: &str,
     annotator_id: i64,
@@ -220,7 +220,7 @@ async fn audit_of(hub: &Hub, action: &str) -> Vec<enact_hub::core::audit::AuditE
 
 /// Appends the listed items of "mini" to an annotator's queue, as an admin would (the gold mix
 /// follows).
-async fn assign_listed(hub: &Hub, annotator: i64, item_ids: &[String]) {
+pub(crate) async fn assign_listed(hub: &Hub, annotator: i64, item_ids: &[String]) {
     annotation::assign(
         hub,
         &tester(),
