@@ -78,7 +78,7 @@ pub async fn rows(
     let mut conn = hub.conn().await?;
     let published = store::submissions::published(&mut conn, dataset.id).await?;
     drop(conn);
-    let board = one_per_model(&leaderboard::rows(hub, &dataset).await?);
+    let board = one_per_model(&leaderboard::board(hub, &dataset.name).await?.rows);
     let row_a = resolve(&dataset, &published, &board, a, "a")?;
     let row_b = resolve(&dataset, &published, &board, b, "b")?;
     if row_a.id == row_b.id {

@@ -111,7 +111,8 @@ pub async fn of(
     let item = items::get(hub, &stored.name, item_id).await?;
     let truth = Permutation::new(item.gt_answer.clone())
         .map_err(|e| AppError::internal(format!("item {item_id}: stored gt_answer: {e}")))?;
-    let board = one_per_model(&leaderboard::rows(hub, &stored).await?);
+    // The cached board: an item page must not rebuild the Human row.
+    let board = one_per_model(&leaderboard::board(hub, &stored.name).await?.rows);
     let mut conn = hub.conn().await?;
     let table: Option<ItemSignatures> =
         match store::items::semantics_json(&mut conn, stored.id, item_id).await? {

@@ -282,8 +282,8 @@ async fn compare_page(
     tr: Tr,
 ) -> Result<Html<String>, PageError> {
     let config = query.config()?;
-    let (stored, rows) = leaderboard::of(&state.hub, &dataset).await?;
-    let choices = one_per_model(&rows)
+    let board = leaderboard::board(&state.hub, &dataset).await?;
+    let choices = one_per_model(&board.rows)
         .iter()
         .filter(|r| r.source == RowSource::Submission)
         .filter_map(|r| {
@@ -296,13 +296,13 @@ async fn compare_page(
         .collect();
     let comparison = match query.rows() {
         Some((a, b)) => {
-            let c = compare::rows(&state.hub, &stored.name, a, b, config, admin).await?;
+            let c = compare::rows(&state.hub, &board.dataset.name, a, b, config, admin).await?;
             Some(comparison_view(&tr, &c, &query))
         }
         None => None,
     };
     let page = ComparePage {
-        dataset: stored.name,
+        dataset: board.dataset.name.clone(),
         choices,
         a: query.a.clone().unwrap_or_default(),
         b: query.b.clone().unwrap_or_default(),
