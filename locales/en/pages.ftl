@@ -237,6 +237,10 @@ leaderboard-human-excluded = ; { $count ->
    *[other] { $count } annotators
   } excluded by an admin
 leaderboard-human-unranked = ; not ranked
+intervals-note = Intervals: 95 % percentile bootstrap, resampling { $resampling }. Items of one activity (ENACT's task_name) share scenes and fail together, so by default whole activities are resampled.
+leaderboard-resample-items = Resample items one by one instead
+leaderboard-resample-activities = Resample whole activities (the default)
+leaderboard-intervals-by-items = this row's intervals resample items: it was scored before the hub resampled activities; rescoring recomputes them
 leaderboard-human-note = The Human row is a reference, never ranked among models; a figure marked † rests on fewer than five human answers. Answers on gold items (items with a known answer mixed into annotators' queues to check their work) never count in it, nor do the answers of annotators an admin excluded.
 leaderboard-reported-count = { $count ->
     [one] This dataset has { $count } result a paper published (a reported row).
@@ -419,9 +423,9 @@ compare-leaderboard = Leaderboard
 compare-row-a = Row A
 compare-row-b = Row B
 compare-rows-hint = A model name (its leaderboard row) or a submission number.
-compare-resample = Intervals resample
-compare-resampling-activities = whole activities with their items
-compare-resampling-items = items one by one
+intervals-resample = Intervals resample
+intervals-resampling-activities = whole activities with their items
+intervals-resampling-items = items one by one
 compare-apply = Compare
 compare-no-rows = This leaderboard has no published submission yet.
 compare-result = { $a } against { $b }

@@ -1,5 +1,6 @@
 //! The built-in demo: the synthetic world's release written to a temporary folder, imported
-//! as dataset "demo" with scene-graph semantics, and a chance baseline on its leaderboard.
+//! as dataset "demo" with scene-graph semantics, and two reference rows on its leaderboard: a
+//! chance baseline and a one-rule heuristic, whose replies are text as a model's are.
 
 use anyhow::Context;
 
@@ -8,6 +9,7 @@ use super::{AppError, Hub, annotators, datasets, submissions};
 use crate::core::annotation::balanced_sample;
 use crate::core::audit::Actor;
 use crate::core::credentials::{random_token, token_hash};
+use crate::core::dataset::parse_release_line;
 use crate::core::demo;
 use crate::core::submission::SubmissionMetadata;
 use crate::store;
@@ -34,6 +36,7 @@ pub async fn load(hub: &Hub) -> anyhow::Result<ImportReport> {
         .run_waiting(move || demo::write_demo_release(&out, demo::DEFAULT_SEED))
         .await
         .context("cannot generate the demo dataset")?;
+    let heuristic = heuristic_replies(&written.jsonl_path)?;
     let options = ImportOptions {
         dataset: DEMO_DATASET.to_owned(),
         skip_invalid: false,
@@ -47,19 +50,11 @@ pub async fn load(hub: &Hub) -> anyhow::Result<ImportReport> {
         .await
         .context("cannot import the demo dataset")?;
     tracing::info!("{}", report.summary_line());
-    let metadata = SubmissionMetadata {
-        model: demo::CHANCE_BASELINE_MODEL.to_owned(),
-        description: "Every item answered with a uniformly random ordering (seeded); what \
-                      chance earns at each step length."
-            .to_owned(),
-        ..SubmissionMetadata::default()
-    };
-    submissions::file_baseline(
+    file_reference_row(
         hub,
-        &Actor::Server,
-        DEMO_DATASET,
-        DEMO_ACCOUNT,
-        metadata,
+        demo::CHANCE_BASELINE_MODEL,
+        "Every item answered with a uniformly random ordering (seeded); what chance earns at \
+         each step length.",
         |dataset| {
             demo::chance_baseline(
                 dataset
@@ -70,9 +65,67 @@ pub async fn load(hub: &Hub) -> anyhow::Result<ImportReport> {
             )
         },
     )
-    .await
-    .context("cannot add the demo's chance baseline")?;
+    .await?;
+    file_reference_row(
+        hub,
+        demo::GRASP_HEURISTIC_MODEL,
+        "Not a model: one rule over ENACT's sentences. Inverse items: each object grasped \
+         before it is released, otherwise the order listed; forward items (images it cannot \
+         see): the order listed.",
+        |_| heuristic,
+    )
+    .await?;
     Ok(report)
+}
+
+/// Files `model`'s answers (made from the dataset's scoring targets by `body`) on the demo's
+/// leaderboard as a reference row, once per database.
+async fn file_reference_row(
+    hub: &Hub,
+    model: &str,
+    description: &str,
+    body: impl FnOnce(&submissions::DatasetTargets) -> String,
+) -> anyhow::Result<()> {
+    let metadata = SubmissionMetadata {
+        model: model.to_owned(),
+        description: description.to_owned(),
+        ..SubmissionMetadata::default()
+    };
+    submissions::file_baseline(
+        hub,
+        &Actor::Server,
+        DEMO_DATASET,
+        DEMO_ACCOUNT,
+        metadata,
+        body,
+    )
+    .await
+    .with_context(|| format!("cannot add the demo's row '{model}'"))?;
+    Ok(())
+}
+
+/// The heuristic's replies to every item of the demo release at `jsonl`.
+fn heuristic_replies(jsonl: &std::path::Path) -> anyhow::Result<String> {
+    let text = std::fs::read_to_string(jsonl)
+        .with_context(|| format!("cannot read {}", jsonl.display()))?;
+    let items = text
+        .lines()
+        .enumerate()
+        .filter(|(_, line)| !line.trim().is_empty())
+        .map(|(n, line)| {
+            parse_release_line(line).map_err(|problems| {
+                anyhow::anyhow!("{} line {}: {problems:?}", jsonl.display(), n + 1)
+            })
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    Ok(demo::grasp_heuristic(items.iter().map(|i| {
+        (
+            i.id.as_str(),
+            i.direction,
+            i.question.as_str(),
+            i.gt_answer.len(),
+        )
+    })))
 }
 
 /// A single-use login link secret for the demo admin (created on first use, with a balanced

@@ -4,14 +4,17 @@
 //! published model the hub also scored. The tables and files are `core::paper`'s; this module
 //! gathers the rows.
 
+use std::collections::HashMap;
+
 use crate::core::bundle::BundleFile;
 use crate::core::leaderboard::{LeaderboardRow, RowSource, one_per_model};
 use crate::core::paper::error_figure::AnalysedRow;
 use crate::core::paper::export::{PaperBundle, StudyFigure, files as bundle_files};
 use crate::core::paper::hub::{
-    AssembledTable, HubRow, Origin, ReproducedCell, RowMetadata, assemble, reproduction,
+    AssembledTable, HubRow, ItemResult, Origin, ReproducedCell, RowMetadata, assemble, reproduction,
 };
 use crate::core::paper::{Category, CellKey, Metric, ReportedModel};
+use crate::core::verifier::{Resampling, cluster_ids};
 use crate::core::version::BUILD;
 use crate::store;
 
@@ -28,6 +31,8 @@ pub struct PaperOptions {
     pub metrics: Vec<Metric>,
     /// Print the hub rows' bootstrap intervals under their values.
     pub intervals: bool,
+    /// What the intervals' bootstrap resamples: activities (the default) or items.
+    pub resampling: Resampling,
 }
 
 impl Default for PaperOptions {
@@ -36,6 +41,7 @@ impl Default for PaperOptions {
             models: None,
             metrics: Metric::ALL.to_vec(),
             intervals: false,
+            resampling: Resampling::Activities,
         }
     }
 }
@@ -92,21 +98,37 @@ fn row_metadata(entry: Option<&models::ModelMetadataEntry>) -> RowMetadata {
 async fn column_results(
     hub: &Hub,
     submission: i64,
-) -> Result<Vec<(CellKey, bool, Option<f64>)>, AppError> {
+    activities: &HashMap<String, u32>,
+) -> Result<Vec<ItemResult>, AppError> {
     let mut conn = hub.conn().await?;
     let verdicts = store::submissions::verdicts(&mut conn, submission).await?;
     Ok(verdicts
         .into_iter()
-        .map(|v| {
-            (
-                CellKey {
-                    direction: v.direction,
-                    step_length: v.step_length,
-                },
-                v.task_accuracy,
-                v.pairwise_accuracy,
-            )
+        .map(|v| ItemResult {
+            column: CellKey {
+                direction: v.direction,
+                step_length: v.step_length,
+            },
+            // Every verdict is of an item of the dataset; a missing one is its own cluster.
+            activity: activities.get(&v.id).copied().unwrap_or(u32::MAX),
+            task_correct: v.task_accuracy,
+            pairwise_accuracy: v.pairwise_accuracy,
         })
+        .collect())
+}
+
+/// Each item's activity (ENACT's `task_name`) as a bootstrap cluster number, by item id.
+async fn activity_clusters(
+    hub: &Hub,
+    dataset: &store::datasets::Dataset,
+) -> Result<HashMap<String, u32>, AppError> {
+    let mut conn = hub.conn().await?;
+    let items = store::items::activities(&mut conn, dataset.id).await?;
+    let clusters = cluster_ids(items.iter().map(|(_, activity)| activity.as_str()));
+    Ok(items
+        .into_iter()
+        .zip(clusters)
+        .map(|((id, _), cluster)| (id, cluster))
         .collect())
 }
 
@@ -220,6 +242,12 @@ pub async fn paper(hub: &Hub, dataset: &str, options: &PaperOptions) -> Result<P
         .filter(|r| r.source == RowSource::Human || !r.baseline)
         .collect();
     let mut own = Vec::with_capacity(rows.len());
+    // The bootstrap's clusters, read when some row's intervals are computed.
+    let activities = if options.intervals || !published.is_empty() {
+        activity_clusters(hub, &dataset).await?
+    } else {
+        HashMap::new()
+    };
     for row in &rows {
         let hub_row = HubRow::of_leaderboard(row, row_metadata(metadata.get(&row.model)), BUILD);
         let reproduced = published
@@ -229,7 +257,10 @@ pub async fn paper(hub: &Hub, dataset: &str, options: &PaperOptions) -> Result<P
             Some(submission)
                 if row.source == RowSource::Submission && (options.intervals || reproduced) =>
             {
-                hub_row.with_intervals(&column_results(hub, submission).await?)
+                hub_row.with_intervals(
+                    &column_results(hub, submission, &activities).await?,
+                    options.resampling,
+                )
             }
             _ => hub_row,
         };

@@ -23,6 +23,15 @@ pub enum ResampleArg {
     Items,
 }
 
+impl From<ResampleArg> for Resampling {
+    fn from(arg: ResampleArg) -> Resampling {
+        match arg {
+            ResampleArg::Activities => Resampling::Activities,
+            ResampleArg::Items => Resampling::Items,
+        }
+    }
+}
+
 #[derive(Args)]
 pub struct CompareArgs {
     /// Row A: a model name (its leaderboard row: the latest published submission of that
@@ -51,10 +60,7 @@ pub struct CompareArgs {
 
 pub async fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
     let config = PairedConfig {
-        resampling: match args.resample {
-            ResampleArg::Activities => Resampling::Activities,
-            ResampleArg::Items => Resampling::Items,
-        },
+        resampling: args.resample.into(),
         resamples: args.resamples as usize,
         seed: args.seed,
         ..PairedConfig::default()

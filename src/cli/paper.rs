@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 
+use super::compare::ResampleArg;
 use super::study::DbArg;
 use super::{in_database, open};
 use crate::app;
@@ -45,6 +46,9 @@ pub struct PaperArgs {
     /// Print the hub rows' 95 % bootstrap intervals under their values.
     #[arg(long)]
     intervals: bool,
+    /// What the intervals' bootstrap resamples.
+    #[arg(long, value_enum, default_value = "activities")]
+    resample: ResampleArg,
     /// Compare each published model the hub also scored with the hub's figures, cell by cell,
     /// and say whether the published value lies in the hub's interval.
     #[arg(long)]
@@ -60,6 +64,7 @@ pub async fn paper(args: PaperArgs) -> anyhow::Result<ExitCode> {
             Some(MetricArg::Pa) => vec![Metric::PairwiseAccuracy],
         },
         intervals: args.intervals,
+        resampling: args.resample.into(),
     };
     let hub = open(&args.db.db).await?;
     let made = app::paper::paper(&hub, &args.dataset, &options).await;

@@ -60,6 +60,26 @@ pub fn routes() -> Vec<ApiRoute> {
     ]
 }
 
+/// The query parameter `resample`: what a bootstrap resamples, activities when absent.
+pub(super) fn resample_param(value: Option<&str>) -> Result<Resampling, AppError> {
+    match value.unwrap_or_default().trim() {
+        "" => Ok(Resampling::default()),
+        other => Resampling::parse(other).ok_or_else(|| {
+            AppError::Invalid(format!(
+                "query parameter `resample`: {other:?} is not `activities` or `items`"
+            ))
+        }),
+    }
+}
+
+/// What a bootstrap resamples, in words.
+pub(super) fn resampling_text(tr: &Tr, resampling: Resampling) -> String {
+    tr.t(match resampling {
+        Resampling::Activities => "intervals-resampling-activities",
+        Resampling::Items => "intervals-resampling-items",
+    })
+}
+
 /// The comparison's choices, as the form and the API send them.
 #[derive(Debug, Default, Deserialize)]
 struct CompareQuery {
@@ -70,14 +90,7 @@ struct CompareQuery {
 
 impl CompareQuery {
     fn config(&self) -> Result<PairedConfig, AppError> {
-        let resampling = match self.resample.as_deref().unwrap_or_default() {
-            "" => Resampling::default(),
-            other => Resampling::parse(other).ok_or_else(|| {
-                AppError::Invalid(format!(
-                    "query parameter `resample`: {other:?} is not `activities` or `items`"
-                ))
-            })?,
-        };
+        let resampling = resample_param(self.resample.as_deref())?;
         Ok(PairedConfig {
             resampling,
             ..PairedConfig::default()
@@ -246,10 +259,7 @@ fn comparison_view(tr: &Tr, c: &RowComparison, query: &CompareQuery) -> Comparis
     ComparisonView {
         a: label(&c.a),
         b: label(&c.b),
-        resampling: tr.t(match c.config.resampling {
-            Resampling::Activities => "compare-resampling-activities",
-            Resampling::Items => "compare-resampling-items",
-        }),
+        resampling: resampling_text(tr, c.config.resampling),
         resamples: c.config.resamples,
         level: format!("{:.0}", 100.0 * c.config.level),
         cells: std::iter::once(&c.overall)

@@ -31,6 +31,7 @@ use crate::core::leaderboard::{
 };
 use crate::core::metric::METRIC_VERSION;
 use crate::core::paper::{CellKey, Metric};
+use crate::core::verifier::Resampling;
 
 /// Rows a page may ask for at once.
 const MAX_PER_PAGE: usize = 1000;
@@ -48,7 +49,9 @@ pub fn api_routes() -> Vec<ApiRoute> {
              and a `history` link), ranked by `sort` (overall TA by default): rows whose value \
              is equal as shown (a percentage to one decimal) share a rank, and the next rank \
              skips. TA and PA overall, forward, inverse and per step length 3..10, 95% \
-             bootstrap intervals, coverage and date. The Human row (when annotations exist) \
+             bootstrap intervals (resampling activities, ENACT's `task_name`, with their items \
+             unless `resample=items`; each row's `interval_resampling` says which), coverage \
+             and date. The Human row (when annotations exist) \
              and baselines are on every page, unranked. Strong `ETag`; `If-None-Match` gives \
              304. The HTML page is /leaderboard/{dataset}.",
         )
@@ -58,6 +61,12 @@ pub fn api_routes() -> Vec<ApiRoute> {
             json!({"type": "string", "pattern": "^(overall_(ta|pa)|(forward|inverse)_(ta|pa)(_([3-9]|10))?)?$"}),
             "overall_ta (default), overall_pa, forward_ta, forward_pa, inverse_ta, inverse_pa, \
              or a step length: forward_ta_5, inverse_pa_10, ….",
+        )
+        .query_with(
+            "resample",
+            false,
+            json!({"type": "string", "enum": ["activities", "items", ""]}),
+            "What the intervals' bootstrap resamples: `activities` (the default) or `items`.",
         )
         .query_with(
             "page",
@@ -146,6 +155,7 @@ impl BoardRequest {
                 "page" => query.page = number("page", value, 1_000_000)?,
                 "per_page" => query.per_page = number("per_page", value, MAX_PER_PAGE)?,
                 "all" => query.every_submission = switch("all", value)?,
+                "resample" => query.intervals = super::compare::resample_param(Some(value))?,
                 "reported" => reported = switch("reported", value)?,
                 "model" => query.model = Some(value.to_owned()),
                 "account" => query.account = Some(value.to_owned()),
@@ -225,6 +235,9 @@ fn query_string(q: &BoardQuery) -> String {
     let mut pairs: Vec<(&str, String)> = vec![("sort", q.sort.name())];
     if q.every_submission {
         pairs.push(("all", "1".to_owned()));
+    }
+    if q.intervals != Resampling::default() {
+        pairs.push(("resample", q.intervals.as_str().to_owned()));
     }
     if let Some(m) = &q.model {
         pairs.push(("model", m.clone()));
@@ -438,6 +451,9 @@ struct RowText {
     overall: CellText,
     ta_ci: String,
     pa_ci: String,
+    /// The intervals resample something other than the page says (scores stored before the
+    /// hub clustered its intervals resample items).
+    ci_differs: bool,
     forward: CellText,
     inverse: CellText,
     forward_steps: Vec<CellText>,
@@ -502,6 +518,12 @@ struct LeaderboardPage {
     next: Option<String>,
     /// The request's parameters but the chart's, for the chart form.
     hidden: Vec<(String, String)>,
+    /// What the intervals resample, in words, and the page resampling the other way.
+    resampling: String,
+    resampling_toggle: String,
+    resampling_items: bool,
+    /// Some row's intervals resample items where the page's resample activities.
+    any_ci_differs: bool,
 }
 
 impl LeaderboardPage {
@@ -550,7 +572,7 @@ impl LeaderboardPage {
                 .rows
                 .iter()
                 .map(|r| {
-                    let mut text = row_text(&tr, r, history(&path, r), &drawn_ids);
+                    let mut text = row_text(&tr, r, history(&path, r), &drawn_ids, query.intervals);
                     if let Some(m) = (r.source == RowSource::Submission)
                         .then(|| board.metadata.get(&r.model))
                         .flatten()
@@ -603,12 +625,31 @@ impl LeaderboardPage {
             next,
             hidden: serde_urlencoded::from_str(&request.query_string(query, request.reported))
                 .unwrap_or_default(),
+            resampling: super::compare::resampling_text(&tr, query.intervals),
+            resampling_toggle: request.link(&path, |q| {
+                q.intervals = match q.intervals {
+                    Resampling::Activities => Resampling::Items,
+                    Resampling::Items => Resampling::Activities,
+                };
+            }),
+            resampling_items: query.intervals == Resampling::Items,
+            any_ci_differs: page.rows.iter().any(|r| {
+                r.interval_resampling
+                    .is_some_and(|stored| stored != query.intervals)
+            }),
             tr,
         }
     }
 }
 
-fn row_text(tr: &Tr, r: &LeaderboardRow, history: Option<String>, drawn: &[i64]) -> RowText {
+/// `resampling`: what the page's intervals resample.
+fn row_text(
+    tr: &Tr,
+    r: &LeaderboardRow,
+    history: Option<String>,
+    drawn: &[i64],
+    resampling: Resampling,
+) -> RowText {
     let human = r.source == RowSource::Human;
     RowText {
         human_note: r.human.map(|h| {
@@ -650,6 +691,9 @@ fn row_text(tr: &Tr, r: &LeaderboardRow, history: Option<String>, drawn: &[i64])
         overall: cell_text(tr, &r.overall, human),
         ta_ci: interval_text(tr, r.overall_task_accuracy_ci),
         pa_ci: interval_text(tr, r.overall_pairwise_accuracy_ci),
+        ci_differs: r
+            .interval_resampling
+            .is_some_and(|stored| stored != resampling),
         forward: cell_text(tr, &r.forward.total, human),
         inverse: cell_text(tr, &r.inverse.total, human),
         forward_steps: r
@@ -721,6 +765,7 @@ fn reported_text(tr: &Tr, r: &ReportedResult) -> RowText {
         overall: none(),
         ta_ci: String::new(),
         pa_ci: String::new(),
+        ci_differs: false,
         forward: none(),
         inverse: none(),
         forward_steps: steps(Direction::Forward),

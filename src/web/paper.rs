@@ -38,6 +38,8 @@ struct PaperQuery {
     /// `ta`, `pa`, or empty for both.
     metric: Option<String>,
     intervals: Option<String>,
+    /// `activities` (the default) or `items`.
+    resample: Option<String>,
 }
 
 impl PaperQuery {
@@ -65,6 +67,7 @@ impl PaperQuery {
             models: (!models.is_empty()).then_some(models),
             metrics,
             intervals: self.intervals.as_deref().is_some_and(|v| !v.is_empty()),
+            resampling: super::compare::resample_param(self.resample.as_deref())?,
         })
     }
 }
@@ -93,6 +96,8 @@ struct GroupView {
 struct TableView {
     metric: &'static str,
     title: String,
+    /// How the printed intervals were drawn; empty without intervals.
+    intervals_note: String,
     groups: Vec<GroupView>,
     figure: String,
     figure_png: String,
@@ -128,6 +133,7 @@ struct PaperPage {
     models: String,
     metric: String,
     intervals: bool,
+    resample: String,
     /// The page's query, for the downloads and figures (empty or starting with `?`).
     query: String,
     step_lengths: Vec<u8>,
@@ -196,7 +202,19 @@ fn table_view(tr: &Tr, dataset: &str, query: &str, table: &PaperTable) -> TableV
         dataset,
         table.metric.as_str()
     );
+    let printed = table
+        .rows
+        .iter()
+        .any(|r| r.cells.values().any(|c| c.interval.is_some()));
     TableView {
+        intervals_note: match table.intervals {
+            Some(resampling) if printed => tr.t_s(
+                "intervals-note",
+                "resampling",
+                &super::compare::resampling_text(tr, resampling),
+            ),
+            _ => String::new(),
+        },
         metric: table.metric.as_str(),
         title: metric_title(tr, table.metric),
         groups,
@@ -279,6 +297,7 @@ async fn paper_page(
         models: query.models.clone().unwrap_or_default(),
         metric: query.metric.clone().unwrap_or_default(),
         intervals: query.intervals.as_deref().is_some_and(|v| !v.is_empty()),
+        resample: query.resample.clone().unwrap_or_default(),
         query: query_text,
         dataset: paper.dataset,
         tr,

@@ -8,6 +8,7 @@ use enact_hub::core::dataset::AnswerVisibility;
 use serde_json::Value;
 
 use crate::helpers::*;
+use crate::submissions::{make_answers_public, post};
 
 /// Twelve items: two activities × forward and inverse × L = 3, 4, 5 (in that order).
 async fn server_with_two_activities() -> (TestServer, Vec<Value>) {
@@ -287,5 +288,138 @@ async fn comparisons_that_cannot_be_made_are_refused_with_the_reason() {
     // The page says the same in its own words.
     let page = server.get("/datasets/mini/compare?a=Human&b=Beta").await;
     assert_eq!(page.status(), 400);
+    server.stop().await;
+}
+
+/// The items ENACT's own evaluator counts as task successes in its per-item output for
+/// `model` (`reference/{mode}/detailed_eval`); an item it skipped is not one.
+fn enact_successes(parity: &std::path::Path, mode: &str, model: &str) -> BTreeSet<String> {
+    let path = parity.join(format!(
+        "reference/{mode}/detailed_eval/enact_ordering_{model}.jsonl"
+    ));
+    std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).expect("a detailed_eval line"))
+        .filter(|v| v["eval_metrics"]["task_accuracy"] == true)
+        .map(|v| v["id"].as_str().expect("id").to_owned())
+        .collect()
+}
+
+#[tokio::test]
+async fn comparing_two_parity_prediction_files_agrees_with_enacts_own_verdicts() {
+    let Some(parity) = crate::fixtures::parity_dir() else {
+        return;
+    };
+    let server = spawn_app_with({
+        let parity = parity.clone();
+        |pool, _| async move {
+            let mut opts = options("parity");
+            opts.scene_graphs = Some(parity.join("replayed_activities"));
+            import(&pool, &parity, &opts).await;
+        }
+    })
+    .await;
+    let (_, token) = api_token(&server.pool, "alice", Role::Admin, None, None).await;
+    make_answers_public(&server, "parity", &token).await;
+    // Well-formed files the strict policy takes as they are: random answers, answers
+    // equivalent to the truth without being it, and the truth with one adjacent pair swapped.
+    let models = ["random", "semequiv", "adjswap"];
+    for model in models {
+        let text = std::fs::read_to_string(
+            parity.join(format!("predictions/enact_ordering_{model}.jsonl")),
+        )
+        .expect("predictions");
+        let (status, _, body) = post(
+            &server,
+            "parity",
+            &format!("model={model}"),
+            Some(&token),
+            text,
+            None,
+        )
+        .await;
+        assert_eq!(status, 201, "{model}: {body}");
+    }
+    for (a, b) in [("random", "semequiv"), ("semequiv", "adjswap"), ("random", "adjswap")] {
+        let (status, c) = server
+            .get_json(&format!("/api/v1/datasets/parity/compare?a={a}&b={b}"))
+            .await;
+        assert_eq!(status, 200, "{c}");
+        let right_a = enact_successes(&parity, "eval_plain", a);
+        let right_b = enact_successes(&parity, "eval_plain", b);
+        let a_only: BTreeSet<String> = right_a.difference(&right_b).cloned().collect();
+        let b_only: BTreeSet<String> = right_b.difference(&right_a).cloned().collect();
+        assert_eq!(listed(&c["a_only_items"]), a_only, "{a} right, {b} wrong");
+        assert_eq!(listed(&c["b_only_items"]), b_only, "{b} right, {a} wrong");
+        assert_eq!(c["overall"]["n"], 96, "{c}");
+        assert_eq!(c["overall"]["a_only"], a_only.len(), "{c}");
+        assert_eq!(c["overall"]["b_only"], b_only.len(), "{c}");
+        let both = right_a.intersection(&right_b).count() as f64;
+        let a_ta = c["overall"]["a_task_accuracy"].as_f64().expect("a TA");
+        assert!(
+            (a_ta - (both + a_only.len() as f64) / 96.0).abs() < 1e-9,
+            "{a}: {a_ta}"
+        );
+    }
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn the_leaderboards_intervals_resample_activities_unless_asked_and_say_which() {
+    let (server, records) = server_with_two_activities().await;
+    let (_, token) = api_token(&server.pool, "alice", Role::Submitter, None, None).await;
+    // Right on every item of cook_bacon, wrong on every item of wash_dishes.
+    let wrong: Vec<usize> = (6..12).collect();
+    let reply = submit_to(&server, "mini", "model=split", &token, answers(&records, &wrong)).await;
+    assert_eq!(reply.status, 201, "{}", reply.text);
+    let stored = reply.json()["scores"]["confidence"].clone();
+    assert_eq!(stored["resampling"], "activities", "{stored}");
+    // By hand: a resample draws two activities, (1, 1), (1, 0), (0, 1) or (0, 0), so its task
+    // accuracy is 1, 1/2 or 0, each end with probability 1/4: the 95 % interval is [0, 1].
+    // Resampling the twelve items one by one draws Binomial(12, 1/2) / 12: far narrower.
+    assert_eq!(
+        stored["task_accuracy"],
+        serde_json::json!({"low": 0.0, "high": 1.0})
+    );
+    let by_items = stored["by_items"]["task_accuracy"].clone();
+    assert!(
+        by_items["low"].as_f64().expect("low") > 0.1
+            && by_items["high"].as_f64().expect("high") < 0.9,
+        "{by_items}"
+    );
+
+    let (status, board) = server.get_json("/api/v1/datasets/mini/leaderboard").await;
+    assert_eq!(status, 200, "{board}");
+    let row = &board["rows"][0];
+    assert_eq!(row["interval_resampling"], "activities", "{row}");
+    assert_eq!(
+        row["overall_task_accuracy_ci"],
+        stored["task_accuracy"],
+        "{row}"
+    );
+    let (status, board) = server
+        .get_json("/api/v1/datasets/mini/leaderboard?resample=items")
+        .await;
+    assert_eq!(status, 200, "{board}");
+    let row = &board["rows"][0];
+    assert_eq!(row["interval_resampling"], "items", "{row}");
+    assert_eq!(row["overall_task_accuracy_ci"], by_items, "{row}");
+    let (status, refused) = server
+        .get_json("/api/v1/datasets/mini/leaderboard?resample=episodes")
+        .await;
+    assert_eq!(status, 400, "{refused}");
+    assert!(refused.to_string().contains("resample"), "{refused}");
+
+    // The page says which, in both languages, and links to the other.
+    let (status, html) = server.page_in("/leaderboard/mini", "en").await;
+    assert_eq!(status, 200);
+    assert!(
+        html.contains("resampling whole activities with their items"),
+        "{html}"
+    );
+    assert!(html.contains("resample=items"), "{html}");
+    let (_, html) = server.page_in("/leaderboard/mini?resample=items", "zh-CN").await;
+    assert!(html.contains("重抽样单位为逐个题目"), "{html}");
     server.stop().await;
 }

@@ -4,6 +4,7 @@
 use std::collections::HashMap;
 
 use enact_hub::core::credentials::Role;
+use enact_hub::core::dataset::{AnswerVisibility, Direction};
 use enact_hub::core::submission::Visibility;
 use enact_hub::store;
 use enact_hub::store::Pool;
@@ -17,7 +18,7 @@ async fn make_token(pool: &Pool, name: &str, role: Role, daily: Option<i64>) -> 
     api_token(pool, name, role, daily, None).await.1
 }
 
-async fn post(
+pub(crate) async fn post(
     server: &TestServer,
     dataset: &str,
     query: &str,
@@ -72,7 +73,7 @@ async fn admin_json(
 }
 
 /// An admin makes a dataset's ground truth and per-item verdicts public.
-async fn make_answers_public(server: &TestServer, dataset: &str, admin: &str) {
+pub(crate) async fn make_answers_public(server: &TestServer, dataset: &str, admin: &str) {
     server
         .call(
             reqwest::Method::PUT,
@@ -554,33 +555,71 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
             .expect("demo");
     })
     .await;
-    // A fresh demo already shows its chance baseline: a line per panel, marked as a baseline.
+    // A fresh demo already shows its chance baseline and the heuristic's row: a line per panel
+    // each, marked as baselines.
     let (status, board) = server.get_json("/api/v1/datasets/demo/leaderboard").await;
     assert_eq!(status, 200, "{board}");
     let rows = board["rows"].as_array().expect("rows");
-    assert_eq!(rows.len(), 1, "{board}");
-    assert_eq!(
-        rows[0]["model"],
-        enact_hub::core::demo::CHANCE_BASELINE_MODEL
-    );
-    assert_eq!(rows[0]["baseline"], true);
+    assert_eq!(rows.len(), 2, "{board}");
+    let row = |model: &str| {
+        rows.iter()
+            .find(|r| r["model"] == model)
+            .unwrap_or_else(|| panic!("no row {model}: {board}"))
+            .clone()
+    };
+    let chance = row(enact_hub::core::demo::CHANCE_BASELINE_MODEL);
+    let heuristic = row(enact_hub::core::demo::GRASP_HEURISTIC_MODEL);
+    assert_eq!(chance["baseline"], true);
+    assert_eq!(heuristic["baseline"], true);
+    // Its replies are text, read by the strict reader: every item answered, none unreadable.
+    assert_eq!(heuristic["coverage"], 1.0, "{heuristic}");
+    assert_eq!(heuristic["parse_failure_rate"], 0.0, "{heuristic}");
+    let heuristic_id = heuristic["submission"].as_i64().expect("id");
+    let mut conn = server.pool.acquire().await.expect("conn");
+    let demo = store::datasets::by_name(&mut conn, "demo")
+        .await
+        .expect("q")
+        .expect("demo");
+    store::submissions::set_answer_visibility(&mut conn, demo.id, AnswerVisibility::Public)
+        .await
+        .expect("public");
+    let first = store::items::scoring_items(&mut conn, demo.id)
+        .await
+        .expect("items")
+        .into_iter()
+        .find(|i| i.direction == Direction::Inverse)
+        .expect("an inverse item")
+        .item_id;
+    drop(conn);
+    let (status, item) = server
+        .get_json(&format!("/api/v1/datasets/demo/items/{first}/answers"))
+        .await;
+    assert_eq!(status, 200, "{item}");
+    let reply = item["models"]
+        .as_array()
+        .expect("models")
+        .iter()
+        .find(|m| m["submission"] == heuristic_id)
+        .unwrap_or_else(|| panic!("no heuristic answer: {item}"))["answer"]
+        .as_str()
+        .expect("a text reply")
+        .to_owned();
+    assert!(reply.contains("Heuristic, not a model"), "{reply}");
     let html = server
         .get("/leaderboard/demo")
         .await
         .text()
         .await
         .expect("html");
-    assert_eq!(html.matches("<polyline").count(), 2);
-    // Loading the demo again (a restart on the same database) does not add a second one.
+    assert_eq!(html.matches("<polyline").count(), 4);
+    // Loading the demo again (a restart on the same database) adds neither again.
     enact_hub::app::demo::load(&server.pool.clone().into())
         .await
         .expect("demo again");
     let (_, board) = server.get_json("/api/v1/datasets/demo/leaderboard").await;
-    assert_eq!(board["rows"].as_array().expect("rows").len(), 1, "{board}");
-    // Nor after an admin has hidden it: the hidden row stays the only one.
-    let baseline_id = board["rows"][0]["submission"]
-        .as_i64()
-        .expect("submission id");
+    assert_eq!(board["rows"].as_array().expect("rows").len(), 2, "{board}");
+    // Nor after an admin has hidden one: the hidden row is not filed again.
+    let baseline_id = chance["submission"].as_i64().expect("submission id");
     let mut conn = server.pool.acquire().await.expect("conn");
     store::submissions::update_listing(&mut conn, baseline_id, None, Some(Visibility::Hidden))
         .await
@@ -595,7 +634,7 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
             .await
             .expect("counts")
             .0,
-        1
+        2
     );
     store::submissions::update_listing(&mut conn, baseline_id, None, Some(Visibility::Published))
         .await
@@ -637,8 +676,8 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
     assert!(html.contains("demo-half"));
     assert_eq!(
         html.matches("<polyline").count(),
-        4,
-        "two models, two panels"
+        6,
+        "two baselines and a model, two panels"
     );
     assert!(
         html.matches("<circle").count() >= 32,

@@ -4,8 +4,8 @@
 //! and inverse items for every L in 3..=10 in ENACT's release layout, with the scene graphs
 //! the importer reads for semantic scoring.
 //!
-//! [`write_demo_release`] writes the dataset; [`chance_baseline`] is the leaderboard row the
-//! demo starts with.
+//! [`write_demo_release`] writes the dataset; [`chance_baseline`] and [`grasp_heuristic`] are
+//! the leaderboard rows the demo starts with.
 
 use std::path::{Path, PathBuf};
 
@@ -13,6 +13,7 @@ use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 
+use crate::dataset::Direction;
 use crate::pipeline::{GenerateOptions, PipelineError, TypeNaming, generate};
 use crate::world::{Activity, CameraRig, FrameImages, SimulateOptions, WorldError, simulate};
 
@@ -112,9 +113,127 @@ pub fn chance_baseline<'a>(items: impl IntoIterator<Item = (&'a str, usize)>, se
     body
 }
 
+/// The model name of the demo's heuristic row on the leaderboard.
+pub const GRASP_HEURISTIC_MODEL: &str = "heuristic: grasp before release (not a model)";
+
+/// The heuristic's answer to one item: for an inverse item, its shuffled actions ordered so
+/// that an action in which the robot comes to grasp an object precedes every action in which
+/// it lets go of that object, the listed order otherwise; for a forward item (whose options
+/// are images, which the heuristic cannot see), the listed order. 1-based labels, `labels` of
+/// them.
+pub fn grasp_heuristic_order(direction: Direction, question: &str, labels: usize) -> Vec<usize> {
+    if direction == Direction::Forward {
+        return (1..=labels).collect();
+    }
+    // (grasped, released) object names per action, by label.
+    let mut grasps: Vec<(Vec<String>, Vec<String>)> = vec![Default::default(); labels];
+    for line in question.lines() {
+        let Some(rest) = line.trim().strip_prefix("[Action ") else {
+            continue;
+        };
+        let Some((number, text)) = rest.split_once(']') else {
+            continue;
+        };
+        let Some(index) = number
+            .trim()
+            .parse::<usize>()
+            .ok()
+            .filter(|n| (1..=labels).contains(n))
+        else {
+            continue;
+        };
+        for sentence in text.split('.') {
+            let Some((_, object)) = sentence.split_once("grasp the ") else {
+                continue;
+            };
+            let object = object.trim().to_owned();
+            if sentence.contains("no longer") || sentence.contains("stopped being") {
+                grasps[index - 1].1.push(object);
+            } else {
+                grasps[index - 1].0.push(object);
+            }
+        }
+    }
+    // Kahn's order, the lowest label first among those free; a cycle (an object grasped,
+    // released and grasped again) is broken by taking the lowest label left.
+    let before = |a: usize, b: usize| grasps[a].0.iter().any(|o| grasps[b].1.contains(o));
+    let mut left: Vec<usize> = (0..labels).collect();
+    let mut order = Vec::with_capacity(labels);
+    while !left.is_empty() {
+        let free = left
+            .iter()
+            .position(|&b| !left.iter().any(|&a| a != b && before(a, b)))
+            .unwrap_or(0);
+        order.push(left.remove(free) + 1);
+    }
+    order
+}
+
+/// The heuristic's replies as a submission (one `{"id", "answer"}` line per item, the answer a
+/// model-like reply text): what ordering by a single rule of ENACT's sentences earns, beside
+/// chance. `items`: id, direction, question and number of labels.
+pub fn grasp_heuristic<'a>(
+    items: impl IntoIterator<Item = (&'a str, Direction, &'a str, usize)>,
+) -> String {
+    let mut body = String::new();
+    for (id, direction, question, labels) in items {
+        let order = grasp_heuristic_order(direction, question, labels);
+        let why = match direction {
+            Direction::Forward => "the images in the order listed (the heuristic cannot see them)",
+            Direction::Inverse => {
+                "each object grasped before it is released, otherwise the order listed"
+            }
+        };
+        let reply = format!("Heuristic, not a model: {why}. Answer: {order:?}");
+        body.push_str(&serde_json::json!({ "id": id, "answer": reply }).to_string());
+        body.push('\n');
+    }
+    body
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_heuristic_puts_a_grasp_before_the_release_of_the_same_object() {
+        let question = "## Shuffled Actions\n\
+            [Action 1] The robot r1 is no longer using the right gripper to grasp the plate.\n\
+            [Action 2] The fridge transitions to be open.\n\
+            [Action 3] The robot r1 now becomes using the right gripper to grasp the plate. \
+            The plate is no longer on top of the table.\n\
+            [Action 4] The robot r1 stopped being using the right gripper to grasp the cup.\n\
+            [Action 5] The robot r1 changes to be using the right gripper to grasp the cup.\n";
+        assert_eq!(
+            grasp_heuristic_order(Direction::Inverse, question, 5),
+            vec![2, 3, 1, 5, 4]
+        );
+        // Forward items list images: the listed order.
+        assert_eq!(
+            grasp_heuristic_order(Direction::Forward, question, 5),
+            vec![1, 2, 3, 4, 5]
+        );
+        // Grasped, released and grasped again: the cycle is broken, every label appears once.
+        let cycle = "[Action 1] The robot r1 now becomes using the right gripper to grasp the cup.\n\
+            [Action 2] The robot r1 is no longer using the right gripper to grasp the cup.\n\
+            [Action 3] The robot r1 changes to be using the right gripper to grasp the cup.\n";
+        let mut order = grasp_heuristic_order(Direction::Inverse, cycle, 3);
+        order.sort_unstable();
+        assert_eq!(order, vec![1, 2, 3]);
+    }
+
+    #[test]
+    fn the_heuristic_replies_as_a_model_would_and_the_strict_reader_reads_them() {
+        let question = "[Action 1] The robot r1 is no longer using the right gripper to grasp the plate.\n\
+            [Action 2] The robot r1 now becomes using the right gripper to grasp the plate.\n";
+        let body = grasp_heuristic([("i", Direction::Inverse, question, 2)]);
+        let line: serde_json::Value = serde_json::from_str(body.trim()).unwrap();
+        assert_eq!(line["id"], "i");
+        let reply = line["answer"].as_str().unwrap();
+        assert!(reply.starts_with("Heuristic, not a model"), "{reply}");
+        let read = crate::verifier::parse_answer_text_strict(reply, 2).unwrap();
+        assert_eq!(read.labels(), &[2, 1]);
+    }
 
     #[test]
     fn the_chance_baseline_answers_every_item_with_a_seeded_permutation() {

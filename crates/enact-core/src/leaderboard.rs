@@ -9,7 +9,9 @@ use serde::Serialize;
 use crate::dataset::StepLength;
 use crate::metric::MetricStamp;
 use crate::submission::SubmissionScores;
-use crate::verifier::{ConfidenceInterval, GroupPerformance, PerformanceReport, StepPerformance};
+use crate::verifier::{
+    ConfidenceInterval, GroupPerformance, PerformanceReport, Resampling, StepPerformance,
+};
 
 /// Where a row comes from. Human performance rows (from annotations) will be a second kind:
 /// they carry the same cells, so the table and chart draw them without change.
@@ -114,6 +116,15 @@ pub struct LeaderboardRow {
     pub overall: AccuracyCell,
     pub overall_task_accuracy_ci: Option<Interval>,
     pub overall_pairwise_accuracy_ci: Option<Interval>,
+    /// What the intervals' bootstrap resampled (`activities` by default; `items` when asked
+    /// for, or for scores stored before the hub clustered its intervals); `None` without
+    /// intervals.
+    pub interval_resampling: Option<Resampling>,
+    /// The item bootstrap's `(task, pairwise)` intervals, swapped in when a reader asks for
+    /// them.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub item_intervals: Option<(Option<Interval>, Option<Interval>)>,
     pub forward: DirectionColumns,
     pub inverse: DirectionColumns,
     pub coverage: f64,
@@ -183,6 +194,13 @@ impl LeaderboardRow {
             overall: cell(report.overall.as_ref().map(|g| &g.totals)),
             overall_task_accuracy_ci: interval(scores.confidence.task_accuracy),
             overall_pairwise_accuracy_ci: interval(scores.confidence.pairwise_accuracy),
+            interval_resampling: (scores.confidence.task_accuracy.is_some()
+                || scores.confidence.pairwise_accuracy.is_some())
+            .then_some(scores.confidence.resampling),
+            item_intervals: scores
+                .confidence
+                .by_items
+                .map(|i| (interval(i.task_accuracy), interval(i.pairwise_accuracy))),
             forward: columns(report.forward_world_modeling.as_ref()),
             inverse: columns(report.inverse_world_modeling.as_ref()),
             coverage: scores.coverage.coverage,
@@ -219,6 +237,8 @@ impl LeaderboardRow {
             overall,
             overall_task_accuracy_ci: None,
             overall_pairwise_accuracy_ci: None,
+            interval_resampling: None,
+            item_intervals: None,
             forward: columns(report.forward_world_modeling.as_ref()),
             inverse: columns(report.inverse_world_modeling.as_ref()),
             parse_failure_rate: 0.0,
@@ -229,6 +249,19 @@ impl LeaderboardRow {
 }
 
 impl LeaderboardRow {
+    /// The row with the item bootstrap's intervals, where it has them, when `resampling`
+    /// asks for items.
+    pub fn with_resampling(mut self, resampling: Resampling) -> Self {
+        if resampling == Resampling::Items
+            && let Some((task, pairwise)) = self.item_intervals
+        {
+            self.overall_task_accuracy_ci = task;
+            self.overall_pairwise_accuracy_ci = pairwise;
+            self.interval_resampling = Some(Resampling::Items);
+        }
+        self
+    }
+
     /// Whether the row competes for a rank: a submission that is not a baseline.
     pub fn is_ranked(&self) -> bool {
         self.source == RowSource::Submission && !self.baseline
@@ -439,6 +472,8 @@ pub struct BoardQuery {
     pub sort: SortKey,
     /// Every published submission rather than one row per account and model.
     pub every_submission: bool,
+    /// What the rows' intervals resample: activities (the default) or items.
+    pub intervals: Resampling,
     /// Only this model (exact name), and only this account.
     pub model: Option<String>,
     pub account: Option<String>,
@@ -452,6 +487,7 @@ impl Default for BoardQuery {
         BoardQuery {
             sort: SortKey::default(),
             every_submission: false,
+            intervals: Resampling::Activities,
             model: None,
             account: None,
             page: 1,
@@ -487,7 +523,9 @@ fn selected_rows(rows: &[LeaderboardRow], query: &BoardQuery) -> Vec<Leaderboard
     };
     rows.retain(|r| !r.is_ranked() || wanted(r));
     rank_by(&mut rows, query.sort);
-    rows
+    rows.into_iter()
+        .map(|r| r.with_resampling(query.intervals))
+        .collect()
 }
 
 /// The page `query` asks for. Ranks are over every matching row, not only the page's; the
@@ -737,6 +775,33 @@ mod tests {
     }
 
     #[test]
+    fn a_row_gives_the_item_bootstrap_s_intervals_when_asked() {
+        let mut stored = scores(0.5, 0.25);
+        stored.confidence.resampling = Resampling::Activities;
+        stored.confidence.by_items = Some(crate::submission::ItemIntervals {
+            task_accuracy: Some(ConfidenceInterval {
+                low: 0.2,
+                high: 0.3,
+            }),
+            pairwise_accuracy: None,
+        });
+        let who = RowIdentity {
+            submission: 1,
+            model: "m",
+            account: "team",
+            baseline: false,
+            submitted_at: "2026-01-01T00:00:00Z",
+            metric_version: crate::metric::METRIC_VERSION,
+        };
+        let r = LeaderboardRow::from_scores(&who, &stored);
+        assert_eq!(r.interval_resampling, Some(Resampling::Activities));
+        assert_eq!(r.overall_task_accuracy_ci.map(|i| i.low), Some(0.1));
+        let items = r.with_resampling(Resampling::Items);
+        assert_eq!(items.interval_resampling, Some(Resampling::Items));
+        assert_eq!(items.overall_task_accuracy_ci.map(|i| i.low), Some(0.2));
+    }
+
+    #[test]
     fn rows_read_the_stored_scores() {
         let r = row(1, 0.5, 0.25);
         assert_eq!(r.overall.task_accuracy, Some(0.25));
@@ -761,6 +826,13 @@ mod tests {
             })
         );
         assert_eq!(r.overall_pairwise_accuracy_ci, None);
+        // Stored before the hub clustered its intervals: they resampled items, and asking
+        // for either keeps them, saying so.
+        assert_eq!(r.interval_resampling, Some(Resampling::Items));
+        assert_eq!(
+            r.clone().with_resampling(Resampling::Activities),
+            r.clone().with_resampling(Resampling::Items)
+        );
         assert_eq!(r.parse_failure_rate, 0.25);
     }
 

@@ -11,15 +11,12 @@
 //!
 //! Pure and synchronous: the hub reads both rows' stored verdicts and calls [`compare`].
 
-use std::collections::BTreeMap;
-
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::dataset::{Direction, StepLength};
-use crate::verifier::bootstrap::quantile;
+pub use crate::verifier::bootstrap::Resampling;
+use crate::verifier::bootstrap::{cluster_ids, percentile_interval, resampled_means};
 use crate::verifier::{BOOTSTRAP_LEVEL, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED};
 
 /// What one side made of one item: task success, and its pairwise accuracy (`None` where the
@@ -39,33 +36,6 @@ pub struct PairedItem {
     pub activity: String,
     pub a: Side,
     pub b: Side,
-}
-
-/// What the bootstrap resamples.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema, Hash)]
-#[serde(rename_all = "lowercase")]
-pub enum Resampling {
-    /// Whole activities with all their items (the default): items of one activity are not
-    /// independent.
-    #[default]
-    Activities,
-    /// Items one by one, as if every item were independent of every other.
-    Items,
-}
-
-impl Resampling {
-    pub const ALL: [Resampling; 2] = [Resampling::Activities, Resampling::Items];
-
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Resampling::Activities => "activities",
-            Resampling::Items => "items",
-        }
-    }
-
-    pub fn parse(text: &str) -> Option<Resampling> {
-        Resampling::ALL.into_iter().find(|r| r.as_str() == text)
-    }
 }
 
 /// How a comparison's intervals are drawn.
@@ -140,15 +110,7 @@ pub struct PairedComparison {
 
 /// Compares the two sides of `items`. `None` when there is no item.
 pub fn compare(items: &[PairedItem], config: &PairedConfig) -> Option<PairedComparison> {
-    let mut clusters: BTreeMap<&str, u32> = BTreeMap::new();
-    for item in items {
-        let next = clusters.len() as u32;
-        clusters.entry(item.activity.as_str()).or_insert(next);
-    }
-    let cluster_of: Vec<u32> = items
-        .iter()
-        .map(|i| clusters[i.activity.as_str()])
-        .collect();
+    let cluster_of = cluster_ids(items.iter().map(|i| i.activity.as_str()));
     let group = |keep: &dyn Fn(&PairedItem) -> bool, salt: u64| {
         let chosen: Vec<usize> = (0..items.len()).filter(|&i| keep(&items[i])).collect();
         cell(items, &cluster_of, &chosen, config, salt)
@@ -266,47 +228,12 @@ pub fn paired_difference(
             high: estimate,
         });
     }
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut means: Vec<f64> = match config.resampling {
-        Resampling::Items => {
-            let n = differences.len();
-            (0..config.resamples)
-                .map(|_| {
-                    let sum: f64 = (0..n).map(|_| differences[rng.random_range(0..n)].1).sum();
-                    sum / n as f64
-                })
-                .collect()
-        }
-        Resampling::Activities => {
-            // Each activity's sum and count; a resample draws as many activities as there are,
-            // with replacement, and takes the mean over all their items.
-            let mut totals: BTreeMap<u32, (f64, usize)> = BTreeMap::new();
-            for &(cluster, d) in differences {
-                let t = totals.entry(cluster).or_default();
-                t.0 += d;
-                t.1 += 1;
-            }
-            let totals: Vec<(f64, usize)> = totals.into_values().collect();
-            let k = totals.len();
-            (0..config.resamples)
-                .map(|_| {
-                    let (mut sum, mut count) = (0.0, 0usize);
-                    for _ in 0..k {
-                        let (s, c) = totals[rng.random_range(0..k)];
-                        sum += s;
-                        count += c;
-                    }
-                    sum / count as f64
-                })
-                .collect()
-        }
-    };
-    means.sort_by(f64::total_cmp);
-    let tail = (1.0 - config.level) / 2.0;
+    let means = resampled_means(differences, config.resampling, config.resamples, seed);
+    let interval = percentile_interval(&means, config.level);
     Some(Difference {
         estimate,
-        low: quantile(&means, tail),
-        high: quantile(&means, 1.0 - tail),
+        low: interval.low,
+        high: interval.high,
     })
 }
 

@@ -14,9 +14,9 @@ use serde_json::value::RawValue;
 use crate::scoring::ScoringTarget;
 use crate::verifier::{
     BOOTSTRAP_LEVEL, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, ConfidenceInterval, Coverage,
-    PerformanceReport, ScoringPolicy, StrictItem, StrictOutcome, StrictParseFailure, StrictScoring,
-    StrictScoringError, SubmissionProblem, bootstrap_mean_ci, parse_python_json, python_text_lines,
-    score_strict_predictions,
+    PerformanceReport, Resampling, ScoringPolicy, StrictItem, StrictOutcome, StrictParseFailure,
+    StrictScoring, StrictScoringError, SubmissionProblem, cluster_ids, leaderboard_ci,
+    parse_python_json, python_text_lines, score_strict_predictions,
 };
 
 /// Why one line (or array element) of a body was refused.
@@ -86,6 +86,21 @@ pub struct ConfidenceIntervals {
     pub level: f64,
     pub resamples: usize,
     pub seed: u64,
+    /// What the bootstrap resampled: activities with their items (the default) or items one
+    /// by one. Scores stored before the hub clustered its intervals resampled items.
+    #[serde(default = "Resampling::before_clustering")]
+    pub resampling: Resampling,
+    pub task_accuracy: Option<ConfidenceInterval>,
+    pub pairwise_accuracy: Option<ConfidenceInterval>,
+    /// The item bootstrap's intervals beside the clustered ones, for readers who ask for
+    /// them; absent when `resampling` is already `items`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub by_items: Option<ItemIntervals>,
+}
+
+/// Intervals from resampling items one by one.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct ItemIntervals {
     pub task_accuracy: Option<ConfidenceInterval>,
     pub pairwise_accuracy: Option<ConfidenceInterval>,
 }
@@ -341,7 +356,7 @@ pub fn score_submission(
                 .and_then(|t| raw_answer(t))
         })
         .collect();
-    Ok(assemble(scoring, raw_answers))
+    Ok(assemble(scoring, raw_answers, &activity_clusters(targets)))
 }
 
 /// An answer a stored submission gave: its item, the body's line (or array element) it came
@@ -396,7 +411,12 @@ pub fn rescore_submission(
                 .map(|a| (*a).to_owned())
         })
         .collect();
-    Ok(assemble(scoring, raw_answers))
+    Ok(assemble(scoring, raw_answers, &activity_clusters(targets)))
+}
+
+/// Each target's activity (`task_name`) as a cluster number, in the targets' order.
+fn activity_clusters(targets: &[ScoringTarget]) -> Vec<u32> {
+    cluster_ids(targets.iter().map(|t| t.task_name.as_str()))
 }
 
 /// The `answer` value of a record, as compact JSON.
@@ -415,21 +435,52 @@ fn raw_answer(record: &str) -> Option<String> {
     }
 }
 
-fn assemble(scoring: StrictScoring, raw_answers: Vec<Option<String>>) -> ScoredSubmission {
-    let ta: Vec<f64> = scoring
+/// The submission's overall intervals: resampling activities (`clusters`: each scored item's
+/// activity, in order), and items one by one beside them.
+fn intervals(scoring: &StrictScoring, clusters: &[u32]) -> ConfidenceIntervals {
+    let ta: Vec<(u32, f64)> = scoring
         .items
         .iter()
-        .map(|r| f64::from(u8::from(r.task_accuracy())))
+        .zip(clusters)
+        .map(|(r, c)| (*c, f64::from(u8::from(r.task_accuracy()))))
         .collect();
-    let pa: Vec<f64> = scoring
+    let pa: Vec<(u32, f64)> = scoring
         .items
         .iter()
-        .filter_map(|r| r.pairwise_accuracy())
+        .zip(clusters)
+        .filter_map(|(r, c)| r.pairwise_accuracy().map(|p| (*c, p)))
         .collect();
-    let (ta_ci, pa_ci) = rayon::join(
-        || bootstrap_mean_ci(&ta, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, BOOTSTRAP_LEVEL),
-        || bootstrap_mean_ci(&pa, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, BOOTSTRAP_LEVEL),
+    let ci = leaderboard_ci;
+    let ((ta_ci, pa_ci), (ta_items, pa_items)) = rayon::join(
+        || {
+            (
+                ci(&ta, Resampling::Activities),
+                ci(&pa, Resampling::Activities),
+            )
+        },
+        || rayon::join(|| ci(&ta, Resampling::Items), || ci(&pa, Resampling::Items)),
     );
+    ConfidenceIntervals {
+        level: BOOTSTRAP_LEVEL,
+        resamples: BOOTSTRAP_RESAMPLES,
+        seed: BOOTSTRAP_SEED,
+        resampling: Resampling::Activities,
+        task_accuracy: ta_ci,
+        pairwise_accuracy: pa_ci,
+        by_items: Some(ItemIntervals {
+            task_accuracy: ta_items,
+            pairwise_accuracy: pa_items,
+        }),
+    }
+}
+
+/// `clusters`: each target's activity as a number, in the targets' order.
+fn assemble(
+    scoring: StrictScoring,
+    raw_answers: Vec<Option<String>>,
+    clusters: &[u32],
+) -> ScoredSubmission {
+    let confidence = intervals(&scoring, clusters);
     let items = scoring
         .items
         .into_iter()
@@ -449,13 +500,7 @@ fn assemble(scoring: StrictScoring, raw_answers: Vec<Option<String>>) -> ScoredS
             policy: ScoringPolicy::Strict,
             report: scoring.report,
             coverage: scoring.coverage,
-            confidence: ConfidenceIntervals {
-                level: BOOTSTRAP_LEVEL,
-                resamples: BOOTSTRAP_RESAMPLES,
-                seed: BOOTSTRAP_SEED,
-                task_accuracy: ta_ci,
-                pairwise_accuracy: pa_ci,
-            },
+            confidence,
         },
         items,
     }

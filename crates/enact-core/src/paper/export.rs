@@ -237,6 +237,7 @@ mod tests {
     use crate::paper::heatmap_png::tests::camera_study;
     use crate::paper::hub::{HUB_CATEGORY, HubRow, Origin, assemble, reproduction};
     use crate::paper::{Category, CellKey, PaperTable, ReportedModel};
+    use crate::verifier::Resampling;
 
     fn f3() -> CellKey {
         CellKey {
@@ -270,6 +271,7 @@ mod tests {
             task_accuracy: BTreeMap::from([(f3(), 80.0)]),
             pairwise_accuracy: BTreeMap::from([(f3(), 88.5)]),
             intervals: BTreeMap::new(),
+            interval_resampling: Some(Resampling::Activities),
         };
         ours.intervals
             .insert((Metric::TaskAccuracy, f3()), (70.0, 86.0));

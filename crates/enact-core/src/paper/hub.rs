@@ -11,7 +11,7 @@ use super::mark::mark;
 use super::{Category, Cell, CellKey, Metric, PaperRow, PaperTable, ReportedModel};
 use crate::dataset::{Direction, StepLength};
 use crate::leaderboard::{AccuracyCell, LeaderboardRow, RowSource};
-use crate::verifier::{BOOTSTRAP_LEVEL, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, bootstrap_mean_ci};
+use crate::verifier::{Resampling, leaderboard_ci};
 
 /// The category the hub's own model rows are marked within unless their metadata names one:
 /// the paper marks best and second-best per category, and a hub run is neither of the paper's.
@@ -51,6 +51,18 @@ pub struct HubRow {
     pub pairwise_accuracy: BTreeMap<CellKey, f64>,
     /// Bootstrap intervals in percent, per metric and column, where computed.
     pub intervals: BTreeMap<(Metric, CellKey), (f64, f64)>,
+    /// What the intervals' bootstrap resampled, once computed.
+    pub interval_resampling: Option<Resampling>,
+}
+
+/// One item's result in a hub row, for its intervals.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ItemResult {
+    pub column: CellKey,
+    /// The item's activity (ENACT's `task_name`) as a number: the bootstrap's cluster.
+    pub activity: u32,
+    pub task_correct: bool,
+    pub pairwise_accuracy: Option<f64>,
 }
 
 /// What the metadata says of a hub row's model.
@@ -131,22 +143,23 @@ impl HubRow {
             task_accuracy,
             pairwise_accuracy,
             intervals: BTreeMap::new(),
+            interval_resampling: None,
         }
     }
 
-    /// This row with bootstrap intervals per column, from its per-item results: `(column, task
-    /// success, pairwise accuracy)`. The leaderboard's resamples, seed and level.
-    pub fn with_intervals(mut self, items: &[(CellKey, bool, Option<f64>)]) -> Self {
-        let mut by_column: BTreeMap<CellKey, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
-        for (key, task, pairwise) in items {
-            let (ta, pa) = by_column.entry(*key).or_default();
-            ta.push(if *task { 1.0 } else { 0.0 });
-            pa.extend(pairwise);
+    /// This row with bootstrap intervals per column, from its per-item results, resampling
+    /// what `resampling` says within each column. The leaderboard's resamples, seed and level.
+    pub fn with_intervals(mut self, items: &[ItemResult], resampling: Resampling) -> Self {
+        let mut by_column: BTreeMap<CellKey, (Vec<(u32, f64)>, Vec<(u32, f64)>)> = BTreeMap::new();
+        for item in items {
+            let (ta, pa) = by_column.entry(item.column).or_default();
+            ta.push((item.activity, if item.task_correct { 1.0 } else { 0.0 }));
+            pa.extend(item.pairwise_accuracy.map(|p| (item.activity, p)));
         }
-        let interval = |values: &[f64]| {
-            bootstrap_mean_ci(values, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, BOOTSTRAP_LEVEL)
-                .map(|ci| (percent(ci.low), percent(ci.high)))
+        let interval = |values: &[(u32, f64)]| {
+            leaderboard_ci(values, resampling).map(|ci| (percent(ci.low), percent(ci.high)))
         };
+        self.interval_resampling = Some(resampling);
         for (key, (ta, pa)) in by_column {
             if let Some(ci) = interval(&ta) {
                 self.intervals.insert((Metric::TaskAccuracy, key), ci);
@@ -313,7 +326,14 @@ pub fn assemble(
     let mut table = PaperTable {
         metric,
         rows: picked.iter().map(|c| c.row.clone()).collect(),
+        intervals: None,
     };
+    if intervals {
+        table.intervals = own
+            .iter()
+            .filter(|h| picked.iter().any(|c| c.row.model == h.model))
+            .find_map(|h| h.interval_resampling.filter(|_| !h.intervals.is_empty()));
+    }
     mark(&mut table);
     let provenance = picked
         .iter()
@@ -416,6 +436,7 @@ mod tests {
             task_accuracy: BTreeMap::from([(key(Direction::Forward, 3), ta)]),
             pairwise_accuracy: BTreeMap::new(),
             intervals: BTreeMap::new(),
+            interval_resampling: None,
         }
     }
 
@@ -538,14 +559,22 @@ mod tests {
     #[test]
     fn intervals_come_from_the_items_of_each_column_and_print_only_when_asked() {
         let f3 = key(Direction::Forward, 3);
-        let items: Vec<(CellKey, bool, Option<f64>)> = (0..40)
-            .map(|i| (f3, i % 4 == 0, Some(if i % 2 == 0 { 1.0 } else { 0.5 })))
+        let items: Vec<ItemResult> = (0..40)
+            .map(|i| ItemResult {
+                column: f3,
+                activity: i / 10,
+                task_correct: i % 4 == 0,
+                pairwise_accuracy: Some(if i % 3 == 0 { 1.0 } else { 0.5 }),
+            })
             .collect();
-        let row = hub("Ours", 1, 25.0).with_intervals(&items);
+        let by_items = hub("Ours", 1, 25.0).with_intervals(&items, Resampling::Items);
+        assert_eq!(by_items.interval_resampling, Some(Resampling::Items));
+        let row = hub("Ours", 1, 25.0).with_intervals(&items, Resampling::Activities);
+        assert_ne!(row.intervals, by_items.intervals);
         let (low, high) = row.intervals[&(Metric::TaskAccuracy, f3)];
         assert!(low < 25.0 && 25.0 < high, "{low}..{high}");
         let (low, high) = row.intervals[&(Metric::PairwiseAccuracy, f3)];
-        assert!(low < 75.0 && 75.0 < high, "{low}..{high}");
+        assert!(low < 67.5 && 67.5 < high, "{low}..{high}");
         let plain = assemble(
             Metric::TaskAccuracy,
             &[],
@@ -555,8 +584,10 @@ mod tests {
         )
         .unwrap();
         assert_eq!(plain.table.rows[0].cells[&f3].interval, None);
+        assert_eq!(plain.table.intervals, None);
         let shown = assemble(Metric::TaskAccuracy, &[], &[row], None, true).unwrap();
         assert!(shown.table.rows[0].cells[&f3].interval.is_some());
+        assert_eq!(shown.table.intervals, Some(Resampling::Activities));
     }
 
     #[test]

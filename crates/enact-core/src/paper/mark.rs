@@ -172,6 +172,7 @@ mod tests {
                 row("y", hub, &[20.0, 8.0]),
                 row("Human", Category::Human, &[90.0, 90.0]),
             ],
+            intervals: None,
         };
         // Stale marks are replaced.
         table.rows[5]

@@ -32,6 +32,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::dataset::{Direction, StepLength};
+use crate::verifier::Resampling;
 
 /// Which accuracy a table reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -270,6 +271,7 @@ pub fn table_of(metric: Metric, models: &[ReportedModel]) -> PaperTable {
     PaperTable {
         metric,
         rows: models.iter().map(|m| m.row(metric)).collect(),
+        intervals: None,
     }
 }
 
@@ -410,6 +412,9 @@ impl PaperRow {
 pub struct PaperTable {
     pub metric: Metric,
     pub rows: Vec<PaperRow>,
+    /// What the printed intervals' bootstrap resampled; `None` when none is printed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intervals: Option<Resampling>,
 }
 
 /// What is wrong with a table's JSON, naming the row and field.
@@ -432,6 +437,8 @@ pub enum PaperError {
 struct TableJson {
     metric: Metric,
     rows: Vec<Value>,
+    #[serde(default)]
+    intervals: Option<Resampling>,
 }
 
 #[derive(Deserialize)]
@@ -463,6 +470,7 @@ impl PaperTable {
         Ok(PaperTable {
             metric: table.metric,
             rows,
+            intervals: table.intervals,
         })
     }
 }

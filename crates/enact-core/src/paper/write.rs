@@ -12,6 +12,7 @@
 
 use super::{Category, Cell, CellKey, Mark, PaperRow, PaperTable};
 use crate::bundle::{csv_field, tex_escape};
+use crate::verifier::Resampling;
 
 /// The rows grouped by category, groups in order of first appearance, humans last.
 pub fn grouped(table: &PaperTable) -> Vec<(&Category, Vec<&PaperRow>)> {
@@ -25,6 +26,23 @@ pub fn grouped(table: &PaperTable) -> Vec<(&Category, Vec<&PaperRow>)> {
     // A stable sort keeps the other groups in their order.
     groups.sort_by_key(|(c, _)| **c == Category::Human);
     groups
+}
+
+/// The sentence that says how the table's intervals were drawn; empty without intervals.
+fn intervals_note(table: &PaperTable) -> String {
+    if !has_intervals(table) {
+        return String::new();
+    }
+    match table.intervals {
+        Some(Resampling::Items) => {
+            " Intervals: 95 % percentile bootstrap, resampling items one by one.".to_owned()
+        }
+        Some(Resampling::Activities) | None => {
+            " Intervals: 95 % percentile bootstrap, resampling activities (ENACT's task_name) \
+             with all their items."
+                .to_owned()
+        }
+    }
 }
 
 fn number(value: f64) -> String {
@@ -129,8 +147,9 @@ pub fn to_tex(table: &PaperTable, standalone: bool) -> String {
     out.push_str(&format!(
         "\\caption{{\\textbf{{Evaluation on ENACT ({}).}} \\colorbox{{firstgrey}}{{Dark grey}}: \
          the best result within each category; \\colorbox{{secondgrey}}{{light grey}}: the \
-         second best.}}\n\\label{{tab:enact_{}}}\n\\end{{table*}}\n",
+         second best.{}}}\n\\label{{tab:enact_{}}}\n\\end{{table*}}\n",
         metric.title(),
+        tex_escape(&intervals_note(table)),
         metric.as_str()
     ));
     if standalone {
@@ -155,6 +174,9 @@ pub fn to_csv(table: &PaperTable) -> String {
     let mut header: Vec<String> = ["model", "category", "family", "size", "source"]
         .map(str::to_owned)
         .to_vec();
+    if intervals {
+        header.push("interval_resampling".to_owned());
+    }
     for key in CellKey::all() {
         header.push(key.to_string());
         header.push(format!("{key}_mark"));
@@ -174,6 +196,13 @@ pub fn to_csv(table: &PaperTable) -> String {
                 row.size.clone().unwrap_or_default(),
                 row.source.clone(),
             ];
+            if intervals {
+                let printed = row.cells.values().any(|c| c.interval.is_some());
+                fields.push(match (printed, table.intervals) {
+                    (false, _) => String::new(),
+                    (true, r) => r.unwrap_or_default().as_str().to_owned(),
+                });
+            }
             for key in CellKey::all() {
                 let c = cell(row, key);
                 fields.push(c.value.map(number).unwrap_or_default());
@@ -235,8 +264,9 @@ fn markdown_cell(cell: Cell) -> String {
 pub fn to_markdown(table: &PaperTable) -> String {
     let mut out = format!(
         "{} (%) by direction and step length L. **Bold**: best within its category; \
-         _italics_: second best.\n\n",
-        table.metric.title()
+         _italics_: second best.{}\n\n",
+        table.metric.title(),
+        markdown_escape(&intervals_note(table))
     );
     out.push_str("| Model |");
     for key in CellKey::all() {
@@ -310,6 +340,7 @@ mod tests {
                 row("B", Category::Proprietary, 70.0, Some(3.6)),
                 row("C", Category::Proprietary, 60.0, None),
             ],
+            intervals: None,
         };
         table.rows[1].family = Some("Fam".to_owned());
         mark(&mut table);

@@ -34,7 +34,8 @@ pub use answer::{
     parse_answer_text_strict,
 };
 pub use bootstrap::{
-    BOOTSTRAP_LEVEL, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, ConfidenceInterval, bootstrap_mean_ci,
+    BOOTSTRAP_LEVEL, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, ConfidenceInterval, Resampling,
+    bootstrap_mean_ci, cluster_ids, clustered_mean_ci, leaderboard_ci,
 };
 pub use enact_policy::{
     EnactEvaluation, EnactRunError, EnactSignatureSource, EvaluatedRecord, SkipReason, SkippedLine,

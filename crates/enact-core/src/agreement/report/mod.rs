@@ -635,6 +635,8 @@ mod tests {
                 overall: AccuracyCell::default(),
                 overall_task_accuracy_ci: None,
                 overall_pairwise_accuracy_ci: None,
+                interval_resampling: None,
+                item_intervals: None,
                 forward: columns.clone(),
                 inverse: columns,
                 coverage: 1.0,
