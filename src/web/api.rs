@@ -10,6 +10,7 @@ use axum::response::{IntoResponse, Response};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use super::error_analysis::ReaderIsAdmin;
 use super::extract::{Json, Path, Query};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
@@ -93,7 +94,9 @@ pub fn routes() -> Vec<ApiRoute> {
              item with state changes, `why`: each step judged, with the changes the answer \
              implies that the true step lacks and those it misses (ENACT's sentences), and the \
              pairs of labels out of order; then every annotator's answer, pseudonymous. Only \
-             for a dataset whose answers are public (404 otherwise, as for its ground truth).",
+             for a dataset whose answers are public (404 otherwise, as for its ground truth), \
+             unless the caller sends an admin token (`Authorization: Bearer`): then hidden \
+             datasets too, with annotators' names, exclusions and the gold flag.",
         )
         .responds_json::<ItemAnswers>(200, "The item's answers.")
         .errors(&[404, 503]),
@@ -399,10 +402,11 @@ impl ItemView {
 
 async fn get_item_answers(
     State(state): State<AppState>,
+    ReaderIsAdmin(admin): ReaderIsAdmin,
     Path((name, item_id)): Path<(String, String)>,
 ) -> Result<axum::Json<ItemAnswers>, AppError> {
     Ok(axum::Json(
-        item_answers::of(&state.hub, &name, &item_id, false).await?,
+        item_answers::of(&state.hub, &name, &item_id, admin).await?,
     ))
 }
 

@@ -200,7 +200,9 @@ async fn dataset_errors(
     }))
 }
 
-/// Whether the reader is a logged-in admin (pages show them examples of hidden datasets).
+/// Whether the reader is an admin: a logged-in admin (pages show them examples of hidden
+/// datasets), or a client presenting an admin API token on a public route (the JSON twins of
+/// those pages). Anything else, a bad token included, reads as anyone would.
 pub(super) struct ReaderIsAdmin(pub(super) bool);
 
 impl FromRequestParts<AppState> for ReaderIsAdmin {
@@ -209,6 +211,10 @@ impl FromRequestParts<AppState> for ReaderIsAdmin {
         parts: &mut Parts,
         state: &AppState,
     ) -> Result<Self, Self::Rejection> {
+        if let Ok(token) = super::auth::bearer_token(&parts.headers) {
+            let admin = crate::app::tokens::authorize(&state.hub, token, Scope::Admin).await;
+            return Ok(ReaderIsAdmin(admin.is_ok()));
+        }
         let has_cookie = parts.headers.contains_key(axum::http::header::COOKIE);
         if !has_cookie {
             return Ok(ReaderIsAdmin(false));

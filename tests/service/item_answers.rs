@@ -75,6 +75,21 @@ async fn an_item_shows_every_rows_and_every_annotators_answer_with_its_verdict_a
         html.contains("shown to admins only") && !html.contains("ann-right"),
         "{html}"
     );
+    // An API client holding an admin token sees them, with names; a submitter's token does not.
+    let (_, root) = api_token(&server.pool, "root", Role::Admin, None, None).await;
+    let hidden = server
+        .call(reqwest::Method::GET, &path)
+        .bearer(&root)
+        .expect(200)
+        .await
+        .json();
+    assert_eq!(hidden["item"]["id"], item.as_str(), "{hidden}");
+    assert!(hidden.to_string().contains("ann-right"), "{hidden}");
+    server
+        .call(reqwest::Method::GET, &path)
+        .bearer(&alice)
+        .expect(404)
+        .await;
 
     set_mini_answers(&server.pool, AnswerVisibility::Public).await;
     let (status, a) = server.get_json(&path).await;
