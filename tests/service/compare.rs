@@ -341,7 +341,11 @@ async fn comparing_two_parity_prediction_files_agrees_with_enacts_own_verdicts()
         .await;
         assert_eq!(status, 201, "{model}: {body}");
     }
-    for (a, b) in [("random", "semequiv"), ("semequiv", "adjswap"), ("random", "adjswap")] {
+    for (a, b) in [
+        ("random", "semequiv"),
+        ("semequiv", "adjswap"),
+        ("random", "adjswap"),
+    ] {
         let (status, c) = server
             .get_json(&format!("/api/v1/datasets/parity/compare?a={a}&b={b}"))
             .await;
@@ -371,7 +375,14 @@ async fn the_leaderboards_intervals_resample_activities_unless_asked_and_say_whi
     let (_, token) = api_token(&server.pool, "alice", Role::Submitter, None, None).await;
     // Right on every item of cook_bacon, wrong on every item of wash_dishes.
     let wrong: Vec<usize> = (6..12).collect();
-    let reply = submit_to(&server, "mini", "model=split", &token, answers(&records, &wrong)).await;
+    let reply = submit_to(
+        &server,
+        "mini",
+        "model=split",
+        &token,
+        answers(&records, &wrong),
+    )
+    .await;
     assert_eq!(reply.status, 201, "{}", reply.text);
     let stored = reply.json()["scores"]["confidence"].clone();
     assert_eq!(stored["resampling"], "activities", "{stored}");
@@ -394,8 +405,7 @@ async fn the_leaderboards_intervals_resample_activities_unless_asked_and_say_whi
     let row = &board["rows"][0];
     assert_eq!(row["interval_resampling"], "activities", "{row}");
     assert_eq!(
-        row["overall_task_accuracy_ci"],
-        stored["task_accuracy"],
+        row["overall_task_accuracy_ci"], stored["task_accuracy"],
         "{row}"
     );
     let (status, board) = server
@@ -419,7 +429,9 @@ async fn the_leaderboards_intervals_resample_activities_unless_asked_and_say_whi
         "{html}"
     );
     assert!(html.contains("resample=items"), "{html}");
-    let (_, html) = server.page_in("/leaderboard/mini?resample=items", "zh-CN").await;
+    let (_, html) = server
+        .page_in("/leaderboard/mini?resample=items", "zh-CN")
+        .await;
     assert!(html.contains("重抽样单位为逐个题目"), "{html}");
     server.stop().await;
 }
