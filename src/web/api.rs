@@ -10,9 +10,9 @@ use axum::response::{IntoResponse, Response};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::error_analysis::ReaderIsAdmin;
 use super::extract::{Json, Path, Query};
 use super::openapi::{ApiRoute, Verb};
+use super::session::ReaderIsAdmin;
 use super::{AppError, AppState};
 use crate::app::datasets::{self, DatasetOverview};
 use crate::app::frames;

@@ -12,10 +12,10 @@ use serde::Deserialize;
 use serde_json::json;
 
 use super::error::PageError;
-use super::error_analysis::ReaderIsAdmin;
 use super::extract::{Path, Query};
 use super::i18n::Tr;
 use super::openapi::{ApiRoute, Verb};
+use super::session::ReaderIsAdmin;
 use super::{AppError, AppState};
 use crate::app::compare::{self, DiscordantItem, RowComparison};
 use crate::app::leaderboard;

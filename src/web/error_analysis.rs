@@ -5,9 +5,7 @@
 use crate::core::error_analysis::ErrorAnalysis;
 use askama::Template;
 use axum::Router;
-use axum::extract::FromRequestParts;
 use axum::extract::State;
-use axum::http::request::Parts;
 use axum::response::Html;
 use axum::routing::get;
 use schemars::JsonSchema;
@@ -18,7 +16,7 @@ use super::error::PageError;
 use super::extract::{Json, Path, Query};
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
-use super::session::LoggedIn;
+use super::session::ReaderIsAdmin;
 use super::{AppError, AppState};
 use crate::app::error_analysis::{self, Analysed, ComparedRow};
 use crate::app::tokens::Caller;
@@ -198,33 +196,6 @@ async fn dataset_errors(
         dataset: dataset.name,
         rows,
     }))
-}
-
-/// Whether the reader is an admin: a logged-in admin (pages show them examples of hidden
-/// datasets), or a client presenting an admin API token on a public route (the JSON twins of
-/// those pages). Anything else, a bad token included, reads as anyone would.
-pub(super) struct ReaderIsAdmin(pub(super) bool);
-
-impl FromRequestParts<AppState> for ReaderIsAdmin {
-    type Rejection = std::convert::Infallible;
-    async fn from_request_parts(
-        parts: &mut Parts,
-        state: &AppState,
-    ) -> Result<Self, Self::Rejection> {
-        if let Ok(token) = super::auth::bearer_token(&parts.headers) {
-            let admin = crate::app::tokens::authorize(&state.hub, token, Scope::Admin).await;
-            return Ok(ReaderIsAdmin(admin.is_ok()));
-        }
-        let has_cookie = parts.headers.contains_key(axum::http::header::COOKIE);
-        if !has_cookie {
-            return Ok(ReaderIsAdmin(false));
-        }
-        Ok(ReaderIsAdmin(
-            LoggedIn::from_request_parts(parts, state)
-                .await
-                .is_ok_and(|LoggedIn(s)| s.is_admin),
-        ))
-    }
 }
 
 /// One table line of figures.

@@ -10,9 +10,9 @@ use super::AppState;
 use super::annotate::direction_key;
 use super::api::{ItemQuery, frame_url};
 use super::error::PageError;
-use super::error_analysis::ReaderIsAdmin;
 use super::extract::{Path, Query};
 use super::i18n::{Tr, msg};
+use super::session::ReaderIsAdmin;
 use crate::app::datasets;
 use crate::app::item_answers::{self, ItemAnswers};
 use crate::app::items::{self, StoredItem};
@@ -279,7 +279,9 @@ fn order(labels: &[u8]) -> String {
         .join(" → ")
 }
 
-fn verdict_view(tr: &Tr, verdict: AnswerVerdict) -> (&'static str, String) {
+/// A verdict's class name and its name in the page's language (the item page and the
+/// explorer show them alike).
+pub(super) fn verdict_view(tr: &Tr, verdict: AnswerVerdict) -> (&'static str, String) {
     let key = match verdict {
         AnswerVerdict::Exact => msg("item-verdict-exact"),
         AnswerVerdict::Equivalent => msg("item-verdict-equivalent"),

@@ -211,7 +211,7 @@ fn table_view(tr: &Tr, dataset: &str, query: &str, table: &PaperTable) -> TableV
             Some(resampling) if printed => tr.t_s(
                 "intervals-note",
                 "resampling",
-                &super::compare::resampling_text(tr, resampling),
+                super::compare::resampling_text(tr, resampling),
             ),
             _ => String::new(),
         },

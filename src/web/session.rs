@@ -34,8 +34,11 @@ use super::{AppError, AppState};
 use crate::app::annotators::{self, SESSION_LIFETIME, now_ms};
 use crate::app::cache::BoundedCache;
 use crate::app::changes::Change;
+use crate::app::tokens;
 use crate::core::annotation::Session;
-use crate::core::credentials::{MIN_PASSWORD_CHARS, constant_time_eq, random_token, token_hash};
+use crate::core::credentials::{
+    MIN_PASSWORD_CHARS, Scope, constant_time_eq, random_token, token_hash,
+};
 
 pub const SESSION_COOKIE: &str = "enact_session";
 const LOGIN_CSRF_COOKIE: &str = "enact_login_csrf";
@@ -640,5 +643,32 @@ async fn accept_invite(
             .await
         }
         Err(e) => Err(e.into()),
+    }
+}
+
+/// Whether the reader is an admin: a logged-in admin (pages show them examples of hidden
+/// datasets), or a client presenting an admin API token on a public route (the JSON twins of
+/// those pages). Anything else, a bad token included, reads as anyone would.
+pub(super) struct ReaderIsAdmin(pub(super) bool);
+
+impl FromRequestParts<AppState> for ReaderIsAdmin {
+    type Rejection = std::convert::Infallible;
+    async fn from_request_parts(
+        parts: &mut Parts,
+        state: &AppState,
+    ) -> Result<Self, Self::Rejection> {
+        if let Ok(token) = super::auth::bearer_token(&parts.headers) {
+            let admin = tokens::authorize(&state.hub, token, Scope::Admin).await;
+            return Ok(ReaderIsAdmin(admin.is_ok()));
+        }
+        let has_cookie = parts.headers.contains_key(axum::http::header::COOKIE);
+        if !has_cookie {
+            return Ok(ReaderIsAdmin(false));
+        }
+        Ok(ReaderIsAdmin(
+            LoggedIn::from_request_parts(parts, state)
+                .await
+                .is_ok_and(|LoggedIn(s)| s.is_admin),
+        ))
     }
 }

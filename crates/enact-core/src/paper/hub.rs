@@ -150,7 +150,9 @@ impl HubRow {
     /// This row with bootstrap intervals per column, from its per-item results, resampling
     /// what `resampling` says within each column. The leaderboard's resamples, seed and level.
     pub fn with_intervals(mut self, items: &[ItemResult], resampling: Resampling) -> Self {
-        let mut by_column: BTreeMap<CellKey, (Vec<(u32, f64)>, Vec<(u32, f64)>)> = BTreeMap::new();
+        // Per column, (activity, value) of task success and of pairwise accuracy.
+        type Clustered = Vec<(u32, f64)>;
+        let mut by_column: BTreeMap<CellKey, (Clustered, Clustered)> = BTreeMap::new();
         for item in items {
             let (ta, pa) = by_column.entry(item.column).or_default();
             ta.push((item.activity, if item.task_correct { 1.0 } else { 0.0 }));
