@@ -185,6 +185,7 @@ leaderboard-metric-version = Metric version { $version }; a row computed with an
 leaderboard-older-metric = older metric
 leaderboard-error-analysis = Error analysis
 leaderboard-compare = Compare two rows
+leaderboard-explore = Explore every answer
 leaderboard-empty = No submission has been published for this dataset yet.
 leaderboard-how-to-submit = Submit ENACT model-output JSONL with an API token:
 leaderboard-ranked-by = Ranked by
@@ -460,6 +461,37 @@ compare-only-a = Items only { $row } gets right
 compare-only-b = Items only { $row } gets right
 compare-none = None.
 compare-items-hidden = This dataset's answers are hidden: per-item verdicts are shown to admins only.
+
+## Every item against every row (/datasets/{dataset}/explore)
+explore-title = Explore the answers
+explore-heading = Every item, every row: { $dataset }
+explore-explanation = Each item of the dataset against each row of the leaderboard and the Human column, with the verdict of each answer. The Human column takes the majority of the annotators' answers the Human row counts: right when more than half are right. A model row without an answer counts as wrong. Filter by kind of item and by pattern, and sort by difficulty (the share of rows wrong) or by one row; each option says how many items it would show.
+explore-leaderboard = Leaderboard
+explore-activity = Activity
+explore-pattern = Pattern
+explore-pattern-any = Every item
+explore-pattern-humans-right = Humans right, every model wrong
+explore-pattern-disagree = Models disagree
+explore-pattern-unparseable = Unparseable by any model
+explore-pattern-only = Only { $row } right
+explore-sort = Order
+explore-sort-difficulty = Hardest first
+explore-sort-wrong = { $row }: wrong first
+explore-sort-right = { $row }: right first
+explore-option-count = { $label } ({ $count })
+explore-apply = Show
+explore-matching = Items matching: { $matching } of { $total }.
+explore-permalink = Link to this view
+explore-csv = CSV of every matching item
+explore-legend = Verdicts:
+explore-none = No item matches this view.
+explore-table = Verdicts on the matching items, page { $page } of { $pages }
+explore-kind = Kind
+explore-wrong-rows = Rows wrong
+explore-human = Human
+explore-baseline = baseline
+explore-right-count = { $count } right
+explore-page = Page { $page } of { $pages }
 
 ## The item page's answers
 item-answers = Answers

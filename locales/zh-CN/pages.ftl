@@ -177,6 +177,7 @@ leaderboard-metric-version = 指标版本 { $version }；用旧版本计算的�
 leaderboard-older-metric = 旧版指标
 leaderboard-error-analysis = 错误分析
 leaderboard-compare = 比较两行
+leaderboard-explore = 浏览每个作答
 leaderboard-empty = 该数据集还没有已发布的提交。
 leaderboard-how-to-submit = 使用 API 令牌提交 ENACT 模型输出 JSONL：
 leaderboard-ranked-by = 排序依据：
@@ -419,6 +420,37 @@ compare-only-a = 仅 { $row } 答对的题目
 compare-only-b = 仅 { $row } 答对的题目
 compare-none = 无。
 compare-items-hidden = 此数据集的答案不公开：逐题判定仅对管理员显示。
+
+## 每道题对照每一行（/datasets/{dataset}/explore）
+explore-title = 浏览作答
+explore-heading = 每道题、每一行：{ $dataset }
+explore-explanation = 数据集的每道题对照排行榜的每一行及人类列，列出每个答案的判定。人类列取人类行所计入的标注员答案的多数：超过一半答对即为答对。模型行缺少答案按答错计。可按题目类型和模式筛选，按难度（答错的行所占比例）或按某一行排序；每个选项都注明会显示多少道题。
+explore-leaderboard = 排行榜
+explore-activity = 活动
+explore-pattern = 模式
+explore-pattern-any = 全部题目
+explore-pattern-humans-right = 人类答对、所有模型答错
+explore-pattern-disagree = 模型之间意见不一
+explore-pattern-unparseable = 有模型的答案无法解析
+explore-pattern-only = 仅 { $row } 答对
+explore-sort = 排序
+explore-sort-difficulty = 最难的在前
+explore-sort-wrong = { $row }：答错的在前
+explore-sort-right = { $row }：答对的在前
+explore-option-count = { $label }（{ $count }）
+explore-apply = 显示
+explore-matching = { $total } 道题中有 { $matching } 道符合。
+explore-permalink = 本视图的链接
+explore-csv = 所有符合条件题目的 CSV
+explore-legend = 判定：
+explore-none = 没有题目符合此视图。
+explore-table = 符合条件题目的判定，第 { $page } 页，共 { $pages } 页
+explore-kind = 类型
+explore-wrong-rows = 答错的行
+explore-human = 人类
+explore-baseline = 基线
+explore-right-count = 答对 { $count } 道
+explore-page = 第 { $page } 页，共 { $pages } 页
 
 ## 题目页上的作答
 item-answers = 作答

@@ -18,6 +18,7 @@ use super::models::{self, ModelMetadata};
 use super::reported::{self, ReportedResult};
 use super::{AppError, Hub, datasets};
 use crate::core::annotation::{self, HumanFigures};
+use crate::core::explorer::Grid;
 use crate::core::leaderboard::{LeaderboardRow, RowIdentity, rank};
 use crate::core::verifier::PerformanceReport;
 use crate::store;
@@ -119,6 +120,9 @@ pub struct Board {
     /// Unique per build in this process: a response's entity tag starts with it.
     pub version: u64,
     views: RwLock<HashMap<String, Bytes>>,
+    /// The explorer's grid of this board's rows' verdicts (`super::explore`), built by its
+    /// first reader: it goes when the board goes, so whatever changes the board changes it.
+    pub explorer: tokio::sync::OnceCell<Arc<Grid>>,
 }
 
 /// Rendered views kept per board; past this the board starts over (each renders in a few ms).
@@ -289,6 +293,7 @@ async fn build(hub: &Hub, name: &str, ticket: u64) -> Result<Arc<Board>, AppErro
         reported,
         version: cache.builds.fetch_add(1, Ordering::SeqCst) + 1,
         views: RwLock::default(),
+        explorer: tokio::sync::OnceCell::new(),
     });
     let changes = cache.changes();
     // A change during the build may predate what was read: serve this board, keep none.

@@ -15,6 +15,8 @@
 //!   items mixed into the queues, and annotators excluded from the Human row; [`quality`]:
 //!   each annotator's figures on a dataset.
 //! - [`agreement`]: the cross-annotation protocol, agreement statistics and the report.
+//! - [`explore`]: the explorer's grid of every item × every leaderboard row's verdict, kept
+//!   with the board, and the views cut from it.
 //! - [`error_analysis`]: the paper's error taxonomy of a submission, the Human row, a file, or
 //!   a whole leaderboard.
 //! - [`studies`]: ablation studies (a baseline and variant datasets) and their reports.
@@ -47,6 +49,7 @@ pub mod episode_curation;
 pub mod episodes;
 mod error;
 pub mod error_analysis;
+pub mod explore;
 pub mod frames;
 pub mod gold;
 pub mod heavy;

@@ -130,6 +130,25 @@ pub async fn activities(
     })
 }
 
+/// Every item of a dataset with its row id, in import order (the explorer's grid).
+pub async fn summaries(
+    conn: &mut Conn,
+    dataset_id: i64,
+) -> Result<Vec<(i64, ItemSummary)>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows = sqlx::query(
+            "SELECT id, item_id, item_type, direction, step_length, task_name FROM items \
+             WHERE dataset_id = $1 ORDER BY id",
+        )
+        .bind(dataset_id)
+        .fetch_all(&mut *c)
+        .await?;
+        rows.iter()
+            .map(|row| Ok((row.try_get("id")?, summary_from_row(row)?)))
+            .collect()
+    })
+}
+
 /// The distinct task names of a dataset, sorted.
 pub async fn task_names(conn: &mut Conn, dataset_id: i64) -> Result<Vec<String>, sqlx::Error> {
     on!(conn, |c| {

@@ -2,7 +2,7 @@
 
 use sqlx::QueryBuilder;
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Dialect, Fields, on};
 
 use super::{corrupt, kind_from_row};
 use crate::core::dataset::{AnswerVisibility, Direction, StepLength};
@@ -320,6 +320,50 @@ pub async fn published_verdicts_of_item(
         rows.iter()
             .map(|row| Ok((row.try_get("submission")?, verdict_from_row(row)?)))
             .collect()
+    })
+}
+
+/// What the explorer's grid keeps of one verdict.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct VerdictCell {
+    pub submission: i64,
+    /// The `items` row id.
+    pub item: i64,
+    pub outcome: VerdictOutcome,
+    pub exact_match: bool,
+    pub task_accuracy: bool,
+}
+
+/// Every verdict of these submissions, in one query (one snapshot), in no particular order.
+/// A full-size grid is some 270,000 of them: read by position into tuples rather than by
+/// column name, and not sorted.
+#[tracing::instrument(skip_all)]
+pub async fn verdict_cells(
+    conn: &mut Conn,
+    submissions: &[i64],
+) -> Result<Vec<VerdictCell>, sqlx::Error> {
+    on!(conn, |c| {
+        let ids = serde_json::to_string(submissions).map_err(|e| corrupt("submission", e))?;
+        let rows: Vec<(i64, i64, VerdictOutcome, bool, bool)> = sqlx::query_as(&format!(
+            "SELECT v.submission, v.item, v.outcome, v.exact_match, v.task_accuracy \
+             FROM submission_items v WHERE v.submission IN ({})",
+            c.json_ids()
+        ))
+        .bind(ids)
+        .fetch_all(&mut *c)
+        .await?;
+        Ok(rows
+            .into_iter()
+            .map(
+                |(submission, item, outcome, exact_match, task_accuracy)| VerdictCell {
+                    submission,
+                    item,
+                    outcome,
+                    exact_match,
+                    task_accuracy,
+                },
+            )
+            .collect())
     })
 }
 

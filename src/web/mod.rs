@@ -27,6 +27,7 @@ mod cookies;
 mod episodes;
 pub mod error;
 mod error_analysis;
+mod explore;
 mod extract;
 pub mod forwarded;
 pub mod i18n;
@@ -159,6 +160,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(quality::routes());
     routes.extend(reported::routes());
     routes.extend(compare::routes());
+    routes.extend(explore::routes());
     routes.push(
         openapi::ApiRoute::new(
             openapi::Verb::Get,
@@ -286,6 +288,7 @@ pub fn router(state: AppState, config: &WebConfig, frame_origin: Option<&str>) -
         .merge(studies::page_router())
         .merge(paper::page_router())
         .merge(compare::page_router())
+        .merge(explore::page_router())
         .merge(run_pages::page_router())
         .merge(assets::router())
         .merge(openapi::page_router())

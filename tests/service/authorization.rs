@@ -329,6 +329,14 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
             if route.path == "/datasets/{dataset}/compare" {
                 path.push_str(&format!("?a={submission}&b={second}"));
             }
+            // So is the explorer (to anyone but an admin's browser session).
+            if route.path == "/datasets/{dataset}/explore" {
+                set_mini_answers(
+                    &server.pool,
+                    enact_hub::core::dataset::AnswerVisibility::Public,
+                )
+                .await;
+            }
             let mut call = callers.credential(
                 server.call(method(route.verb), &format!("/api/v1{path}")),
                 caller,
@@ -473,6 +481,8 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("GET", "/datasets/{dataset}/items/{item_id}", Page::Public),
     ("GET", "/datasets/{dataset}/paper", Page::Public),
     ("GET", "/datasets/{dataset}/compare", Page::Public),
+    // Public for a dataset with public answers (the matrix makes `mini`'s public).
+    ("GET", "/datasets/{dataset}/explore", Page::Public),
     ("GET", "/datasets/{dataset}/paper.tar", Page::Public),
     (
         "GET",

@@ -589,7 +589,8 @@ impl PublicWorld {
     }
 
     /// The public pages: home, dataset and items (with every answer), leaderboard, a
-    /// comparison of two rows, error analyses, studies.
+    /// comparison of two rows, the explorer (all items, and a pattern sorted by a row), error
+    /// analyses, studies.
     fn public_pages(&self) -> Vec<String> {
         vec![
             "/".to_owned(),
@@ -599,6 +600,11 @@ impl PublicWorld {
             "/leaderboard/mini".to_owned(),
             "/datasets/mini/paper?intervals=1".to_owned(),
             "/datasets/mini/compare?a=exact&b=reversed".to_owned(),
+            "/datasets/mini/explore".to_owned(),
+            format!(
+                "/datasets/mini/explore?pattern=models-disagree&sort=wrong:{}",
+                self.submissions[1]
+            ),
             "/leaderboard/mini/errors".to_owned(),
             format!("/leaderboard/mini/errors/{}", self.submissions[2]),
             "/studies".to_owned(),

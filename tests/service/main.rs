@@ -22,6 +22,7 @@ mod episode_pages;
 mod episodes;
 mod errors;
 mod escaping;
+mod explore;
 #[path = "../support/fixtures.rs"]
 mod fixtures;
 mod frames;

@@ -16,6 +16,8 @@
 //!   other papers' numbers in the same shape.
 //! - [`paired`]: two leaderboard rows compared item by item: McNemar's exact test and a paired
 //!   bootstrap of the difference, resampling activities.
+//! - [`explorer`]: a dataset's items × its leaderboard rows as a grid of verdicts, with the
+//!   explorer's filters (direction, step length, activity, pattern), orders and counts.
 //! - [`heatmap`]: the significance heatmap both reports draw (the paper's ablation figures).
 //! - [`leaderboard`]: leaderboard rows (Table 1 layout) and the TA-vs-L chart geometry.
 //! - [`model_run`]: asking a model an item: the versioned prompt, reading replies, retry
@@ -51,6 +53,7 @@ pub mod dataset;
 pub mod demo;
 pub mod episode;
 pub mod error_analysis;
+pub mod explorer;
 pub mod gold;
 pub mod heatmap;
 pub mod leaderboard;
