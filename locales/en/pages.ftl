@@ -241,7 +241,7 @@ leaderboard-human-unranked = ; not ranked
 intervals-note = Intervals: 95 % percentile bootstrap, resampling { $resampling }. Items of one activity (ENACT's task_name) share scenes and fail together, so by default whole activities are resampled.
 leaderboard-resample-items = Resample items one by one instead
 leaderboard-resample-activities = Resample whole activities (the default)
-leaderboard-intervals-by-items = this row's intervals resample items: it was scored before the hub resampled activities; rescoring recomputes them
+leaderboard-intervals-by-items = this row's intervals resample items: it was scored before the hub resampled activities
 leaderboard-human-note = The Human row is a reference, never ranked among models; a figure marked † rests on fewer than five human answers. Answers on gold items (items with a known answer mixed into annotators' queues to check their work) never count in it, nor do the answers of annotators an admin excluded.
 leaderboard-reported-count = { $count ->
     [one] This dataset has { $count } result a paper published (a reported row).
