@@ -10,8 +10,9 @@ use serde_json::Value;
 use crate::helpers::*;
 use crate::submissions::{make_answers_public, post};
 
-/// Twelve items: two activities × forward and inverse × L = 3, 4, 5 (in that order).
-async fn server_with_two_activities() -> (TestServer, Vec<Value>) {
+/// Twelve items: two activities × forward and inverse × L = 3, 4, 5 (in that order): 0–2 cook
+/// forward, 3–5 cook inverse, 6–8 wash forward, 9–11 wash inverse.
+pub(crate) async fn server_with_two_activities() -> (TestServer, Vec<Value>) {
     let records = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
     let shared = records.clone();
     let server = spawn_app_with(|pool, dir| async move {

@@ -10,35 +10,9 @@ use reqwest::Method;
 use serde_json::{Value, json};
 
 use crate::annotate::{annotator, logged_in_on};
+use crate::compare::server_with_two_activities;
 use crate::helpers::*;
 use crate::quality::{assign_listed, work_queue};
-
-/// Twelve items: two activities × forward and inverse × L = 3, 4, 5 (in that order): 0–2 cook
-/// forward, 3–5 cook inverse, 6–8 wash forward, 9–11 wash inverse.
-async fn server_with_twelve_items() -> (TestServer, Vec<Value>) {
-    let records = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
-    let shared = records.clone();
-    let server = spawn_app_with(|pool, dir| async move {
-        let root = dir.join("release");
-        let mut written = Vec::new();
-        let mut n = 1;
-        for task in ["cook_bacon", "wash_dishes"] {
-            for forward in [true, false] {
-                for l in [3, 4, 5] {
-                    written.push(write_record(&root, task, forward, l, n));
-                    n += 1;
-                }
-            }
-        }
-        let lines: Vec<String> = written.iter().map(Value::to_string).collect();
-        write_qa_file(&root, &lines);
-        import(&pool, &root, &options("mini")).await;
-        *shared.lock().expect("lock") = written;
-    })
-    .await;
-    let records = records.lock().expect("lock").clone();
-    (server, records)
-}
 
 fn id(records: &[Value], i: usize) -> String {
     records[i]["id"].as_str().expect("id").to_owned()
@@ -79,7 +53,7 @@ async fn shown(server: &TestServer, query: &str) -> BTreeSet<String> {
 
 #[tokio::test]
 async fn every_filter_pattern_sort_and_count_of_the_explorer() {
-    let (server, records) = server_with_twelve_items().await;
+    let (server, records) = server_with_two_activities().await;
     let (_, alice) = api_token(&server.pool, "alice", Role::Submitter, None, None).await;
     let (_, bob) = api_token(&server.pool, "bob", Role::Submitter, None, None).await;
     let (_, admin_token) = api_token(&server.pool, "root", Role::Admin, None, None).await;
