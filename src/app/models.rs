@@ -31,15 +31,33 @@ const MAX_LINK: usize = 2000;
 pub struct ModelMetadata {
     /// `proprietary`, `open-weight`, or (set by an admin) any other name.
     #[serde(default)]
+    #[schemars(
+        length(max = 100),
+        regex(pattern = r"^[^\u0000-\u001F\u007F-\u009F]*$")
+    )]
     pub category: Option<String>,
     /// The model family ("Qwen2.5-VL", "GPT-4o").
     #[serde(default)]
+    #[schemars(
+        length(max = 100),
+        regex(pattern = r"^[^\u0000-\u001F\u007F-\u009F]*$")
+    )]
     pub family: Option<String>,
     /// The size as the model's authors give it ("7B", "72B").
     #[serde(default)]
+    #[schemars(
+        length(max = 100),
+        regex(pattern = r"^[^\u0000-\u001F\u007F-\u009F]*$")
+    )]
     pub size: Option<String>,
-    /// An http or https URL about the model.
+    /// An http or https URL about the model (blank: none).
     #[serde(default)]
+    #[schemars(
+        length(max = 2000),
+        regex(
+            pattern = r"^(https?://[A-Za-z0-9]([A-Za-z0-9.-]*[A-Za-z0-9])?(:[0-9]{1,4})?(/[!-~]*)?)?$"
+        )
+    )]
     pub link: Option<String>,
 }
 

@@ -41,43 +41,114 @@ pub struct ReportedResult {
 /// are refused, as the core type's reading refuses them.
 #[derive(JsonSchema)]
 #[schemars(deny_unknown_fields)]
+// At least one cell, in either metric (checked again when stored).
+#[schemars(extend("anyOf" = [
+    {"required": ["task_accuracy"], "properties": {"task_accuracy": {"minProperties": 1}}},
+    {"required": ["pairwise_accuracy"], "properties": {"pairwise_accuracy": {"minProperties": 1}}}
+]))]
 #[allow(dead_code)]
 pub struct ReportedModelSchema {
+    #[schemars(
+        length(min = 1, max = 300),
+        regex(
+            pattern = r"^[^\u0000-\u001F\u007F-\u009F]*[^\s\u0000-\u001F\u007F-\u009F][^\u0000-\u001F\u007F-\u009F]*$"
+        )
+    )]
     pub model: String,
     /// `proprietary`, `open-weight`, `human`, or any other name.
+    #[schemars(
+        length(min = 1, max = 300),
+        regex(
+            pattern = r"^[^\u0000-\u001F\u007F-\u009F]*[^\s\u0000-\u001F\u007F-\u009F][^\u0000-\u001F\u007F-\u009F]*$"
+        )
+    )]
     pub category: String,
+    #[serde(default)]
+    #[schemars(
+        length(min = 1, max = 300),
+        regex(
+            pattern = r"^[^\u0000-\u001F\u007F-\u009F]*[^\s\u0000-\u001F\u007F-\u009F][^\u0000-\u001F\u007F-\u009F]*$"
+        )
+    )]
     pub family: Option<String>,
+    #[serde(default)]
+    #[schemars(
+        length(min = 1, max = 300),
+        regex(
+            pattern = r"^[^\u0000-\u001F\u007F-\u009F]*[^\s\u0000-\u001F\u007F-\u009F][^\u0000-\u001F\u007F-\u009F]*$"
+        )
+    )]
     pub size: Option<String>,
     /// Where the numbers were published: paper and table label, or a URL.
+    #[schemars(
+        length(min = 1, max = 300),
+        regex(
+            pattern = r"^[^\u0000-\u001F\u007F-\u009F]*[^\s\u0000-\u001F\u007F-\u009F][^\u0000-\u001F\u007F-\u009F]*$"
+        )
+    )]
     pub source: String,
     /// Task accuracy in percent by cell.
-    pub task_accuracy: Option<CellsSchema>,
+    #[serde(default)]
+    pub task_accuracy: CellsSchema,
     /// Pairwise accuracy in percent, by the same cells.
-    pub pairwise_accuracy: Option<CellsSchema>,
+    #[serde(default)]
+    pub pairwise_accuracy: CellsSchema,
 }
 
 /// The cells of a reported result in JSON, for the API's documentation: the paper's 16 columns,
-/// each optional.
-#[derive(JsonSchema)]
+/// each optional, in percent.
+#[derive(Default, JsonSchema)]
 #[schemars(deny_unknown_fields)]
 #[allow(dead_code)]
 pub struct CellsSchema {
-    pub forward_3: Option<f64>,
-    pub forward_4: Option<f64>,
-    pub forward_5: Option<f64>,
-    pub forward_6: Option<f64>,
-    pub forward_7: Option<f64>,
-    pub forward_8: Option<f64>,
-    pub forward_9: Option<f64>,
-    pub forward_10: Option<f64>,
-    pub inverse_3: Option<f64>,
-    pub inverse_4: Option<f64>,
-    pub inverse_5: Option<f64>,
-    pub inverse_6: Option<f64>,
-    pub inverse_7: Option<f64>,
-    pub inverse_8: Option<f64>,
-    pub inverse_9: Option<f64>,
-    pub inverse_10: Option<f64>,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub forward_3: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub forward_4: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub forward_5: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub forward_6: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub forward_7: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub forward_8: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub forward_9: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub forward_10: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub inverse_3: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub inverse_4: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub inverse_5: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub inverse_6: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub inverse_7: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub inverse_8: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub inverse_9: f64,
+    #[serde(default)]
+    #[schemars(range(min = 0, max = 100))]
+    pub inverse_10: f64,
 }
 
 fn shown(dataset: &str, stored: StoredReported) -> ReportedResult {

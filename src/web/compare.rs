@@ -47,8 +47,18 @@ pub fn routes() -> Vec<ApiRoute> {
              id. Rows scored under different metric versions are compared and marked \
              (`metric_versions_differ`).",
         )
-        .query("a", true, "Row A: a model name or a submission id.")
-        .query("b", true, "Row B: a model name or a submission id.")
+        .query_with(
+            "a",
+            true,
+            json!({"type": "string", "pattern": "\\S"}),
+            "Row A: a model name or a submission id.",
+        )
+        .query_with(
+            "b",
+            true,
+            json!({"type": "string", "pattern": "\\S"}),
+            "Row B: a model name or a submission id (not row A).",
+        )
         .query_with(
             "resample",
             false,

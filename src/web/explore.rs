@@ -108,6 +108,11 @@ pub fn routes() -> Vec<ApiRoute> {
             "`json` (the default): one page; `csv`: every matching item.",
         )
         .responds_json::<ExplorerPage>(200, "A page of the grid, or the CSV.")
+        .responds(
+            200,
+            Some("text/csv"),
+            "With `format=csv`: every matching item, one line each.",
+        )
         .errors(&[400, 404, 503]),
     ]
 }

@@ -377,7 +377,9 @@ fn path_param_description(name: &str) -> &'static str {
 /// 400 when every path parameter was documented as any string).
 fn path_param_schema(name: &str) -> Value {
     match name {
-        "run" | "job" => json!({"type": "integer", "minimum": 1, "maximum": i64::MAX}),
+        "run" | "job" | "reported_id" => {
+            json!({"type": "integer", "minimum": 1, "maximum": i64::MAX})
+        }
         "change" => json!({"enum": ["pause", "resume", "cancel"]}),
         _ => json!({"type": "string", "minLength": 1}),
     }
@@ -437,6 +439,15 @@ fn operation_json(
                 json!({"type": "string", "format": "binary"})
             };
             response["content"] = json!({ media: {"schema": schema} });
+        }
+        // A status given twice answers in either media type (JSON, or CSV when asked).
+        if let Some(Value::Object(earlier)) = responses.get_mut(&outcome.status.to_string()) {
+            if let (Some(Value::Object(content)), Some(Value::Object(more))) =
+                (earlier.get_mut("content"), response.get("content"))
+            {
+                content.extend(more.clone());
+            }
+            continue;
         }
         responses.insert(outcome.status.to_string(), response);
     }

@@ -129,8 +129,16 @@ async fn set_metadata_api(
     State(state): State<AppState>,
     Path((dataset, model)): Path<(String, String)>,
     caller: Caller,
-    Json(metadata): Json<ModelMetadata>,
+    Json(body): Json<serde_json::Map<String, serde_json::Value>>,
 ) -> Result<axum::Json<ModelMetadataEntry>, AppError> {
+    // Taken as an object first: serde would read a struct from an array of its fields.
+    let metadata: ModelMetadata =
+        serde_json::from_value(serde_json::Value::Object(body)).map_err(|e| {
+            AppError::Rejected {
+                message: format!("the JSON body does not fit this route: {e}"),
+                problems: Vec::new(),
+            }
+        })?;
     let editor = MetadataEditor {
         actor: caller.actor(),
         admin: caller.has(Scope::Admin),
