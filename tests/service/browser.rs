@@ -818,8 +818,8 @@ async fn a_run_page_follows_its_run_live_and_is_paused_and_resumed_by_keyboard()
     assert_eq!(found["last"]["cancel_visible"], false, "{found}");
     assert_eq!(found["navigations"], 0, "the page was reloaded: {found}");
     // What the page showed when it loaded after the resume was not the end: its script
-    // brought it there.
-    assert_ne!(found["resumed"]["done"], format!("{n} of {n}"), "{found}");
+    // brought it there. (Its count may already be complete: items in flight when the run was
+    // paused finish during the pause, so only the stage tells the end apart.)
     assert!(
         found["resumed"]["stage"]
             .as_str()
