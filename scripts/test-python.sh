@@ -34,11 +34,11 @@ esac
 VERSION=$(sed -n 's/^version = "\(.*\)"$/\1/p' Cargo.toml | head -n 1)
 
 # Pinned tools from PyPI: maturin and its build in one virtualenv, and a wheelhouse of what the
-# fresh virtualenv installs besides the wheel (the package's dependency, Pillow for its `pil`
-# extra, pytest), so later runs install offline.
+# fresh virtualenv installs besides the wheel (the package's dependencies, requests and
+# cryptography, Pillow for its `pil` extra, pytest), so later runs install offline.
 TOOLS_VENV="$TOOLS/maturin-venv"
 WHEELHOUSE="$TOOLS/wheelhouse"
-PINNED=(requests==2.34.2 pillow==11.3.0 pytest==9.2.0)
+PINNED=(requests==2.34.2 cryptography==48.0.0 pillow==11.3.0 pytest==9.2.0)
 if [ ! -x "$TOOLS_VENV/bin/maturin" ] || [ ! -f "$WHEELHOUSE/.complete" ]; then
   echo "== installing maturin 1.16.0 (PyPI) into $TOOLS_VENV; ${PINNED[*]} into $WHEELHOUSE"
   mkdir -p "$TOOLS"
@@ -49,6 +49,11 @@ if [ ! -x "$TOOLS_VENV/bin/maturin" ] || [ ! -f "$WHEELHOUSE/.complete" ]; then
   "$TOOLS_VENV/bin/pip" install --quiet --disable-pip-version-check 'maturin==1.16.0'
   "$TOOLS_VENV/bin/pip" download --quiet --disable-pip-version-check --dest "$WHEELHOUSE" "${PINNED[@]}"
   touch "$WHEELHOUSE/.complete"
+fi
+# A wheelhouse made before the package needed cryptography (signed statements) gets it now.
+if ! ls "$WHEELHOUSE"/cryptography-*.whl >/dev/null 2>&1; then
+  echo "== adding cryptography (PyPI) to $WHEELHOUSE"
+  "$TOOLS_VENV/bin/pip" download --quiet --disable-pip-version-check --dest "$WHEELHOUSE" 'cryptography==48.0.0'
 fi
 if [ ${#ZIG_ARGS[@]} -gt 0 ] && ! "$TOOLS_VENV/bin/python" -c 'import ziglang' 2>/dev/null; then
   echo "== installing ziglang 0.13.0 (PyPI) into $TOOLS_VENV, the linker for a glibc 2.17 wheel"
@@ -118,7 +123,7 @@ allowed = [
 ]
 required = [
     data + "scripts/enact-hub", "enact_hub/__init__.py", "enact_hub/__main__.py",
-    "enact_hub/client.py", "enact_hub/py.typed", info + "METADATA", info + "WHEEL", info + "RECORD",
+    "enact_hub/client.py", "enact_hub/verify.py", "enact_hub/py.typed", info + "METADATA", info + "WHEEL", info + "RECORD",
 ]
 stray = [n for n in names if not any(re.fullmatch(p, n) for p in allowed)]
 missing = [r for r in required if not any(re.fullmatch(r, n) for n in names)]
@@ -128,6 +133,8 @@ if "\nVersion: {}\n".format(version) not in metadata:
     problems.append("METADATA does not give Version: " + version)
 if not re.search(r"^Requires-Dist: requests", metadata, re.M):
     problems.append("METADATA does not require requests")
+if not re.search(r"^Requires-Dist: cryptography", metadata, re.M):
+    problems.append("METADATA does not require cryptography")
 # The platform tag is a promise about glibc: no symbol of the binary may need a newer version.
 tag = re.search(r"manylinux_(\d+)_(\d+)_x86_64", wheel)
 if tag is None:

@@ -253,7 +253,35 @@ leaderboard-reported-badge = reported
 leaderboard-reported-source = source: { $source }
 leaderboard-reported-unranked = not ranked: a reported row
 leaderboard-reported-note = Reported rows are numbers a paper published, entered as data: not scored by this hub, with no interval and no per-item data, and never ranked against the hub's rows (their rank is left empty). The paper's appendix tables give step-length cells only, so their overall, forward and inverse totals are empty.
+leaderboard-provenance-run = run
+leaderboard-provenance-run-meaning = this hub asked the model itself and scored the replies it kept; the link shows the run's stamp
+leaderboard-provenance-submitted = submitted
+leaderboard-provenance-submitted-meaning = answers uploaded by the submitter; this hub scored them but did not see the model answer
+leaderboard-provenance-filter = Only rows that are:
+leaderboard-provenance-all = any provenance
 leaderboard-model-link = about the model
+leaderboard-challenge-public = Challenge under way: these figures are over the public part only, { $public } of the { $total } items. The private part ({ $private } of { $total }) is revealed at { $deadline } (UTC), and the final ranking is over it.
+leaderboard-challenge-public-no-deadline = Challenge under way: these figures are over the public part only, { $public } of the { $total } items. The private part ({ $private } of { $total }) is revealed when an admin reveals it, and the final ranking is over it.
+leaderboard-challenge-public-after = The public part's figures ({ $public } of the { $total } items), as the board stood during the challenge. The private part was revealed on { $revealed }.
+leaderboard-challenge-private = Final ranking: the private part was revealed on { $revealed }. These figures are over its { $private } of the { $total } items, for the submissions each account selected (its latest, when it selected none); each row shows its rank over the public part and the change.
+leaderboard-challenge-preview = Admin preview: the final ranking over the private part ({ $private } of the { $total } items), as a reveal now would make it. Submitters cannot see it before the reveal.
+leaderboard-challenge-show-preview = Preview the final ranking
+leaderboard-challenge-show-final = The final ranking
+leaderboard-challenge-show-public = The public part's board
+leaderboard-account-submissions = { $count ->
+    [one] { $count } submission by this account
+   *[other] { $count } submissions by this account
+  }
+leaderboard-standing = public rank { $public }, private rank { $private }: { $change }
+leaderboard-rank-up = { $places ->
+    [one] up { $places } place
+   *[other] up { $places } places
+  }
+leaderboard-rank-down = { $places ->
+    [one] down { $places } place
+   *[other] down { $places } places
+  }
+leaderboard-rank-same = no change
 leaderboard-page-of = page { $page } of { $pages }
 leaderboard-ranked-rows = { $count ->
     [one] { $count } ranked row

@@ -238,6 +238,20 @@ class Hub:
             self._get_json("/api/v1/submissions/{}".format(int(submission)), "reading submission {}".format(submission), auth=True)
         )
 
+    def statement(self, submission: int) -> Dict[str, Any]:
+        """The submission's signed statement: a DSSE envelope (``payloadType``, ``payload``,
+        ``signatures``) to check with :func:`enact_hub.verify.verify` against :meth:`keys`."""
+        return self._get_json(
+            "/api/v1/submissions/{}/statement".format(int(submission)),
+            "reading the statement of submission {}".format(submission),
+            auth=True,
+        )
+
+    def keys(self) -> Dict[str, Any]:
+        """The hub's public signing keys (``{"keys": [{"keyid", "algorithm", "public_key",
+        "created_at", "retired_at"?}]}``), old ones included."""
+        return self._get_json("/api/v1/keys", "reading the hub's signing keys")
+
     def leaderboard(self, dataset: str, **filters: Any) -> Dict[str, Any]:
         """A dataset's leaderboard as the hub serves it (rows ranked, with ``next``/``prev``).
 

@@ -8,6 +8,11 @@
 //! way, then puts it in place with a rename, so the target is never half written; it refuses a
 //! database that exists unless told to move it aside. Into PostgreSQL, a restore copies the
 //! snapshot into an empty database in one transaction.
+//!
+//! A snapshot never holds the statement-signing key's secret: it lives in a key file outside the
+//! database ([`super::signing`]), and only the public keys and the signed statements are
+//! tables. A database restored without its key file makes a new key at its next signing, listed
+//! beside the old ones, so every statement stays verifiable.
 
 use std::path::{Path, PathBuf};
 

@@ -92,9 +92,14 @@ pub async fn rows(
         .await?
         .into_iter()
         .collect();
-    let verdicts_a = store::submissions::verdicts(&mut conn, row_a.id).await?;
-    let verdicts_b = store::submissions::verdicts(&mut conn, row_b.id).await?;
+    let mut verdicts_a = store::submissions::verdicts(&mut conn, row_a.id).await?;
+    let mut verdicts_b = store::submissions::verdicts(&mut conn, row_b.id).await?;
     drop(conn);
+    // On a split dataset before its reveal, only the public part's items (as on the board).
+    if let Some(shown) = super::challenge::items_shown(hub, &dataset, admin).await? {
+        verdicts_a.retain(|v| shown.contains(&v.id));
+        verdicts_b.retain(|v| shown.contains(&v.id));
+    }
     let (ids, items, unpaired) = paired_items(&verdicts_a, &verdicts_b, &activities);
     if items.is_empty() {
         return Err(AppError::Invalid(format!(

@@ -145,11 +145,7 @@ pub async fn view(
             board.dataset.name
         )));
     }
-    let grid = board
-        .explorer
-        .get_or_try_init(|| build(hub, &board))
-        .await?
-        .clone();
+    let grid = grid(hub, &board).await?;
     let view = grid.parse_view(text).map_err(AppError::Invalid)?;
     let exploration = grid.explore(&view);
     Ok(Explored {
@@ -158,6 +154,15 @@ pub async fn view(
         view,
         exploration,
     })
+}
+
+/// The board's grid, built by its first reader and kept with the board.
+pub async fn grid(hub: &Hub, board: &Board) -> Result<Arc<Grid>, AppError> {
+    Ok(board
+        .explorer
+        .get_or_try_init(|| build(hub, board))
+        .await?
+        .clone())
 }
 
 /// Reads the board's verdicts and the answers its Human row counts, and builds the grid.

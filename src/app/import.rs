@@ -231,6 +231,9 @@ pub struct ImportReport {
     pub longest_transaction_ms: f64,
     pub cut_over_ms: f64,
     pub seconds: f64,
+    /// Public datasets holding some of the imported dataset's items or frames (its ground
+    /// truth is out there); reported while its answers are hidden, as a new dataset's are.
+    pub leaks: Vec<crate::core::red_flags::Leak>,
 }
 
 impl ImportReport {
@@ -281,6 +284,13 @@ impl ImportReport {
             s.push_str(
                 "; an unfinished import from another file or with other options was discarded",
             );
+        }
+        for leak in &self.leaks {
+            s.push_str(&format!(
+                "; warning: {} items and {} frames are also in public dataset '{}', so their \
+                 answers are public",
+                leak.items, leak.frames, leak.dataset
+            ));
         }
         s.push_str(&format!("; {:.2} s", self.seconds));
         s
@@ -848,6 +858,13 @@ pub async fn import_release(
     )
     .await?;
     report.longest_transaction_ms = report.longest_transaction_ms.max(report.cut_over_ms);
+    // The import is in: a failed check is logged, never turned into a failed import.
+    match super::red_flags::leak_at_import(hub, actor, &options.dataset).await {
+        Ok(leaks) => report.leaks = leaks,
+        Err(e) => {
+            tracing::warn!(dataset = %options.dataset, error = %e, "the leak check after an import failed");
+        }
+    }
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)
 }

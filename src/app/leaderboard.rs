@@ -14,6 +14,7 @@ use std::sync::{Arc, Mutex, RwLock};
 use bytes::Bytes;
 
 use super::cache::{BoundedCache, CacheLimits, CacheStats};
+use super::challenge::ChallengeBoard;
 use super::models::{self, ModelMetadata};
 use super::reported::{self, ReportedResult};
 use super::{AppError, Hub, datasets};
@@ -35,6 +36,8 @@ pub fn submission_row(s: &SubmissionRow) -> LeaderboardRow {
             baseline: s.baseline,
             submitted_at: &s.created_at,
             metric_version: s.metric_version,
+            provenance: s.provenance,
+            run: s.run,
         },
         &s.scores,
     )
@@ -81,21 +84,35 @@ pub async fn human_performance(
 
 /// The dataset's leaderboard rows, ranked.
 pub async fn rows(hub: &Hub, dataset: &Dataset) -> Result<Vec<LeaderboardRow>, AppError> {
+    Ok(rows_and_challenge(hub, dataset).await?.0)
+}
+
+/// The dataset's leaderboard rows, ranked, and on a split dataset its challenge with the
+/// other part's rows, ranked too ([`super::challenge::on_board`]).
+pub async fn rows_and_challenge(
+    hub: &Hub,
+    dataset: &Dataset,
+) -> Result<(Vec<LeaderboardRow>, Option<ChallengeBoard>), AppError> {
     let mut conn = hub.conn().await?;
     let submissions = store::submissions::published(&mut conn, dataset.id).await?;
     let items = store::datasets::counts(&mut conn, dataset.id).await?.total;
     drop(conn);
     let mut rows: Vec<LeaderboardRow> = submissions.iter().map(submission_row).collect();
+    let mut challenge =
+        super::challenge::on_board(hub, dataset, &submissions, &mut rows, submission_row).await?;
     let dataset_items = usize::try_from(items).unwrap_or(0);
     if let Some(human) = human_figures(hub, dataset, dataset_items).await? {
-        rows.push(LeaderboardRow::human(
-            &human.report,
-            human.coverage,
-            human.stamp,
-        ));
+        let human = LeaderboardRow::human(&human.report, human.coverage, human.stamp);
+        if let Some(c) = &mut challenge {
+            c.other.push(human.clone());
+        }
+        rows.push(human);
     }
     rank(&mut rows);
-    Ok(rows)
+    if let Some(c) = &mut challenge {
+        rank(&mut c.other);
+    }
+    Ok((rows, challenge))
 }
 
 /// The leaderboard of the dataset named `name`.
@@ -117,6 +134,8 @@ pub struct Board {
     /// Results papers published for the dataset, shown beside the rows when asked for and
     /// never ranked with them.
     pub reported: Vec<ReportedResult>,
+    /// A split dataset's challenge: what the rows are over, and the other part's rows.
+    pub challenge: Option<ChallengeBoard>,
     /// Unique per build in this process: a response's entity tag starts with it.
     pub version: u64,
     views: RwLock<HashMap<String, Bytes>>,
@@ -129,6 +148,14 @@ pub struct Board {
 const MAX_VIEWS: usize = 256;
 
 impl Board {
+    /// Whether this board was built before its challenge's deadline, which has now passed: it
+    /// must be built again (and the reveal recorded) rather than served.
+    pub fn reveal_due(&self) -> bool {
+        self.challenge
+            .as_ref()
+            .is_some_and(ChallengeBoard::reveal_due)
+    }
+
     /// A view rendered before under `key` (a format and the normalized request).
     pub fn view(&self, key: &str) -> Option<Bytes> {
         self.views
@@ -240,7 +267,8 @@ impl BoardCache {
 /// Readers that miss at once share one build (see [`BoardCache`]).
 pub async fn board(hub: &Hub, name: &str) -> Result<Arc<Board>, AppError> {
     let cache = &hub.boards;
-    if let Some(board) = cache.get(name) {
+    // A board kept from before its challenge's deadline is built again (and the reveal made).
+    if let Some(board) = cache.get(name).filter(|b| !b.reveal_due()) {
         return Ok(board);
     }
     let flight = Landing {
@@ -276,10 +304,11 @@ impl Drop for Landing<'_> {
 async fn build(hub: &Hub, name: &str, ticket: u64) -> Result<Arc<Board>, AppError> {
     let cache = &hub.boards;
     // Kept by a build that landed between this reader's miss and its flight.
-    if let Some(board) = cache.get(name) {
+    if let Some(board) = cache.get(name).filter(|b| !b.reveal_due()) {
         return Ok(board);
     }
-    let (dataset, rows) = of(hub, name).await?;
+    let dataset = datasets::by_name(hub, name).await?;
+    let (rows, challenge) = rows_and_challenge(hub, &dataset).await?;
     let metadata = models::of_dataset(hub, &dataset.name)
         .await?
         .into_iter()
@@ -291,6 +320,7 @@ async fn build(hub: &Hub, name: &str, ticket: u64) -> Result<Arc<Board>, AppErro
         rows,
         metadata,
         reported,
+        challenge,
         version: cache.builds.fetch_add(1, Ordering::SeqCst) + 1,
         views: RwLock::default(),
         explorer: tokio::sync::OnceCell::new(),

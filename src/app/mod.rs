@@ -8,7 +8,9 @@
 //!   [`import`]: an ENACT release read from disk, all or nothing.
 //! - [`scoring`]: a prediction file scored against a stored dataset or a release folder.
 //! - [`submissions`]: submit, read and list a leaderboard submission; [`leaderboard`] builds
-//!   the rows, the Human row included, and keeps each dataset's board in memory.
+//!   the rows, the Human row included, and keeps each dataset's board in memory;
+//!   [`challenge`]: a hidden dataset split into a public and a private part, its deadline,
+//!   reveal and selections, and what the board shows of it.
 //! - [`tokens`]: API tokens and the accounts behind them; [`annotators`]: annotator accounts,
 //!   invites and login sessions.
 //! - [`annotation`]: assignments, the queue, drafts, answers, skips and flags; [`gold`]: gold
@@ -27,6 +29,9 @@
 //! - [`audit`]: the audit log every audited use case writes in its own transaction.
 //! - [`demo`]: the built-in demo dataset, its chance baseline and its login link.
 //! - [`backup`]: online snapshots of the database, and restoring one.
+//! - [`signing`]: the hub's statement-signing key (in a key file, never in the database),
+//!   made on first need and rotated; [`statements`]: each scored submission's signed
+//!   statement, and checking one offline.
 //! - [`jobs`]: long work that survives restarts, worked by one instance at a time (model runs,
 //!   rescoring); [`pipeline`]: new items from replays, and simulated replays.
 //! - [`runs`]: model runs: the hub asks an OpenAI-compatible endpoint every item, keeps each
@@ -40,6 +45,7 @@ pub mod annotators;
 pub mod audit;
 pub mod backup;
 pub mod cache;
+pub mod challenge;
 pub mod changes;
 pub mod compare;
 pub mod datasets;
@@ -65,11 +71,14 @@ pub mod models;
 pub mod paper;
 pub mod pipeline;
 pub mod quality;
+pub mod red_flags;
 pub mod reported;
 pub mod rescore;
 pub mod runs;
 pub mod scoring;
+pub mod signing;
 pub mod standings;
+pub mod statements;
 pub mod studies;
 pub mod submissions;
 pub mod tokens;
@@ -163,6 +172,9 @@ pub struct Hub {
     gate: store::gate::WriteGate,
     /// This process's name in the change feed, so that a server skips its own announcements.
     origin: Arc<str>,
+    /// The key statements are signed with, and the hub they name.
+    signer: Arc<signing::Signer>,
+    item_digests: Arc<statements::ItemDigests>,
 }
 
 impl From<SqlitePool> for Hub {
@@ -186,6 +198,10 @@ impl Hub {
             let metrics = metrics.clone();
             Arc::new(move |lane, held| metrics.write_held(lane, held))
         });
+        let signer = Arc::new(signing::Signer::new(
+            signing::KeySource::beside(&pool),
+            None,
+        ));
         Hub {
             pool,
             items: caches.items,
@@ -203,7 +219,25 @@ impl Hub {
             heavy,
             gate,
             origin: changes::new_origin().into(),
+            signer,
+            item_digests: Arc::default(),
         }
+    }
+
+    /// The hub signing its statements with the key in `key_file` (made there on first need)
+    /// instead of the one beside a SQLite database (`--signing-key`, `ENACT_HUB_SIGNING_KEY`),
+    /// naming itself by `public_url` in them (`--public-url`, `ENACT_HUB_PUBLIC_URL`).
+    pub fn with_signing(
+        mut self,
+        key_file: Option<std::path::PathBuf>,
+        public_url: Option<String>,
+    ) -> Hub {
+        let source = match key_file {
+            Some(path) => signing::KeySource::File(path),
+            None => signing::KeySource::beside(&self.pool),
+        };
+        self.signer = Arc::new(signing::Signer::new(source, public_url));
+        self
     }
 
     /// The hub with empty caches bounded by `limits` (call before serving).

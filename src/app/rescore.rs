@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use super::changes::Change;
 use super::jobs::{self, JobContext, JobId, JobKind};
-use super::{AppError, Hub, audit, datasets, submissions};
+use super::{AppError, Hub, audit, datasets, statements, submissions};
 use crate::core::annotation::human_verdict;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::metric::METRIC_VERSION;
@@ -387,6 +387,7 @@ async fn rescore_one_submission(hub: &Hub, id: i64) -> Result<Unit, AppError> {
             }
         };
         let new_scores = serde_json::to_string(&scored.scores)?;
+        let verdicts = statements::scored_verdicts(&targets.targets, &scored.items);
         let mut tx = hub.begin_bulk().await?;
         if store::content_generation(&mut tx).await? != generation {
             // An import changed the items meanwhile: score against what it left.
@@ -407,6 +408,7 @@ async fn rescore_one_submission(hub: &Hub, id: i64) -> Result<Unit, AppError> {
             tx.rollback().await?;
             return Ok(Unit::Current);
         }
+        statements::record(hub, &mut tx, id, verdicts).await?;
         hub.publish(&mut tx, &Change::Boards).await?;
         tx.commit().await?;
         hub.boards.changed();

@@ -9,14 +9,14 @@ use sha2::{Digest, Sha256};
 use super::cache::{BoundedCache, CacheLimits};
 use super::changes::Change;
 use super::tokens::Caller;
-use super::{AppError, Hub, audit, datasets};
+use super::{AppError, Hub, audit, datasets, statements};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{NewToken, Role, Scope};
 use crate::core::dataset::AnswerVisibility;
 use crate::core::metric::METRIC_VERSION;
 use crate::core::scoring::{self, ScoringTarget};
 use crate::core::submission::{
-    ScoredSubmission, SubmissionError, SubmissionMetadata, Visibility, score_submission,
+    Provenance, ScoredSubmission, SubmissionError, SubmissionMetadata, Visibility, score_submission,
 };
 use crate::core::version::BUILD;
 use crate::store;
@@ -250,6 +250,7 @@ pub async fn submit<B>(
     caller: &Caller,
     dataset_name: &str,
     metadata: SubmissionMetadata,
+    provenance: Provenance,
     idempotency_key: Option<&str>,
     body: B,
 ) -> Result<Submitted, AppError>
@@ -269,7 +270,16 @@ where
         }
     }
     let attempt = take_attempt(hub, caller).await?;
-    let stored = store_submission(hub, caller, &dataset, metadata, idempotency_key, body).await;
+    let stored = store_submission(
+        hub,
+        caller,
+        &dataset,
+        metadata,
+        provenance,
+        idempotency_key,
+        body,
+    )
+    .await;
     if let (Err(AppError::Unavailable(_)), Some(attempt)) = (&stored, attempt) {
         // The server was too busy to take it on (a full scoring queue, a write lock held too
         // long): that is not the caller's attempt to pay for.
@@ -298,6 +308,7 @@ async fn store_submission<B>(
     caller: &Caller,
     dataset: &Dataset,
     metadata: SubmissionMetadata,
+    provenance: Provenance,
     idempotency_key: Option<&str>,
     body: B,
 ) -> Result<Submitted, AppError>
@@ -308,6 +319,7 @@ where
     let targets = dataset_targets(hub, dataset.id).await?;
     let sha256 = body_sha256(&body);
     let scored = score_body(hub, targets.clone(), &dataset.name, body).await?;
+    let verdicts = statements::scored_verdicts(&targets.targets, &scored.items);
 
     let mut tx = hub.begin_bulk().await?;
     let new = NewSubmission {
@@ -320,6 +332,7 @@ where
         scores: &scored.scores,
         metric_version: METRIC_VERSION,
         scored_by: BUILD,
+        provenance,
     };
     let id = match store::submissions::insert(&mut tx, &new).await {
         Ok(id) => id,
@@ -341,6 +354,7 @@ where
         Err(e) => return Err(e.into()),
     };
     store::submissions::insert_items(&mut tx, id, &targets.item_rows, &scored.items).await?;
+    statements::record(hub, &mut tx, id, verdicts).await?;
     audit::record(
         &mut tx,
         &caller.actor(),
@@ -494,6 +508,7 @@ pub async fn file_baseline(
     let body = answer_body(&targets);
     let sha256 = body_sha256(body.as_bytes());
     let scored = score_body(hub, targets.clone(), &dataset.name, body.into_bytes()).await?;
+    let verdicts = statements::scored_verdicts(&targets.targets, &scored.items);
     let mut tx = hub.begin_bulk().await?;
     let account = super::tokens::ensure_account(&mut tx, account_name, Role::Submitter).await?;
     let token = NewToken::generate();
@@ -511,10 +526,13 @@ pub async fn file_baseline(
         scores: &scored.scores,
         metric_version: METRIC_VERSION,
         scored_by: BUILD,
+        // The hub computed a baseline's answers itself, but asked no model: not a run.
+        provenance: Provenance::Submitted,
     };
     let id = store::submissions::insert(&mut tx, &new).await?;
     store::submissions::insert_items(&mut tx, id, &targets.item_rows, &scored.items).await?;
     store::submissions::update_listing(&mut tx, id, Some(true), None).await?;
+    statements::record(hub, &mut tx, id, verdicts).await?;
     audit::record(
         &mut tx,
         actor,

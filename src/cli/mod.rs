@@ -35,6 +35,7 @@ mod run;
 mod scoring;
 mod serve;
 mod simulate;
+mod statements;
 mod stored;
 mod study;
 
@@ -130,6 +131,14 @@ enum Command {
     /// graphs, compare two curators, choose the graphs to export, export for `generate`.
     #[command(subcommand)]
     Episode(episode::EpisodeCommand),
+    /// The keys the hub signs each scored submission's statement with: list the public keys,
+    /// or rotate to a new key (old statements keep verifying).
+    #[command(subcommand)]
+    Keys(statements::KeysCommand),
+    /// Check a submission's signed statement offline: its signature against the hub's public
+    /// keys and, with --answers, that a file is the answers it was made for. Exits 1 with the
+    /// reason when it does not hold.
+    Verify(statements::VerifyArgs),
 }
 
 #[derive(Args)]
@@ -207,6 +216,8 @@ pub fn main() -> ExitCode {
             Command::Reported(command) => reported::reported(command).await,
             Command::Doctor(args) => doctor::doctor(args).await,
             Command::Episode(command) => episode::episode(command).await,
+            Command::Keys(command) => statements::keys(command).await,
+            Command::Verify(args) => statements::verify(args).await,
         }
     });
     match result {
@@ -247,7 +258,18 @@ fn describe_db(db: &Path) -> String {
 
 /// Opens the database a command works on.
 async fn open(db: &Path) -> anyhow::Result<Hub> {
-    Hub::open(&resolve(db)).await
+    open_signing(db, None).await
+}
+
+/// Opens the database; statements it makes are signed with the key in `key_file`, else the
+/// file `ENACT_HUB_SIGNING_KEY` names, else the one beside a SQLite database, and name the hub
+/// by `ENACT_HUB_PUBLIC_URL` (the variables `serve` also reads).
+async fn open_signing(db: &Path, key_file: Option<PathBuf>) -> anyhow::Result<Hub> {
+    let from_env = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
+    let key_file = key_file.or_else(|| from_env("ENACT_HUB_SIGNING_KEY").map(PathBuf::from));
+    Ok(Hub::open(&resolve(db))
+        .await?
+        .with_signing(key_file, from_env("ENACT_HUB_PUBLIC_URL")))
 }
 
 /// Prints a use case's refusal as the command's error and fails.

@@ -68,6 +68,15 @@ pub(super) struct ServeArgs {
     /// dies, another (or this one restarted) takes its jobs over this long after.
     #[arg(long, env = "ENACT_HUB_JOB_LEASE", default_value_t = app::jobs::JobSettings::default().lease.as_secs_f64(), value_name = "SECONDS", value_parser = lease_seconds)]
     job_lease: f64,
+    /// The file holding the key statements are signed with (made on first start when
+    /// missing, mode 0600). Default: `<db>.signing-key` beside a SQLite database; on
+    /// PostgreSQL give every instance the same file, else each signs with a key of its own that
+    /// is lost when it stops.
+    #[arg(long, env = "ENACT_HUB_SIGNING_KEY", value_name = "FILE")]
+    signing_key: Option<PathBuf>,
+    /// The hub's public URL, as its signed statements name it (e.g. https://hub.example.org).
+    #[arg(long, env = "ENACT_HUB_PUBLIC_URL", value_name = "URL")]
+    public_url: Option<String>,
     /// Generate the built-in demo dataset at start and serve it (as dataset "demo").
     #[arg(long)]
     demo: bool,
@@ -158,7 +167,12 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         .with_endpoint_keys(app::runs::EndpointKeys::from_env(
             args.endpoint_keys.clone(),
         )?)
-        .with_import_dir(args.import_dir.clone());
+        .with_import_dir(args.import_dir.clone())
+        .with_signing(
+            args.signing_key.clone(),
+            args.public_url.clone().filter(|u| !u.trim().is_empty()),
+        );
+    prepare_signing_key(&hub).await?;
     if args.demo {
         app::demo::load(&hub).await?;
     }
@@ -206,6 +220,26 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     served?;
     hub.close().await;
     Ok(ExitCode::SUCCESS)
+}
+
+/// The key statements are signed with, made on the first start (a key file that cannot be
+/// read, or holds a retired key, stops the server here).
+async fn prepare_signing_key(hub: &Hub) -> anyhow::Result<()> {
+    let key = app::signing::prepare(hub).await?;
+    match app::signing::source(hub) {
+        app::signing::KeySource::File(path) => tracing::info!(
+            keyid = %key.keyid,
+            file = %path.display(),
+            "statements are signed with key {}",
+            key.keyid
+        ),
+        app::signing::KeySource::Process => tracing::warn!(
+            keyid = %key.keyid,
+            "statements are signed with a key of this process only, lost when it stops: give \
+             --signing-key FILE (ENACT_HUB_SIGNING_KEY) to keep one across restarts and instances"
+        ),
+    }
+    Ok(())
 }
 
 /// A job lease in seconds: from 1 s (renewals must fit in it) to a day.

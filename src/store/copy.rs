@@ -162,6 +162,7 @@ pub const TABLES: &[Table] = &[
             ("error_analysis", Text),
             ("metric_version", Int),
             ("scored_by", Text),
+            ("provenance", Text),
         ],
         true,
     ),
@@ -181,6 +182,31 @@ pub const TABLES: &[Table] = &[
             ("pairwise_accuracy", Real),
         ],
         false,
+    ),
+    table(
+        "challenges",
+        &[
+            ("dataset", Int),
+            ("seed", Int),
+            ("public_share", Real),
+            ("reveal_at", Text),
+            ("revealed_at", Text),
+            ("revealed_by", Text),
+            ("selection_limit", Int),
+            ("split_by", Text),
+            ("created_at", Text),
+        ],
+        false,
+    ),
+    table(
+        "challenge_items",
+        &[("item", Int), ("dataset", Int), ("part", Text)],
+        false,
+    ),
+    table(
+        "challenge_selections",
+        &[("id", Int), ("submission", Int), ("selected_at", Text)],
+        true,
     ),
     table(
         "annotators",
@@ -495,6 +521,29 @@ pub const TABLES: &[Table] = &[
             ("updated_at_ms", Int),
         ],
         false,
+    ),
+    table(
+        "signing_keys",
+        &[
+            ("id", Int),
+            ("keyid", Text),
+            ("algorithm", Text),
+            ("public_key", Text),
+            ("created_at", Text),
+            ("retired_at", Text),
+        ],
+        true,
+    ),
+    table(
+        "submission_statements",
+        &[
+            ("id", Int),
+            ("submission", Int),
+            ("keyid", Text),
+            ("envelope", Text),
+            ("made_at", Text),
+        ],
+        true,
     ),
 ];
 

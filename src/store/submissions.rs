@@ -7,7 +7,8 @@ use super::db::{Conn, Dialect, Fields, on};
 use super::{corrupt, kind_from_row};
 use crate::core::dataset::{AnswerVisibility, Direction, StepLength};
 use crate::core::submission::{
-    ItemVerdict, SubmissionMetadata, SubmissionScores, SubmissionStatus, VerdictOutcome, Visibility,
+    ItemVerdict, Provenance, SubmissionMetadata, SubmissionScores, SubmissionStatus,
+    VerdictOutcome, Visibility,
 };
 use crate::core::verifier::{ScoringPolicy, StrictOutcome};
 
@@ -68,12 +69,18 @@ pub struct SubmissionRow {
     pub metric_version: u32,
     /// The build that computed its scores (empty: before builds were recorded).
     pub scored_by: String,
+    /// Whether the hub asked the model itself (`Run`) or was handed the answers.
+    pub provenance: Provenance,
+    /// The model run that filed it (the row's link to the run's stamp).
+    pub run: Option<i64>,
 }
 
 const SUBMISSION_COLUMNS: &str = "s.id, s.dataset, d.name AS dataset_name, s.account, \
     a.name AS account_name, s.model, s.description, s.url, s.prompt_version, s.notes, s.policy, \
     s.status, s.visibility, s.baseline, s.scores, s.created_at, s.body_sha256, \
-    s.metric_version, s.scored_by FROM submissions s JOIN datasets d ON d.id = s.dataset JOIN accounts a ON a.id = s.account";
+    s.metric_version, s.scored_by, s.provenance, \
+    (SELECT min(r.id) FROM model_runs r WHERE r.submission = s.id) AS run_id \
+    FROM submissions s JOIN datasets d ON d.id = s.dataset JOIN accounts a ON a.id = s.account";
 
 fn submission_from_row(row: &impl Fields) -> Result<SubmissionRow, sqlx::Error> {
     let id: i64 = row.try_get("id")?;
@@ -104,6 +111,8 @@ fn submission_from_row(row: &impl Fields) -> Result<SubmissionRow, sqlx::Error> 
         body_sha256: row.try_get("body_sha256")?,
         metric_version: version_column(row, "metric_version")?,
         scored_by: row.try_get("scored_by")?,
+        provenance: row.try_get("provenance")?,
+        run: row.try_get("run_id")?,
     })
 }
 
@@ -167,6 +176,7 @@ pub struct NewSubmission<'a> {
     pub metric_version: u32,
     /// The build computing them.
     pub scored_by: &'a str,
+    pub provenance: Provenance,
 }
 
 /// Inserts the submission; call inside the transaction that also stores its items. An
@@ -178,8 +188,9 @@ pub async fn insert(conn: &mut Conn, new: &NewSubmission<'_>) -> Result<i64, sql
         let scores = serde_json::to_string(new.scores).map_err(|e| corrupt("scores", e))?;
         sqlx::query_scalar(
             "INSERT INTO submissions (dataset, account, token, idempotency_key, body_sha256, \
-             model, description, url, prompt_version, notes, scores, metric_version, scored_by) \
-             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13) RETURNING id",
+             model, description, url, prompt_version, notes, scores, metric_version, scored_by, \
+             provenance) \
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14) RETURNING id",
         )
         .bind(new.dataset)
         .bind(new.account)
@@ -194,6 +205,7 @@ pub async fn insert(conn: &mut Conn, new: &NewSubmission<'_>) -> Result<i64, sql
         .bind(scores)
         .bind(i64::from(new.metric_version))
         .bind(new.scored_by)
+        .bind(new.provenance)
         .fetch_one(&mut *c)
         .await
     })

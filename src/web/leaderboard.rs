@@ -20,10 +20,13 @@ use super::error::PageError;
 use super::extract::Path;
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
+use super::session::ReaderIsAdmin;
 use super::{AppError, AppState};
+use crate::app::challenge::BoardChallenge;
 use crate::app::leaderboard::{self, Board};
 use crate::app::models::ModelMetadata;
 use crate::app::reported::ReportedResult;
+use crate::core::challenge::Part;
 use crate::core::dataset::{Direction, StepLength};
 use crate::core::leaderboard::{
     AccuracyCell, AccuracyChart, BoardPage, BoardQuery, ColumnGroup, Interval, LeaderboardRow,
@@ -31,6 +34,7 @@ use crate::core::leaderboard::{
 };
 use crate::core::metric::METRIC_VERSION;
 use crate::core::paper::{CellKey, Metric};
+use crate::core::submission::Provenance;
 use crate::core::verifier::Resampling;
 
 /// Rows a page may ask for at once.
@@ -90,11 +94,30 @@ pub fn api_routes() -> Vec<ApiRoute> {
         .query("model", false, "Only this model (exact name).")
         .query("account", false, "Only this account (exact name).")
         .query_with(
+            "provenance",
+            false,
+            json!({"enum": ["", "run", "submitted", "reported"]}),
+            "Only rows whose answers came this way: `run` (this hub asked the model), \
+             `submitted` (uploaded) or `reported` (a paper's published numbers; shows them).",
+        )
+        .query_with(
             "reported",
             false,
             json!({"enum": ["", "0", "1", "false", "true"]}),
             "`1` adds `reported`: the results papers published for the dataset (values in \
              percent as printed), never ranked against the hub's rows.",
+        )
+        .query_with(
+            "part",
+            false,
+            json!({"enum": ["", "public", "private"]}),
+            "On a dataset split for a challenge (`challenge` says so): whose items the figures \
+             are over. By default the public part until the reveal, then the private part, \
+             whose rows are each account's selected submissions (or its latest) with their \
+             `standing`: rank over each part and the change. Before the reveal `private` (the \
+             final ranking as a reveal now would make it) is for admins: 403 otherwise. \
+             Ignored on a dataset that is not split. Every row's `account_submissions` counts \
+             its account's submissions to the dataset, listed or not.",
         )
         .responds_json::<LeaderboardView<'static>>(
             200,
@@ -105,7 +128,7 @@ pub fn api_routes() -> Vec<ApiRoute> {
             None,
             "Unchanged since the `ETag` sent in `If-None-Match`.",
         )
-        .errors(&[400, 404]),
+        .errors(&[400, 403, 404, 503]),
     ]
 }
 
@@ -120,6 +143,8 @@ struct BoardRequest {
     reported: bool,
     /// Submission ids the reader picked for the chart.
     chart: Option<Vec<i64>>,
+    /// On a split dataset, the part whose figures to show (`super::challenge`).
+    part: Option<Part>,
 }
 
 impl BoardRequest {
@@ -129,6 +154,7 @@ impl BoardRequest {
         let mut query = BoardQuery::default();
         let mut chart: Option<Vec<i64>> = None;
         let mut reported = false;
+        let mut part = None;
         let number = |name: &str, text: &str, max: usize| {
             text.trim()
                 .parse::<usize>()
@@ -157,8 +183,19 @@ impl BoardRequest {
                 "all" => query.every_submission = switch("all", value)?,
                 "resample" => query.intervals = super::compare::resample_param(Some(value))?,
                 "reported" => reported = switch("reported", value)?,
+                "part" => part = Some(super::challenge::parse_part(value)?),
                 "model" => query.model = Some(value.to_owned()),
                 "account" => query.account = Some(value.to_owned()),
+                "provenance" => {
+                    let p = Provenance::parse(value).ok_or_else(|| {
+                        AppError::Invalid(format!(
+                            "provenance must be run, submitted or reported, not {value:?}"
+                        ))
+                    })?;
+                    // A paper's numbers are the reported rows: asking for them shows them.
+                    reported |= p == Provenance::Reported;
+                    query.provenance = Some(p);
+                }
                 "chart" => {
                     for part in value.split(',').filter(|p| !p.trim().is_empty()) {
                         let id = part.trim().parse().map_err(|_| {
@@ -175,6 +212,7 @@ impl BoardRequest {
             query,
             reported,
             chart,
+            part,
         })
     }
 
@@ -185,11 +223,15 @@ impl BoardRequest {
         format!("{dataset_path}?{}", self.query_string(&q, self.reported))
     }
 
-    /// `q` as a query string, with the reported rows' switch.
+    /// `q` as a query string, with the reported rows' switch and the part asked for.
     fn query_string(&self, q: &BoardQuery, reported: bool) -> String {
         let mut text = query_string(q);
         if reported {
             text.push_str("&reported=1");
+        }
+        if let Some(part) = self.part {
+            text.push_str("&part=");
+            text.push_str(part.as_str());
         }
         text
     }
@@ -244,6 +286,9 @@ fn query_string(q: &BoardQuery) -> String {
     }
     if let Some(a) = &q.account {
         pairs.push(("account", a.clone()));
+    }
+    if let Some(p) = q.provenance {
+        pairs.push(("provenance", p.as_str().to_owned()));
     }
     pairs.push(("page", q.page.to_string()));
     pairs.push(("per_page", q.per_page.to_string()));
@@ -310,6 +355,10 @@ struct LeaderboardView<'a> {
     /// printed), never ranked against `rows` (a paper's numbers, no interval, no per-item data).
     #[serde(skip_serializing_if = "Option::is_none")]
     reported: Option<&'a [ReportedResult]>,
+    /// On a dataset split for a challenge: the part the rows' figures are over, the parts'
+    /// sizes, the deadline and the reveal.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    challenge: Option<BoardChallenge>,
     next: Option<String>,
     prev: Option<String>,
 }
@@ -331,24 +380,34 @@ async fn leaderboard_json(
     Path(name): Path<String>,
     RawQuery(raw): RawQuery,
     headers: HeaderMap,
+    ReaderIsAdmin(admin): ReaderIsAdmin,
 ) -> Result<Response, AppError> {
     let request = BoardRequest::parse(raw.as_deref())?;
     let board = leaderboard::board(&state.hub, &name).await?;
+    // Refused before anything is served, a kept view or a 304 included.
+    let (rows, challenge) = super::challenge::board_rows(&board, request.part, admin)?;
     let etag = request.etag(&board, "json");
     if matches_etag(&headers, &etag) {
         return Ok(with_etag(&headers, &etag, ()));
     }
     let json = request.view(&board, "json", || {
-        Ok(serde_json::to_vec(&leaderboard_view(&board, &request))?)
+        Ok(serde_json::to_vec(&leaderboard_view(
+            &board, rows, challenge, &request,
+        ))?)
     })?;
     let body = ([(header::CONTENT_TYPE, "application/json")], json);
     Ok(with_etag(&headers, &etag, body))
 }
 
-/// The JSON of the page `request` asks for.
-fn leaderboard_view<'a>(board: &'a Board, request: &BoardRequest) -> LeaderboardView<'a> {
+/// The JSON of the page `request` asks for, cut from `rows` (the part asked for).
+fn leaderboard_view<'a>(
+    board: &'a Board,
+    rows: &[LeaderboardRow],
+    challenge: Option<BoardChallenge>,
+    request: &BoardRequest,
+) -> LeaderboardView<'a> {
     let path = format!("/api/v1/datasets/{}/leaderboard", board.dataset.name);
-    let page = board_page(&board.rows, &request.query);
+    let page = board_page(rows, &request.query);
     let (prev, next) = neighbours(request, &path, &page);
     LeaderboardView {
         dataset: &board.dataset.name,
@@ -373,6 +432,7 @@ fn leaderboard_view<'a>(board: &'a Board, request: &BoardRequest) -> Leaderboard
             })
             .collect(),
         reported: request.reported.then_some(board.reported.as_slice()),
+        challenge,
         next,
         prev,
     }
@@ -466,10 +526,42 @@ struct RowText {
     outdated: Option<String>,
     /// A reported row (a paper's published numbers): where they were published.
     reported: Option<String>,
+    /// A hub row's provenance badge: `run` (with the link to the run's stamp) or `submitted`.
+    provenance: Option<ProvenanceBadge>,
+    /// How many submissions the row's account made to the dataset, listed or not.
+    account_submissions: Option<String>,
+    /// A challenge's final row: its rank over each part and the change.
+    standing: Option<String>,
     /// The model's category, family and size, as the hub's metadata or the paper gives them.
     about: Option<String>,
     /// The model's link, from its metadata.
     link: Option<String>,
+}
+
+/// A submission row's provenance as the page shows it.
+struct ProvenanceBadge {
+    label: String,
+    /// What the badge means, for its title and screen readers.
+    meaning: String,
+    /// A run's stamp (endpoint host, model, parameters, prompt version and hash).
+    stamp: Option<String>,
+}
+
+fn provenance_badge(tr: &Tr, r: &LeaderboardRow) -> Option<ProvenanceBadge> {
+    let badge = match r.provenance? {
+        Provenance::Run => ProvenanceBadge {
+            label: tr.t("leaderboard-provenance-run"),
+            meaning: tr.t("leaderboard-provenance-run-meaning"),
+            stamp: r.run.map(|run| format!("/api/v1/runs/{run}/stamp")),
+        },
+        Provenance::Submitted => ProvenanceBadge {
+            label: tr.t("leaderboard-provenance-submitted"),
+            meaning: tr.t("leaderboard-provenance-submitted-meaning"),
+            stamp: None,
+        },
+        Provenance::Reported => return None,
+    };
+    Some(badge)
 }
 
 /// A column header that sorts the board by its column.
@@ -524,15 +616,33 @@ struct LeaderboardPage {
     resampling_items: bool,
     /// Some row's intervals resample items where the page's resample activities.
     any_ci_differs: bool,
+    /// Links narrowing the board to one provenance, and back to every row.
+    provenance_links: Vec<FilterLink>,
+    /// On a split dataset: which part the figures are over, and the other part's board.
+    challenge: Option<super::challenge::ChallengeNote>,
+}
+
+/// A link that narrows a board, marked when it is the board shown.
+struct FilterLink {
+    label: String,
+    href: String,
+    active: bool,
 }
 
 impl LeaderboardPage {
-    fn new(tr: Tr, board: &Board, request: &BoardRequest) -> LeaderboardPage {
+    /// The page of `rows` (the part asked for, see `super::challenge::board_rows`).
+    fn new(
+        tr: Tr,
+        board: &Board,
+        (rows, challenge): (&[LeaderboardRow], Option<BoardChallenge>),
+        admin: bool,
+        request: &BoardRequest,
+    ) -> LeaderboardPage {
         let name = &board.dataset.name;
         let path = format!("/leaderboard/{name}");
         let query = &request.query;
-        let page = board_page(&board.rows, query);
-        let drawn = chart_rows(&board.rows, query, request.chart.as_deref());
+        let page = board_page(rows, query);
+        let drawn = chart_rows(rows, query, request.chart.as_deref());
         let drawn_ids: Vec<i64> = drawn.iter().filter_map(|r| r.submission).collect();
         let sort = |key: SortKey| SortLink {
             href: request.link(&path, |q| {
@@ -637,9 +747,50 @@ impl LeaderboardPage {
                 r.interval_resampling
                     .is_some_and(|stored| stored != query.intervals)
             }),
+            provenance_links: provenance_links(&tr, request, &path),
+            challenge: challenge.map(|c| {
+                let other = match c.part {
+                    Part::Public => Part::Private,
+                    Part::Private => Part::Public,
+                };
+                let mut q = query.clone();
+                q.page = 1;
+                let href = format!("{path}?{}&part={}", query_string(&q), other.as_str());
+                super::challenge::note(&tr, &c, admin, href)
+            }),
             tr,
         }
     }
+}
+
+/// One link per provenance, and one to rows of any provenance.
+fn provenance_links(tr: &Tr, request: &BoardRequest, path: &str) -> Vec<FilterLink> {
+    let link = |label: String, provenance: Option<Provenance>| {
+        let mut href = request.link(path, |q| {
+            q.provenance = provenance;
+            q.page = 1;
+        });
+        if provenance == Some(Provenance::Reported) && !request.reported {
+            href.push_str("&reported=1");
+        }
+        FilterLink {
+            label,
+            href,
+            active: request.query.provenance == provenance,
+        }
+    };
+    vec![
+        link(tr.t("leaderboard-provenance-run"), Some(Provenance::Run)),
+        link(
+            tr.t("leaderboard-provenance-submitted"),
+            Some(Provenance::Submitted),
+        ),
+        link(
+            tr.t("leaderboard-reported-badge"),
+            Some(Provenance::Reported),
+        ),
+        link(tr.t("leaderboard-provenance-all"), None),
+    ]
 }
 
 /// `resampling`: what the page's intervals resample.
@@ -720,6 +871,9 @@ fn row_text(
             )
         }),
         reported: None,
+        provenance: provenance_badge(tr, r),
+        account_submissions: super::challenge::submissions_text(tr, r),
+        standing: super::challenge::standing_text(tr, r.standing.as_ref()),
         about: None,
         link: None,
     }
@@ -775,6 +929,9 @@ fn reported_text(tr: &Tr, r: &ReportedResult) -> RowText {
         human_note: None,
         outdated: None,
         reported: Some(m.source.clone()),
+        provenance: None,
+        account_submissions: None,
+        standing: None,
         about: about(
             Some(m.category.as_str()),
             m.family.as_deref(),
@@ -789,18 +946,21 @@ async fn leaderboard_page(
     Path(name): Path<String>,
     RawQuery(raw): RawQuery,
     headers: HeaderMap,
+    ReaderIsAdmin(admin): ReaderIsAdmin,
     tr: Tr,
 ) -> Result<Response, PageError> {
     let request = BoardRequest::parse(raw.as_deref())?;
     let board = leaderboard::board(&state.hub, &name).await?;
-    // One rendering per language; the switch's return path is the request's own.
-    let kind = format!("page.{}.{}", tr.lang(), tr.here());
+    let shown = super::challenge::board_rows(&board, request.part, admin)?;
+    // One rendering per language and kind of reader (admins see a link to the preview); the
+    // switch's return path is the request's own.
+    let kind = format!("page.{}.{}.{admin}", tr.lang(), tr.here());
     let etag = request.etag(&board, &kind);
     if matches_etag(&headers, &etag) {
         return Ok(with_etag(&headers, &etag, ()));
     }
     let html = request.view(&board, &kind, || {
-        Ok(LeaderboardPage::new(tr, &board, &request)
+        Ok(LeaderboardPage::new(tr, &board, shown, admin, &request)
             .render()?
             .into_bytes())
     })?;

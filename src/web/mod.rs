@@ -5,8 +5,11 @@
 //! scripts; `auth` checks API tokens (before the handler, for every route whose table entry
 //! asks for one), `session` logs annotators in (and gates the admin pages), `annotate` is
 //! their side of human annotation and `admin`, `admin_tokens` and `admin_audit` the admins';
-//! `error_analysis` serves the error taxonomy as JSON and pages; `episodes` the curators' pages
-//! for real-world episodes (key frames, the scene-graph editor, comparison and resolution).
+//! `error_analysis` serves the error taxonomy as JSON and pages; `challenge` hidden datasets
+//! split into a public and a private part (the admin API and page, submitters' selections);
+//! `episodes` the curators' pages for real-world episodes (key frames, the scene-graph editor,
+//! comparison and resolution); `statements` a submission's signed statement, the hub's public
+//! keys and their rotation.
 //! Each page module exposes one `router()`; they are merged once in [`router`], the admin
 //! pages behind one gate ([`admin_pages`]). The JSON routes are one table instead ([`api_routes`]): the `/api/v1`
 //! router, its authorization and the OpenAPI document (`openapi`) are all built from it.
@@ -22,6 +25,7 @@ mod api;
 mod archive;
 mod assets;
 mod auth;
+mod challenge;
 mod compare;
 mod cookies;
 mod episodes;
@@ -39,11 +43,13 @@ pub mod openapi;
 mod pages;
 mod paper;
 mod quality;
+mod red_flags;
 mod reported;
 mod rescore;
 mod run_pages;
 mod runs;
 pub mod session;
+mod statements;
 mod studies;
 mod submissions;
 
@@ -151,7 +157,9 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(api::routes());
     routes.extend(archive::routes());
     routes.extend(submissions::routes());
+    routes.extend(statements::routes());
     routes.extend(leaderboard::api_routes());
+    routes.extend(challenge::routes());
     routes.extend(error_analysis::routes());
     routes.extend(studies::routes());
     routes.extend(imports::routes());
@@ -159,6 +167,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(runs::routes());
     routes.extend(quality::routes());
     routes.extend(reported::routes());
+    routes.extend(red_flags::routes());
     routes.extend(compare::routes());
     routes.extend(explore::routes());
     routes.push(
@@ -240,9 +249,11 @@ fn admin_pages(state: &AppState) -> Router<AppState> {
         .merge(admin_audit::router())
         .merge(studies::admin_router())
         .merge(reported::admin_router())
+        .merge(red_flags::admin_router())
         .merge(imports::router())
         .merge(rescore::router())
         .merge(quality::router())
+        .merge(challenge::admin_router())
         .merge(run_pages::admin_router())
         .merge(episodes::admin_router())
         .route_layer(axum::middleware::from_fn_with_state(

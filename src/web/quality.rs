@@ -197,7 +197,7 @@ struct GoldRequest {
 
 /// A seed: a whole number from 0 to `u64::MAX`, or a whole float up to
 /// [`MOST_WHOLE_NUMBER`] (`7.0` is a JSON Schema integer; schemathesis sent one and got 422).
-fn whole_seed<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
+pub(super) fn whole_seed<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
     let Some(number) = Option::<serde_json::Number>::deserialize(d)? else {
         return Ok(None);
     };

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use super::extract::{Json, Path, whole_number};
 use super::openapi::{ApiRoute, Verb};
+use super::session::ReaderIsAdmin;
 use super::{AppError, AppState};
 use crate::app::jobs::JobControl;
 use crate::app::runs::{self, Audience, RunCalls, RunOutput, RunSpec, ServerRunView};
@@ -99,7 +100,65 @@ pub fn routes() -> Vec<ApiRoute> {
         )
         .responds(200, Some(JSONL), "The answers, one JSON object a line.")
         .errors(&[400, 404]),
+        ApiRoute::new(
+            Verb::Get,
+            "/runs/{run}/stamp",
+            run_stamp,
+            "What a model run asked, and how",
+        )
+        .describe(
+            "The stamp a leaderboard row of provenance `run` links to: the endpoint's host, the \
+             model, the generation parameters, the prompt's version and SHA-256, the hub \
+             version, token usage and cost, and the submission the replies became. Anyone may \
+             read it once that submission is listed on its leaderboard (an admin always); no \
+             answer is in it, so hidden datasets' runs show theirs too. 404 for a run that has \
+             not submitted.",
+        )
+        .responds_json::<RunStampView>(200, "The run and its stamp.")
+        .errors(&[400, 404]),
     ]
+}
+
+/// A run's stamp as the API gives it.
+#[derive(Serialize, JsonSchema)]
+struct RunStampView {
+    run: i64,
+    name: String,
+    dataset: String,
+    /// The submission its answers were filed as.
+    submission: i64,
+    /// As stored when the run submitted: `endpoint_host`, `model`, `params`, `prompt_version`,
+    /// `prompt_hash`, `hub_version`, `usage`, `cost_usd`, `answered`, `failed` and the call
+    /// settings.
+    stamp: serde_json::Map<String, serde_json::Value>,
+}
+
+async fn run_stamp(
+    State(state): State<AppState>,
+    ReaderIsAdmin(admin): ReaderIsAdmin,
+    Path(RunPath { run }): Path<RunPath>,
+) -> Result<Json<RunStampView>, AppError> {
+    let audience = if admin {
+        Audience::Admin
+    } else {
+        Audience::Public
+    };
+    let stamped = runs::stamp(&state.hub, run, audience).await?;
+    let stamp = match stamped.stamp {
+        serde_json::Value::Object(map) => map,
+        other => {
+            return Err(AppError::internal(format!(
+                "model run {run}: stored stamp is not an object: {other}"
+            )));
+        }
+    };
+    Ok(Json(RunStampView {
+        run: stamped.run.id,
+        name: stamped.run.name,
+        dataset: stamped.run.dataset,
+        submission: stamped.submission,
+        stamp,
+    }))
 }
 
 const JSONL: &str = "application/x-ndjson";

@@ -12,13 +12,15 @@ use serde_json::{Value, json};
 use super::extract::{IdempotencyKey, Json, Path, Query, whole_number};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
-use crate::app::datasets;
 use crate::app::submissions::{self, StoredVerdict, SubmissionRow, Submitted};
 use crate::app::tokens::{self, Caller, CreatedToken, TokenListing};
+use crate::app::{challenge, datasets};
 use crate::core::credentials::{Role, Scope};
 use crate::core::dataset::AnswerVisibility;
 use crate::core::metric::MetricStamp;
-use crate::core::submission::{SubmissionMetadata, SubmissionScores, SubmissionStatus, Visibility};
+use crate::core::submission::{
+    Provenance, SubmissionMetadata, SubmissionScores, SubmissionStatus, Visibility,
+};
 use crate::core::verifier::ScoringPolicy;
 
 /// Submitting, reading scores, and the admin's controls (see [`super::openapi`]).
@@ -75,7 +77,9 @@ pub fn routes() -> Vec<ApiRoute> {
                 "Status; TA and PA overall, forward, inverse and per step length; coverage and \
                  parse-failure rate; 95% bootstrap intervals on overall TA and PA. Per-item \
                  verdicts (`items`) only to the owner (or an admin) and only if the dataset's \
-                 answers are public; otherwise `items_withheld` says why.",
+                 answers are public; otherwise `items_withheld` says why. On a dataset split for \
+                 a challenge, until its private part is revealed, `scores` are over the public \
+                 part only (to anyone but an admin), as they are when the submission is posted.",
             )
             .bearer(Scope::ReadOwn)
             .responds_json::<SubmissionView>(200, "The submission.")
@@ -212,6 +216,11 @@ struct SubmissionView {
     policy: ScoringPolicy,
     visibility: Visibility,
     baseline: bool,
+    /// `run` when this hub asked the model itself (then `run` names the model run), else
+    /// `submitted`.
+    provenance: Provenance,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    run: Option<i64>,
     created_at: String,
     scores: SubmissionScores,
     /// The metric version `scores` and the verdicts were computed with, and whether it is
@@ -285,6 +294,8 @@ impl From<SubmissionRow> for SubmissionView {
             policy: row.policy,
             visibility: row.visibility,
             baseline: row.baseline,
+            provenance: row.provenance,
+            run: row.run,
             created_at: row.created_at,
             scores: row.scores,
             metric: MetricStamp::of(row.metric_version),
@@ -312,6 +323,8 @@ async fn submit(
         &caller,
         &dataset,
         query.into(),
+        // An upload, whatever its metadata claims: only the hub's own runs are `run`.
+        Provenance::Submitted,
         key.as_deref(),
         read,
     )
@@ -320,6 +333,7 @@ async fn submit(
         Submitted::Created(row) => (StatusCode::CREATED, row),
         Submitted::Repeated(row) => (StatusCode::OK, row),
     };
+    let row = challenge::as_shown_to(&state.hub, &caller, row).await?;
     let location = format!("/api/v1/submissions/{}", row.id);
     Ok((
         status,
@@ -335,7 +349,8 @@ async fn get_submission(
     caller: Caller,
 ) -> Result<Json<SubmissionView>, AppError> {
     let detail = submissions::read(&state.hub, &caller, &id).await?;
-    let mut view = SubmissionView::from(detail.row);
+    let row = challenge::as_shown_to(&state.hub, &caller, detail.row).await?;
+    let mut view = SubmissionView::from(row);
     match detail.verdicts {
         Ok(verdicts) => {
             view.items = Some(verdicts.into_iter().map(ItemVerdictView::from).collect());

@@ -193,6 +193,8 @@ async fn every_audited_action_names_its_actor_target_and_dataset() {
             "backup.create",
             "dataset.answer_visibility",
             "dataset.import",
+            // The signing key, made for the submission's statement.
+            "key.generate",
             "submission.create",
             "submission.listing",
             "token.issue",

@@ -93,6 +93,7 @@ fn body_of(verb: Verb, path: &str, records: &[Value], n: usize) -> Option<(Strin
             "application/json",
         )),
         (Verb::Post, "/admin/jobs/{job}/{change}") => Some((String::new(), "text/plain")),
+        (Verb::Post, "/admin/keys/rotate") => Some((String::new(), "text/plain")),
         (Verb::Post, "/admin/rescore") => {
             Some((json!({"dataset": "mini"}).to_string(), "application/json"))
         }
@@ -120,6 +121,18 @@ fn body_of(verb: Verb, path: &str, records: &[Value], n: usize) -> Option<(Strin
             json!({"category": "open-weight", "family": format!("family-{n}")}).to_string(),
             "application/json",
         )),
+        (Verb::Post, "/admin/datasets/{dataset}/challenge/split") => Some((
+            json!({"share": 0.5, "seed": n}).to_string(),
+            "application/json",
+        )),
+        (Verb::Patch, "/admin/datasets/{dataset}/challenge") => Some((
+            json!({"selection_limit": 2}).to_string(),
+            "application/json",
+        )),
+        (Verb::Put | Verb::Delete, "/submissions/{id}/selection")
+        | (Verb::Post, "/admin/datasets/{dataset}/challenge/reveal") => {
+            Some((String::new(), "text/plain"))
+        }
         (Verb::Delete, "/admin/datasets/{dataset}/gold")
         | (
             Verb::Put | Verb::Delete,
@@ -280,7 +293,21 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                             )
                             .await;
                         }
-                        matrix_run(&server, n).await.to_string()
+                        let run = matrix_run(&server, n).await;
+                        // A run's stamp is shown once it has submitted: filed as the
+                        // owner's published submission.
+                        if route.path.ends_with("/stamp") {
+                            let mut conn = server.pool.acquire().await.expect("conn");
+                            enact_hub::store::runs::set_submission(
+                                &mut conn,
+                                run,
+                                submission,
+                                r#"{"model": "m", "endpoint_host": "127.0.0.1:9"}"#,
+                            )
+                            .await
+                            .expect("the run linked to a submission");
+                        }
+                        run.to_string()
                     }
                     // A fresh queued job for every call, so that cancelling it succeeds.
                     "job" => enact_hub::app::rescore::request(
@@ -323,6 +350,15 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                 set_mini_answers(
                     &server.pool,
                     enact_hub::core::dataset::AnswerVisibility::Public,
+                )
+                .await;
+            }
+            // Only a dataset whose answers are hidden can be split (other routes of the matrix
+            // make them public); the challenge's other routes come after the split.
+            if route.path == "/admin/datasets/{dataset}/challenge/split" {
+                set_mini_answers(
+                    &server.pool,
+                    enact_hub::core::dataset::AnswerVisibility::Hidden,
                 )
                 .await;
             }
@@ -533,6 +569,7 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("GET", "/admin/datasets/{dataset}/report.json", Page::Admin),
     ("GET", "/admin/datasets/{dataset}/report.tar", Page::Admin),
     ("GET", "/admin/datasets/{dataset}/reported", Page::Admin),
+    ("GET", "/admin/datasets/{dataset}/flags", Page::Admin),
     (
         "POST",
         "/admin/datasets/{dataset}/reported/paper",
@@ -558,6 +595,10 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("POST", "/admin/quality/gold", Page::Admin),
     ("POST", "/admin/quality/gold/clear", Page::Admin),
     ("POST", "/admin/quality/exclusion", Page::Admin),
+    ("GET", "/admin/challenges", Page::Admin),
+    ("POST", "/admin/challenges/split", Page::Admin),
+    ("POST", "/admin/challenges/settings", Page::Admin),
+    ("POST", "/admin/challenges/reveal", Page::Admin),
     ("GET", "/admin/runs", Page::Admin),
     ("POST", "/admin/runs", Page::Admin),
     ("GET", "/admin/runs/{run}", Page::Admin),

@@ -5,7 +5,7 @@
 use enact_hub::app::{self, AppError, Hub};
 use enact_hub::core::agreement::protocol::ProtocolPlan;
 use enact_hub::core::credentials::{Role, Scope, random_token, token_hash};
-use enact_hub::core::submission::SubmissionMetadata;
+use enact_hub::core::submission::{Provenance, SubmissionMetadata};
 use enact_hub::store;
 use enact_hub::store::Pool;
 use enact_hub::store::db::{UniqueKey, Violation, ViolationKind, violation};
@@ -62,6 +62,7 @@ async fn a_reused_idempotency_key_is_recognised_by_its_constraint() {
         scores: &first.scores,
         metric_version: enact_hub::core::metric::METRIC_VERSION,
         scored_by: enact_hub::core::version::BUILD,
+        provenance: Provenance::Submitted,
     };
     let e = store::submissions::insert(&mut conn, &again)
         .await
@@ -251,10 +252,18 @@ async fn a_twin_request_that_stores_first_is_answered_as_a_repeat() {
     let body = ground_truth_answers(&records).into_bytes();
     // The body is read after the key was looked up and found unused: a twin with the same key
     // stores its submission in between, as a concurrent request would.
-    let same = app::submissions::submit(&hub, &caller, "mini", metadata(), Some("k"), async {
-        twin_with_key(&hub, &caller, "k", body.clone()).await;
-        Ok(body.clone())
-    })
+    let same = app::submissions::submit(
+        &hub,
+        &caller,
+        "mini",
+        metadata(),
+        Provenance::Submitted,
+        Some("k"),
+        async {
+            twin_with_key(&hub, &caller, "k", body.clone()).await;
+            Ok(body.clone())
+        },
+    )
     .await
     .expect("answered");
     let app::submissions::Submitted::Repeated(row) = same else {
@@ -269,10 +278,18 @@ async fn a_twin_request_that_stores_first_is_answered_as_a_repeat() {
 
     // The same race with another body is the conflict a late request with it gets.
     let other = answers(&records, &[0]).into_bytes();
-    let raced = app::submissions::submit(&hub, &caller, "mini", metadata(), Some("k2"), async {
-        twin_with_key(&hub, &caller, "k2", body.clone()).await;
-        Ok(other)
-    })
+    let raced = app::submissions::submit(
+        &hub,
+        &caller,
+        "mini",
+        metadata(),
+        Provenance::Submitted,
+        Some("k2"),
+        async {
+            twin_with_key(&hub, &caller, "k2", body.clone()).await;
+            Ok(other)
+        },
+    )
     .await;
     let Err(AppError::Conflict(message)) = raced else {
         panic!("a different body under a used key is a conflict: {raced:?}");
@@ -289,9 +306,17 @@ async fn twin_with_key(hub: &Hub, caller: &app::tokens::Caller, key: &str, body:
         model: "m".to_owned(),
         ..SubmissionMetadata::default()
     };
-    app::submissions::submit(hub, caller, "mini", metadata, Some(key), async { Ok(body) })
-        .await
-        .expect("the twin is stored");
+    app::submissions::submit(
+        hub,
+        caller,
+        "mini",
+        metadata,
+        Provenance::Submitted,
+        Some(key),
+        async { Ok(body) },
+    )
+    .await
+    .expect("the twin is stored");
 }
 
 #[tokio::test]

@@ -48,6 +48,46 @@ fn calls(concurrency: usize) -> RunCalls {
 /// it waited for: far beyond what any step needs on a loaded two-core machine.
 const DEADLINE: Duration = Duration::from_secs(60);
 
+/// Starts the run `name` of "mini" over the API against `standin` (as submitter "Stand-in")
+/// and works it until it has submitted: the run's id and its submission's.
+pub async fn run_to_submission(
+    server: &TestServer,
+    hub: &Hub,
+    admin: &str,
+    standin: &StandIn,
+    name: &str,
+) -> (i64, i64) {
+    let started = server
+        .call(Method::POST, "/api/v1/admin/runs")
+        .bearer(admin)
+        .json(&json!({
+            "dataset": "mini", "endpoint": standin.endpoint(), "model": "standin-vl",
+            "name": name, "temperature": 0, "key_variable": KEY_VARIABLE,
+            "concurrency": 2, "timeout_s": 5, "submit_as": "Stand-in",
+        }))
+        .expect(202)
+        .await
+        .json();
+    let run = started["run"].as_i64().expect("a run id");
+    let worker = Worker::spawn(hub.clone(), enact_hub::app::job_handlers(), fast());
+    let mut submission = None;
+    for _ in 0..1500 {
+        let shown = server
+            .call(Method::GET, &format!("/api/v1/admin/runs/{run}"))
+            .bearer(admin)
+            .expect(200)
+            .await
+            .json();
+        if shown["state"] == "done" {
+            submission = shown["submission"].as_i64();
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    worker.stop().await;
+    (run, submission.expect("the run submitted"))
+}
+
 async fn wait_until(hub: &Hub, id: JobId, what: &str, done: impl Fn(&jobs::JobRow) -> bool) {
     let deadline = Instant::now() + DEADLINE;
     while Instant::now() < deadline {

@@ -98,10 +98,23 @@ pub enum AuditAction {
     ReportedRemove,
     /// A model's category, family, size or link on a dataset set.
     ModelMetadata,
+    /// The hub's statement-signing key made (on first start) or replaced by a new one.
+    KeyGenerate,
+    KeyRotate,
+    /// A hidden dataset's items drawn into a public and a private part.
+    DatasetSplit,
+    /// A split dataset's private part revealed (at its deadline or by hand).
+    DatasetReveal,
+    /// A challenge's deadline or selection limit set.
+    ChallengeSettings,
+    /// A submission selected for (or withdrawn from) a challenge's final ranking.
+    SubmissionSelect,
+    /// An import whose items or frames also belong to a public dataset.
+    DatasetLeak,
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 32] = [
+    pub const ALL: [AuditAction; 39] = [
         AuditAction::DatasetImport,
         AuditAction::DatasetSubset,
         AuditAction::DatasetAnswerVisibility,
@@ -134,6 +147,13 @@ impl AuditAction {
         AuditAction::ReportedAdd,
         AuditAction::ReportedRemove,
         AuditAction::ModelMetadata,
+        AuditAction::KeyGenerate,
+        AuditAction::KeyRotate,
+        AuditAction::DatasetSplit,
+        AuditAction::DatasetReveal,
+        AuditAction::ChallengeSettings,
+        AuditAction::SubmissionSelect,
+        AuditAction::DatasetLeak,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -170,6 +190,13 @@ impl AuditAction {
             AuditAction::ReportedAdd => "reported.add",
             AuditAction::ReportedRemove => "reported.remove",
             AuditAction::ModelMetadata => "model.metadata",
+            AuditAction::KeyGenerate => "key.generate",
+            AuditAction::KeyRotate => "key.rotate",
+            AuditAction::DatasetSplit => "dataset.split",
+            AuditAction::DatasetReveal => "dataset.reveal",
+            AuditAction::ChallengeSettings => "challenge.settings",
+            AuditAction::SubmissionSelect => "submission.select",
+            AuditAction::DatasetLeak => "dataset.leak",
         }
     }
 

@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use crate::dataset::StepLength;
 use crate::metric::MetricStamp;
-use crate::submission::SubmissionScores;
+use crate::submission::{Provenance, SubmissionScores};
 use crate::verifier::{
     ConfidenceInterval, GroupPerformance, PerformanceReport, Resampling, StepPerformance,
 };
@@ -75,6 +75,18 @@ impl HumanCoverage {
     }
 }
 
+/// Where a final row of a split dataset stands over each part, and how far it moved
+/// (`crate::challenge::standings`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
+pub struct Standing {
+    /// Its rank among the final rows by overall task accuracy over the public part.
+    pub public_rank: Option<usize>,
+    /// Its rank among the same rows over the private part.
+    pub private_rank: Option<usize>,
+    /// `public_rank − private_rank`: places gained at the reveal (negative: lost).
+    pub rank_change: Option<i64>,
+}
+
 /// A Human cell resting on fewer answers than this is marked, not shown as a bare figure.
 pub const MIN_HUMAN_ANSWERS: usize = 5;
 
@@ -106,7 +118,22 @@ pub struct LeaderboardRow {
     pub rank: Option<usize>,
     /// Published submissions of this account and model (1 when every submission is shown).
     pub attempts: usize,
+    /// Every submission of this account to the dataset, listed or not (hidden and withdrawn
+    /// ones too): how many times it has been scored here. `None` for the Human row.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub account_submissions: Option<usize>,
+    /// On a split dataset's final ranking (`crate::challenge`): the row's rank over the public
+    /// part, over the private part, and the change.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub standing: Option<Standing>,
     pub source: RowSource,
+    /// Where the row's answers came from: `run` (this hub asked the model) or `submitted`
+    /// (uploaded); `None` for the Human row.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<Provenance>,
+    /// The model run a `run` row came from (its stamp: `GET /api/v1/runs/{run}/stamp`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub run: Option<i64>,
     /// The submission id.
     pub submission: Option<i64>,
     pub model: String,
@@ -176,6 +203,9 @@ pub struct RowIdentity<'a> {
     pub submitted_at: &'a str,
     /// The metric version its scores were computed with.
     pub metric_version: u32,
+    pub provenance: Provenance,
+    /// The model run that filed it, if any.
+    pub run: Option<i64>,
 }
 
 impl LeaderboardRow {
@@ -185,7 +215,11 @@ impl LeaderboardRow {
         LeaderboardRow {
             rank: None,
             attempts: 1,
+            account_submissions: None,
+            standing: None,
             source: RowSource::Submission,
+            provenance: Some(who.provenance),
+            run: who.run,
             submission: Some(who.submission),
             model: who.model.to_owned(),
             account: who.account.to_owned(),
@@ -223,7 +257,11 @@ impl LeaderboardRow {
         LeaderboardRow {
             rank: None,
             attempts: 1,
+            account_submissions: None,
+            standing: None,
             source: RowSource::Human,
+            provenance: None,
+            run: None,
             submission: None,
             model: "Human".to_owned(),
             account: "annotators".to_owned(),
@@ -477,6 +515,8 @@ pub struct BoardQuery {
     /// Only this model (exact name), and only this account.
     pub model: Option<String>,
     pub account: Option<String>,
+    /// Only rows of this provenance (`reported` leaves no hub row: those rows are a paper's).
+    pub provenance: Option<Provenance>,
     /// 1-based.
     pub page: usize,
     pub per_page: usize,
@@ -490,6 +530,7 @@ impl Default for BoardQuery {
             intervals: Resampling::Activities,
             model: None,
             account: None,
+            provenance: None,
             page: 1,
             per_page: DEFAULT_PER_PAGE,
         }
@@ -520,6 +561,7 @@ fn selected_rows(rows: &[LeaderboardRow], query: &BoardQuery) -> Vec<Leaderboard
     let wanted = |r: &LeaderboardRow| {
         query.model.as_deref().is_none_or(|m| r.model == m)
             && query.account.as_deref().is_none_or(|a| r.account == a)
+            && query.provenance.is_none_or(|p| r.provenance == Some(p))
     };
     rows.retain(|r| !r.is_ranked() || wanted(r));
     rank_by(&mut rows, query.sort);
@@ -769,6 +811,8 @@ mod tests {
                 baseline: false,
                 submitted_at: "2026-01-01T00:00:00Z",
                 metric_version: crate::metric::METRIC_VERSION,
+                provenance: Provenance::Submitted,
+                run: None,
             },
             &scores(forward_l3, overall),
         )
@@ -792,6 +836,8 @@ mod tests {
             baseline: false,
             submitted_at: "2026-01-01T00:00:00Z",
             metric_version: crate::metric::METRIC_VERSION,
+            provenance: Provenance::Submitted,
+            run: None,
         };
         let r = LeaderboardRow::from_scores(&who, &stored);
         assert_eq!(r.interval_resampling, Some(Resampling::Activities));

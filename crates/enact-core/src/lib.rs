@@ -20,6 +20,8 @@
 //!   explorer's filters (direction, step length, activity, pattern), orders and counts.
 //! - [`heatmap`]: the significance heatmap both reports draw (the paper's ablation figures).
 //! - [`leaderboard`]: leaderboard rows (Table 1 layout) and the TA-vs-L chart geometry.
+//! - [`challenge`]: hidden test sets split into a public and a private part: the seeded
+//!   stratified draw, figures per part, the selection rule and the rank change at the reveal.
 //! - [`model_run`]: asking a model an item: the versioned prompt, reading replies, retry
 //!   delays and the in-flight window of a model run.
 //! - [`pipeline`]: ENACT's data pipeline: key-frame segmentation, the transition graph, path
@@ -36,6 +38,8 @@
 //! - [`credentials`]: API tokens, session and invite tokens, passwords, roles, scopes and the
 //!   naming rules of accounts.
 //! - [`release`]: a stored dataset written back out as an ENACT release archive.
+//! - [`statement`]: signed statements of scored submissions: DSSE envelopes, Ed25519 signing
+//!   and verification, and the digests a statement names.
 //! - [`study`]: ablation studies: variant datasets aligned with a baseline, the Welch, paired t
 //!   and sign tests per variant and direction, the paper's heatmap and handedness panel.
 //! - `sql_text` (with the `sqlx` feature, which the hub turns on): the enums above as the
@@ -48,6 +52,7 @@ pub mod agreement;
 pub mod annotation;
 pub mod audit;
 pub mod bundle;
+pub mod challenge;
 pub mod credentials;
 pub mod dataset;
 pub mod demo;
@@ -63,12 +68,14 @@ pub mod paired;
 pub mod paper;
 pub mod pipeline;
 pub mod quality;
+pub mod red_flags;
 pub mod release;
 pub mod scene_graph;
 pub mod scoring;
 pub mod semantics;
 #[cfg(feature = "sqlx")]
 pub mod sql_text;
+pub mod statement;
 pub mod study;
 pub mod submission;
 pub mod verifier;

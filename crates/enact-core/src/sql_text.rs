@@ -58,5 +58,6 @@ text_columns!(
     crate::submission::SubmissionStatus,
     crate::submission::VerdictOutcome,
     crate::submission::Visibility,
+    crate::submission::Provenance,
     crate::verifier::ScoringPolicy,
 );

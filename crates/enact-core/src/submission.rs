@@ -170,6 +170,37 @@ impl Visibility {
     }
 }
 
+/// Where a leaderboard row's answers came from, so a reader can tell what the hub itself
+/// witnessed from what it was handed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum Provenance {
+    /// A model run of this hub (on the server, or by the CLI on its database): the hub sent
+    /// every prompt and kept every reply it scored.
+    Run,
+    /// Answers uploaded by a submitter (including a CLI run against a remote hub, which the
+    /// hub only sees as an upload).
+    Submitted,
+    /// A number a paper published, copied in; never scored by the hub.
+    Reported,
+}
+
+impl Provenance {
+    pub const ALL: [Provenance; 3] = [Provenance::Run, Provenance::Submitted, Provenance::Reported];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Provenance::Run => "run",
+            Provenance::Submitted => "submitted",
+            Provenance::Reported => "reported",
+        }
+    }
+
+    pub fn parse(text: &str) -> Option<Provenance> {
+        Provenance::ALL.into_iter().find(|p| p.as_str() == text)
+    }
+}
+
 /// What has happened to a submission. Scoring is synchronous, so a stored submission is
 /// always scored; the state is kept so that queued scoring can be added without a new column.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]

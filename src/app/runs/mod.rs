@@ -28,8 +28,8 @@ use tokio::task::JoinSet;
 pub use asker::{ApiKey, CallSettings};
 pub use remote::{RemoteHub, default_cache, execute_remote, study_datasets};
 pub use responses::{
-    Audience, RESPONSES_PER_PAGE, ResponsePage, RunOutput, output, public_runs, response_page,
-    visible_run,
+    Audience, RESPONSES_PER_PAGE, ResponsePage, RunOutput, StampedRun, output, public_runs,
+    response_page, stamp, visible_run,
 };
 pub use server::{
     EndpointKeys, MOST_CONCURRENCY, RunCalls, ServerRunView, control, start, view, views, work,
@@ -44,7 +44,7 @@ pub use crate::core::model_run::{GenerationParams, Prices, Usage};
 use crate::core::model_run::{
     PROMPT_VERSION, PromptImage, chat_request, prompt_template_hash, user_message,
 };
-use crate::core::submission::SubmissionMetadata;
+use crate::core::submission::{Provenance, SubmissionMetadata};
 use crate::store;
 pub use crate::store::runs::{RunItemRow, RunRow};
 
@@ -827,6 +827,7 @@ async fn submit(
         &caller,
         &run.dataset,
         metadata,
+        Provenance::Run,
         Some(&key),
         async move { Ok(bytes) },
     )

@@ -62,6 +62,49 @@ pub async fn visible_run(hub: &Hub, id: i64, audience: Audience) -> Result<RunRo
     })
 }
 
+/// A run's stamp as a leaderboard reader sees it: what the hub asked, how, and which
+/// submission the replies became.
+#[derive(Debug, Clone)]
+pub struct StampedRun {
+    pub run: RunRow,
+    pub submission: i64,
+    /// The stamp's JSON as stored when the run submitted.
+    pub stamp: serde_json::Value,
+}
+
+/// Run `id`'s stamp, for an admin always, for anyone else once the run's submission is on
+/// its leaderboard (a stamp names the endpoint's host, model, parameters and prompt, never an
+/// answer, so a hidden dataset's runs show theirs too). A run that has not submitted has none.
+pub async fn stamp(hub: &Hub, id: i64, audience: Audience) -> Result<StampedRun, AppError> {
+    let missing = || {
+        AppError::NotFound(format!(
+            "no model run {id} with a submission on a leaderboard"
+        ))
+    };
+    let mut conn = hub.conn().await?;
+    let run = store::runs::by_id(&mut conn, id)
+        .await?
+        .ok_or_else(missing)?;
+    let (Some(submission), Some(stamp)) = (run.submission, run.stamp.as_deref()) else {
+        return Err(missing());
+    };
+    if audience == Audience::Public {
+        let listed = store::submissions::by_id(&mut conn, submission)
+            .await?
+            .is_some_and(|s| s.visibility == crate::core::submission::Visibility::Published);
+        if !listed {
+            return Err(missing());
+        }
+    }
+    let stamp = serde_json::from_str(stamp)
+        .map_err(|e| AppError::internal(format!("model run {id}: stored stamp unreadable: {e}")))?;
+    Ok(StampedRun {
+        run,
+        submission,
+        stamp,
+    })
+}
+
 /// The runs of `dataset` anyone may read the responses of: all of them when its answers are
 /// public, none otherwise. Newest first.
 pub async fn public_runs(hub: &Hub, dataset: &Dataset) -> Result<Vec<RunRow>, AppError> {

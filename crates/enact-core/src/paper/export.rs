@@ -264,6 +264,7 @@ mod tests {
             size: None,
             origin: Origin::Submission {
                 submission: 12,
+                provenance: crate::submission::Provenance::Submitted,
                 account: "lab".to_owned(),
                 metric_version: 3,
                 hub_version: "0.1.0+abc".to_owned(),

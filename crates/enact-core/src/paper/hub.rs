@@ -11,6 +11,7 @@ use super::mark::mark;
 use super::{Category, Cell, CellKey, Metric, PaperRow, PaperTable, ReportedModel};
 use crate::dataset::{Direction, StepLength};
 use crate::leaderboard::{AccuracyCell, LeaderboardRow, RowSource};
+use crate::submission::Provenance;
 use crate::verifier::{Resampling, leaderboard_ci};
 
 /// The category the hub's own model rows are marked within unless their metadata names one:
@@ -24,6 +25,8 @@ pub enum Origin {
     /// A scored submission of this hub (an upload or a model run's answers).
     Submission {
         submission: i64,
+        /// `run` when this hub asked the model itself, else `submitted`.
+        provenance: Provenance,
         account: String,
         metric_version: u32,
         hub_version: String,
@@ -112,6 +115,7 @@ impl HubRow {
         let origin = match (human, row.submission) {
             (false, Some(submission)) => Origin::Submission {
                 submission,
+                provenance: row.provenance.unwrap_or(Provenance::Submitted),
                 account: row.account.clone(),
                 metric_version: row.metric.metric_version,
                 hub_version: hub_version.to_owned(),
@@ -209,6 +213,11 @@ impl HubRow {
     /// The row's source as a table prints it.
     pub fn source(&self) -> String {
         match &self.origin {
+            Origin::Submission {
+                submission,
+                provenance: Provenance::Run,
+                ..
+            } => format!("enact-hub model run (submission {submission})"),
             Origin::Submission { submission, .. } => format!("enact-hub submission {submission}"),
             Origin::Annotations { answers, .. } => {
                 format!("enact-hub annotations ({answers} answers)")
@@ -431,6 +440,7 @@ mod tests {
             size: None,
             origin: Origin::Submission {
                 submission,
+                provenance: Provenance::Submitted,
                 account: "alice".to_owned(),
                 metric_version: 3,
                 hub_version: "0.1.0+abc".to_owned(),

@@ -626,7 +626,11 @@ mod tests {
             row: LeaderboardRow {
                 rank: None,
                 attempts: 1,
+                account_submissions: None,
+                standing: None,
                 source: RowSource::Submission,
+                provenance: None,
+                run: None,
                 submission: Some(id),
                 model: format!("m{id}"),
                 account: "team".into(),
