@@ -22,18 +22,55 @@ use crate::store::reported::StoredReported;
 const MAX_TEXT: usize = 300;
 
 /// A reported result on a dataset as the API shows it; values in percent as printed.
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ReportedResult {
     /// Its id on this hub (what `DELETE /api/v1/datasets/{dataset}/reported/{reported_id}`
     /// takes).
     pub id: i64,
     pub dataset: String,
     #[serde(flatten)]
-    #[schemars(with = "ReportedModelSchema")]
     pub reported: ReportedModel,
     /// Who entered it, as the audit log writes it.
     pub added_by: String,
     pub added_at: String,
+}
+
+// Documented field by field: schemars marks every field of a flattened `with` type required,
+// where the JSON leaves out absent family, size and cells.
+impl JsonSchema for ReportedResult {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "ReportedResult".into()
+    }
+
+    fn json_schema(generator: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        ReportedResultSchema::json_schema(generator)
+    }
+}
+
+/// The shape of [`ReportedResult`] in JSON.
+#[derive(JsonSchema)]
+#[allow(dead_code)]
+struct ReportedResultSchema {
+    /// Its id on this hub (what `DELETE /api/v1/datasets/{dataset}/reported/{reported_id}`
+    /// takes).
+    id: i64,
+    dataset: String,
+    model: String,
+    /// `proprietary`, `open-weight`, `human`, or any other name.
+    category: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    family: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    size: Option<String>,
+    /// Where the numbers were published: paper and table label, or a URL.
+    source: String,
+    /// Task accuracy in percent by cell (none: `{}`).
+    task_accuracy: CellsSchema,
+    /// Pairwise accuracy in percent, by the same cells.
+    pairwise_accuracy: CellsSchema,
+    /// Who entered it, as the audit log writes it.
+    added_by: String,
+    added_at: String,
 }
 
 /// The shape of [`ReportedModel`] in JSON, for the API's documentation (the core type has no
@@ -95,58 +132,65 @@ pub struct ReportedModelSchema {
     pub pairwise_accuracy: CellsSchema,
 }
 
+/// For the schemas only: a cell is optional in both directions (a reply leaves out cells
+/// without a value), which schemars reads from these serde attributes.
+#[allow(dead_code)]
+fn absent(_: &f64) -> bool {
+    false
+}
+
 /// The cells of a reported result in JSON, for the API's documentation: the paper's 16 columns,
 /// each optional, in percent.
 #[derive(Default, JsonSchema)]
 #[schemars(deny_unknown_fields)]
 #[allow(dead_code)]
 pub struct CellsSchema {
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub forward_3: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub forward_4: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub forward_5: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub forward_6: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub forward_7: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub forward_8: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub forward_9: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub forward_10: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub inverse_3: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub inverse_4: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub inverse_5: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub inverse_6: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub inverse_7: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub inverse_8: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub inverse_9: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "absent")]
     #[schemars(range(min = 0, max = 100))]
     pub inverse_10: f64,
 }
