@@ -136,6 +136,9 @@ cargo test --locked --test service -- --ignored "$LIVE"
 echo "== the service suite again, on PostgreSQL"
 ENACT_HUB_TEST_POSTGRES="postgres://postgres@127.0.0.1:$PG_PORT" cargo test --locked --test service
 ENACT_HUB_TEST_POSTGRES="postgres://postgres@127.0.0.1:$PG_PORT" cargo test --locked --test service -- --ignored "$LIVE"
+echo "== the server-side jobs' kill trials again, on PostgreSQL"
+ENACT_HUB_TEST_POSTGRES="postgres://postgres@127.0.0.1:$PG_PORT" cargo test --locked --test crash -- \
+  a_model_run_killed_at_random a_rescore_killed_at_random an_import_job_killed_at_random
 
 echo "== the Python package, the wheel and cargo install (scripts/test-python.sh)"
 ./scripts/test-python.sh

@@ -6,14 +6,24 @@
 //! submission has every item verdict, an audit entry exists exactly for what was done); and no
 //! draft may outlive its finished item.
 //!
-//! `ENACT_CRASH_KILLS` sets the kills per kind (default 50); `ENACT_CRASH_SEED` the seed of the
-//! kill moments (default: random, printed so a failure can be replayed).
+//! The server-side jobs (a model run against a stand-in endpoint, a rescore, an import from the
+//! import folder) are killed the same way while the restarted server's worker takes them over
+//! after each dead lease (`serve --job-lease`, short here): the job finishes, nothing is stored
+//! twice, and a run asks the endpoint again at most what was in flight at each kill. These
+//! trials run on PostgreSQL too when `ENACT_HUB_TEST_POSTGRES` names a server (a fresh
+//! database each, as the service suite makes them); the others use SQLite files only.
+//!
+//! `ENACT_CRASH_KILLS` sets the kills per kind (default 50), `ENACT_CRASH_JOB_KILLS` per job
+//! (default 10); `ENACT_CRASH_SEED` the seed of the kill moments (default: random, printed so a
+//! failure can be replayed).
 
 #[path = "support/fixtures.rs"]
 mod fixtures;
 #[path = "service/helpers.rs"]
 #[allow(unused_imports)]
 mod helpers;
+#[path = "support/standin.rs"]
+mod standin;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -21,7 +31,8 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use enact_hub::app::Hub;
-use enact_hub::core::credentials::{hash_password, random_token, token_hash};
+use enact_hub::core::credentials::{Role, hash_password, random_token, token_hash};
+use enact_hub::core::metric::METRIC_VERSION;
 use enact_hub::store;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -72,7 +83,22 @@ struct Server {
 
 impl Server {
     async fn start(db: &Path) -> Server {
+        Server::start_with(db, &[], None).await
+    }
+
+    /// `serve` on `db` with `extra` arguments, its log appended to `log` when given.
+    async fn start_with(db: &Path, extra: &[String], log: Option<&Path>) -> Server {
         let port = free_port();
+        let stderr = match log {
+            Some(log) => Stdio::from(
+                std::fs::OpenOptions::new()
+                    .create(true)
+                    .append(true)
+                    .open(log)
+                    .expect("the server's log"),
+            ),
+            None => Stdio::null(),
+        };
         let child = enact_hub()
             .args([
                 "serve",
@@ -81,12 +107,13 @@ impl Server {
                 "--total-quota",
                 "1000000",
             ])
+            .args(extra)
             .arg("--db")
             .arg(db)
             .arg("--addr")
             .arg(format!("127.0.0.1:{port}"))
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
+            .stderr(stderr)
             .spawn()
             .expect("spawn serve");
         let base = format!("http://127.0.0.1:{port}");
@@ -865,5 +892,848 @@ async fn annotation_saves_and_answers_acknowledged_before_a_kill_survive_it() {
         !answered.is_empty() && acked_drafts > 0,
         "{} answers and {acked_drafts} draft saves acknowledged: nothing was checked",
         answered.len()
+    );
+}
+
+/// Kills per server-side job (`ENACT_CRASH_JOB_KILLS`, default 10).
+fn job_kills() -> usize {
+    std::env::var("ENACT_CRASH_JOB_KILLS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(10)
+}
+
+/// The lease the job trials' servers hold their jobs by (`serve --job-lease`, in seconds): a
+/// restarted server takes a job over once its killed predecessor's lease has run out, at its
+/// next look at the queue (every second). Short, so that ten kills take seconds rather than
+/// minutes; three renewals long (one every half second), so that a renewal a loaded machine
+/// delays does not lose it.
+const JOB_LEASE: &str = "1.5";
+
+/// The longest any one wait of a job trial may take before it fails saying what it saw: far
+/// beyond a takeover (a lease and a poll) or any unit of work on a loaded two-core machine.
+const JOB_DEADLINE: Duration = Duration::from_secs(90);
+
+/// The servers of one job trial: all on one database (a SQLite file, or a fresh PostgreSQL
+/// database when `ENACT_HUB_TEST_POSTGRES` is set), with one signing key and one log.
+struct JobServers {
+    db: PathBuf,
+    pool: store::Pool,
+    args: Vec<String>,
+    log: PathBuf,
+}
+
+impl JobServers {
+    async fn new(dir: &TempDir, extra: &[String]) -> JobServers {
+        let (pool, db) = helpers::fresh_db_located(dir).await;
+        let mut args = vec![
+            "--job-lease".to_owned(),
+            JOB_LEASE.to_owned(),
+            "--signing-key".to_owned(),
+            dir.path().join("signing-key").display().to_string(),
+        ];
+        args.extend_from_slice(extra);
+        JobServers {
+            db,
+            pool,
+            args,
+            log: dir.path().join("servers.log"),
+        }
+    }
+
+    async fn start(&self) -> Server {
+        Server::start_with(&self.db, &self.args, Some(&self.log)).await
+    }
+
+    /// The end of the servers' log, for a failure's message.
+    fn log_tail(&self) -> String {
+        let log = std::fs::read_to_string(&self.log).unwrap_or_default();
+        let lines: Vec<&str> = log.lines().collect();
+        let tail = lines[lines.len().saturating_sub(40)..].join("\n");
+        format!("the servers' log ends:\n{tail}")
+    }
+
+    /// POSTs `body` to `path` of `server` as `token`; the reply's JSON, which must come with
+    /// `status`.
+    async fn post(&self, server: &Server, path: &str, token: &str, body: &Value) -> Value {
+        let reply = reqwest::Client::new()
+            .post(format!("{}{path}", server.base))
+            .bearer_auth(token)
+            .json(body)
+            .send()
+            .await
+            .unwrap_or_else(|e| panic!("POST {path}: {e}"));
+        let status = reply.status();
+        let json: Value = reply.json().await.expect("a JSON reply");
+        assert_eq!(status, 202, "POST {path}: {json}");
+        json
+    }
+}
+
+/// The database checks after every kill of a job trial: SQLite's file checks
+/// ([`check_database`]). PostgreSQL checks foreign keys at each commit and has no file a kill
+/// can tear; only a constraint left unvalidated would escape it.
+async fn check_job_database(pool: &store::Pool, after: &str) {
+    match pool {
+        store::Pool::Sqlite(pool) => check_database(pool, after).await,
+        store::Pool::Pg(_) => {
+            let unvalidated = helpers::count(
+                pool,
+                "SELECT count(*) FROM pg_constraint WHERE NOT convalidated",
+            )
+            .await;
+            assert_eq!(unvalidated, 0, "after {after}: unvalidated constraints");
+        }
+    }
+}
+
+/// `SELECT count(*) …` with one integer parameter, on either database.
+async fn count_with(pool: &store::Pool, sql: &str, bind: i64) -> i64 {
+    helpers::db!(
+        pool,
+        fetch_one,
+        sqlx::query_scalar::<_, i64>(sql).bind(bind)
+    )
+    .unwrap_or_else(|e| panic!("{sql}: {e}"))
+}
+
+/// Audit entries of `action` on `target`.
+async fn audit_entries(pool: &store::Pool, action: &str, target: &str) -> i64 {
+    helpers::db!(
+        pool,
+        fetch_one,
+        sqlx::query_scalar::<_, i64>(
+            "SELECT count(*) FROM audit_log WHERE action = $1 AND target = $2"
+        )
+        .bind(action)
+        .bind(target)
+    )
+    .expect("audit")
+}
+
+/// A job's row as the trial sees it.
+#[derive(Debug)]
+struct JobSeen {
+    state: String,
+    lease_owner: Option<String>,
+    attempts: i64,
+    /// Shown (through `Debug`) when a wait fails.
+    #[allow(dead_code)]
+    last_error: Option<String>,
+    progress: Option<String>,
+}
+
+impl JobSeen {
+    fn ended(&self) -> bool {
+        ["done", "failed", "cancelled"].contains(&self.state.as_str())
+    }
+
+    /// Whether the server with process id `pid` holds the lease (owners are
+    /// `host:pid:random`).
+    fn held_by(&self, pid: u32) -> bool {
+        self.lease_owner
+            .as_deref()
+            .is_some_and(|owner| owner.contains(&format!(":{pid}:")))
+    }
+
+    fn progress(&self) -> Value {
+        serde_json::from_str(self.progress.as_deref().unwrap_or("null")).expect("JSON progress")
+    }
+}
+
+async fn job_seen(pool: &store::Pool, job: i64) -> JobSeen {
+    let (state, lease_owner, attempts, last_error, progress) = helpers::db!(
+        pool,
+        fetch_one,
+        sqlx::query_as::<_, (String, Option<String>, i64, Option<String>, Option<String>)>(
+            "SELECT state, lease_owner, attempts, last_error, progress FROM jobs WHERE id = $1"
+        )
+        .bind(job)
+    )
+    .expect("the job");
+    JobSeen {
+        state,
+        lease_owner,
+        attempts,
+        last_error,
+        progress,
+    }
+}
+
+/// What a job has durably done so far, read from the database: kills are aimed at random
+/// points of it, so that they fall while the job works whatever the machine's speed.
+#[derive(Debug, Clone, Copy)]
+enum Gauge {
+    /// Items of the run stored.
+    RunItems(i64),
+    /// Submissions at the current metric version.
+    Rescored,
+    /// Records of the import's committed batches, or of the dataset once it has landed.
+    ImportedRows,
+}
+
+impl Gauge {
+    async fn read(self, pool: &store::Pool) -> i64 {
+        match self {
+            Gauge::RunItems(run) => {
+                count_with(
+                    pool,
+                    "SELECT count(*) FROM model_run_items WHERE run = $1",
+                    run,
+                )
+                .await
+            }
+            Gauge::Rescored => {
+                count_with(
+                    pool,
+                    "SELECT count(*) FROM submissions WHERE metric_version >= $1",
+                    i64::from(METRIC_VERSION),
+                )
+                .await
+            }
+            Gauge::ImportedRows => {
+                helpers::count(
+                    pool,
+                    "SELECT coalesce((SELECT max(rows_done) FROM staged_imports), \
+                     (SELECT count(*) FROM items i JOIN datasets d ON d.id = i.dataset_id \
+                      WHERE d.name = 'main'))",
+                )
+                .await
+            }
+        }
+    }
+}
+
+/// Where a trial's kills fall: once the server has taken the job over, after the gauge has
+/// grown by a random amount up to `most` (none, one time in four), and a random moment under
+/// `jitter` more.
+#[derive(Debug, Clone, Copy)]
+struct Aim {
+    gauge: Gauge,
+    most: i64,
+    jitter: Duration,
+}
+
+/// Lets `server` take `job` over and work it until the moment `aim` draws, then SIGKILLs it.
+/// Returns what the kill was, for messages. Fails when the job ends first (the trial's job is
+/// too short for its kills) or a wait passes [`JOB_DEADLINE`].
+async fn kill_mid_job(
+    servers: &JobServers,
+    server: Server,
+    job: i64,
+    aim: Aim,
+    rng: &mut ChaCha8Rng,
+    label: &str,
+) -> String {
+    let pid = server.child.id();
+    let deadline = Instant::now() + JOB_DEADLINE;
+    loop {
+        let seen = job_seen(&servers.pool, job).await;
+        if seen.held_by(pid) && seen.state == "running" {
+            break;
+        }
+        assert!(
+            !seen.ended(),
+            "{label}: the job ended before this kill: {seen:?}; the trial's job is too short \
+             for its kills"
+        );
+        assert!(
+            Instant::now() < deadline,
+            "{label}: the restarted server (pid {pid}) did not take the job over within \
+             {JOB_DEADLINE:?}: {seen:?}\n{}",
+            servers.log_tail()
+        );
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    let from = aim.gauge.read(&servers.pool).await;
+    let step = if rng.random_bool(0.25) {
+        0
+    } else {
+        rng.random_range(1..=aim.most.max(1))
+    };
+    loop {
+        let now = aim.gauge.read(&servers.pool).await;
+        if now >= from + step {
+            break;
+        }
+        let seen = job_seen(&servers.pool, job).await;
+        assert!(
+            !seen.ended(),
+            "{label}: the job ended before this kill: {seen:?}; the trial's job is too short \
+             for its kills"
+        );
+        assert!(
+            seen.held_by(pid) && seen.state == "running",
+            "{label}: the server (pid {pid}) stopped working the job (it failed, or lost its \
+             lease): {seen:?}\n{}",
+            servers.log_tail()
+        );
+        assert!(
+            Instant::now() < deadline,
+            "{label}: {:?} stayed at {now} (from {from}, waiting for {}) for {JOB_DEADLINE:?}: \
+             {seen:?}\n{}",
+            aim.gauge,
+            from + step,
+            servers.log_tail()
+        );
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    let jitter = Duration::from_micros(
+        rng.random_range(0..=u64::try_from(aim.jitter.as_micros()).unwrap_or(u64::MAX)),
+    );
+    tokio::time::sleep(jitter).await;
+    server.kill();
+    format!(
+        "{label} ({:?} +{step} from {from}, then {jitter:?})",
+        aim.gauge
+    )
+}
+
+/// Starts a server once more, waits until `job` has ended and stops it; the job's row.
+async fn run_job_to_end(servers: &JobServers, job: i64, label: &str) -> JobSeen {
+    let server = servers.start().await;
+    let deadline = Instant::now() + JOB_DEADLINE;
+    let seen = loop {
+        let seen = job_seen(&servers.pool, job).await;
+        if seen.ended() {
+            break seen;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "{label}: the job did not end within {JOB_DEADLINE:?} after the last restart: \
+             {seen:?}\n{}",
+            servers.log_tail()
+        );
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    };
+    server.kill();
+    assert_eq!(
+        seen.state,
+        "done",
+        "{label}: the job ended {seen:?}\n{}",
+        servers.log_tail()
+    );
+    seen
+}
+
+/// Answers every item right at once (as [`standin::StandIn`] scripts are keyed: by the item's
+/// first image).
+fn right_answers(
+    root: &Path,
+    records: &[Value],
+) -> std::collections::HashMap<String, (String, Vec<standin::Step>)> {
+    records
+        .iter()
+        .map(|r| {
+            let first = root.join(r["images"][0].as_str().expect("image path"));
+            let png = std::fs::read(&first).expect("the first image");
+            let gt: Vec<u64> = r["gt_answer"]
+                .as_array()
+                .expect("gt")
+                .iter()
+                .map(|v| v.as_u64().expect("label"))
+                .collect();
+            (
+                standin::item_key(&png),
+                (
+                    r["id"].as_str().expect("id").to_owned(),
+                    vec![standin::Step::Answer(format!("The order is {gt:?}"))],
+                ),
+            )
+        })
+        .collect()
+}
+
+/// A model run worked by the server against the stand-in endpoint, the server killed at random
+/// moments while the run asks and stores: after every kill each stored item is stored once (one
+/// reply recorded, one attempt) and no submission or audit entry is doubled; after the restarts
+/// the run finishes with every item answered exactly once, one submission with a verdict per
+/// item, and the endpoint asked again at most what was in flight at each kill.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_model_run_killed_at_random_answers_every_item_once() {
+    const CONCURRENCY: i64 = 4;
+    let began = Instant::now();
+    let mut rng = rng("model run job");
+    let kills = job_kills();
+    let dir = TempDir::new().expect("tempdir");
+    let root = dir.path().join("release");
+    // 180 items: fewer than 251, so that each one's first frame, by which the stand-in knows
+    // it, is its own.
+    let records = helpers::write_balanced_release(&root, &[3, 4, 5], 30);
+    let items = records.len() as i64;
+    let servers = JobServers::new(&dir, &[]).await;
+    helpers::import(&servers.pool, &root, &helpers::options("mini")).await;
+    let (_, admin) = helpers::api_token(&servers.pool, "root", Role::Admin, None, None).await;
+    // Each reply after a model's pause, so that the run keeps CONCURRENCY requests in flight
+    // and takes seconds, whatever the machine.
+    let latency = Duration::from_millis(100);
+    let standin = standin::StandIn::start(standin::StandInConfig {
+        scripts: right_answers(&root, &records),
+        latency,
+        ..standin::StandInConfig::default()
+    })
+    .await;
+
+    let first = servers.start().await;
+    let started = servers
+        .post(
+            &first,
+            "/api/v1/admin/runs",
+            &admin,
+            &json!({
+                "dataset": "mini", "endpoint": standin.endpoint(), "model": "standin-vl",
+                "name": "crash", "temperature": 0, "concurrency": CONCURRENCY,
+                "timeout_s": 30, "submit_as": "Stand-in",
+            }),
+        )
+        .await;
+    let run = started["run"].as_i64().expect("a run id");
+    let job = started["job"].as_i64().expect("a job id");
+    let aim = Aim {
+        gauge: Gauge::RunItems(run),
+        most: items / (2 * kills.max(1) as i64),
+        jitter: latency,
+    };
+    let pool = &servers.pool;
+    // item row -> the reply stored for it, as first seen after a kill.
+    let mut stored: BTreeMap<i64, Option<String>> = BTreeMap::new();
+    let mut in_flight_at_kills = Vec::new();
+    let mut first = Some(first);
+    for k in 0..kills {
+        let server = match first.take() {
+            Some(server) => server,
+            None => servers.start().await,
+        };
+        let after = kill_mid_job(
+            &servers,
+            server,
+            job,
+            aim,
+            &mut rng,
+            &format!("model run kill {k}"),
+        )
+        .await;
+        check_job_database(pool, &after).await;
+        let twice = count_with(
+            pool,
+            "SELECT count(*) FROM model_run_items WHERE run = $1 \
+             AND (state != 'answered' OR attempts != 1)",
+            run,
+        )
+        .await;
+        assert_eq!(twice, 0, "{after}: items asked twice or failed");
+        let now: Vec<(i64, Option<String>)> = helpers::db!(
+            pool,
+            fetch_all,
+            sqlx::query_as("SELECT item, response FROM model_run_items WHERE run = $1").bind(run)
+        )
+        .expect("run items");
+        for (item, response) in &now {
+            if let Some(before) = stored.get(item) {
+                assert_eq!(
+                    before, response,
+                    "{after}: item {item}'s stored reply changed"
+                );
+            }
+        }
+        let asked = standin.calls().len() as i64;
+        in_flight_at_kills.push(asked - now.len() as i64);
+        stored.extend(now);
+        let submissions = helpers::count(pool, "SELECT count(*) FROM submissions").await;
+        assert!(submissions <= 1, "{after}: {submissions} submissions");
+        assert_eq!(
+            helpers::count(
+                pool,
+                "SELECT count(*) FROM audit_log WHERE action = 'submission.create'"
+            )
+            .await,
+            submissions,
+            "{after}: audit entries and submissions differ"
+        );
+        assert_eq!(
+            audit_entries(pool, "run.start", "run crash").await,
+            1,
+            "{after}: the run's start is logged once"
+        );
+    }
+
+    let seen = run_job_to_end(&servers, job, "the model run").await;
+    let after = "the finished model run";
+    check_job_database(pool, after).await;
+    let answered_once = count_with(
+        pool,
+        "SELECT count(*) FROM model_run_items WHERE run = $1 \
+         AND state = 'answered' AND attempts = 1",
+        run,
+    )
+    .await;
+    let rows = count_with(
+        pool,
+        "SELECT count(*) FROM model_run_items WHERE run = $1",
+        run,
+    )
+    .await;
+    assert_eq!(
+        (rows, answered_once),
+        (items, items),
+        "{after}: (items stored, answered once) of {items}"
+    );
+    let submission: i64 = helpers::db!(
+        pool,
+        fetch_one,
+        sqlx::query_scalar::<_, Option<i64>>("SELECT submission FROM model_runs WHERE id = $1")
+            .bind(run)
+    )
+    .expect("the run")
+    .unwrap_or_else(|| panic!("{after}: no submission ({seen:?})"));
+    assert_eq!(
+        helpers::count(pool, "SELECT count(*) FROM submissions").await,
+        1,
+        "{after}: one submission"
+    );
+    let verdicts = count_with(
+        pool,
+        "SELECT count(*) FROM submission_items WHERE submission = $1",
+        submission,
+    )
+    .await;
+    let right = count_with(
+        pool,
+        "SELECT count(*) FROM submission_items WHERE submission = $1 AND exact_match",
+        submission,
+    )
+    .await;
+    assert_eq!(
+        (verdicts, right),
+        (items, items),
+        "{after}: (verdicts, right) of {items}"
+    );
+    assert_eq!(audit_entries(pool, "run.start", "run crash").await, 1);
+    assert_eq!(
+        audit_entries(
+            pool,
+            "submission.create",
+            &format!("submission {submission}")
+        )
+        .await,
+        1,
+        "{after}: the submission's audit entry"
+    );
+    assert_eq!(
+        helpers::count(
+            pool,
+            "SELECT count(*) FROM audit_log WHERE action = 'submission.create'"
+        )
+        .await,
+        1
+    );
+    // The endpoint: every item asked, and again at most what was in flight at each kill.
+    assert!(
+        standin.problems().is_empty(),
+        "requests not as the client builds them: {:?}",
+        standin.problems()
+    );
+    let calls = standin.calls();
+    for r in &records {
+        let id = r["id"].as_str().expect("id");
+        assert!(calls.contains_key(id), "{after}: {id} was never asked");
+    }
+    let asked = standin.total_requests() as i64;
+    let most = items + kills as i64 * CONCURRENCY;
+    let mut again: Vec<(&String, usize)> = calls
+        .iter()
+        .filter(|(_, c)| c.requests > 1)
+        .map(|(id, c)| (id, c.requests))
+        .collect();
+    again.sort();
+    assert!(
+        asked <= most,
+        "{after}: the endpoint was asked {asked} times for {items} items over {kills} kills \
+         (at most {most}); asked more than once: {again:?}"
+    );
+    eprintln!(
+        "crash model run job: {kills} kills, {asked} requests for {items} items ({} asked \
+         again; unstored asks at each kill {in_flight_at_kills:?}), job attempts {}, {:.1?}",
+        asked - items,
+        seen.attempts,
+        began.elapsed()
+    );
+}
+
+/// Scores of every submission, by id, exactly as stored.
+async fn stored_scores(pool: &store::Pool) -> BTreeMap<i64, String> {
+    helpers::db!(
+        pool,
+        fetch_all,
+        sqlx::query_as::<_, (i64, String)>("SELECT id, scores FROM submissions")
+    )
+    .expect("scores")
+    .into_iter()
+    .collect()
+}
+
+/// A rescore of every stored submission worked by the server, killed at random moments while
+/// it writes: after every kill each submission is wholly at the old version or wholly rescored
+/// (its scores as they were, a verdict per item, and one signed statement more than it had),
+/// and the rescore's audit entry is not doubled; after the restarts every submission is
+/// rescored exactly once and the rescore is logged exactly once.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_rescore_killed_at_random_rescores_every_submission_once() {
+    const SUBMISSIONS: usize = 160;
+    let began = Instant::now();
+    let mut rng = rng("rescore job");
+    let kills = job_kills();
+    let dir = TempDir::new().expect("tempdir");
+    let root = dir.path().join("release");
+    let records = release(&root, 10);
+    let items = records.len() as i64;
+    let servers = JobServers::new(&dir, &[]).await;
+    let pool = &servers.pool;
+    helpers::import(pool, &root, &helpers::options("mini")).await;
+    let (_, admin) = helpers::api_token(pool, "root", Role::Admin, None, None).await;
+    let (_, team) = helpers::api_token(pool, "team", Role::Submitter, None, None).await;
+
+    let first = servers.start().await;
+    let client = reqwest::Client::new();
+    for n in 0..SUBMISSIONS {
+        let reply = client
+            .post(format!(
+                "{}/api/v1/datasets/mini/submissions?model=m{n}",
+                first.base
+            ))
+            .bearer_auth(&team)
+            .body(answers(&records, &[n % records.len()]))
+            .send()
+            .await
+            .expect("submit");
+        assert_eq!(reply.status(), 201, "submission {n}");
+    }
+    let scores = stored_scores(pool).await;
+    // As a migration raising the metric version leaves them.
+    helpers::db!(
+        pool,
+        execute,
+        sqlx::query("UPDATE submissions SET metric_version = 1")
+    )
+    .expect("age the submissions");
+    let statements = "SELECT count(*) FROM submissions s WHERE \
+         (SELECT count(*) FROM submission_statements t WHERE t.submission = s.id) \
+         != CASE WHEN s.metric_version >= $1 THEN 2 ELSE 1 END";
+    let verdictless = "SELECT count(*) FROM submissions s WHERE \
+         (SELECT count(*) FROM submission_items i WHERE i.submission = s.id) != $1";
+    let current = i64::from(METRIC_VERSION);
+    assert_eq!(
+        count_with(pool, statements, current).await,
+        0,
+        "a submission is made with one signed statement"
+    );
+    let queued = servers
+        .post(
+            &first,
+            "/api/v1/admin/rescore",
+            &admin,
+            &json!({"dataset": "mini"}),
+        )
+        .await;
+    let job = queued["job"].as_i64().expect("a job id");
+    let aim = Aim {
+        gauge: Gauge::Rescored,
+        most: (SUBMISSIONS / (2 * kills.max(1))) as i64,
+        jitter: Duration::from_millis(20),
+    };
+    let mut first = Some(first);
+    let mut rescored_at_kills = Vec::new();
+    for k in 0..kills {
+        let server = match first.take() {
+            Some(server) => server,
+            None => servers.start().await,
+        };
+        let after = kill_mid_job(
+            &servers,
+            server,
+            job,
+            aim,
+            &mut rng,
+            &format!("rescore kill {k}"),
+        )
+        .await;
+        check_job_database(pool, &after).await;
+        assert_eq!(
+            count_with(pool, verdictless, items).await,
+            0,
+            "{after}: a submission without a verdict per item"
+        );
+        assert_eq!(
+            count_with(pool, statements, current).await,
+            0,
+            "{after}: a submission rescored without its statement, or with two"
+        );
+        assert_eq!(
+            count_with(
+                pool,
+                "SELECT count(*) FROM submissions WHERE metric_version NOT IN (1, $1)",
+                current
+            )
+            .await,
+            0
+        );
+        assert_eq!(
+            stored_scores(pool).await,
+            scores,
+            "{after}: scores changed by a rescore under the same rules"
+        );
+        let logged = audit_entries(pool, "metric.rescore", "dataset mini").await;
+        assert!(logged <= 1, "{after}: the rescore logged {logged} times");
+        rescored_at_kills.push(Gauge::Rescored.read(pool).await);
+    }
+
+    let seen = run_job_to_end(&servers, job, "the rescore").await;
+    let after = "the finished rescore";
+    check_job_database(pool, after).await;
+    assert_eq!(
+        Gauge::Rescored.read(pool).await,
+        SUBMISSIONS as i64,
+        "{after}: submissions left at the old version"
+    );
+    assert_eq!(count_with(pool, verdictless, items).await, 0, "{after}");
+    assert_eq!(
+        count_with(pool, statements, current).await,
+        0,
+        "{after}: every submission has its statement and the rescore's"
+    );
+    assert_eq!(stored_scores(pool).await, scores, "{after}");
+    assert_eq!(
+        audit_entries(pool, "metric.rescore", "dataset mini").await,
+        1,
+        "{after}: the rescore is logged once"
+    );
+    let summary = seen.progress();
+    assert_eq!(summary["failures"], json!([]), "{after}: {summary}");
+    assert_eq!(summary["stopped"], false, "{after}: {summary}");
+    eprintln!(
+        "crash rescore job: {kills} kills, {SUBMISSIONS} submissions rescored once (rescored at \
+         each kill {rescored_at_kills:?}; the last start {}), job attempts {}, {:.1?}",
+        summary["submissions"],
+        seen.attempts,
+        began.elapsed()
+    );
+}
+
+/// An import from the server's import folder worked by the server, killed at random moments
+/// while it stages its batches: after every kill the dataset is absent or whole (identical,
+/// by content hash, to an uninterrupted import's) and logged once exactly when it is there;
+/// after the restarts it lands once, with nothing of its staging left.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_import_job_killed_at_random_lands_whole_once() {
+    let began = Instant::now();
+    let mut rng = rng("import job");
+    let kills = job_kills();
+    let dir = TempDir::new().expect("tempdir");
+    let folder = dir.path().join("imports");
+    // 1536 records: 24 batches of 64 lines, about twice what ten kills consume.
+    let records = release(&folder.join("release"), 256);
+    let items = records.len() as i64;
+    let servers = JobServers::new(
+        &dir,
+        &["--import-dir".to_owned(), folder.display().to_string()],
+    )
+    .await;
+    let pool = &servers.pool;
+    let (_, admin) = helpers::api_token(pool, "root", Role::Admin, None, None).await;
+    // The same release imported uninterrupted, in this process, for its content hash.
+    let reference_dir = TempDir::new().expect("tempdir");
+    let (reference, _) = helpers::fresh_db_located(&reference_dir).await;
+    let timed = Instant::now();
+    helpers::import(
+        &reference,
+        &folder.join("release"),
+        &helpers::options("main"),
+    )
+    .await;
+    let whole = timed.elapsed();
+    let digest = dataset_digest(&reference, "main").await;
+
+    let first = servers.start().await;
+    let queued = servers
+        .post(
+            &first,
+            "/api/v1/admin/imports",
+            &admin,
+            &json!({"path": "release", "dataset": "main"}),
+        )
+        .await;
+    let job = queued["job"].as_i64().expect("a job id");
+    let aim = Aim {
+        gauge: Gauge::ImportedRows,
+        most: 64,
+        jitter: Duration::from_millis(30),
+    };
+    let mut first = Some(first);
+    let mut rows_at_kills = Vec::new();
+    for k in 0..kills {
+        let server = match first.take() {
+            Some(server) => server,
+            None => servers.start().await,
+        };
+        let after = kill_mid_job(
+            &servers,
+            server,
+            job,
+            aim,
+            &mut rng,
+            &format!("import job kill {k}"),
+        )
+        .await;
+        check_job_database(pool, &after).await;
+        let landed =
+            helpers::count(pool, "SELECT count(*) FROM datasets WHERE name = 'main'").await;
+        if landed == 1 {
+            assert_eq!(
+                dataset_digest(pool, "main").await,
+                digest,
+                "{after}: the dataset landed, but not whole"
+            );
+        }
+        assert_eq!(
+            audit_entries(pool, "dataset.import", "dataset main").await,
+            landed,
+            "{after}: the import's audit entries"
+        );
+        let staged = helpers::count(pool, "SELECT count(*) FROM staged_imports").await;
+        assert!(staged <= 1, "{after}: {staged} staged imports");
+        rows_at_kills.push(Gauge::ImportedRows.read(pool).await);
+    }
+
+    let seen = run_job_to_end(&servers, job, "the import job").await;
+    let after = "the finished import job";
+    check_job_database(pool, after).await;
+    let progress = seen.progress();
+    assert_eq!(progress["outcome"], "imported", "{after}: {progress}");
+    assert_eq!(
+        dataset_digest(pool, "main").await,
+        digest,
+        "{after}: the dataset differs from an uninterrupted import's"
+    );
+    assert_eq!(
+        audit_entries(pool, "dataset.import", "dataset main").await,
+        1,
+        "{after}: the import is logged once"
+    );
+    assert_eq!(
+        (
+            helpers::count(pool, "SELECT count(*) FROM staged_imports").await,
+            helpers::count(pool, "SELECT count(*) FROM datasets").await,
+            helpers::count(pool, "SELECT count(*) FROM items").await,
+        ),
+        (0, 1, items),
+        "{after}: (staged imports, datasets, items) left"
+    );
+    eprintln!(
+        "crash import job: {kills} kills, {items} items landed whole once (rows committed at \
+         each kill {rows_at_kills:?}; the last start wrote {} items), job attempts {}, an \
+         uninterrupted import {whole:.1?}, {:.1?}",
+        progress["report"]["items_written"],
+        seen.attempts,
+        began.elapsed()
     );
 }

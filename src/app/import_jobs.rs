@@ -9,6 +9,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
+use tokio::sync::watch;
 
 use super::import::{
     BATCH_LINES, ImportError, ImportObserver, ImportOptions, ImportProgress, ImportStop,
@@ -202,26 +203,38 @@ pub async fn work(hub: &Hub, job: &Arc<JobContext>) -> Result<(), AppError> {
             stopping.stop_requested().is_some()
         }))),
     };
-    let importing = import_release(hub, &actor, &path, &options);
-    tokio::pin!(importing);
-    let mut tick = tokio::time::interval(PROGRESS_EVERY);
-    let result = loop {
-        tokio::select! {
-            result = &mut importing => break result,
-            _ = tick.tick() => {
-                let seen = latest.lock().unwrap_or_else(|p| p.into_inner()).take();
-                if let Some(p) = seen {
-                    let outcome = ImportOutcome::Importing {
-                        dataset: payload.dataset.clone(),
-                        qa_bytes_read: p.qa_bytes_read,
-                        qa_bytes: p.qa_bytes,
-                        rows: p.rows,
-                    };
-                    job.progress(hub, serde_json::json!(outcome)).await?;
+    // The progress is written beside the import, never in its place: awaited while the import
+    // waits unpolled, a write would wait for the lock of the batch transaction the import holds
+    // open (SQLite's single writer), and both would wait out the busy timeout.
+    let (finished, mut ended) = watch::channel(false);
+    let importing = async {
+        let result = import_release(hub, &actor, &path, &options).await;
+        finished.send_replace(true);
+        result
+    };
+    let writer = async {
+        let mut tick = tokio::time::interval(PROGRESS_EVERY);
+        loop {
+            tokio::select! {
+                _ = tick.tick() => {
+                    let seen = latest.lock().unwrap_or_else(|p| p.into_inner()).take();
+                    if let Some(p) = seen {
+                        let outcome = ImportOutcome::Importing {
+                            dataset: payload.dataset.clone(),
+                            qa_bytes_read: p.qa_bytes_read,
+                            qa_bytes: p.qa_bytes,
+                            rows: p.rows,
+                        };
+                        if let Err(e) = job.progress(hub, serde_json::json!(outcome)).await {
+                            tracing::warn!(job = job.id.0, error = %e, "storing an import's progress failed");
+                        }
+                    }
                 }
+                _ = ended.changed() => break,
             }
         }
     };
+    let (result, ()) = tokio::join!(importing, writer);
     let dataset = payload.dataset.clone();
     let outcome = match result {
         Ok(report) => {

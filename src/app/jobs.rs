@@ -384,19 +384,26 @@ async fn work_queue(
         return;
     }
     let mut running: JoinSet<()> = JoinSet::new();
+    // The jobs this worker works, by task: never claimed again while their code runs, even
+    // when their lease ran out (renewals held up on a busy database) and the queue offers them.
+    let mut working: HashMap<tokio::task::Id, i64> = HashMap::new();
     tracing::info!(%owner, kinds = ?kinds.iter().map(|k| k.as_str()).collect::<Vec<_>>(), "job worker started");
     loop {
         if *stopping.borrow() {
             break;
         }
-        while running.try_join_next().is_some() {}
+        while let Some(ended) = running.try_join_next_with_id() {
+            working.remove(&ended.map_or_else(|e| e.id(), |(id, ())| id));
+        }
         let claimed = if running.len() < settings.max_running {
-            claim(&hub, &owner, &kinds, &settings).await
+            let ids: Vec<i64> = working.values().copied().collect();
+            claim(&hub, &owner, &kinds, &settings, &ids).await
         } else {
             None
         };
         if let Some(job) = claimed {
-            running.spawn(work_one(
+            let id = job.id;
+            let task = running.spawn(work_one(
                 hub.clone(),
                 Arc::clone(&handlers),
                 settings,
@@ -404,30 +411,35 @@ async fn work_queue(
                 job,
                 stopping.clone(),
             ));
+            working.insert(task.id(), id);
             continue;
         }
         tokio::select! {
             _ = tokio::time::sleep(settings.poll) => {}
             _ = stopping.changed() => {}
-            Some(_) = running.join_next(), if !running.is_empty() => {}
+            Some(ended) = running.join_next_with_id(), if !running.is_empty() => {
+                working.remove(&ended.map_or_else(|e| e.id(), |(id, ())| id));
+            }
         }
     }
     while running.join_next().await.is_some() {}
     tracing::info!(%owner, "job worker stopped");
 }
 
-/// The next due job of a kind this worker has code for, leased to `owner`.
+/// The next due job of a kind this worker has code for and is not working already, leased to
+/// `owner`.
 async fn claim(
     hub: &Hub,
     owner: &str,
     kinds: &[JobKind],
     settings: &JobSettings,
+    working: &[i64],
 ) -> Option<JobRow> {
     let claimed = async {
         let mut tx = hub.begin().await?;
         let now = now_ms();
         let until = now + millis(settings.lease);
-        let job = store::jobs::claim(&mut tx, kinds, owner, now, until).await?;
+        let job = store::jobs::claim(&mut tx, kinds, owner, now, until, working).await?;
         tx.commit().await?;
         Ok::<_, AppError>(job)
     };

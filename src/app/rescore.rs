@@ -208,20 +208,33 @@ pub async fn work_on(hub: &Hub, job: &impl RescoreJob) -> Result<(), AppError> {
         *latest.lock().unwrap_or_else(|p| p.into_inner()) = Some(p);
     };
     let stop = || job.stop_requested();
-    let running = run(hub, &actor, payload.dataset.as_deref(), &note, &stop);
-    tokio::pin!(running);
-    let mut tick = tokio::time::interval(PROGRESS_EVERY);
-    let summary = loop {
-        tokio::select! {
-            summary = &mut running => break summary?,
-            _ = tick.tick() => {
-                let value = latest.lock().unwrap_or_else(|p| p.into_inner()).take();
-                if let Some(p) = value {
-                    job.progress(hub, serde_json::json!(p)).await?;
+    // The progress is written beside the rescore, never in its place: awaited while the
+    // rescore waits unpolled, a write would wait for the lock of the unit's transaction the
+    // rescore holds open (SQLite's single writer), and both would wait out the busy timeout.
+    let (finished, mut ended) = tokio::sync::watch::channel(false);
+    let running = async {
+        let summary = run(hub, &actor, payload.dataset.as_deref(), &note, &stop).await;
+        finished.send_replace(true);
+        summary
+    };
+    let writer = async {
+        let mut tick = tokio::time::interval(PROGRESS_EVERY);
+        loop {
+            tokio::select! {
+                _ = tick.tick() => {
+                    let value = latest.lock().unwrap_or_else(|p| p.into_inner()).take();
+                    if let Some(p) = value
+                        && let Err(e) = job.progress(hub, serde_json::json!(p)).await
+                    {
+                        tracing::warn!(error = %e, "storing a rescore's progress failed");
+                    }
                 }
+                _ = ended.changed() => break,
             }
         }
     };
+    let (summary, ()) = tokio::join!(running, writer);
+    let summary = summary?;
     job.progress(hub, serde_json::json!(summary)).await
 }
 

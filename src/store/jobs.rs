@@ -150,17 +150,26 @@ pub async fn insert(
 /// lease that ran out before `now_ms` (its instance died), for `owner` until `lease_until_ms`.
 /// Run it in a write transaction: two instances then never take the same job. A job paused
 /// and resumed while its code was still working keeps that lease until the code has stopped
-/// (or the lease ran out), so the job's code never runs twice at once.
+/// (or the lease ran out), so the job's code never runs twice at once. Jobs in `working` (the
+/// claiming worker's own, still running: their lease ran out because its renewals were held
+/// up) are left alone, for the same reason.
 pub async fn claim(
     conn: &mut Conn,
     kinds: &[JobKind],
     owner: &str,
     now_ms: i64,
     lease_until_ms: i64,
+    working: &[i64],
 ) -> Result<Option<JobRow>, sqlx::Error> {
     // `,model_run,rescore,`: one parameter both databases can match a kind against.
     let kinds: String = kinds.iter().fold(",".to_owned(), |mut list, kind| {
         list.push_str(kind.as_str());
+        list.push(',');
+        list
+    });
+    // `,4,7,`: the jobs the claiming worker still works, the same way.
+    let working: String = working.iter().fold(",".to_owned(), |mut list, id| {
+        list.push_str(&id.to_string());
         list.push(',');
         list
     });
@@ -173,6 +182,7 @@ pub async fn claim(
                                  AND (lease_owner IS NULL OR lease_until_ms < $3)) \
                                 OR (state = 'running' AND lease_until_ms < $3)) \
                            AND $4 LIKE '%,' || kind || ',%' \
+                           AND $5 NOT LIKE '%,' || CAST(id AS TEXT) || ',%' \
                          ORDER BY id LIMIT 1) \
              RETURNING {COLUMNS}",
             now = super::db::Dialect::utc_now(&*c),
@@ -182,6 +192,7 @@ pub async fn claim(
             .bind(lease_until_ms)
             .bind(now_ms)
             .bind(kinds)
+            .bind(working)
             .fetch_optional(&mut *c)
             .await?;
         row.as_ref().map(job_from_row).transpose()
