@@ -421,7 +421,7 @@ fn print_annotator_lines(stats: &Stats, started_ms: u64) {
 /// and a line for the annotators' writes together.
 fn print_table(stats: &Stats, window: (u64, u64), seconds: f64) -> usize {
     println!(
-        "| route | requests | req/s | p50 ms | p99 ms | max ms | statuses |\n|---|---|---|---|---|---|---|"
+        "| route | requests | req/s | p50 ms | p99 ms | p99.9 ms | max ms | statuses |\n|---|---|---|---|---|---|---|---|"
     );
     let in_window = |t: &&Timed| (window.0..=window.1).contains(&t.sent_ms);
     let mut total = 0;
@@ -443,11 +443,12 @@ fn print_table(stats: &Stats, window: (u64, u64), seconds: f64) -> usize {
         }
         let statuses: Vec<String> = by_status.iter().map(|(s, n)| format!("{s}: {n}")).collect();
         println!(
-            "| {route} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {} |",
+            "| {route} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {} |",
             sorted.len(),
             sorted.len() as f64 / seconds,
             percentile(&sorted, 0.5),
             percentile(&sorted, 0.99),
+            percentile(&sorted, 0.999),
             percentile(&sorted, 1.0),
             statuses.join(", ")
         );
@@ -463,6 +464,47 @@ fn print_table(stats: &Stats, window: (u64, u64), seconds: f64) -> usize {
         );
     }
     total
+}
+
+/// The `count` slowest reads of the run (GET requests; submissions and logins are slow by
+/// their nature), each with when it was sent and what else was in flight meanwhile (requests
+/// of each route whose time overlapped it): a reader's rare slow request is told apart as
+/// waiting behind logins' password hashes, submissions' scoring, or its own route's work.
+fn print_slowest(stats: &Stats, started_ms: u64, count: usize) {
+    let all: Vec<(&'static str, Timed)> = stats
+        .routes
+        .iter()
+        .flat_map(|(route, times)| times.iter().map(move |t| (*route, *t)))
+        .collect();
+    let mut reads: Vec<&(&'static str, Timed)> = all
+        .iter()
+        .filter(|(route, _)| route.starts_with("GET "))
+        .collect();
+    reads.sort_unstable_by_key(|(_, t)| std::cmp::Reverse(t.micros));
+    println!("\nthe {count} slowest reads (sent at seconds from the start; in flight meanwhile):");
+    for (route, slow) in reads.iter().take(count) {
+        let (from, to) = (slow.sent_ms, slow.sent_ms + slow.micros / 1000);
+        let mut overlapping = BTreeMap::<&str, usize>::new();
+        for (other, t) in &all {
+            if t.sent_ms <= to && t.sent_ms + t.micros / 1000 >= from {
+                *overlapping.entry(*other).or_default() += 1;
+            }
+        }
+        let mut busiest: Vec<(&str, usize)> = overlapping.into_iter().collect();
+        busiest.sort_unstable_by_key(|(_, n)| std::cmp::Reverse(*n));
+        let meanwhile: Vec<String> = busiest
+            .iter()
+            .take(4)
+            .map(|(r, n)| format!("{n} × {r}"))
+            .collect();
+        println!(
+            "- {route}: {:.0} ms, sent at {:.1} s, status {}; meanwhile {}",
+            slow.micros as f64 / 1000.0,
+            slow.sent_ms.saturating_sub(started_ms) as f64 / 1000.0,
+            slow.status,
+            meanwhile.join(", ")
+        );
+    }
 }
 
 fn percentile(sorted: &[u64], p: f64) -> f64 {
@@ -580,6 +622,7 @@ async fn run(
     );
     println!();
     print_annotator_lines(&stats, started_ms);
+    print_slowest(&stats, started_ms, 15);
     let server_errors: u64 = stats
         .statuses
         .iter()

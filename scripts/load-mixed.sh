@@ -65,7 +65,8 @@ python3 scripts/lib/replicate_items.py "$DB" demo "$ITEMS"
 "$LOAD" setup --db "$DB" --dataset demo --out "$OUT/accounts.json"
 
 # shellcheck disable=SC2086 # SERVE_ARGS is a list of flags
-RUST_LOG=warn "$BIN" serve --db "$DB" --addr "127.0.0.1:$PORT" \
+METRICS_TOKEN=load-mixed-metrics
+RUST_LOG=warn "$BIN" serve --db "$DB" --addr "127.0.0.1:$PORT" --metrics-token "$METRICS_TOKEN" \
   --daily-quota 100000 --total-quota 100000 ${SERVE_ARGS:-} >>"$OUT/server.log" 2>&1 &
 SERVER=$!
 wait_ready
@@ -85,6 +86,12 @@ fi
 status=0
 "$LOAD" run --base "$BASE" --accounts "$OUT/accounts.json" --seconds "$SECONDS_TO_RUN" "${WINDOW[@]}" || status=$?
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
+# How long writes waited for their turn, by lane (the server's histogram: each figure is the
+# upper bound of the bucket the quantile falls in); the bulk lane's is the write gate's bound
+# at work.
+if curl -fsS -H "Authorization: Bearer $METRICS_TOKEN" "$BASE/metrics" >"$OUT/metrics.txt" 2>/dev/null; then
+  python3 scripts/lib/write_waits.py "$OUT/metrics.txt"
+fi
 if [ "${IMPORT_MIDWAY:-0}" = 1 ]; then
   wait "$IMPORTER" || { echo "error: the import failed (see $OUT/import.log)" >&2; status=1; }
   tail -n 3 "$OUT/import.log"

@@ -57,6 +57,7 @@ queue-resume = Resume where you left off
 queue-continue = Continue
 queue-all-done = Every item assigned to you is finished. Thank you!
 queue-empty = No item is assigned to you yet.
+queue-paused = Your queue is paused by an admin. You can see your items, but you cannot open, answer or skip them until it is resumed; your drafts are kept.
 queue-progress-caption = Finished / assigned, by direction and step length (L = number of images)
 
 ## Table headings and the benchmark's words
@@ -81,6 +82,10 @@ annotate-instructions = Instructions (the question the models get)
 annotate-untranslated = The question is shown exactly as the models get it, in English, and is never translated: it is part of the benchmark.
 annotate-untranslated-actions = The action descriptions are part of the benchmark and are shown exactly as the dataset holds them, untranslated.
 annotate-finished = You have finished this item.
+annotate-attention-keep-forward = Attention check: whatever the actions say, put the candidate images in the slots in the order they are listed: Next State 1 in slot 1, Next State 2 in slot 2, and so on.
+annotate-attention-reverse-forward = Attention check: whatever the actions say, put the frames in reverse order: the last listed candidate image in slot 1, the one before it in slot 2, and so on, Next State 1 in the last slot.
+annotate-attention-keep-inverse = Attention check: whatever the images show, put the candidate actions in the slots in the order they are listed: Action 1 in slot 1, Action 2 in slot 2, and so on.
+annotate-attention-reverse-inverse = Attention check: whatever the images show, put the actions in reverse order: the last listed candidate action in slot 1, the one before it in slot 2, and so on, Action 1 in the last slot.
 annotate-next = Continue with the next one
 annotate-answer = Answer
 annotate-steps = Steps: action k leads to image k

@@ -55,6 +55,7 @@ queue-resume = 从上次中断处继续
 queue-continue = 继续
 queue-all-done = 分配给您的条目已全部完成，谢谢！
 queue-empty = 目前还没有分配给您的条目。
+queue-paused = 管理员已暂停您的队列。您仍可查看自己的条目，但在队列恢复之前不能打开、作答或跳过条目；您的草稿会保留。
 queue-progress-caption = 已完成 / 已分配，按方向和步长统计（L = 图像数量）
 
 ## 表头与基准术语
@@ -79,6 +80,10 @@ annotate-instructions = 说明（模型收到的题目原文）
 annotate-untranslated = 题目按模型收到的原样以英文显示，不做翻译：它是基准的一部分。
 annotate-untranslated-actions = 动作描述是基准的一部分，按数据集中的原文显示，不做翻译。
 annotate-finished = 您已完成此条目。
+annotate-attention-keep-forward = 注意力检查：无论动作描述如何，请按候选图像列出的顺序放入槽位：Next State 1 放入槽位 1，Next State 2 放入槽位 2，依此类推。
+annotate-attention-reverse-forward = 注意力检查：无论动作描述如何，请把图像按相反顺序放入槽位：最后列出的候选图像放入槽位 1，倒数第二张放入槽位 2，依此类推，Next State 1 放入最后一个槽位。
+annotate-attention-keep-inverse = 注意力检查：无论图像显示什么，请按候选动作列出的顺序放入槽位：Action 1 放入槽位 1，Action 2 放入槽位 2，依此类推。
+annotate-attention-reverse-inverse = 注意力检查：无论图像显示什么，请把动作按相反顺序放入槽位：最后列出的候选动作放入槽位 1，倒数第二个放入槽位 2，依此类推，Action 1 放入最后一个槽位。
 annotate-next = 继续下一个
 annotate-answer = 答案
 annotate-steps = 步骤：第 k 个动作得到第 k 张图像

@@ -14,6 +14,7 @@ use crate::core::annotation::{
     AssignmentState, Draft, Outcome, QueueEntry, QueueStatus, Session, Telemetry, balanced_split,
     next_in_queue,
 };
+use crate::core::attention::Instruction;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::gold::{self, GoldRate, QueuedEntry};
 use crate::store;
@@ -33,15 +34,18 @@ pub enum Assignment {
 }
 
 /// What an assignment did.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Assigned {
     /// Pairs asked for.
     pub requested: u64,
     /// Pairs new to the queues (the others were assigned already and left as they were).
     pub added: u64,
+    /// Annotators chosen for a split whose queue is paused: left out of it.
+    pub paused: Vec<String>,
 }
 
-/// Appends items of `dataset` to annotators' queues.
+/// Appends items of `dataset` to annotators' queues. A balanced split leaves out annotators
+/// whose queue is paused ([`super::controls`]); a split over paused annotators only is refused.
 pub async fn assign(
     hub: &Hub,
     actor: &Actor,
@@ -64,6 +68,7 @@ pub async fn assign(
             "annotator: no annotator has id {unknown}"
         )));
     }
+    let mut paused = Vec::new();
     let pairs = match how {
         Assignment::Split(annotators) => {
             if annotators.is_empty() {
@@ -71,8 +76,21 @@ pub async fn assign(
                     "choose at least one annotator to split the dataset over".to_owned(),
                 ));
             }
+            paused = super::controls::paused_among(&mut conn, annotators).await?;
+            let running: Vec<i64> = annotators
+                .iter()
+                .copied()
+                .filter(|a| !paused.contains(a))
+                .collect();
+            if running.is_empty() {
+                return Err(AppError::Conflict(
+                    "every annotator chosen for the split has a paused queue: resume one or \
+                     choose others"
+                        .to_owned(),
+                ));
+            }
             let items = store::annotations::unassigned_items(&mut conn, dataset.id).await?;
-            balanced_split(&items, annotators)
+            balanced_split(&items, &running)
         }
         Assignment::List {
             annotator,
@@ -93,8 +111,9 @@ pub async fn assign(
     drop(conn);
     let mut tx = hub.begin().await?;
     let added = store::annotations::assign(&mut tx, &pairs).await?;
-    // More ordinary items may call for more gold ones.
-    let gold = super::gold::after_assignment(&mut tx, dataset.id, chosen).await?;
+    // More ordinary items may call for more gold items and attention checks.
+    let gold = super::gold::after_assignment(&mut tx, dataset.id, chosen).await?
+        + super::attention::after_assignment(&mut tx, dataset.id, chosen).await?;
     let named: Vec<&str> = chosen.iter().map(|a| names[a].as_str()).collect();
     let how = match how {
         Assignment::Split(_) => "balanced split of the unassigned items",
@@ -107,12 +126,18 @@ pub async fn assign(
         format!("annotators {}", named.join(", ")),
         Some(&dataset.name),
         format!(
-            "{how}: {} asked, {added} new to the queues{}",
+            "{how}: {} asked, {added} new to the queues{}{}",
             pairs.len(),
             if gold > 0 {
-                format!(", and {gold} gold items mixed in")
+                format!(", and {gold} gold items and attention checks mixed in")
             } else {
                 String::new()
+            },
+            if paused.is_empty() {
+                String::new()
+            } else {
+                let names: Vec<&str> = paused.iter().map(|a| names[a].as_str()).collect();
+                format!("; paused, left out: {}", names.join(", "))
             }
         ),
     )
@@ -121,6 +146,7 @@ pub async fn assign(
     Ok(Assigned {
         requested: pairs.len() as u64,
         added,
+        paused: paused.iter().map(|a| names[a].clone()).collect(),
     })
 }
 
@@ -132,14 +158,16 @@ pub async fn queue(hub: &Hub, annotator: i64) -> Result<Vec<QueueEntry>, AppErro
     let queued = rows
         .into_iter()
         .map(|r| {
-            let gold_rate = r
-                .gold_rate
-                .map(GoldRate::new)
-                .transpose()
-                .map_err(AppError::internal)?;
+            let rate = |stored: Option<i64>| {
+                stored
+                    .map(GoldRate::new)
+                    .transpose()
+                    .map_err(AppError::internal)
+            };
             Ok(QueuedEntry {
                 dataset: r.dataset.clone(),
-                gold_rate,
+                gold_rate: rate(r.gold_rate)?,
+                attention_rate: rate(r.attention_rate)?,
                 entry: QueueEntry {
                     dataset: r.dataset,
                     item_id: r.item_id,
@@ -164,6 +192,8 @@ pub struct AssignedItem {
     pub finished: bool,
     /// The draft, when one exists (always after [`open`] on an unfinished item).
     pub draft: Option<Draft>,
+    /// The instruction its question carries when the item is an attention check.
+    pub attention: Option<Instruction>,
 }
 
 /// Looks up an item assigned to the session's annotator: 404 for an unknown dataset or item,
@@ -202,7 +232,7 @@ fn standing_changed(session: &Session, item: &StoredItem) -> Change {
 }
 
 /// Opens an assigned item: its first opening creates an empty draft, which starts the item's
-/// clock.
+/// clock. 409 while the annotator's queue is paused.
 pub async fn open(
     hub: &Hub,
     session: &Session,
@@ -210,6 +240,10 @@ pub async fn open(
     item_id: &str,
 ) -> Result<AssignedItem, AppError> {
     let (item, standing) = assigned(hub, session, dataset, item_id).await?;
+    let mut conn = hub.conn().await?;
+    super::controls::refuse_if_paused(&mut conn, session).await?;
+    let attention = super::attention::instruction_of(&mut conn, item.rowid).await?;
+    drop(conn);
     let draft = match (standing.finished, standing.draft) {
         (true, _) => None,
         (false, Some(stored)) => Some(stored.draft),
@@ -246,6 +280,7 @@ pub async fn open(
         item,
         finished: draft.is_none(),
         draft,
+        attention,
     })
 }
 
@@ -288,6 +323,7 @@ pub async fn save_draft(
     // A write transaction, so a save is ordered with a finish of the same item made on another
     // instance: it lands before the finish (which drops it) or sees the answer and is refused.
     let mut tx = hub.begin().await?;
+    super::controls::refuse_if_paused(&mut tx, session).await?;
     let saved =
         store::annotations::save_draft(&mut tx, session.annotator, item.rowid, draft, now_ms())
             .await?;
@@ -350,6 +386,7 @@ async fn finish(
     let answered = matches!(outcome, Outcome::Answered(_));
     let now = now_ms();
     let mut tx = hub.begin().await?;
+    super::controls::refuse_if_paused(&mut tx, session).await?;
     if let Some(draft) = save
         && !store::annotations::save_draft(&mut tx, session.annotator, item.rowid, draft, now)
             .await?

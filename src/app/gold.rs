@@ -86,10 +86,34 @@ pub async fn set(
             all.len()
         )));
     }
+    // An item is a gold item or an attention check, never both.
+    let checks: HashSet<i64> = store::attention::attention_item_rowids(&mut conn, dataset.id)
+        .await?
+        .into_iter()
+        .collect();
     let items = match choice {
-        GoldChoice::Share { share, seed } => gold::draw_share(&all, *share, *seed),
+        GoldChoice::Share { share, seed } => {
+            let pool: Vec<i64> = all
+                .iter()
+                .copied()
+                .filter(|i| !checks.contains(i))
+                .collect();
+            gold::draw_share(&pool, *share, *seed)
+        }
         GoldChoice::List(ids) => {
             let mut rows = super::items::listed(&mut conn, &dataset, ids).await?;
+            if let Some(check) = ids
+                .iter()
+                .zip(&rows)
+                .find(|(_, row)| checks.contains(row))
+                .map(|(id, _)| id)
+            {
+                return Err(AppError::Invalid(format!(
+                    "items: '{check}' is an attention check of dataset '{}'; it cannot be gold \
+                     too",
+                    dataset.name
+                )));
+            }
             rows.sort_unstable();
             rows.dedup();
             if rows.len() >= all.len() {
@@ -200,8 +224,13 @@ pub async fn clear(hub: &Hub, actor: &Actor, dataset: &str) -> Result<GoldCleare
     })
 }
 
-/// Tells other instances that the Human row and these standings changed, on commit.
-async fn announce(hub: &Hub, tx: &mut store::Tx, removed: &[(i64, i64)]) -> Result<(), AppError> {
+/// Tells other instances that the Human row and these standings changed, on commit (gold
+/// items or attention checks taken out of queues).
+pub(super) async fn announce(
+    hub: &Hub,
+    tx: &mut store::Tx,
+    removed: &[(i64, i64)],
+) -> Result<(), AppError> {
     for &(annotator, item) in removed {
         hub.publish(tx, &Change::Standing { annotator, item })
             .await?;
@@ -209,8 +238,9 @@ async fn announce(hub: &Hub, tx: &mut store::Tx, removed: &[(i64, i64)]) -> Resu
     hub.publish(tx, &Change::Boards).await
 }
 
-/// Drops what this instance's caches hold of a changed gold set (after commit).
-fn forget(hub: &Hub, removed: &[(i64, i64)]) {
+/// Drops what this instance's caches hold of a changed gold set or attention set (after
+/// commit).
+pub(super) fn forget(hub: &Hub, removed: &[(i64, i64)]) {
     for &(annotator, item) in removed {
         hub.standings.forget(annotator, item);
     }

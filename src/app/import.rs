@@ -230,6 +230,10 @@ pub struct ImportReport {
     /// writers may have waited for it.
     pub longest_transaction_ms: f64,
     pub cut_over_ms: f64,
+    /// Verdicts of replaced items deleted after the cut-over (a submission per transaction),
+    /// and the longest of those transactions in milliseconds.
+    pub swept_verdicts: u64,
+    pub longest_sweep_ms: f64,
     pub seconds: f64,
     /// Public datasets holding some of the imported dataset's items or frames (its ground
     /// truth is out there); reported while its answers are hidden, as a new dataset's are.
@@ -284,6 +288,12 @@ impl ImportReport {
             s.push_str(
                 "; an unfinished import from another file or with other options was discarded",
             );
+        }
+        if self.swept_verdicts > 0 {
+            s.push_str(&format!(
+                "; {} stored verdicts of replaced items deleted after the cut-over",
+                self.swept_verdicts
+            ));
         }
         for leak in &self.leaks {
             s.push_str(&format!(
@@ -858,6 +868,10 @@ pub async fn import_release(
     )
     .await?;
     report.longest_transaction_ms = report.longest_transaction_ms.max(report.cut_over_ms);
+    let swept = sweep_replaced_verdicts(hub).await?;
+    report.swept_verdicts = swept.verdicts;
+    report.longest_sweep_ms = swept.longest_ms;
+    report.longest_transaction_ms = report.longest_transaction_ms.max(swept.longest_ms);
     // The import is in: a failed check is logged, never turned into a failed import.
     match super::red_flags::leak_at_import(hub, actor, &options.dataset).await {
         Ok(leaks) => report.leaks = leaks,
@@ -1090,6 +1104,42 @@ async fn log_import(
         detail,
     };
     store::audit::insert(tx, &record).await
+}
+
+/// What [`sweep_replaced_verdicts`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Swept {
+    pub submissions: u64,
+    pub verdicts: u64,
+    /// The longest of its transactions, in milliseconds.
+    pub longest_ms: f64,
+}
+
+/// Deletes the verdicts replacing imports left naming no item (`store::staged::publish_into`),
+/// one submission per short bulk transaction, until no sweep is pending. Run after every
+/// cut-over and when a server starts, so a sweep a killed process left is finished by the
+/// next; two processes sweeping at once delete nothing twice.
+pub async fn sweep_replaced_verdicts(hub: &super::Hub) -> Result<Swept, sqlx::Error> {
+    let mut swept = Swept::default();
+    let pending = {
+        let mut conn = hub.pool.acquire().await?;
+        store::staged::verdict_sweeps(&mut conn).await?
+    };
+    for sweep in pending {
+        loop {
+            let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+            let held = Instant::now();
+            let (deleted, more) = store::staged::sweep_submission(&mut tx, &sweep).await?;
+            tx.commit().await?;
+            swept.longest_ms = swept.longest_ms.max(held.elapsed().as_secs_f64() * 1000.0);
+            swept.verdicts += deleted;
+            if !more {
+                break;
+            }
+            swept.submissions += 1;
+        }
+    }
+    Ok(swept)
 }
 
 /// How many rows one cleanup transaction deletes.

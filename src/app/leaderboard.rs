@@ -58,7 +58,9 @@ pub async fn human_figures(
 ) -> Result<Option<HumanFigures>, AppError> {
     let mut conn = hub.conn().await?;
     let answers = store::annotations::counted_answers(&mut conn, dataset.id).await?;
-    let gold_items = store::gold::gold_count(&mut conn, dataset.id).await?;
+    // Attention checks are left out of the Human row as gold items are.
+    let gold_items = store::gold::gold_count(&mut conn, dataset.id).await?
+        + store::attention::attention_count(&mut conn, dataset.id).await?;
     let excluded = store::gold::exclusions(&mut conn, dataset.id).await?.len();
     drop(conn);
     let figures = annotation::human_figures(&answers, dataset_items).map_err(|e| {

@@ -43,6 +43,16 @@ struct LaneLabels {
     lane: String,
 }
 
+fn lane_labels(lane: store::gate::Lane) -> LaneLabels {
+    let lane = match lane {
+        store::gate::Lane::Interactive => "interactive",
+        store::gate::Lane::Bulk => "bulk",
+    };
+    LaneLabels {
+        lane: lane.to_owned(),
+    }
+}
+
 #[derive(Clone, Debug, Hash, PartialEq, Eq, EncodeLabelSet)]
 struct JobLabels {
     kind: String,
@@ -82,7 +92,7 @@ pub struct Metrics {
     requests: Family<RequestLabels, Counter>,
     latency: Family<RouteLabels, Histogram>,
     connection_wait: Histogram,
-    write_wait: Histogram,
+    write_wait: Family<LaneLabels, Histogram>,
     write_held: Family<LaneLabels, Histogram>,
     submissions_scored: Counter,
     annotator_answers: Counter,
@@ -123,11 +133,14 @@ impl Default for Metrics {
             "Time a use case waited for a database connection from the pool",
             connection_wait.clone(),
         );
-        let write_wait = Histogram::new(seconds_buckets());
+        let write_wait = Family::<LaneLabels, Histogram>::new_with_constructor(|| {
+            Histogram::new(seconds_buckets())
+        });
         registry.register(
             "db_write_wait_seconds",
             "Time to begin a write transaction (this instance's turn to write, a connection, then \
-             the database's write lock)",
+             the database's write lock), by lane: a bulk writer's wait is bounded by the write \
+             gate's ageing",
             write_wait.clone(),
         );
         let write_held = Family::<LaneLabels, Histogram>::new_with_constructor(|| {
@@ -261,19 +274,15 @@ impl Metrics {
         self.connection_wait.observe(took.as_secs_f64());
     }
 
-    pub(super) fn write_waited(&self, took: Duration) {
-        self.write_wait.observe(took.as_secs_f64());
+    pub(super) fn write_waited(&self, lane: store::gate::Lane, took: Duration) {
+        self.write_wait
+            .get_or_create(&lane_labels(lane))
+            .observe(took.as_secs_f64());
     }
 
     pub(super) fn write_held(&self, lane: store::gate::Lane, took: Duration) {
-        let lane = match lane {
-            store::gate::Lane::Interactive => "interactive",
-            store::gate::Lane::Bulk => "bulk",
-        };
         self.write_held
-            .get_or_create(&LaneLabels {
-                lane: lane.to_owned(),
-            })
+            .get_or_create(&lane_labels(lane))
             .observe(took.as_secs_f64());
     }
 

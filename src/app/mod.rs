@@ -14,8 +14,10 @@
 //! - [`tokens`]: API tokens and the accounts behind them; [`annotators`]: annotator accounts,
 //!   invites and login sessions.
 //! - [`annotation`]: assignments, the queue, drafts, answers, skips and flags; [`gold`]: gold
-//!   items mixed into the queues, and annotators excluded from the Human row; [`quality`]:
-//!   each annotator's figures on a dataset.
+//!   items mixed into the queues, and annotators excluded from the Human row; [`attention`]:
+//!   attention checks mixed in like gold items and judged against their instruction;
+//!   [`controls`]: pausing an annotator's queue and handing their unfinished items to others;
+//!   [`quality`]: each annotator's figures on a dataset.
 //! - [`agreement`]: the cross-annotation protocol, agreement statistics and the report.
 //! - [`explore`]: the explorer's grid of every item × every leaderboard row's verdict, kept
 //!   with the board, and the views cut from it.
@@ -42,12 +44,14 @@
 pub mod agreement;
 pub mod annotation;
 pub mod annotators;
+pub mod attention;
 pub mod audit;
 pub mod backup;
 pub mod cache;
 pub mod challenge;
 pub mod changes;
 pub mod compare;
+pub mod controls;
 pub mod datasets;
 pub mod demo;
 pub mod doctor;
@@ -475,7 +479,7 @@ impl Hub {
             .await
             .map_err(|_| sqlx::Error::PoolTimedOut)?;
         let tx = self.pool.begin().await?.holding(turn);
-        self.metrics.write_waited(asked.elapsed());
+        self.metrics.write_waited(lane, asked.elapsed());
         Ok(tx)
     }
 

@@ -1,10 +1,12 @@
 //! Per-annotator quality on a dataset: everything each annotator finished, gold items
 //! included, turned into the figures of [`crate::core::quality`] for the admin page, the API
-//! and the command line.
+//! and the command line; and each annotator's attention checks ([`super::attention`]),
+//! counted apart (their answers are no answers to the scene, so they stay out of the figures).
 
 use schemars::JsonSchema;
 use serde::Serialize;
 
+use super::attention::AnnotatorChecks;
 use super::{AppError, Hub, datasets};
 use crate::core::quality::{self, AnnotatorQuality, AnnotatorWork};
 use crate::store;
@@ -22,6 +24,11 @@ pub struct QualityReport {
     pub annotators: Vec<AnnotatorQuality>,
     /// Who is excluded from the Human row and the agreement report, by whom and when.
     pub exclusions: Vec<ExclusionView>,
+    /// The dataset's attention checks (0 without any).
+    pub attention_checks: i64,
+    /// Every annotator with an attention check of the dataset in their queue, by name: how
+    /// many they passed, failed (another answer, a skip or a flag) and have still to do.
+    pub attention: Vec<AnnotatorChecks>,
 }
 
 /// An annotator excluded from a dataset's Human row.
@@ -65,6 +72,8 @@ pub async fn report(
     let rows = store::annotations::quality_rows(&mut conn, dataset.id).await?;
     let exclusions = store::gold::exclusions(&mut conn, dataset.id).await?;
     let gold_items = store::gold::gold_count(&mut conn, dataset.id).await?;
+    let attention_checks = store::attention::attention_count(&mut conn, dataset.id).await?;
+    let attention = super::attention::tallies(&mut conn, dataset.id).await?;
     drop(conn);
     let mut work: Vec<AnnotatorWork> = Vec::new();
     for row in rows {
@@ -106,5 +115,7 @@ pub async fn report(
         gold_items,
         annotators,
         exclusions: exclusions.into_iter().map(ExclusionView::from).collect(),
+        attention_checks,
+        attention,
     })
 }

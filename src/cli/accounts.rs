@@ -21,6 +21,14 @@ pub(super) enum AnnotatorCommand {
     Exclude(super::quality::ExclusionArgs),
     /// Count an excluded annotator's answers on a dataset again (audited).
     Include(super::quality::ExclusionArgs),
+    /// Pause an annotator's queue: they can read it but not open, save, answer or skip an
+    /// item, and no balanced split assigns them items (drafts kept; audited).
+    Pause(super::controls::PauseArgs),
+    /// Resume a paused queue as it was (audited).
+    Resume(super::controls::PauseArgs),
+    /// Hand an annotator's unfinished items to other annotators with a balanced split
+    /// (finished answers stay; audited).
+    Handover(super::controls::HandoverArgs),
 }
 
 #[derive(Args)]
@@ -180,6 +188,9 @@ pub(super) async fn annotator(command: AnnotatorCommand) -> anyhow::Result<ExitC
         AnnotatorCommand::Quality(args) => super::quality::quality(args).await,
         AnnotatorCommand::Exclude(args) => super::quality::exclude(args).await,
         AnnotatorCommand::Include(args) => super::quality::include(args).await,
+        AnnotatorCommand::Pause(args) => super::controls::pause(args).await,
+        AnnotatorCommand::Resume(args) => super::controls::resume(args).await,
+        AnnotatorCommand::Handover(args) => super::controls::handover(args).await,
     }
 }
 

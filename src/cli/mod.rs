@@ -17,8 +17,10 @@ const MIB: u64 = 1024 * 1024;
 
 mod accounts;
 mod agreement;
+mod attention;
 mod audit;
 mod compare;
+mod controls;
 mod database;
 mod dataset;
 mod doctor;
@@ -119,6 +121,10 @@ enum Command {
     /// every annotator's queue to check their work.
     #[command(subcommand)]
     Gold(gold::GoldCommand),
+    /// Attention checks: items whose question tells the annotator how to order the cards,
+    /// mixed into every annotator's queue to check that they read it.
+    #[command(subcommand)]
+    Attention(attention::AttentionCommand),
     /// Results papers published (the ENACT paper's own, or another paper's tables), attached
     /// to a dataset and shown on its leaderboard as reported rows, never ranked.
     #[command(subcommand)]
@@ -213,6 +219,7 @@ pub fn main() -> ExitCode {
             Command::MigrateDb(args) => database::migrate_db(args).await,
             Command::Rescore(args) => rescore::rescore(args).await,
             Command::Gold(command) => gold::gold(command).await,
+            Command::Attention(command) => attention::attention(command).await,
             Command::Reported(command) => reported::reported(command).await,
             Command::Doctor(args) => doctor::doctor(args).await,
             Command::Episode(command) => episode::episode(command).await,

@@ -78,6 +78,12 @@ pub(super) async fn quality(args: QualityArgs) -> anyhow::Result<ExitCode> {
     for a in &report.annotators {
         println!("{}", table_row(a));
     }
+    for c in &report.attention {
+        println!(
+            "attention checks of {}: {} passed, {} failed, {} pending",
+            c.annotator, c.tally.passed, c.tally.failed, c.tally.pending
+        );
+    }
     for e in &report.exclusions {
         println!(
             "excluded: {} (by {} at {})",

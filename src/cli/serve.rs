@@ -205,6 +205,19 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
             eprintln!("(the demo database is temporary; give --db FILE to keep it)");
         }
     }
+    // Verdicts a replacing import killed after its cut-over left naming no item.
+    let sweeper = hub.clone();
+    tokio::spawn(async move {
+        match app::import::sweep_replaced_verdicts(&sweeper).await {
+            Ok(swept) if swept.verdicts > 0 => tracing::info!(
+                verdicts = swept.verdicts,
+                submissions = swept.submissions,
+                "deleted the verdicts of items replacing imports replaced"
+            ),
+            Ok(_) => {}
+            Err(e) => tracing::warn!(error = %e, "sweeping replaced items' verdicts failed"),
+        }
+    });
     let worker = app::jobs::Worker::spawn(
         hub.clone(),
         app::job_handlers(),

@@ -31,6 +31,7 @@ pub async fn annotator_answers(
          LEFT JOIN item_signatures s ON s.item = i.id \
          WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
          AND NOT EXISTS (SELECT 1 FROM gold_items gi WHERE gi.item = n.item) \
+         AND NOT EXISTS (SELECT 1 FROM attention_items ti WHERE ti.item = n.item) \
          AND NOT EXISTS (SELECT 1 FROM annotator_exclusions x \
              WHERE x.dataset = i.dataset_id AND x.annotator = n.annotator) \
          ORDER BY i.item_id, n.annotator",
@@ -66,6 +67,7 @@ pub async fn primary_answers(
          WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
          AND coalesce(g.kind, 'primary') = 'primary' \
          AND NOT EXISTS (SELECT 1 FROM gold_items gi WHERE gi.item = n.item) \
+         AND NOT EXISTS (SELECT 1 FROM attention_items ti WHERE ti.item = n.item) \
          ORDER BY n.item, n.annotator",
         )
         .bind(dataset_id)

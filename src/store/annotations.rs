@@ -271,7 +271,8 @@ pub async fn unassigned_items(
         let rows = sqlx::query(
             "SELECT i.id, i.direction, i.step_length FROM items i WHERE i.dataset_id = $1 \
          AND NOT EXISTS (SELECT 1 FROM assignments a WHERE a.item = i.id) \
-         AND NOT EXISTS (SELECT 1 FROM gold_items g WHERE g.item = i.id) ORDER BY i.id",
+         AND NOT EXISTS (SELECT 1 FROM gold_items g WHERE g.item = i.id) \
+         AND NOT EXISTS (SELECT 1 FROM attention_items t WHERE t.item = i.id) ORDER BY i.id",
         )
         .bind(dataset_id)
         .fetch_all(&mut *c)
@@ -335,6 +336,8 @@ pub struct QueuedItem {
     pub started: bool,
     /// The gold set's rate when the gold mix put this gold item in the queue.
     pub gold_rate: Option<i64>,
+    /// The attention checks' rate when their mix put this check in the queue.
+    pub attention_rate: Option<i64>,
 }
 
 /// An annotator's assigned items in queue order.
@@ -343,12 +346,15 @@ pub async fn queue(conn: &mut Conn, annotator: i64) -> Result<Vec<QueuedItem>, s
         let rows = sqlx::query(
             "SELECT d.name AS dataset, i.item_id, i.direction, i.step_length, n.outcome, \
          (dr.item IS NOT NULL) AS started, \
-         CASE WHEN a.gold = $2 THEN gs.rate END AS gold_rate \
+         CASE WHEN a.gold = $2 THEN gs.rate END AS gold_rate, \
+         CASE WHEN a.attention = $2 THEN ts.rate END AS attention_rate \
          FROM assignments a JOIN items i ON i.id = a.item JOIN datasets d ON d.id = i.dataset_id \
          LEFT JOIN annotations n ON n.annotator = a.annotator AND n.item = a.item \
          LEFT JOIN drafts dr ON dr.annotator = a.annotator AND dr.item = a.item \
          LEFT JOIN gold_items gi ON gi.item = a.item \
          LEFT JOIN gold_sets gs ON gs.dataset = gi.dataset \
+         LEFT JOIN attention_items ti ON ti.item = a.item \
+         LEFT JOIN attention_sets ts ON ts.dataset = ti.dataset \
          WHERE a.annotator = $1 ORDER BY a.position",
         )
         .bind(annotator)
@@ -366,6 +372,7 @@ pub async fn queue(conn: &mut Conn, annotator: i64) -> Result<Vec<QueuedItem>, s
                     finished: r.try_get("outcome")?,
                     started: r.try_get("started")?,
                     gold_rate: r.try_get("gold_rate")?,
+                    attention_rate: r.try_get("attention_rate")?,
                 })
             })
             .collect()
@@ -645,6 +652,7 @@ pub async fn human_answers_of(
          WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
          AND ($2 IS NULL OR n.annotator = $3) \
          AND NOT EXISTS (SELECT 1 FROM gold_items g WHERE g.item = n.item) \
+         AND NOT EXISTS (SELECT 1 FROM attention_items t WHERE t.item = n.item) \
          AND ($4 IS NOT NULL OR NOT EXISTS (SELECT 1 FROM annotator_exclusions x \
              WHERE x.dataset = i.dataset_id AND x.annotator = n.annotator)) \
          ORDER BY n.finished_at, i.id, n.annotator",
@@ -753,6 +761,7 @@ pub async fn counted_answers(
              LEFT JOIN item_signatures s ON s.item = i.id \
              WHERE i.dataset_id = $1 AND n.outcome = 'answered' \
              AND NOT EXISTS (SELECT 1 FROM gold_items g WHERE g.item = n.item) \
+         AND NOT EXISTS (SELECT 1 FROM attention_items t WHERE t.item = n.item) \
              AND NOT EXISTS (SELECT 1 FROM annotator_exclusions x \
                  WHERE x.dataset = i.dataset_id AND x.annotator = n.annotator) \
              ORDER BY n.finished_at, i.id, n.annotator",
@@ -1004,7 +1013,9 @@ pub async fn quality_rows(
              JOIN items i ON i.id = n.item \
              LEFT JOIN item_signatures s ON s.item = i.id \
              LEFT JOIN gold_items g ON g.item = n.item \
-             WHERE i.dataset_id = $1 ORDER BY a.name, n.item",
+             WHERE i.dataset_id = $1 \
+             AND NOT EXISTS (SELECT 1 FROM attention_items t WHERE t.item = n.item) \
+             ORDER BY a.name, n.item",
         )
         .bind(dataset_id)
         .fetch_all(&mut *c)

@@ -239,6 +239,7 @@ pub const TABLES: &[Table] = &[
             ("position", Int),
             ("kind", Text),
             ("gold", Bool),
+            ("attention", Bool),
         ],
         false,
     ),
@@ -256,6 +257,21 @@ pub const TABLES: &[Table] = &[
         false,
     ),
     table("gold_items", &[("item", Int), ("dataset", Int)], false),
+    table(
+        "attention_sets",
+        &[
+            ("dataset", Int),
+            ("rate", Int),
+            ("set_by", Text),
+            ("created_at", Text),
+        ],
+        false,
+    ),
+    table(
+        "attention_items",
+        &[("item", Int), ("dataset", Int), ("instruction", Text)],
+        false,
+    ),
     table(
         "reported_results",
         &[
@@ -284,6 +300,15 @@ pub const TABLES: &[Table] = &[
             ("link", Text),
             ("updated_by", Text),
             ("updated_at", Text),
+        ],
+        false,
+    ),
+    table(
+        "annotator_pauses",
+        &[
+            ("annotator", Int),
+            ("paused_by", Text),
+            ("created_at", Text),
         ],
         false,
     ),
@@ -473,6 +498,15 @@ pub const TABLES: &[Table] = &[
             ("item_id", Text),
             ("source", Text),
             ("signatures", Text),
+        ],
+        false,
+    ),
+    table(
+        "verdict_sweeps",
+        &[
+            ("dataset", Int),
+            ("generation", Int),
+            ("swept_through", Int),
         ],
         false,
     ),

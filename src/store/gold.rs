@@ -165,7 +165,7 @@ pub async fn drop_unfinished_gold_assignments(
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct GoldStanding {
     pub annotator: i64,
-    /// Assigned items of the dataset that are not gold.
+    /// Assigned items of the dataset that are neither gold nor attention checks.
     pub ordinary: usize,
     /// Gold items already in the queue, however they got there.
     pub held: Vec<i64>,
@@ -178,8 +178,10 @@ pub async fn gold_standings(
 ) -> Result<Vec<GoldStanding>, sqlx::Error> {
     on!(conn, |c| {
         let rows = sqlx::query(
-            "SELECT a.annotator, a.item, (g.item IS NOT NULL) AS is_gold FROM assignments a \
+            "SELECT a.annotator, a.item, (g.item IS NOT NULL) AS is_gold, \
+             (t.item IS NOT NULL) AS is_check FROM assignments a \
              JOIN items i ON i.id = a.item LEFT JOIN gold_items g ON g.item = a.item \
+             LEFT JOIN attention_items t ON t.item = a.item \
              WHERE i.dataset_id = $1 ORDER BY a.annotator, a.item",
         )
         .bind(dataset_id)
@@ -197,7 +199,8 @@ pub async fn gold_standings(
             if let Some(standing) = standings.last_mut() {
                 if row.try_get::<bool>("is_gold")? {
                     standing.held.push(row.try_get("item")?);
-                } else {
+                } else if !row.try_get::<bool>("is_check")? {
+                    // Attention checks are not the dataset's coverage either.
                     standing.ordinary += 1;
                 }
             }

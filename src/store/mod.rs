@@ -8,8 +8,10 @@
 pub mod accounts;
 pub mod agreement;
 pub mod annotations;
+pub mod attention;
 pub mod audit;
 pub mod challenges;
+pub mod controls;
 pub mod copy;
 pub mod datasets;
 pub mod db;

@@ -4,7 +4,8 @@
 use super::db::{Conn, Fields, on};
 use crate::core::red_flags::{ExactAnswers, Leak};
 
-/// Every submission to `dataset` (listed or not) with its count of exactly right answers.
+/// Every submission to `dataset` (listed or not) with its count of exactly right answers (of
+/// the dataset's items: not verdicts a replacing import left to be swept).
 pub async fn exact_answers(
     conn: &mut Conn,
     dataset: i64,
@@ -13,7 +14,8 @@ pub async fn exact_answers(
         let rows = sqlx::query(
             "SELECT s.id, s.model, a.name AS account, s.visibility, \
              (SELECT coalesce(sum(CASE WHEN v.exact_match THEN 1 ELSE 0 END), 0) \
-              FROM submission_items v WHERE v.submission = s.id) AS exact \
+              FROM submission_items v JOIN items i ON i.id = v.item AND i.dataset_id = s.dataset \
+              WHERE v.submission = s.id) AS exact \
              FROM submissions s JOIN accounts a ON a.id = s.account \
              WHERE s.dataset = $1 ORDER BY s.id",
         )

@@ -306,8 +306,9 @@ pub async fn publish_as_new(conn: &mut Conn, staged: &StagedImport) -> Result<()
 }
 
 /// Cut-over into an existing dataset: its items the staged version replaces are deleted
-/// (what was made on them goes with them), the staged items move in keeping their row ids,
-/// and the staged signature tables are applied. Returns (items replaced, signatures applied).
+/// (what was made on them goes with them, but their verdicts: see [`sweep_submission`]), the
+/// staged items move in keeping their row ids, and the staged signature tables are applied.
+/// Returns (items replaced, signatures applied).
 pub async fn publish_into(
     conn: &mut Conn,
     staged: &StagedImport,
@@ -315,19 +316,6 @@ pub async fn publish_into(
     source: &str,
 ) -> Result<(u64, u64), sqlx::Error> {
     on!(conn, |c| {
-        // Verdicts do not reference items (they are written by the thousand per submission,
-        // and an index by item to cascade on would cost every submission a write per item):
-        // the replaced items' verdicts go first, found by key.
-        sqlx::query(
-            "DELETE FROM submission_items WHERE submission IN \
-             (SELECT id FROM submissions WHERE dataset = $1) AND item IN \
-             (SELECT id FROM items WHERE dataset_id = $1 AND item_id IN \
-             (SELECT item_id FROM items WHERE dataset_id = $2))",
-        )
-        .bind(target)
-        .bind(staged.staging)
-        .execute(&mut *c)
-        .await?;
         let replaced = sqlx::query(
             "DELETE FROM items WHERE dataset_id = $1 AND item_id IN \
              (SELECT item_id FROM items WHERE dataset_id = $2)",
@@ -337,6 +325,20 @@ pub async fn publish_into(
         .execute(&mut *c)
         .await?
         .rows_affected();
+        // Verdicts do not reference items (they are written by the thousand per submission,
+        // and an index by item to delete by would cost every submission a write per item): the
+        // replaced items' verdicts now name no item, and are deleted after the cut-over, a
+        // submission per transaction, rather than by the million in this one.
+        if replaced > 0 {
+            sqlx::query(
+                "INSERT INTO verdict_sweeps (dataset, generation, swept_through) \
+                 VALUES ($1, 1, 0) ON CONFLICT (dataset) DO UPDATE SET \
+                 generation = verdict_sweeps.generation + 1, swept_through = 0",
+            )
+            .bind(target)
+            .execute(&mut *c)
+            .await?;
+        }
         sqlx::query("UPDATE items SET dataset_id = $1 WHERE dataset_id = $2")
             .bind(target)
             .bind(staged.staging)
@@ -360,5 +362,86 @@ pub async fn publish_into(
             .execute(&mut *c)
             .await?;
         Ok((replaced, signatures))
+    })
+}
+
+/// A dataset whose replaced items' verdicts are still to be deleted, and how far that got.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct VerdictSweep {
+    pub dataset: i64,
+    pub generation: i64,
+    /// Submissions with ids up to this one are swept.
+    pub swept_through: i64,
+}
+
+/// Every pending sweep of replaced items' verdicts.
+pub async fn verdict_sweeps(conn: &mut Conn) -> Result<Vec<VerdictSweep>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows: Vec<(i64, i64, i64)> = sqlx::query_as(
+            "SELECT dataset, generation, swept_through FROM verdict_sweeps ORDER BY dataset",
+        )
+        .fetch_all(&mut *c)
+        .await?;
+        Ok(rows
+            .into_iter()
+            .map(|(dataset, generation, swept_through)| VerdictSweep {
+                dataset,
+                generation,
+                swept_through,
+            })
+            .collect())
+    })
+}
+
+/// Deletes the verdicts of the sweep's next submission that name none of the dataset's items,
+/// and records it as swept; returns (rows deleted, whether a submission was left to sweep).
+/// When none is left, or a newer cut-over restarted the sweep (another generation), nothing is
+/// deleted; a finished sweep's row is removed.
+pub async fn sweep_submission(
+    conn: &mut Conn,
+    sweep: &VerdictSweep,
+) -> Result<(u64, bool), sqlx::Error> {
+    on!(conn, |c| {
+        let current: Option<(i64, i64)> = sqlx::query_as(
+            "SELECT generation, swept_through FROM verdict_sweeps WHERE dataset = $1",
+        )
+        .bind(sweep.dataset)
+        .fetch_optional(&mut *c)
+        .await?;
+        let Some((generation, swept_through)) = current else {
+            return Ok((0, false));
+        };
+        if generation != sweep.generation {
+            return Ok((0, false));
+        }
+        let next: Option<i64> =
+            sqlx::query_scalar("SELECT min(id) FROM submissions WHERE dataset = $1 AND id > $2")
+                .bind(sweep.dataset)
+                .bind(swept_through)
+                .fetch_one(&mut *c)
+                .await?;
+        let Some(submission) = next else {
+            sqlx::query("DELETE FROM verdict_sweeps WHERE dataset = $1 AND generation = $2")
+                .bind(sweep.dataset)
+                .bind(generation)
+                .execute(&mut *c)
+                .await?;
+            return Ok((0, false));
+        };
+        let deleted = sqlx::query(
+            "DELETE FROM submission_items WHERE submission = $1 AND item NOT IN \
+             (SELECT id FROM items WHERE dataset_id = $2)",
+        )
+        .bind(submission)
+        .bind(sweep.dataset)
+        .execute(&mut *c)
+        .await?
+        .rows_affected();
+        sqlx::query("UPDATE verdict_sweeps SET swept_through = $1 WHERE dataset = $2")
+            .bind(submission)
+            .bind(sweep.dataset)
+            .execute(&mut *c)
+            .await?;
+        Ok((deleted, true))
     })
 }

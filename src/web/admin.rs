@@ -318,8 +318,13 @@ async fn assign(
         request.session,
         Some(format!(
             "Assigned {added} items of '{dataset}' ({} already assigned were left as they \
-             were).",
-            done.requested - added
+             were).{}",
+            done.requested - added,
+            if done.paused.is_empty() {
+                String::new()
+            } else {
+                format!(" Paused queues left out: {}.", done.paused.join(", "))
+            }
         )),
         None,
     )

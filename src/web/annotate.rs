@@ -18,8 +18,10 @@ use super::i18n::{Tr, msg};
 use super::session::{LoggedIn, Protected};
 use super::{AppError, AppState};
 use crate::app::annotation::{self, AssignedItem};
+use crate::app::controls;
 use crate::app::items::StoredItem;
 use crate::core::annotation::{Draft, QueueStatus, next_in_queue};
+use crate::core::attention::Instruction;
 use crate::core::dataset::{Direction, StepLength};
 
 pub fn router() -> Router<AppState> {
@@ -49,6 +51,17 @@ fn status_key(status: QueueStatus) -> &'static str {
         QueueStatus::Answered => msg("status-answered"),
         QueueStatus::Skipped => msg("status-skipped"),
         QueueStatus::Flagged => msg("status-flagged"),
+    }
+}
+
+/// The message key of an attention check's instruction on an item of `direction`: the cards
+/// it names are the page's (candidate images forward, candidate actions inverse).
+fn attention_key(instruction: Instruction, direction: Direction) -> &'static str {
+    match (instruction, direction) {
+        (Instruction::Keep, Direction::Forward) => msg("annotate-attention-keep-forward"),
+        (Instruction::Reverse, Direction::Forward) => msg("annotate-attention-reverse-forward"),
+        (Instruction::Keep, Direction::Inverse) => msg("annotate-attention-keep-inverse"),
+        (Instruction::Reverse, Direction::Inverse) => msg("annotate-attention-reverse-inverse"),
     }
 }
 
@@ -89,6 +102,8 @@ struct QueuePage {
     total: usize,
     next: Option<String>,
     resume: bool,
+    /// An admin paused the queue: the page says so and offers no item to open.
+    paused: bool,
     items: Vec<QueueRow>,
 }
 
@@ -98,6 +113,9 @@ async fn queue_page(
     tr: Tr,
 ) -> Result<Html<String>, PageError> {
     let queue = annotation::queue(&state.hub, session.annotator).await?;
+    let paused = controls::paused(&state.hub, session.annotator)
+        .await?
+        .is_some();
     let lengths: Vec<StepLength> = StepLength::all()
         .filter(|l| queue.iter().any(|e| e.step_length == *l))
         .collect();
@@ -119,7 +137,7 @@ async fn queue_page(
                 .collect(),
         })
         .collect();
-    let next = next_in_queue(&queue);
+    let next = next_in_queue(&queue).filter(|_| !paused);
     let page = QueuePage {
         tr: tr.clone(),
         name: session.name,
@@ -131,6 +149,7 @@ async fn queue_page(
         total: queue.len(),
         next: next.map(|e| item_href(&e.dataset, &e.item_id)),
         resume: next.is_some_and(|e| e.status == QueueStatus::Started),
+        paused,
         items: queue
             .iter()
             .map(|e| QueueRow {
@@ -151,6 +170,13 @@ async fn next_item(
     State(state): State<AppState>,
     LoggedIn(session): LoggedIn,
 ) -> Result<Redirect, PageError> {
+    // A paused queue has no next item: its page says why.
+    if controls::paused(&state.hub, session.annotator)
+        .await?
+        .is_some()
+    {
+        return Ok(Redirect::to("/annotate"));
+    }
     Ok(
         match annotation::next(&state.hub, session.annotator).await? {
             Some(e) => Redirect::to(&item_href(&e.dataset, &e.item_id)),
@@ -197,6 +223,8 @@ struct ItemPage {
     transitions: Vec<Transition>,
     library: Vec<Card>,
     question: String,
+    /// An attention check's instruction, in the annotator's language.
+    attention: Option<String>,
     draft_json: String,
     finished: bool,
     base: String,
@@ -274,6 +302,9 @@ impl ItemPage {
                 })
                 .collect()
         };
+        let attention = opened
+            .attention
+            .map(|i| tr.t(attention_key(i, item.summary.direction)));
         Ok(ItemPage {
             tr,
             csrf,
@@ -296,6 +327,7 @@ impl ItemPage {
             transitions,
             library: library(item),
             question: item.question.clone(),
+            attention,
             draft_json: draft,
             finished: opened.finished,
         })

@@ -21,6 +21,7 @@ mod admin_audit;
 mod admin_tokens;
 mod agreement;
 mod annotate;
+mod annotator_controls;
 mod api;
 mod archive;
 mod assets;
@@ -166,6 +167,7 @@ pub fn api_routes() -> Vec<openapi::ApiRoute> {
     routes.extend(rescore::routes());
     routes.extend(runs::routes());
     routes.extend(quality::routes());
+    routes.extend(annotator_controls::routes());
     routes.extend(reported::routes());
     routes.extend(red_flags::routes());
     routes.extend(compare::routes());
@@ -253,6 +255,7 @@ fn admin_pages(state: &AppState) -> Router<AppState> {
         .merge(imports::router())
         .merge(rescore::router())
         .merge(quality::router())
+        .merge(annotator_controls::router())
         .merge(challenge::admin_router())
         .merge(run_pages::admin_router())
         .merge(episodes::admin_router())

@@ -1,7 +1,8 @@
 //! Annotator quality control from the web: the admin API (`/api/v1/admin/annotators/quality`,
 //! a dataset's gold set, exclusions) and the admin page `/admin/quality` (the gold set's form,
 //! the sortable quality table with the annotators under a chosen bar highlighted, and
-//! exclude/include buttons).
+//! exclude/include buttons; the queues with their pause and handover forms, and the attention
+//! checks, whose forms [`super::annotator_controls`] handles).
 
 use askama::Template;
 use axum::Router;
@@ -20,7 +21,7 @@ use super::{AppError, AppState};
 use crate::app::gold::{GoldCleared, GoldQueues, GoldSet};
 use crate::app::quality::QualityReport;
 use crate::app::tokens::Caller;
-use crate::app::{datasets, gold, quality};
+use crate::app::{annotators, attention, controls, datasets, gold, quality};
 use crate::core::annotation::Session;
 use crate::core::credentials::Scope;
 use crate::core::gold::{GoldChoice, GoldRate};
@@ -326,7 +327,7 @@ const COLUMNS: [(&str, &str); 12] = [
 /// The page's query: the dataset, the bar (in percent) under which gold TA is highlighted, the
 /// fast-answer threshold, and the sort.
 #[derive(Debug, Default, Deserialize)]
-struct PageQuery {
+pub(super) struct PageQuery {
     #[serde(default)]
     dataset: String,
     #[serde(default)]
@@ -337,6 +338,16 @@ struct PageQuery {
     sort: String,
     #[serde(default)]
     desc: bool,
+}
+
+impl PageQuery {
+    /// The page of `dataset` with the default bar, threshold and order.
+    pub(super) fn of(dataset: String) -> PageQuery {
+        PageQuery {
+            dataset,
+            ..PageQuery::default()
+        }
+    }
 }
 
 struct Heading {
@@ -351,6 +362,32 @@ struct QualityRow {
     excluded: bool,
     below_bar: bool,
     cells: Vec<String>,
+}
+
+/// An annotator's queue with its controls (pause or resume, hand over).
+struct QueueView {
+    name: String,
+    assigned: i64,
+    finished: i64,
+    /// Who paused it and when, when paused.
+    paused: Option<(String, String)>,
+}
+
+/// One annotator's attention checks on the dataset.
+struct ChecksView {
+    name: String,
+    passed: u64,
+    failed: u64,
+    pending: u64,
+}
+
+struct AttentionView {
+    rate: i64,
+    set_by: String,
+    set_at: String,
+    /// `ITEM_ID instruction` lines, as the form takes them.
+    lines: String,
+    items: usize,
 }
 
 struct GoldView {
@@ -377,6 +414,10 @@ struct QualityPage {
     gold: Option<GoldView>,
     gold_items: i64,
     excluded: Vec<(String, String, String)>,
+    queues: Vec<QueueView>,
+    attention: Option<AttentionView>,
+    attention_checks: i64,
+    checks: Vec<ChecksView>,
     notice: Option<String>,
 }
 
@@ -457,7 +498,7 @@ fn page_link(query: &PageQuery, bar: f64, sort: &str, desc: bool) -> String {
     )
 }
 
-async fn render(
+pub(super) async fn render(
     state: &AppState,
     session: Session,
     query: PageQuery,
@@ -491,8 +532,43 @@ async fn render(
     } else {
         "name".to_owned()
     };
-    let (rows, gold_view, gold_items, excluded) = if query.dataset.is_empty() {
-        (Vec::new(), None, 0, Vec::new())
+    let pauses = controls::pauses(&state.hub).await?;
+    let queues = annotators::with_progress(&state.hub)
+        .await?
+        .into_iter()
+        .filter(|p| p.annotator.active)
+        .map(|p| QueueView {
+            paused: pauses
+                .iter()
+                .find(|x| x.annotator == p.annotator.name)
+                .map(|x| (x.paused_by.clone(), x.paused_at.clone())),
+            name: p.annotator.name,
+            assigned: p.assigned,
+            finished: p.finished,
+        })
+        .collect();
+    let attention_view = if query.dataset.is_empty() {
+        None
+    } else {
+        let set = attention::show(&state.hub, &query.dataset).await?;
+        set.map(|a| AttentionView {
+            rate: a.rate,
+            set_by: a.set_by,
+            set_at: a.set_at,
+            items: a.checks.len(),
+            lines: a
+                .checks
+                .iter()
+                .map(|c| format!("{} {}", c.item_id, c.instruction.as_str()))
+                .collect::<Vec<_>>()
+                .join("\n"),
+        })
+    };
+    let (rows, gold_view, gold_items, excluded, attention_checks, checks) = if query
+        .dataset
+        .is_empty()
+    {
+        (Vec::new(), None, 0, Vec::new(), 0, Vec::new())
     } else {
         let report = quality::report(&state.hub, &query.dataset, fast).await?;
         let gold_set = gold::show(&state.hub, &query.dataset).await?;
@@ -533,7 +609,24 @@ async fn render(
             .into_iter()
             .map(|e| (e.annotator, e.excluded_by, e.excluded_at))
             .collect();
-        (rows, gold_view, report.gold_items, excluded)
+        let checks = report
+            .attention
+            .into_iter()
+            .map(|c| ChecksView {
+                name: c.annotator,
+                passed: c.tally.passed,
+                failed: c.tally.failed,
+                pending: c.tally.pending,
+            })
+            .collect();
+        (
+            rows,
+            gold_view,
+            report.gold_items,
+            excluded,
+            report.attention_checks,
+            checks,
+        )
     };
     let headings = COLUMNS
         .iter()
@@ -565,6 +658,10 @@ async fn render(
         gold: gold_view,
         gold_items,
         excluded,
+        queues,
+        attention: attention_view,
+        attention_checks,
+        checks,
         notice,
     };
     Ok(Html(page.render()?))

@@ -137,7 +137,22 @@ fn body_of(verb: Verb, path: &str, records: &[Value], n: usize) -> Option<(Strin
         | (
             Verb::Put | Verb::Delete,
             "/admin/datasets/{dataset}/exclusions/{annotator}",
-        ) => Some((String::new(), "text/plain")),
+        )
+        | (Verb::Put | Verb::Delete, "/admin/annotators/{annotator}/pause")
+        | (Verb::Delete, "/admin/datasets/{dataset}/attention") => {
+            Some((String::new(), "text/plain"))
+        }
+        // To the annotator `Callers::new` makes for it (the session's "ann" is an admin, whom
+        // a handover without names leaves out).
+        (Verb::Post, "/admin/annotators/{annotator}/handover") => Some((
+            json!({"to": ["recipient"]}).to_string(),
+            "application/json",
+        )),
+        (Verb::Put, "/admin/datasets/{dataset}/attention") => Some((
+            json!({"rate": 5, "checks": [{"item_id": records[n % 2 + 2]["id"], "instruction": "reverse"}]})
+                .to_string(),
+            "application/json",
+        )),
         (verb, path) => {
             panic!("the authorization matrix has no request for {verb:?} {path}: add it to body_of")
         }
@@ -192,6 +207,7 @@ impl Callers {
             .expect(204)
             .await;
         crate::annotate::annotator(server, "ann", true).await;
+        crate::annotate::annotator(server, "recipient", false).await;
         let (browser, _) = crate::annotate::logged_in_on(server, "ann", "/annotate").await;
         Callers {
             admin,
@@ -595,6 +611,10 @@ const PAGES: &[(&str, &str, Page)] = &[
     ("POST", "/admin/quality/gold", Page::Admin),
     ("POST", "/admin/quality/gold/clear", Page::Admin),
     ("POST", "/admin/quality/exclusion", Page::Admin),
+    ("POST", "/admin/quality/pause", Page::Admin),
+    ("POST", "/admin/quality/handover", Page::Admin),
+    ("POST", "/admin/quality/attention", Page::Admin),
+    ("POST", "/admin/quality/attention/clear", Page::Admin),
     ("GET", "/admin/challenges", Page::Admin),
     ("POST", "/admin/challenges/split", Page::Admin),
     ("POST", "/admin/challenges/settings", Page::Admin),

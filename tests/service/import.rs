@@ -519,3 +519,151 @@ async fn the_log_of_an_import_can_be_emptied_while_connections_are_open() {
     assert_eq!(size(), 0);
     assert_eq!(item_count(&pool).await, 4, "the items are in the database");
 }
+
+/// Stores a ground-truth submission of `model` to `dataset` through the use case.
+async fn submit_truth(pool: &Pool, dataset: &str, model: &str, records: &[Value]) {
+    use enact_hub::app::{Hub, submissions};
+    use enact_hub::core::credentials::{Role, Scope};
+    use enact_hub::core::submission::{Provenance, SubmissionMetadata};
+    let (_, token) = api_token(pool, model, Role::Submitter, None, None).await;
+    let hub = Hub::from(pool.clone());
+    let caller = enact_hub::app::tokens::authorize(&hub, &token, Scope::Submit)
+        .await
+        .expect("caller");
+    let metadata = SubmissionMetadata {
+        model: model.to_owned(),
+        ..SubmissionMetadata::default()
+    };
+    let body = ground_truth_answers(records).into_bytes();
+    submissions::submit(
+        &hub,
+        &caller,
+        dataset,
+        metadata,
+        Provenance::Submitted,
+        None,
+        async { Ok(body) },
+    )
+    .await
+    .expect("stored");
+}
+
+#[tokio::test]
+async fn a_replacing_import_sweeps_the_replaced_items_verdicts_after_its_cut_over() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let mut records = write_release(&root, &[3, 4]);
+    let pool = fresh_db(&dir).await;
+    import(&pool, &root, &options("mini")).await;
+    let items = item_count(&pool).await;
+    submit_truth(&pool, "mini", "m1", &records).await;
+    submit_truth(&pool, "mini", "m2", &records).await;
+    let verdicts = "SELECT count(*) FROM submission_items";
+    assert_eq!(count(&pool, verdicts).await, 2 * items);
+
+    for record in &mut records[..2] {
+        let mut reversed = record["gt_answer"].as_array().expect("gt").clone();
+        reversed.reverse();
+        record["gt_answer"] = Value::Array(reversed);
+    }
+    write_qa_file(
+        &root,
+        &records.iter().map(Value::to_string).collect::<Vec<_>>(),
+    );
+    let mut replace = options("mini");
+    replace.replace = true;
+    let report = import(&pool, &root, &replace).await;
+    assert_eq!(report.replaced_items, 2);
+    // The cut-over left them; the sweep after it deleted exactly those: 2 items × 2 submissions.
+    assert_eq!(report.swept_verdicts, 4);
+    assert!(report.longest_transaction_ms >= report.longest_sweep_ms);
+    assert_eq!(count(&pool, verdicts).await, 2 * (items - 2));
+    assert_eq!(
+        count(
+            &pool,
+            "SELECT count(*) FROM submission_items v WHERE NOT EXISTS \
+             (SELECT 1 FROM items i WHERE i.id = v.item)"
+        )
+        .await,
+        0
+    );
+    assert_eq!(count(&pool, "SELECT count(*) FROM verdict_sweeps").await, 0);
+}
+
+#[tokio::test]
+async fn verdicts_left_to_sweep_are_not_counted_and_a_restarted_sweep_supersedes_an_older_one() {
+    use enact_hub::app::Hub;
+    use enact_hub::app::import::sweep_replaced_verdicts;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let records = write_release(&root, &[3, 4]);
+    let pool = fresh_db(&dir).await;
+    import(&pool, &root, &options("mini")).await;
+    submit_truth(&pool, "mini", "m1", &records).await;
+    submit_truth(&pool, "mini", "m2", &records).await;
+    let hub = Hub::from(pool.clone());
+    let dataset: i64 = count(&pool, "SELECT id FROM datasets WHERE name = 'mini'").await;
+    let exact = || async {
+        let mut conn = pool.acquire().await.expect("conn");
+        store::red_flags::exact_answers(&mut conn, dataset)
+            .await
+            .expect("exact answers")
+            .iter()
+            .map(|s| s.exact)
+            .collect::<Vec<_>>()
+    };
+    let before = exact().await;
+    assert_eq!(before, vec![records.len(); 2]);
+
+    // As a process killed between a cut-over and its sweep leaves it: an item gone, its verdicts
+    // not, and the sweep pending.
+    let gone: i64 = count(&pool, "SELECT min(id) FROM items").await;
+    db!(
+        pool,
+        execute,
+        sqlx::query("DELETE FROM items WHERE id = $1").bind(gone)
+    )
+    .expect("delete");
+    db!(
+        pool,
+        execute,
+        sqlx::query("INSERT INTO verdict_sweeps (dataset) VALUES ($1)").bind(dataset)
+    )
+    .expect("sweep");
+    let orphans = "SELECT count(*) FROM submission_items v WHERE NOT EXISTS \
+                   (SELECT 1 FROM items i WHERE i.id = v.item)";
+    assert_eq!(count(&pool, orphans).await, 2);
+    assert_eq!(
+        exact().await,
+        vec![records.len() - 1; 2],
+        "left verdicts are not counted"
+    );
+
+    // A sweeper of an older generation stops at its next step, writing nothing.
+    let mut conn = pool.acquire().await.expect("conn");
+    let pending = store::staged::verdict_sweeps(&mut conn)
+        .await
+        .expect("sweeps");
+    assert_eq!(pending.len(), 1);
+    let older = store::staged::VerdictSweep {
+        generation: pending[0].generation - 1,
+        ..pending[0]
+    };
+    assert_eq!(
+        store::staged::sweep_submission(&mut conn, &older)
+            .await
+            .expect("step"),
+        (0, false)
+    );
+    drop(conn);
+    assert_eq!(count(&pool, orphans).await, 2);
+
+    let swept = sweep_replaced_verdicts(&hub).await.expect("sweep");
+    assert_eq!((swept.submissions, swept.verdicts), (2, 2));
+    assert_eq!(count(&pool, orphans).await, 0);
+    assert_eq!(count(&pool, "SELECT count(*) FROM verdict_sweeps").await, 0);
+    assert_eq!(
+        sweep_replaced_verdicts(&hub).await.expect("again"),
+        Default::default()
+    );
+}

@@ -4,6 +4,7 @@
 mod admin_tokens;
 mod agreement;
 mod annotate;
+mod annotator_controls;
 mod api;
 mod app_layer;
 mod archive;

@@ -4,7 +4,7 @@
 //! models get. Passwords and tokens are in [`crate::credentials`].
 
 use crate::audit::Actor;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap, HashSet};
 
 use serde::{Deserialize, Serialize};
 
@@ -71,6 +71,46 @@ pub fn balanced_split(items: &[SplitItem], annotators: &[i64]) -> Vec<(i64, i64)
         }
     }
     out
+}
+
+/// Deals an annotator's unfinished `items` over `recipients` for a handover: kind by kind
+/// (direction × step length, in the order of [`balanced_split`]), each item goes to the
+/// recipient who has received the fewest so far (the earliest in `recipients` on a tie) among
+/// those who do not hold it already (`held`: annotator → items in their queue), so the totals
+/// stay within one of each other whenever nobody holds the items. Returns the `(recipient,
+/// item)` pairs and the items every recipient holds already (nobody can take them).
+pub fn handover_split(
+    items: &[SplitItem],
+    recipients: &[i64],
+    held: &HashMap<i64, HashSet<i64>>,
+) -> (Vec<(i64, i64)>, Vec<i64>) {
+    let mut by_kind: BTreeMap<(Direction, StepLength), Vec<i64>> = BTreeMap::new();
+    for it in items {
+        by_kind
+            .entry((it.direction, it.step_length))
+            .or_default()
+            .push(it.item);
+    }
+    let mut given = vec![0usize; recipients.len()];
+    let mut pairs = Vec::with_capacity(items.len());
+    let mut left = Vec::new();
+    for kind_items in by_kind.values() {
+        for &item in kind_items {
+            let takes = recipients
+                .iter()
+                .enumerate()
+                .filter(|(_, r)| !held.get(r).is_some_and(|h| h.contains(&item)))
+                .min_by_key(|(index, _)| (given[*index], *index));
+            match takes {
+                Some((index, &recipient)) => {
+                    given[index] += 1;
+                    pairs.push((recipient, item));
+                }
+                None => left.push(item),
+            }
+        }
+    }
+    (pairs, left)
 }
 
 /// Interaction counts the item page reports with each change.
@@ -590,6 +630,34 @@ mod tests {
             .collect();
         assert_eq!(totals, vec![6, 6]);
         assert!(balanced_split(&items, &[]).is_empty());
+    }
+
+    #[test]
+    fn a_handover_is_balanced_and_never_gives_an_item_twice() {
+        let items: Vec<SplitItem> = (1..=7)
+            .map(|item| SplitItem {
+                item,
+                direction: if item % 2 == 0 {
+                    Direction::Forward
+                } else {
+                    Direction::Inverse
+                },
+                step_length: l(3),
+            })
+            .collect();
+        let (pairs, left) = handover_split(&items, &[100, 200], &HashMap::new());
+        assert!(left.is_empty());
+        let count = |pairs: &[(i64, i64)], who: i64| pairs.iter().filter(|p| p.0 == who).count();
+        assert_eq!((count(&pairs, 100), count(&pairs, 200)), (4, 3));
+        // 200 holds item 2 already, and both hold item 5: 5 stays where it was.
+        let held: HashMap<i64, HashSet<i64>> = [(200, [2, 5].into()), (100, [5].into())].into();
+        let (pairs, left) = handover_split(&items, &[100, 200], &held);
+        assert_eq!(left, vec![5]);
+        assert!(pairs.contains(&(100, 2)));
+        assert!(!pairs.iter().any(|p| p.1 == 5));
+        assert!(count(&pairs, 100).abs_diff(count(&pairs, 200)) <= 1);
+        assert_eq!(pairs.len(), 6);
+        assert!(handover_split(&items, &[], &HashMap::new()).0.is_empty());
     }
 
     #[test]

@@ -111,10 +111,18 @@ pub enum AuditAction {
     SubmissionSelect,
     /// An import whose items or frames also belong to a public dataset.
     DatasetLeak,
+    /// An annotator's queue paused: they can read it but not work on it, and get no new items.
+    AnnotatorPause,
+    AnnotatorResume,
+    /// An annotator's unfinished items split over other annotators.
+    AnnotatorHandover,
+    /// A dataset's attention checks chosen (or replaced), with their rate.
+    AttentionSet,
+    AttentionClear,
 }
 
 impl AuditAction {
-    pub const ALL: [AuditAction; 39] = [
+    pub const ALL: [AuditAction; 44] = [
         AuditAction::DatasetImport,
         AuditAction::DatasetSubset,
         AuditAction::DatasetAnswerVisibility,
@@ -154,6 +162,11 @@ impl AuditAction {
         AuditAction::ChallengeSettings,
         AuditAction::SubmissionSelect,
         AuditAction::DatasetLeak,
+        AuditAction::AnnotatorPause,
+        AuditAction::AnnotatorResume,
+        AuditAction::AnnotatorHandover,
+        AuditAction::AttentionSet,
+        AuditAction::AttentionClear,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -197,6 +210,11 @@ impl AuditAction {
             AuditAction::ChallengeSettings => "challenge.settings",
             AuditAction::SubmissionSelect => "submission.select",
             AuditAction::DatasetLeak => "dataset.leak",
+            AuditAction::AnnotatorPause => "annotator.pause",
+            AuditAction::AnnotatorResume => "annotator.resume",
+            AuditAction::AnnotatorHandover => "annotator.handover",
+            AuditAction::AttentionSet => "attention.set",
+            AuditAction::AttentionClear => "attention.clear",
         }
     }
 

@@ -151,46 +151,59 @@ pub struct QueuedEntry<T> {
     pub dataset: String,
     /// The gold set's rate when the gold mix put this item here; `None` for every other item.
     pub gold_rate: Option<GoldRate>,
+    /// The attention checks' rate when their mix put this item here
+    /// ([`crate::attention`]); `None` for every other item.
+    pub attention_rate: Option<GoldRate>,
 }
 
 /// The queue in the order the annotator works it: every other item in its stored order, and
 /// after every `rate - 1` items of a dataset with gold, that dataset's next gold item (any
-/// left over go last). Gold items are never marked: the entries come out as they went in.
+/// left over go last); attention checks stand the same way at their own rate, after the gold
+/// item of the same place. Mixed items are never marked: the entries come out as they went in.
 pub fn mix<T>(queue: Vec<QueuedEntry<T>>) -> Vec<T> {
-    let mut gold: HashMap<String, (GoldRate, std::collections::VecDeque<T>)> = HashMap::new();
+    // By (dataset, is an attention check): the rate and the items waiting for their place.
+    type Waiting<T> = (GoldRate, std::collections::VecDeque<T>);
+    let mut mixed_in: HashMap<(String, bool), Waiting<T>> = HashMap::new();
+    let mut order: Vec<(String, bool)> = Vec::new();
     let mut ordinary = Vec::new();
-    let mut gold_order: Vec<String> = Vec::new();
     for queued in queue {
-        match queued.gold_rate {
-            Some(rate) => {
-                if !gold.contains_key(&queued.dataset) {
-                    gold_order.push(queued.dataset.clone());
-                }
-                gold.entry(queued.dataset)
-                    .or_insert_with(|| (rate, std::collections::VecDeque::new()))
-                    .1
-                    .push_back(queued.entry);
+        let (rate, attention) = match (queued.gold_rate, queued.attention_rate) {
+            (Some(rate), _) => (rate, false),
+            (None, Some(rate)) => (rate, true),
+            (None, None) => {
+                ordinary.push((queued.dataset, queued.entry));
+                continue;
             }
-            None => ordinary.push((queued.dataset, queued.entry)),
+        };
+        let key = (queued.dataset, attention);
+        if !mixed_in.contains_key(&key) {
+            order.push(key.clone());
         }
+        mixed_in
+            .entry(key)
+            .or_insert_with(|| (rate, std::collections::VecDeque::new()))
+            .1
+            .push_back(queued.entry);
     }
     let mut mixed =
-        Vec::with_capacity(ordinary.len() + gold.values().map(|g| g.1.len()).sum::<usize>());
+        Vec::with_capacity(ordinary.len() + mixed_in.values().map(|g| g.1.len()).sum::<usize>());
     let mut counts: HashMap<String, usize> = HashMap::new();
     for (dataset, entry) in ordinary {
         mixed.push(entry);
-        if let Some((rate, waiting)) = gold.get_mut(&dataset) {
-            let count = counts.entry(dataset).or_default();
-            *count += 1;
-            if (*count).is_multiple_of(rate.ordinary_per_gold())
+        let count = counts.entry(dataset.clone()).or_default();
+        *count += 1;
+        let count = *count;
+        for attention in [false, true] {
+            if let Some((rate, waiting)) = mixed_in.get_mut(&(dataset.clone(), attention))
+                && count.is_multiple_of(rate.ordinary_per_gold())
                 && let Some(next) = waiting.pop_front()
             {
                 mixed.push(next);
             }
         }
     }
-    for dataset in gold_order {
-        if let Some((_, waiting)) = gold.remove(&dataset) {
+    for key in order {
+        if let Some((_, waiting)) = mixed_in.remove(&key) {
             mixed.extend(waiting);
         }
     }
@@ -276,7 +289,27 @@ mod tests {
             entry: name.to_owned(),
             dataset: dataset.to_owned(),
             gold_rate: gold.map(rate),
+            attention_rate: None,
         }
+    }
+
+    #[test]
+    fn attention_checks_stand_at_their_own_rate_beside_gold_items() {
+        let check = |name: &str, r: i64| QueuedEntry {
+            entry: name.to_owned(),
+            dataset: "d".to_owned(),
+            gold_rate: None,
+            attention_rate: Some(rate(r)),
+        };
+        let queue = vec![
+            check("t1", 2),
+            queued("a", "d", None),
+            queued("g1", "d", Some(2)),
+            queued("b", "d", None),
+            check("t2", 2),
+            check("t3", 2),
+        ];
+        assert_eq!(mix(queue), ["a", "g1", "t1", "b", "t2", "t3"]);
     }
 
     #[test]

@@ -28,9 +28,11 @@
 //!   sampling and QA items in the release layout.
 //! - [`agreement`]: Krippendorff's alpha, bootstrap, ordering encodings, Welch; the paper's
 //!   cross-annotation [`agreement::protocol`] and the agreement [`agreement::report`].
-//! - [`annotation`]: human annotation without I/O: the balanced split, drafts, queue
-//!   standing, telemetry, and human answers scored like model answers.
+//! - [`annotation`]: human annotation without I/O: the balanced split (and the split of a
+//!   handover), drafts, queue standing, telemetry, and human answers scored like model answers.
 //! - [`gold`]: gold items: choosing a dataset's gold set and mixing it into every queue.
+//! - [`attention`]: attention checks: the instruction an item's question carries, the answer
+//!   it expects, and each check judged as passed, failed or pending.
 //! - [`quality`]: each annotator's figures: gold accuracy, agreement with the others, time
 //!   per item, skip and flag rates.
 //! - [`audit`]: the audit log's actors, actions, entries and filters.
@@ -50,6 +52,7 @@
 
 pub mod agreement;
 pub mod annotation;
+pub mod attention;
 pub mod audit;
 pub mod bundle;
 pub mod challenge;
