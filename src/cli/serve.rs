@@ -177,6 +177,14 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         app::demo::load(&hub).await?;
     }
     ensure_admin_token(&hub).await?;
+    // Before the port opens: the first readers find the boards built.
+    let warming = std::time::Instant::now();
+    let boards = app::leaderboard::warm(&hub).await?;
+    tracing::info!(
+        boards,
+        seconds = warming.elapsed().as_secs_f64(),
+        "leaderboards built"
+    );
     let config = WebConfig {
         body_limit: args.body_limit,
         request_timeout: Duration::from_secs(args.request_timeout),
