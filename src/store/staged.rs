@@ -437,11 +437,16 @@ pub async fn sweep_submission(
         .execute(&mut *c)
         .await?
         .rows_affected();
-        sqlx::query("UPDATE verdict_sweeps SET swept_through = $1 WHERE dataset = $2")
-            .bind(submission)
-            .bind(sweep.dataset)
-            .execute(&mut *c)
-            .await?;
+        // Only for this generation: a cut-over committed meanwhile (PostgreSQL reads committed
+        // rows per statement) restarted the sweep, and its progress is not this one's.
+        sqlx::query(
+            "UPDATE verdict_sweeps SET swept_through = $1 WHERE dataset = $2 AND generation = $3",
+        )
+        .bind(submission)
+        .bind(sweep.dataset)
+        .bind(generation)
+        .execute(&mut *c)
+        .await?;
         Ok((deleted, true))
     })
 }
