@@ -365,6 +365,7 @@ async fn a_run_at_concurrency_32_against_a_server_taking_4_is_rarely_refused() {
         latency: Duration::from_millis(20),
         max_in_flight: Some(4),
         tokens_per_image: 10,
+        ..StandInConfig::default()
     })
     .await;
     let hub = Hub::from(pool);

@@ -75,6 +75,9 @@ pub struct StandInConfig {
     /// Prompt tokens reported per image of the request (completion tokens: the reply's
     /// characters).
     pub tokens_per_image: u64,
+    /// When set, every request takes one permit before it is answered (and never gives it
+    /// back): a test lets a run go as far as it wants it, whatever the machine's speed.
+    pub gate: Option<Arc<tokio::sync::Semaphore>>,
 }
 
 struct Shared {
@@ -275,6 +278,9 @@ async fn chat_completions(
         let index = (calls.requests - calls.refused - 1).min(script.len().saturating_sub(1));
         script.get(index).cloned()
     };
+    if let Some(gate) = &config.gate {
+        gate.acquire().await.expect("the gate stays open").forget();
+    }
     tokio::time::sleep(config.latency).await;
     let prompt_tokens = config.tokens_per_image * images as u64;
     let (status, body, finish) = match step {
