@@ -81,12 +81,41 @@ fn run_json(args: &[&str]) -> (bool, Value, String) {
     (out.status.success(), json, stderr)
 }
 
+/// `enact-hub agreement --db db --dataset mini` with `args` besides (see [`run_json`]).
+fn agreement_on_mini(db: &str, args: &[&str]) -> (bool, Value, String) {
+    let mut all = vec!["agreement", "--db", db, "--dataset", "mini"];
+    all.extend_from_slice(args);
+    run_json(&all)
+}
+
 fn close(a: &Value, b: Option<f64>) {
     match (a.as_f64(), b) {
         (Some(a), Some(b)) => assert!((a - b).abs() < 1e-12, "{a} != {b}"),
         (None, None) => {}
         (a, b) => panic!("{a:?} != {b:?}"),
     }
+}
+
+/// The answers of [`stored_answers`] (three coders) as the pure core takes them: the items
+/// `keep` keeps of those answered by two or more, sorted by id.
+fn core_annotations(
+    ids: &[String],
+    answers: &[Vec<Option<Vec<u8>>>],
+    keep: impl Fn(usize) -> bool,
+) -> OrderingAnnotations {
+    let mut items: Vec<AnnotatedOrdering> = ids
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| keep(*i))
+        .map(|(i, id)| AnnotatedOrdering {
+            item_id: id.clone(),
+            answers: answers.iter().map(|row| row[i].clone()).collect(),
+        })
+        .filter(|item| item.answers.iter().flatten().count() >= 2)
+        .collect();
+    items.sort_by(|a, b| a.item_id.cmp(&b.item_id));
+    let names = vec!["coder0".into(), "coder1".into(), "coder2".into()];
+    OrderingAnnotations::new(names, items).expect("valid")
 }
 
 #[tokio::test]
@@ -123,37 +152,23 @@ async fn agreement_on_stored_annotations_matches_the_core() {
     let (db, ids) = stored_answers(&dir, &answers).await;
     let db = db.to_str().expect("utf-8 path");
 
-    // The same data through the pure core: items answered by two or more, sorted by id.
-    let mut items: Vec<AnnotatedOrdering> = ids
-        .iter()
-        .enumerate()
-        .map(|(i, id)| AnnotatedOrdering {
-            item_id: id.clone(),
-            answers: answers.iter().map(|row| row[i].clone()).collect(),
-        })
-        .filter(|item| item.answers.iter().flatten().count() >= 2)
-        .collect();
-    items.sort_by(|a, b| a.item_id.cmp(&b.item_id));
-    assert_eq!(items.len(), 5, "I5 has one answer only");
-    let names = vec!["coder0".into(), "coder1".into(), "coder2".into()];
-    let core = OrderingAnnotations::new(names, items).expect("valid");
+    let core = core_annotations(&ids, &answers, |_| true);
+    assert_eq!(core.items().len(), 5, "I5 has one answer only");
 
     for encoding in OrderingEncoding::ALL {
-        let (ok, json, stderr) = run_json(&[
-            "agreement",
-            "--db",
+        let (ok, json, stderr) = agreement_on_mini(
             db,
-            "--dataset",
-            "mini",
-            "--encoding",
-            encoding.name(),
-            "--bootstrap",
-            "300",
-            "--seed",
-            "9",
-            "--confidence",
-            "0.9",
-        ]);
+            &[
+                "--encoding",
+                encoding.name(),
+                "--bootstrap",
+                "300",
+                "--seed",
+                "9",
+                "--confidence",
+                "0.9",
+            ],
+        );
         assert!(ok, "{stderr}");
         let config = BootstrapConfig {
             replicates: 300,
@@ -188,33 +203,21 @@ async fn agreement_on_stored_annotations_matches_the_core() {
     }
 
     // Without an interval the CI is null; a level the encoding cannot take is refused.
-    let (ok, json, _) = run_json(&[
-        "agreement",
-        "--db",
+    let (ok, json, _) = agreement_on_mini(
         db,
-        "--dataset",
-        "mini",
-        "--encoding",
-        "rank",
-        "--bootstrap",
-        "0",
-        "--level",
-        "interval",
-    ]);
+        &[
+            "--encoding",
+            "rank",
+            "--bootstrap",
+            "0",
+            "--level",
+            "interval",
+        ],
+    );
     assert!(ok);
     assert_eq!(json["level"], "interval");
     assert!(json["ci"].is_null());
-    let (ok, _, stderr) = run_json(&[
-        "agreement",
-        "--db",
-        db,
-        "--dataset",
-        "mini",
-        "--encoding",
-        "answer",
-        "--level",
-        "ordinal",
-    ]);
+    let (ok, _, stderr) = agreement_on_mini(db, &["--encoding", "answer", "--level", "ordinal"]);
     assert!(!ok);
     assert!(
         stderr.contains("only the nominal level applies"),
@@ -760,4 +763,66 @@ async fn admin_json(browser: &mut Browser, path: &str) -> (reqwest::StatusCode, 
     let r = browser.get(path).await;
     let status = r.status();
     (status, r.json().await.expect("json"))
+}
+
+/// Answers on gold items are left out of the agreement report: the coders agree on every
+/// ordinary item (alpha 1) and disagree on the two gold ones, which would pull alpha down.
+#[tokio::test]
+async fn gold_answers_are_left_out_of_the_agreement_report() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let some = |v: &[u8]| Some(v.to_vec());
+    // Items in release order: F3, I3, F4, I4, F5, I5; I3 and I5 are made gold.
+    let answers = [
+        ([1, 2], [1, 2, 3, 4]),
+        ([2, 1], [4, 3, 2, 1]),
+        ([1, 2], [1, 2, 4, 3]),
+    ]
+    .map(|(i3, i5)| {
+        vec![
+            some(&[2, 1]),
+            some(&i3),
+            some(&[3, 2, 1]),
+            some(&[1, 2, 3]),
+            some(&[4, 3, 2, 1]),
+            some(&i5),
+        ]
+    })
+    .to_vec();
+    let gold = [1, 5];
+    let (db, ids) = stored_answers(&dir, &answers).await;
+    let db = db.to_str().expect("utf-8 path");
+    let config = BootstrapConfig {
+        replicates: 100,
+        confidence_level: 0.95,
+        seed: 1,
+    };
+    let alpha = |keep: &dyn Fn(usize) -> bool| {
+        let core = core_annotations(&ids, &answers, keep);
+        let report = ordering_agreement(&core, OrderingEncoding::Answer, &config).expect("core");
+        report.alpha.estimate.alpha.expect("an alpha")
+    };
+    let with_gold = alpha(&|_| true);
+    assert!(
+        with_gold < 0.9,
+        "the gold answers would give alpha {with_gold}"
+    );
+    assert_eq!(alpha(&|i| !gold.contains(&i)), 1.0);
+
+    let list = dir.path().join("gold.txt");
+    std::fs::write(&list, format!("{}\n{}\n", ids[gold[0]], ids[gold[1]])).expect("a list");
+    let out = enact_hub()
+        .args(["gold", "set", "mini", "--rate", "5", "--db", db, "--items"])
+        .arg(&list)
+        .output()
+        .expect("run enact-hub");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (ok, json, stderr) = agreement_on_mini(db, &["--encoding", "answer", "--bootstrap", "0"]);
+    assert!(ok, "{stderr}");
+    close(&json["alpha"], Some(1.0));
+    assert_eq!(json["counts"]["items"], 4, "{json}");
+    assert_eq!(json["counts"]["answers"], 12, "{json}");
 }

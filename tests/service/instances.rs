@@ -90,6 +90,31 @@ impl Instance {
         format!("{}{path}", self.base)
     }
 
+    /// Sends `signal` (as `kill -s` names it: `INT`, `TERM`) to the process.
+    pub(crate) fn signal(&self, signal: &str) {
+        let sent = Command::new("kill")
+            .args(["-s", signal, &self.pid().to_string()])
+            .status()
+            .expect("run kill");
+        assert!(sent.success(), "kill -s {signal} {}", self.pid());
+    }
+
+    /// Waits up to `limit` for the process to end by itself: how it ended.
+    pub(crate) async fn exit_within(&mut self, limit: Duration) -> std::process::ExitStatus {
+        let deadline = Instant::now() + limit;
+        loop {
+            if let Some(status) = self.child.try_wait().expect("poll the server process") {
+                return status;
+            }
+            assert!(
+                Instant::now() < deadline,
+                "the server still runs {limit:?} later; its log: {:#?}",
+                self.log()
+            );
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+    }
+
     /// Stops the process at once, as a crash would (SIGKILL).
     pub(crate) fn kill(&mut self) {
         let _ = self.child.kill();
@@ -425,4 +450,108 @@ async fn two_instances_on_one_database_and_bucket_behave_as_one_server() {
         "a submission without all its verdicts"
     );
     drop(b);
+}
+
+/// The backend of the connection this database's change feed listens on (`LISTEN`), other
+/// than `not`, once there is one (for up to five seconds).
+async fn listening_backend(pool: &Pool, not: Option<i32>) -> i32 {
+    let deadline = Instant::now() + Duration::from_secs(5);
+    loop {
+        let found: Option<i32> = db!(
+            pool,
+            fetch_optional,
+            sqlx::query_scalar(
+                "SELECT pid FROM pg_stat_activity WHERE datname = current_database() \
+                 AND query ILIKE 'LISTEN%' AND pid IS DISTINCT FROM $1"
+            )
+            .bind(not)
+        )
+        .expect("read pg_stat_activity");
+        if let Some(pid) = found {
+            return pid;
+        }
+        assert!(Instant::now() < deadline, "no listening connection");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+}
+
+/// When the connection an instance listens for announcements on drops, announcements may have
+/// been lost meanwhile, so it clears every cache; then it listens again.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_dropped_listening_connection_clears_every_cache_and_listening_resumes() {
+    if postgres_server().is_none() {
+        eprintln!("no PostgreSQL server (ENACT_HUB_TEST_POSTGRES unset): skipping");
+        return;
+    }
+    let (server, records) = spawn_app_with_release().await;
+    let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let item = records[0]["id"].as_str().expect("id");
+    let shown = async |server: &TestServer| {
+        let board = server.get_json("/api/v1/datasets/mini/leaderboard").await.1;
+        let models: Vec<String> = board["rows"]
+            .as_array()
+            .expect("rows")
+            .iter()
+            .filter_map(|r| r["model"].as_str().map(str::to_owned))
+            .collect();
+        let item = server
+            .get_json(&format!("/api/v1/datasets/mini/items/{item}"))
+            .await
+            .1;
+        (
+            models,
+            item["question"].as_str().expect("question").to_owned(),
+        )
+    };
+    let body = answers(&records, &[]);
+    submit_to(&server, "mini", "model=first", &token, body.clone())
+        .await
+        .id();
+    let (models, question) = shown(&server).await;
+    assert_eq!(models, ["first"]);
+    let listener = listening_backend(&server.pool, None).await;
+
+    // Changed without an announcement (as when one is lost) or a new content generation: the
+    // cached board and item stay as they were.
+    db!(
+        server.pool,
+        execute,
+        sqlx::query("UPDATE submissions SET model = 'renamed'")
+    )
+    .expect("rename behind the server's back");
+    db!(
+        server.pool,
+        execute,
+        sqlx::query("UPDATE items SET question = question || ' Edited.' WHERE item_id = $1")
+            .bind(item)
+    )
+    .expect("edit behind the server's back");
+    assert_eq!(shown(&server).await, (models, question.clone()));
+
+    let killed: bool = db!(
+        server.pool,
+        fetch_one,
+        sqlx::query_scalar("SELECT pg_terminate_backend($1)").bind(listener)
+    )
+    .expect("terminate the listening backend");
+    assert!(killed);
+    eventually("both caches are cleared", || async {
+        shown(&server).await == (vec!["renamed".to_owned()], format!("{question} Edited."))
+    })
+    .await;
+
+    // Listening again: what another instance announces reaches this one.
+    listening_backend(&server.pool, Some(listener)).await;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let other = enact_hub::app::Hub::from(server.pool.clone());
+    let other = serve_hub(other, server.pool.clone(), dir, &Default::default()).await;
+    submit_to(&other, "mini", "model=second", &token, body)
+        .await
+        .id();
+    eventually("the other instance's submission is shown", || async {
+        shown(&server).await.0.contains(&"second".to_owned())
+    })
+    .await;
+    other.stop().await;
+    server.stop().await;
 }

@@ -55,6 +55,7 @@ mod run_pages;
 mod runs;
 mod score;
 mod server_runs;
+mod shutdown;
 mod staged;
 #[path = "../support/standin.rs"]
 mod standin;

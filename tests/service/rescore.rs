@@ -328,14 +328,7 @@ async fn rescoring_rewrites_stored_results_the_current_metric_disagrees_with_and
 
     // As an older metric that judged differently would have left them: the stored scores, every
     // item's verdict and one human verdict are not what the current metric computes.
-    db!(
-        server.pool,
-        execute,
-        sqlx::query("UPDATE submissions SET metric_version = 1, scores = $1 WHERE id = $2")
-            .bind(tampered(&scores_before))
-            .bind(id)
-    )
-    .expect("tamper the scores");
+    scored_differently_before(&server.pool, id, &scores_before).await;
     db!(
         server.pool,
         execute,
@@ -773,4 +766,100 @@ async fn the_command_line_rescores_in_the_foreground() {
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("nope"), "{stderr}");
+}
+
+/// Submission `id` as an older metric that scored it differently would have left it: its
+/// stored scores tampered (see [`tampered`]) and its version 1.
+async fn scored_differently_before(pool: &Pool, id: i64, scores: &str) {
+    db!(
+        pool,
+        execute,
+        sqlx::query("UPDATE submissions SET metric_version = 1, scores = $1 WHERE id = $2")
+            .bind(tampered(scores))
+            .bind(id)
+    )
+    .expect("tamper the scores");
+}
+
+/// One submission the current metric scores differently and one it cannot rescore (a stored
+/// answer cut short, so its line is refused): both forms of a rescore count one changed and
+/// one failed, naming the failed one; the command line exits non-zero.
+#[tokio::test]
+async fn a_rescore_counts_the_submissions_it_changed_and_failed_and_the_command_fails() {
+    let (server, records) = spawn_app_with_release().await;
+    let (_, token) = api_token(&server.pool, "team", Role::Submitter, None, None).await;
+    let changed = submit_to(&server, "mini", "model=a", &token, answers(&records, &[1])).await;
+    let failing = submit_to(&server, "mini", "model=b", &token, answers(&records, &[])).await;
+    let (changed, failing) = (changed.id(), failing.id());
+    let scores = scores_text(&server.pool, changed).await;
+    scored_differently_before(&server.pool, changed, &scores).await;
+    age(&server.pool, failing).await;
+    db!(
+        server.pool,
+        execute,
+        sqlx::query(
+            "UPDATE submission_items SET raw_answer = '[2, 1' WHERE submission = $1 \
+             AND item = (SELECT min(item) FROM submission_items WHERE submission = $1)"
+        )
+        .bind(failing)
+    )
+    .expect("cut a stored answer short");
+    let counted = |summary: &Value| {
+        let failures = summary["failures"].as_array().expect("failures");
+        assert_eq!(failures.len(), 1, "{summary}");
+        let failure = failures[0].as_str().expect("a reason");
+        assert!(
+            failure.contains(&format!("submission {failing}:")) && failure.contains("refused"),
+            "{failure}"
+        );
+        assert_eq!(
+            (&summary["submissions"], &summary["submissions_changed"]),
+            (&Value::from(1), &Value::from(1)),
+            "{summary}"
+        );
+    };
+
+    let out = enact_hub()
+        .args(["rescore", "--dataset", "mini", "--json", "--db"])
+        .arg(server.db_path())
+        .output()
+        .expect("run");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "not rescored: dataset 'mini': submission {failing}:"
+        )),
+        "{stderr}"
+    );
+    counted(&serde_json::from_slice(&out.stdout).expect("a JSON summary"));
+    assert_eq!(scores_text(&server.pool, changed).await, scores);
+
+    // The job form, over the same two: the failed one is still below the current version.
+    scored_differently_before(&server.pool, changed, &scores).await;
+    let job = FakeJob {
+        payload: RescorePayload::new(Some("mini"), &operator()).to_json(),
+        stop: false,
+        progress: Mutex::default(),
+    };
+    rescore::work_on(&Hub::from(server.pool.clone()), &job)
+        .await
+        .expect("worked");
+    counted(&job.progress.lock().expect("lock").pop().expect("a summary"));
+    assert_eq!(scores_text(&server.pool, changed).await, scores);
+    let details = db!(
+        server.pool,
+        fetch_all,
+        sqlx::query_scalar::<_, String>(
+            "SELECT detail FROM audit_log WHERE action = 'metric.rescore' ORDER BY id"
+        )
+    )
+    .expect("audit");
+    assert_eq!(details.len(), 2);
+    for detail in details {
+        assert!(
+            detail.contains("1 submissions (1 changed), 0 human answers (0 changed), 1 failed"),
+            "{detail}"
+        );
+    }
 }

@@ -393,6 +393,87 @@ async fn idempotency_keys_return_the_first_submission_and_refuse_another_body() 
     server.stop().await;
 }
 
+/// Rounds of each race below: one lost race in ten is likely to show.
+const RACES: usize = 10;
+
+/// The statuses of two replies, lowest first.
+fn both(a: &reqwest::StatusCode, b: &reqwest::StatusCode) -> [u16; 2] {
+    let mut statuses = [a.as_u16(), b.as_u16()];
+    statuses.sort_unstable();
+    statuses
+}
+
+/// Twin requests (one body, one Idempotency-Key) sent at once: one is stored; one request
+/// answers 201, the other 200 with the same submission.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn twin_requests_racing_with_one_idempotency_key_store_one_submission() {
+    let (server, records) = spawn_app_with_release().await;
+    // Each twin that loses its race has taken an attempt too: a quota that leaves room.
+    let token = make_token(&server.pool, "alice", Role::Submitter, Some(1000)).await;
+    let body = answers(&records, &[]);
+    for round in 0..RACES {
+        let key = format!("race-{round}");
+        let send = || {
+            post(
+                &server,
+                "mini",
+                "model=m",
+                Some(&token),
+                body.clone(),
+                Some(&key),
+            )
+        };
+        let (a, b) = tokio::join!(send(), send());
+        assert_eq!(
+            both(&a.0, &b.0),
+            [200, 201],
+            "round {round}: {} {}",
+            a.2,
+            b.2
+        );
+        assert_eq!((&a.2["id"], &a.2["scores"]), (&b.2["id"], &b.2["scores"]));
+        let stored = count(
+            &server.pool,
+            &format!("SELECT count(*) FROM submissions WHERE idempotency_key = '{key}'"),
+        )
+        .await;
+        assert_eq!(stored, 1, "round {round}");
+    }
+    assert_eq!(stored_counts(&server.pool).await.0, RACES as i64);
+    server.stop().await;
+}
+
+/// Two submissions sent at once by a token with one submission left: one is stored (201), the
+/// other refused with the quota's 429.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn two_submissions_racing_for_the_last_quota_slot_store_one() {
+    let (server, records) = spawn_app_with_release().await;
+    let body = answers(&records, &[]);
+    for round in 0..RACES {
+        let name = format!("racer-{round}");
+        let (id, token) = api_token(&server.pool, &name, Role::Submitter, None, Some(1)).await;
+        let send = |model| post(&server, "mini", model, Some(&token), body.clone(), None);
+        let (a, b) = tokio::join!(send("model=a"), send("model=b"));
+        assert_eq!(
+            both(&a.0, &b.0),
+            [201, 429],
+            "round {round}: {} {}",
+            a.2,
+            b.2
+        );
+        let refusal = if a.0 == 429 { &a.2 } else { &b.2 };
+        let message = refusal["error"].as_str().expect("a message");
+        assert!(message.contains("total quota is used up"), "{message}");
+        let stored = count(
+            &server.pool,
+            &format!("SELECT count(*) FROM submissions WHERE token = {id}"),
+        )
+        .await;
+        assert_eq!(stored, 1, "round {round}");
+    }
+    server.stop().await;
+}
+
 #[tokio::test]
 async fn a_body_over_the_limit_is_refused_with_413() {
     let config = WebConfig {
