@@ -238,10 +238,10 @@ async fn by_id(hub: &Hub, id: i64) -> Result<Option<SubmissionRow>, AppError> {
 }
 
 /// Submits a model's answers to `dataset`: counts the attempt against the caller's quotas
-/// (given back when the server was too busy to take it on), reads the body (only then, so an
-/// attempt over quota never uploads), scores it against every item and stores the submission
-/// with every verdict in one transaction. The caller's `submit` scope was checked before the
-/// request reached this (the web's route table).
+/// (given back when the server was too busy to take it on or a twin request stored it), reads
+/// the body (only then, so an attempt over quota never uploads), scores it against every item
+/// and stores the submission with every verdict in one transaction. The caller's `submit`
+/// scope was checked before the request reached this (the web's route table).
 ///
 /// With an `idempotency_key` already used by this token, the first submission is returned
 /// when the body is the same, and 409 when it differs.
@@ -280,9 +280,12 @@ where
         body,
     )
     .await;
-    if let (Err(AppError::Unavailable(_)), Some(attempt)) = (&stored, attempt) {
-        // The server was too busy to take it on (a full scoring queue, a write lock held too
-        // long): that is not the caller's attempt to pay for.
+    // The server was too busy to take it on (a full scoring queue, a write lock held too
+    // long), or a twin request with the same key stored it first: neither is the caller's
+    // attempt to pay for (a repeat sent after the first one ended costs none).
+    if let (Err(AppError::Unavailable(_)) | Ok(Submitted::Repeated(_)), Some(attempt)) =
+        (&stored, attempt)
+    {
         give_back_attempt(hub, attempt).await;
     }
     stored

@@ -408,8 +408,10 @@ fn both(a: &reqwest::StatusCode, b: &reqwest::StatusCode) -> [u16; 2] {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn twin_requests_racing_with_one_idempotency_key_store_one_submission() {
     let (server, records) = spawn_app_with_release().await;
-    // Each twin that loses its race has taken an attempt too: a quota that leaves room.
-    let token = make_token(&server.pool, "alice", Role::Submitter, Some(1000)).await;
+    // A twin that loses its race gives its attempt back: one attempt a round, however the
+    // two interleave.
+    let (token_id, token) =
+        api_token(&server.pool, "alice", Role::Submitter, Some(1000), None).await;
     let body = answers(&records, &[]);
     for round in 0..RACES {
         let key = format!("race-{round}");
@@ -440,6 +442,12 @@ async fn twin_requests_racing_with_one_idempotency_key_store_one_submission() {
         assert_eq!(stored, 1, "round {round}");
     }
     assert_eq!(stored_counts(&server.pool).await.0, RACES as i64);
+    let attempts = count(
+        &server.pool,
+        &format!("SELECT count(*) FROM submission_attempts WHERE token = {token_id}"),
+    )
+    .await;
+    assert_eq!(attempts, RACES as i64, "a repeat is not paid for");
     server.stop().await;
 }
 
