@@ -224,9 +224,10 @@ pub async fn follow_feed(
 
 /// Applies the changes other instances announce, until the pool closes (PostgreSQL only; on
 /// SQLite, [`follow_feed`]). What this process announced itself (`origin`) was applied when
-/// it committed and is skipped: applied again on arrival, it would drop caches filled since. Changes are also sent on `changes` for caches outside the
-/// app layer (the web's sessions). When the connection drops, notifications may have been
-/// missed meanwhile: every cache is cleared.
+/// it committed and is skipped: applied again on arrival, it would drop caches filled since.
+/// Changes are also sent on `changes` for caches outside the app layer (the web's sessions).
+/// When the connection drops, notifications may have been missed meanwhile: every cache is
+/// cleared once listening again.
 pub async fn listen(
     pool: Pool,
     caches: Caches,
@@ -243,18 +244,8 @@ pub async fn listen(
         );
         apply(&caches, &changes, Change::Everything);
     };
-    let mut listener = loop {
-        match sqlx::postgres::PgListener::connect_with(pg).await {
-            Ok(mut listener) => match listener.listen(CHANNEL).await {
-                Ok(()) => break listener,
-                Err(e) => tracing::warn!(error = %e, "cannot listen for other instances' changes"),
-            },
-            Err(e) => tracing::warn!(error = %e, "cannot listen for other instances' changes"),
-        }
-        if pool.is_closed() {
-            return;
-        }
-        tokio::time::sleep(POLL_INTERVAL).await;
+    let Some(mut listener) = listening(&pool, pg).await else {
+        return;
     };
     loop {
         match listener.try_recv().await {
@@ -265,15 +256,41 @@ pub async fn listen(
                     None => tracing::warn!(payload, "unknown change announced on {CHANNEL}"),
                 },
             },
-            // The connection was lost and is back.
+            // The connection was lost and is back (sqlx listens again before it says so).
             Ok(None) => clear_all("the listening connection was re-established"),
+            // The connection was lost and could not be made again at once. The caches are
+            // cleared once listening again, not before: a change committed while nobody
+            // listened would otherwise stay unseen in a cache refilled meanwhile.
             Err(e) => {
                 if pool.is_closed() {
                     return;
                 }
-                clear_all(&e.to_string());
+                tracing::warn!(error = %e, "lost the connection listening for other instances' changes");
                 tokio::time::sleep(POLL_INTERVAL).await;
+                let Some(again) = listening(&pool, pg).await else {
+                    return;
+                };
+                listener = again;
+                clear_all(&format!("listening again after: {e}"));
             }
         }
+    }
+}
+
+/// A connection listening on [`CHANNEL`], tried every [`POLL_INTERVAL`] until it is made;
+/// `None` once the pool is closed.
+async fn listening(pool: &Pool, pg: &sqlx::PgPool) -> Option<sqlx::postgres::PgListener> {
+    loop {
+        match sqlx::postgres::PgListener::connect_with(pg).await {
+            Ok(mut listener) => match listener.listen(CHANNEL).await {
+                Ok(()) => return Some(listener),
+                Err(e) => tracing::warn!(error = %e, "cannot listen for other instances' changes"),
+            },
+            Err(e) => tracing::warn!(error = %e, "cannot listen for other instances' changes"),
+        }
+        if pool.is_closed() {
+            return None;
+        }
+        tokio::time::sleep(POLL_INTERVAL).await;
     }
 }
