@@ -100,6 +100,16 @@ cleanup() {
   as_pg "'$PG_BIN/pg_ctl' -D '$PGDATA' -m immediate stop" >/dev/null 2>&1 || true
 }
 trap cleanup EXIT
+# A PostgreSQL pass that fails says whether the server still runs and what it logged last: a
+# server gone mid-run fails every later test with "Connection refused" and nothing else.
+postgres_failed() {
+  echo "== a PostgreSQL pass failed; the server's status, disk and log:" >&2
+  as_pg "'$PG_BIN/pg_ctl' -D '$PGDATA' status" >&2 || true
+  df -h "$PGDATA" >&2 || true
+  free -m >&2 || true
+  tail -n 80 "$PGDATA/server.log" >&2 || true
+  exit 1
+}
 echo "== PostgreSQL $("$PG_BIN/postgres" --version | awk '{print $3}') on 127.0.0.1:$PG_PORT"
 
 echo "== cargo fmt --check"
@@ -152,11 +162,13 @@ cargo test --locked --test service -- --ignored "$LIVE"
 # One suite at a time: run beside the SQLite one, the PostgreSQL suite took 3.4 times as long
 # (636 s against 186 s) and slowed the SQLite tests as much, on CI's two cores.
 echo "== the service suite again, on PostgreSQL"
-ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test service
-ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test service -- --ignored "$LIVE"
+ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test service || postgres_failed
+ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test service -- --ignored "$LIVE" ||
+  postgres_failed
 echo "== the server-side jobs' kill trials again, on PostgreSQL"
 ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test crash -- \
-  a_model_run_killed_at_random a_rescore_killed_at_random an_import_job_killed_at_random
+  a_model_run_killed_at_random a_rescore_killed_at_random an_import_job_killed_at_random ||
+  postgres_failed
 
 echo "== the Python package, the wheel and cargo install (scripts/test-python.sh)"
 ./scripts/test-python.sh
