@@ -6,16 +6,14 @@
 use std::collections::{BTreeSet, HashMap};
 use std::fs;
 
-use enact_hub::core::dataset::{QaItem, parse_release_line};
-use enact_hub::core::error_analysis::{
-    ErrorFigures, StructuralClass, analyse_strict, answer_steps,
-};
-use enact_hub::core::scoring::ScoringTarget;
-use enact_hub::core::semantics;
-use enact_hub::core::verifier::{Permutation, python_text_lines, score_strict_predictions};
+use enact_core::dataset::{QaItem, parse_release_line};
+use enact_core::error_analysis::{ErrorFigures, StructuralClass, analyse_strict, answer_steps};
+use enact_core::scoring::ScoringTarget;
+use enact_core::semantics;
+use enact_core::verifier::{Permutation, python_text_lines, score_strict_predictions};
 use serde_json::Value;
 
-#[path = "support/fixtures.rs"]
+#[path = "../../../tests/support/fixtures.rs"]
 mod fixtures;
 
 fn targets(dir: &std::path::Path) -> Vec<ScoringTarget> {
@@ -79,7 +77,7 @@ fn step_sets_are_the_ones_enact_writes() {
             let input = record["input_signatures"].as_array().unwrap();
             assert_eq!(steps.len(), correct.len(), "{}", target.id);
             for (k, step) in steps.iter().enumerate() {
-                let ours = |cs: &[enact_hub::core::error_analysis::Component]| {
+                let ours = |cs: &[enact_core::error_analysis::Component]| {
                     cs.iter().map(|c| c.to_string()).collect::<BTreeSet<_>>()
                 };
                 assert_eq!(
@@ -97,7 +95,7 @@ fn step_sets_are_the_ones_enact_writes() {
                 );
                 compared_steps += 1;
             }
-            if target.direction == enact_hub::core::verifier::Direction::Forward
+            if target.direction == enact_core::verifier::Direction::Forward
                 && answer.labels() != target.ground_truth.labels()
             {
                 compared_forward_off_chain += 1;

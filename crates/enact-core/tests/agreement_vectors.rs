@@ -5,14 +5,14 @@
 
 use std::collections::HashMap;
 
-use enact_hub::core::agreement::{
+use enact_core::agreement::{
     AlphaUndefined, AnnotatedOrdering, BootstrapConfig, MeasurementLevel, OrderingAnnotations,
     OrderingEncoding, PreparedAlpha, ReliabilityData, krippendorff_alpha, pairwise_alphas,
     parse_reliability_json,
 };
 use serde_json::Value;
 
-#[path = "support/fixtures.rs"]
+#[path = "../../../tests/support/fixtures.rs"]
 mod fixtures;
 
 fn vectors() -> Option<Vec<Value>> {

@@ -8,13 +8,13 @@ use std::collections::{BTreeSet, HashMap, HashSet};
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use enact_hub::core::verifier::{
+use enact_core::verifier::{
     EnactEvaluation, EnactRunError, EnactSignatureSource, ItemSignatures, View, VisibleCoverage,
     enact_model_name, python_text_lines, score_enact_predictions,
 };
 use serde_json::Value;
 
-#[path = "support/fixtures.rs"]
+#[path = "../../../tests/support/fixtures.rs"]
 mod fixtures;
 
 type PairSets = Result<(BTreeSet<String>, BTreeSet<String>), String>;

@@ -5,7 +5,7 @@
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;
 
-use enact_hub::core::scene_graph::{
+use enact_core::scene_graph::{
     FrameSelection, SceneGraph, SceneGraphTimeline, TransientFilter, View, diff_signatures,
     pair_signatures, parse_action, render_diff, transition_signatures, visible_diff,
 };
@@ -13,7 +13,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde_json::Value;
 
-#[path = "support/fixtures.rs"]
+#[path = "../../../tests/support/fixtures.rs"]
 mod fixtures;
 
 macro_rules! parity_or_skip {
