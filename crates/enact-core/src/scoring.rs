@@ -401,3 +401,286 @@ pub fn targets_from_stored(rows: Vec<ScoringItem>) -> Result<Vec<ScoringTarget>,
     }
     Ok(targets)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::verifier::{View, score_strict_predictions};
+
+    fn frames(n: usize) -> Vec<String> {
+        (0..n).map(|i| format!("f{i}")).collect()
+    }
+
+    /// A table of `n` key frames whose every pair changes `change`.
+    fn table(n: usize, change: &str) -> ItemSignatures {
+        ItemSignatures::build(&frames(n), VisibleCoverage::Chronological, |_, _, _| {
+            Ok(BTreeSet::from([change.to_owned()]))
+        })
+    }
+
+    fn target(
+        id: &str,
+        direction: Direction,
+        truth: &[u8],
+        source: Option<SignatureSource>,
+    ) -> ScoringTarget {
+        let step_length = StepLength::new(truth.len() + 1).expect("3 to 10 states");
+        ScoringTarget {
+            id: id.to_owned(),
+            item_type: format!("{direction}_world_modeling"),
+            task_name: "task".to_owned(),
+            direction,
+            step_length,
+            ground_truth: Permutation::new(truth.to_vec()).expect("a permutation"),
+            semantics: source.map(|source| ItemSemantics {
+                source,
+                signatures: table(truth.len() + 1, "open(door)"),
+            }),
+        }
+    }
+
+    #[test]
+    fn stored_signatures_lend_a_stored_table_and_make_any_other_one_of_errors() {
+        let stored = StoredSignatures::new([("task".to_owned(), frames(3), table(3, "a"))]);
+        assert!(stored.has_task("task"));
+        assert!(!stored.has_task("other"));
+        let found = stored.item_signatures("task", &frames(3), VisibleCoverage::Chronological);
+        assert!(matches!(found, Cow::Borrowed(_)));
+        assert_eq!(
+            found.signature_set(View::Visible, 0, 1),
+            Some(Ok(vec!["a"]))
+        );
+        // All pairs, another task, other key frames: not what was stored.
+        for (task, ids, coverage) in [
+            ("task", frames(3), VisibleCoverage::AllPairs),
+            ("other", frames(3), VisibleCoverage::Chronological),
+            ("task", frames(4), VisibleCoverage::Chronological),
+        ] {
+            let made = stored.item_signatures(task, &ids, coverage);
+            assert!(matches!(made, Cow::Owned(_)), "{task} {ids:?} {coverage:?}");
+            assert_eq!(made.key_frame_ids(), &ids[..]);
+            assert_eq!(made.visible_coverage(), coverage);
+            assert_eq!(
+                made.signature_set(View::Full, 0, 1),
+                Some(Err("these key frames are not a stored item of the dataset"))
+            );
+        }
+    }
+
+    #[test]
+    fn a_task_without_a_scene_graph_is_left_out_and_its_pairs_raise() {
+        let replayed = tempfile::tempdir().expect("tempdir");
+        let lines = [
+            r#"{"task_name": "t", "key_frame_ids": [1, "2", null]}"#,
+            "not json",
+            r#"{"key_frame_ids": [1, 2]}"#,
+            "[1, 2]",
+        ];
+        let signatures = SceneGraphSignatures::for_predictions(replayed.path(), lines)
+            .expect("a missing scene graph is no error");
+        assert!(!signatures.has_task("t"));
+        let made = signatures.item_signatures("t", &frames(3), VisibleCoverage::Chronological);
+        assert_eq!(
+            made.signature_set(View::Full, 0, 1),
+            Some(Err("no scene graph for task t"))
+        );
+        // A scene graph that is there but unreadable is an error, not a skip.
+        let task = replayed.path().join("t");
+        std::fs::create_dir(&task).expect("task folder");
+        std::fs::write(task.join("scene_graph_0.json"), "{ not json").expect("write");
+        assert!(SceneGraphSignatures::for_predictions(replayed.path(), lines).is_err());
+    }
+
+    #[test]
+    fn semantic_coverage_counts_items_by_source_and_says_so() {
+        let targets = [
+            target(
+                "a",
+                Direction::Forward,
+                &[2, 1],
+                Some(SignatureSource::SceneGraph),
+            ),
+            target(
+                "b",
+                Direction::Inverse,
+                &[1, 2],
+                Some(SignatureSource::ActionText),
+            ),
+            target("c", Direction::Inverse, &[1, 2], None),
+            target("d", Direction::Forward, &[1, 3, 2], None),
+        ];
+        let coverage = SemanticCoverage::of(&targets);
+        assert_eq!(
+            coverage,
+            SemanticCoverage {
+                scene_graph: 1,
+                action_text: 1,
+                exact_only: 2
+            }
+        );
+        assert_eq!(
+            coverage.describe(),
+            "semantic matching: 1 items from scene graphs, 1 from action text (lower bound), \
+             2 exact-only"
+        );
+    }
+
+    fn scored(targets: &[ScoringTarget], lines: &[&str]) -> StrictScoring {
+        let items: Vec<StrictItem<'_>> = targets.iter().map(ScoringTarget::strict_item).collect();
+        score_strict_predictions(&items, lines.iter().enumerate().map(|(i, l)| (i + 1, *l)))
+            .expect("a valid dataset")
+    }
+
+    #[test]
+    fn the_performance_table_has_a_row_per_direction_and_a_cell_per_step_length() {
+        let targets = [
+            target("a", Direction::Forward, &[2, 1], None),
+            target("b", Direction::Inverse, &[1, 3, 2], None),
+            target(
+                "c",
+                Direction::Inverse,
+                &[1, 2],
+                Some(SignatureSource::SceneGraph),
+            ),
+        ];
+        let scoring = scored(
+            &targets,
+            &[
+                r#"{"id": "a", "answer": [2, 1]}"#,
+                r#"{"id": "b", "answer": [1, 2, 3]}"#,
+                r#"{"id": "c", "answer": [2, 1]}"#,
+            ],
+        );
+        let table = performance_table(&scoring.report);
+        let rows: Vec<&str> = table.lines().collect();
+        assert_eq!(rows.len(), 4, "{table}");
+        let cells = |row: &str| {
+            row.split_whitespace()
+                .map(str::to_owned)
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(cells(rows[0])[..4], ["count", "TA", "PA", "L=3"]);
+        // Forward: one item of 3 states, right. Exact-only items have no partial credit.
+        let forward = cells(rows[2]);
+        assert_eq!(
+            forward[..5],
+            ["forward", "1", "100.00", "100.00", "100.00/100.00"]
+        );
+        assert_eq!(forward[5], "-/-");
+        // Inverse: of 4 states, wrong and exact-only (n/a); of 3 states, a semantic match
+        // (every transition changes the same thing).
+        let inverse = cells(rows[3]);
+        assert_eq!(inverse[..3], ["inverse", "2", "50.00"]);
+        assert_eq!(inverse[4], "100.00/100.00");
+        assert_eq!(inverse[5], "0.00/n/a");
+        assert_eq!(cells(rows[1])[..3], ["overall", "3", "66.67"]);
+        assert!(!table.contains("no item was scored"));
+
+        let nothing = performance_table(&scored(&[], &[]).report);
+        assert_eq!(nothing.lines().count(), 2, "{nothing}");
+        assert!(nothing.ends_with("(no item was scored)\n"));
+    }
+
+    #[test]
+    fn detailed_lines_say_how_each_item_was_scored_and_why_not() {
+        let targets = [
+            target("a", Direction::Forward, &[2, 1], None),
+            target("b", Direction::Inverse, &[1, 2], None),
+            target("c", Direction::Inverse, &[2, 1], None),
+        ];
+        let scoring = scored(
+            &targets,
+            &[
+                r#"{"id": "a", "answer": [2, 1]}"#,
+                r#"{"id": "b", "answer": "first"}"#,
+            ],
+        );
+        let text = strict_detailed_jsonl(&targets, &scoring);
+        let lines: Vec<Value> = text
+            .lines()
+            .map(|l| serde_json::from_str(l).expect("a JSON line"))
+            .collect();
+        assert_eq!(lines.len(), 3);
+        let [a, b, c] = &lines[..] else {
+            unreachable!()
+        };
+        assert_eq!(a["id"], "a");
+        assert_eq!(a["task_name"], "task");
+        assert_eq!(a["type"], "forward_world_modeling");
+        assert_eq!(a["outcome"], "scored");
+        assert_eq!(a["line"], 1);
+        assert_eq!(a["ground_truth"], serde_json::json!([2, 1]));
+        assert_eq!(a["model_answer"], serde_json::json!([2, 1]));
+        assert_eq!(a["reason"], Value::Null);
+        assert_eq!(a["eval_metrics"]["exact_match"], true);
+        assert_eq!(a["eval_metrics"]["task_accuracy"], true);
+        assert_eq!(a["eval_metrics"]["pairwise_accuracy"], 1.0);
+
+        assert_eq!(b["outcome"], "unparseable");
+        assert_eq!(b["line"], 2);
+        assert_eq!(b["model_answer"], Value::Null);
+        assert!(b["reason"].as_str().is_some_and(|r| !r.is_empty()), "{b}");
+        for failed in [b, c] {
+            assert_eq!(
+                failed["eval_metrics"],
+                serde_json::json!({"exact_match": false, "semantic_match": false,
+                                   "task_accuracy": false, "pairwise_accuracy": 0.0})
+            );
+        }
+        assert_eq!(c["outcome"], "missing");
+        assert_eq!(c["line"], Value::Null);
+        assert_eq!(c["ground_truth"], serde_json::json!([2, 1]));
+    }
+
+    fn stored_row(semantics: Option<(&str, String)>, truth: Vec<u8>) -> ScoringItem {
+        ScoringItem {
+            row_id: 7,
+            item_id: "i1".to_owned(),
+            item_type: "inverse_world_modeling".to_owned(),
+            direction: Direction::Inverse,
+            step_length: StepLength::new(3).expect("3 states"),
+            task_name: "task".to_owned(),
+            key_frame_ids: frames(3),
+            gt_answer: truth,
+            semantics: semantics.map(|(source, json)| (source.to_owned(), json)),
+        }
+    }
+
+    #[test]
+    fn stored_items_become_targets_and_a_bad_one_is_named() {
+        let json = serde_json::to_string(&table(3, "a")).expect("serialise");
+        let targets = targets_from_stored(vec![
+            stored_row(Some(("scene_graph", json.clone())), vec![2, 1]),
+            stored_row(None, vec![1, 2]),
+        ])
+        .expect("valid rows");
+        assert_eq!(targets.len(), 2);
+        assert_eq!(targets[0].id, "i1");
+        assert_eq!(targets[0].ground_truth.labels(), &[2, 1]);
+        let semantics = targets[0].semantics.as_ref().expect("signatures");
+        assert_eq!(semantics.source, SignatureSource::SceneGraph);
+        assert_eq!(semantics.signatures, table(3, "a"));
+        assert!(targets[1].semantics.is_none());
+
+        let unknown = targets_from_stored(vec![stored_row(Some(("graph", json)), vec![2, 1])]);
+        assert_eq!(
+            unknown.err().as_deref(),
+            Some("item i1: unknown signature source \"graph\"")
+        );
+        let unreadable = targets_from_stored(vec![stored_row(
+            Some(("scene_graph", "{".to_owned())),
+            vec![2, 1],
+        )])
+        .expect_err("refused");
+        assert!(
+            unreadable.starts_with("item i1: stored signatures are unreadable: "),
+            "{unreadable}"
+        );
+        let not_a_permutation =
+            targets_from_stored(vec![stored_row(None, vec![2, 2])]).expect_err("refused");
+        assert!(
+            not_a_permutation.starts_with("item i1: gt_answer: "),
+            "{not_a_permutation}"
+        );
+    }
+}

@@ -221,6 +221,19 @@ pub(crate) mod tests {
                 n: 0
             })
         );
+        // The second sample is checked on its own: one value is too few, two are enough.
+        let single_b = welch_t_test(&[1.0, 2.0, 3.0], &[4.0]).unwrap();
+        assert_eq!(
+            single_b.reason,
+            Some(WelchUndefined::TooFewValues {
+                sample: Sample::B,
+                n: 1
+            })
+        );
+        assert_eq!((single_b.t, single_b.p), (None, None));
+        let pair_b = welch_t_test(&[1.0, 2.0, 3.0], &[4.0, 6.0]).unwrap();
+        assert_eq!(pair_b.reason, None);
+        assert!(pair_b.p.is_some_and(|p| p > 0.0 && p < 1.0), "{pair_b:?}");
         let flat = welch_t_test(&[1.0, 1.0], &[0.5, 0.5, 0.5]).unwrap();
         assert_eq!(flat.reason, Some(WelchUndefined::ZeroVariance));
         assert_eq!((flat.t, flat.p, flat.se), (None, None, None));

@@ -463,3 +463,178 @@ pub fn analyse<'a>(answers: impl IntoIterator<Item = AnsweredItem<'a>>) -> Error
         examples,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeSet;
+
+    use super::*;
+    use crate::verifier::{ItemSignatures, Permutation, StepLength, View, VisibleCoverage};
+
+    const INSIDE: &str = "edge_add_the apple_the fridge_Inside";
+    const OPEN: &str = "node_add_the fridge_Open";
+
+    /// An inverse item of three states whose transitions change `first` then `second`, each
+    /// transition's full change being both.
+    fn table(first: &[&str], second: &[&str]) -> ItemSignatures {
+        let ids: Vec<String> = (0..3).map(|i| format!("f{i}")).collect();
+        let both: BTreeSet<String> = first
+            .iter()
+            .chain(second)
+            .map(|s| (*s).to_owned())
+            .collect();
+        ItemSignatures::build(&ids, VisibleCoverage::Chronological, |from, to, view| {
+            Ok(match (view, from, to) {
+                (View::Visible, "f0", "f1") => first.iter().map(|s| (*s).to_owned()).collect(),
+                (View::Visible, "f1", "f2") => second.iter().map(|s| (*s).to_owned()).collect(),
+                _ => both.clone(),
+            })
+        })
+    }
+
+    fn item<'a>(id: &'a str, truth: &'a Permutation, table: &'a ItemSignatures) -> StrictItem<'a> {
+        StrictItem {
+            id,
+            direction: Direction::Inverse,
+            step_length: StepLength::new(3).expect("3 states"),
+            ground_truth: truth,
+            signatures: Some(table),
+        }
+    }
+
+    #[test]
+    fn components_errors_and_accepted_but_incomplete_answers_are_counted() {
+        let truth = Permutation::new(vec![1, 2]).expect("a permutation");
+        let swapped = Permutation::new(vec![2, 1]).expect("a permutation");
+        // The first transition changes more than the second: the swapped answer's first step
+        // names a strict subset of what happened, its second step one change too many.
+        let nested = table(&[INSIDE, OPEN], &[OPEN]);
+        let apart = table(&[INSIDE], &[OPEN]);
+        let answers = [
+            // Right: two steps, every component matched.
+            (
+                item("right", &truth, &apart),
+                Reading::Answer {
+                    answer: &truth,
+                    task_accuracy: true,
+                },
+            ),
+            // Accepted (each chosen change is within the full change) but incomplete.
+            (
+                item("nested", &truth, &nested),
+                Reading::Answer {
+                    answer: &swapped,
+                    task_accuracy: true,
+                },
+            ),
+            (item("short", &truth, &apart), Reading::WrongLength),
+            (item("garbled", &truth, &apart), Reading::Unreadable),
+            (item("silent", &truth, &apart), Reading::Missing),
+        ];
+        let analysis = analyse(answers.iter().map(|(item, reading)| AnsweredItem {
+            item: *item,
+            reading: *reading,
+        }));
+        let figures = &analysis.overall;
+        assert_eq!(figures.analysed_answers, 2);
+        assert_eq!(figures.analysed_steps, 4);
+        assert_eq!(
+            (
+                figures.excluded_unequal_length,
+                figures.excluded_unreadable,
+                figures.excluded_missing,
+                figures.excluded_without_signatures
+            ),
+            (1, 1, 1, 0)
+        );
+        // Right: 1 + 1 matched. Nested, swapped: step 1 predicts {open} of {inside, open}
+        // (1 matched, 1 missing); step 2 predicts {inside, open} of {open} (1 matched, 1 extra).
+        assert_eq!(
+            figures.components,
+            ComponentCounts {
+                truth: 2 + 3,
+                predicted: 2 + 3,
+                matched: 2 + 2
+            }
+        );
+        assert_eq!(figures.structural.omission, 1);
+        assert_eq!(figures.structural.hallucination, 1);
+        assert_eq!(figures.errors, 2);
+        assert_eq!(
+            figures
+                .semantic
+                .get(SemanticCategory::SpatialRelations)
+                .total,
+            2,
+            "{:?}",
+            figures.semantic
+        );
+        let incomplete = &figures.accepted_incomplete;
+        assert_eq!(
+            (incomplete.accepted_answers, incomplete.incomplete_answers),
+            (2, 1)
+        );
+        assert_eq!(incomplete.data_level, Some(0.5));
+        assert_eq!(
+            (incomplete.accepted_steps, incomplete.incomplete_steps),
+            (4, 1)
+        );
+        assert_eq!(incomplete.pair_level, Some(0.25));
+        // Every answer here is inverse.
+        assert_eq!(analysis.direction(Direction::Inverse), figures);
+        assert_eq!(analysis.direction(Direction::Forward).analysed_answers, 0);
+        assert_eq!(
+            analysis
+                .direction(Direction::Forward)
+                .accepted_incomplete
+                .data_level,
+            None
+        );
+        assert_eq!(analysis.examples.len(), 2);
+        assert!(analysis.examples.iter().all(|e| e.item == "nested"));
+        assert_eq!(
+            analysis
+                .examples
+                .iter()
+                .map(|e| (e.step, e.class))
+                .collect::<Vec<_>>(),
+            [
+                (1, StructuralClass::Omission),
+                (2, StructuralClass::Hallucination)
+            ]
+        );
+    }
+
+    #[test]
+    fn examples_stop_at_their_cap_per_category_and_class() {
+        let truth = Permutation::new(vec![1, 2]).expect("a permutation");
+        let swapped = Permutation::new(vec![2, 1]).expect("a permutation");
+        let nested = table(&[INSIDE, OPEN], &[OPEN]);
+        let ids: Vec<String> = (0..EXAMPLES_PER_CELL + 2)
+            .map(|i| format!("item{i}"))
+            .collect();
+        let analysis = analyse(ids.iter().map(|id| AnsweredItem {
+            item: item(id, &truth, &nested),
+            reading: Reading::Answer {
+                answer: &swapped,
+                task_accuracy: true,
+            },
+        }));
+        assert_eq!(analysis.overall.structural.omission, EXAMPLES_PER_CELL + 2);
+        let omissions: Vec<&str> = analysis
+            .examples
+            .iter()
+            .filter(|e| e.class == StructuralClass::Omission)
+            .map(|e| e.item.as_str())
+            .collect();
+        // The first answers' examples, in answer order.
+        assert_eq!(
+            omissions,
+            ids[..EXAMPLES_PER_CELL]
+                .iter()
+                .map(String::as_str)
+                .collect::<Vec<_>>()
+        );
+        assert_eq!(analysis.examples.len(), 2 * EXAMPLES_PER_CELL);
+    }
+}
