@@ -295,6 +295,44 @@ proptest! {
     }
 }
 
+/// Integers around and far past the machine range, the way ENACT's answers can hold them.
+fn python_int() -> impl Strategy<Value = i128> {
+    prop_oneof![
+        any::<i64>().prop_map(i128::from),
+        (i128::from(i64::MAX) - 3)..(i128::from(i64::MAX) + 3),
+        (i128::from(i64::MIN) - 3)..(i128::from(i64::MIN) + 3),
+        -(1i128 << 100)..(1i128 << 100),
+        // Limb boundaries (10⁹ per limb).
+        (0u32..76).prop_map(|k| 10i128.pow(k / 2) - i128::from(k % 2)),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 512, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn python_ints_read_print_add_subtract_and_compare_as_i128_does(
+        a in python_int(),
+        b in python_int(),
+    ) {
+        let int = |v: i128| PyInt::parse_ascii(&v.to_string()).expect("an integer");
+        let (x, y) = (int(a), int(b));
+        prop_assert_eq!(x.to_string(), a.to_string());
+        prop_assert_eq!(x.to_i64(), i64::try_from(a).ok());
+        prop_assert_eq!(x.add(&y).to_string(), (a + b).to_string());
+        prop_assert_eq!(x.sub(&y).to_string(), (a - b).to_string());
+        prop_assert_eq!(x.negate().to_string(), (-a).to_string());
+        prop_assert_eq!(x.cmp(&y), a.cmp(&b));
+        prop_assert_eq!(x.is_zero(), a == 0);
+        prop_assert_eq!(x.is_negative(), a < 0);
+        // Exactly representable floats compare exactly.
+        if b.unsigned_abs() < 1 << 52 {
+            prop_assert_eq!(x.cmp_f64(b as f64), Some(a.cmp(&b)));
+            prop_assert_eq!(x.cmp_f64(b as f64 + 0.5), Some(if a <= b { std::cmp::Ordering::Less } else { std::cmp::Ordering::Greater }));
+        }
+    }
+}
+
 /// Whether the truth is also a semantic match, in either direction: every transition's visible
 /// change is within its full change.
 fn truth_is_semantic(item: &Item) -> bool {

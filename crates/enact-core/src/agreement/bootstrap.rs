@@ -244,6 +244,16 @@ mod tests {
     }
 
     #[test]
+    fn replicate_mean_and_sample_standard_deviation() {
+        assert_eq!(mean_and_sd(&[]), (None, None));
+        assert_eq!(mean_and_sd(&[0.25]), (Some(0.25), None));
+        let (mean, sd) = mean_and_sd(&[1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(mean, Some(2.5));
+        // Σ(x − 2.5)² = 5 over n − 1 = 3.
+        assert!((sd.expect("two or more values") - (5.0f64 / 3.0).sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
     fn percentile_interpolates_like_numpy() {
         let sorted = [1.0, 2.0, 4.0, 8.0];
         assert_eq!(percentile(&sorted, 0.0), Some(1.0));

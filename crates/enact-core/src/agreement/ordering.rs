@@ -514,6 +514,15 @@ mod tests {
             ],
         )
         .unwrap();
+        assert_eq!(annotations.annotators(), names(2));
+        assert_eq!(
+            annotations
+                .items()
+                .iter()
+                .map(|item| item.item_id.as_str())
+                .collect::<Vec<_>>(),
+            ["q1", "q2", "q3"]
+        );
         let position = annotations.encode(OrderingEncoding::Position);
         // q2 has no answer, so no known length and no units, but it is still an item.
         assert_eq!(position.data.units(), 4);

@@ -401,4 +401,153 @@ mod tests {
         // Chinese characters are counted full width.
         assert!(label_width("结构性错误") >= 60.0);
     }
+
+    /// Figures with four errors: three omissions (two of them spatial) and one hallucination,
+    /// and a left hand whose precision is 0.8 ± 0.1.
+    fn figures() -> ErrorFigures {
+        let mut f = analyse([]).overall;
+        f.errors = 4;
+        f.structural.omission = 3;
+        f.structural.hallucination = 1;
+        f.semantic.spatial_relations.total = 2;
+        f.semantic.agent_interaction.total = 1;
+        f.handedness.left.precision = Some(0.8);
+        f.handedness.left.precision_se = Some(0.1);
+        f.handedness.right.recall = Some(0.95);
+        f.handedness.right.recall_se = Some(0.2);
+        f
+    }
+
+    /// No two rows overlap, each row as tall as its bars or its label, and the box holds them.
+    fn assert_rows_stacked(chart: &BarChart, bars_height: f64, gap: f64) {
+        for pair in chart.rows.windows(2) {
+            let height = bars_height.max(pair[0].lines.len() as f64 * LINE_HEIGHT);
+            assert_eq!(pair[1].y, pair[0].y + height + gap, "{chart:?}");
+        }
+        let last = chart.rows.last().expect("a row");
+        let height = bars_height.max(last.lines.len() as f64 * LINE_HEIGHT);
+        assert_eq!(chart.height, last.y + height + gap + 20.0);
+        assert_eq!(chart.rows[0].y, 10.0);
+    }
+
+    #[test]
+    fn a_structural_row_is_one_bar_split_by_class_shares() {
+        let f = figures();
+        let empty = analyse([]).overall;
+        let names = ChartNames::english();
+        let chart = structural_chart(&[("model", &f), ("none", &empty)], &names);
+        let bars = &chart.rows[0].bars;
+        assert_eq!(bars.len(), 2, "{bars:?}");
+        let (omission, hallucination) = (&bars[0], &bars[1]);
+        assert_eq!(omission.x, chart.plot_left);
+        assert_eq!(omission.width, PLOT_WIDTH * 0.75);
+        assert_eq!(hallucination.x, chart.plot_left + PLOT_WIDTH * 0.75);
+        assert_eq!(hallucination.width, PLOT_WIDTH * 0.25);
+        assert_eq!(omission.colour, PALETTE[3]);
+        assert_eq!(hallucination.colour, PALETTE[4]);
+        assert_eq!(omission.title, "model: Omission 3 (75.0%)");
+        assert_eq!(hallucination.title, "model: Hallucination 1 (25.0%)");
+        assert!(
+            bars.iter()
+                .all(|b| b.y == chart.rows[0].y && b.height == BAR_HEIGHT)
+        );
+        assert!(chart.rows[1].bars.is_empty());
+        assert_rows_stacked(&chart, BAR_HEIGHT, 10.0);
+        assert_eq!(
+            chart
+                .legend
+                .iter()
+                .map(|(name, _)| name.as_str())
+                .collect::<Vec<_>>(),
+            [
+                "Polarity inversion",
+                "Predicate substitution",
+                "Entity substitution",
+                "Omission",
+                "Hallucination"
+            ]
+        );
+        assert_eq!(
+            chart.ticks,
+            (0..=4)
+                .map(|k| (
+                    chart.plot_left + 130.0 * f64::from(k),
+                    format!("{}%", 25 * k)
+                ))
+                .collect::<Vec<_>>()
+        );
+    }
+
+    #[test]
+    fn grouped_bars_are_one_per_row_under_each_group_with_whiskers() {
+        let f = figures();
+        let other = analyse([]).overall;
+        let names = ChartNames::english();
+        let semantic = semantic_chart(&[("a", &f), ("b", &other)], &names);
+        assert_eq!(semantic.rows.len(), SemanticCategory::ALL.len());
+        let spatial = &semantic.rows[0];
+        assert_eq!(spatial.bars.len(), 1, "b has no errors: no share, no bar");
+        assert_eq!(spatial.bars[0].width, PLOT_WIDTH * 0.5);
+        assert_eq!(spatial.bars[0].x, semantic.plot_left);
+        assert_eq!(spatial.bars[0].y, spatial.y);
+        assert_eq!(spatial.bars[0].title, "a: Spatial relations 2/4 (50.0%)");
+        let agent = &semantic.rows[3];
+        assert_eq!(agent.bars[0].width, PLOT_WIDTH * 0.25);
+        // Two series: each group is two bars of 12 px with 2 px between, then 12 px.
+        assert_rows_stacked(&semantic, 2.0 * 14.0, 12.0);
+        assert_eq!(
+            semantic.legend,
+            vec![("a".to_owned(), PALETTE[0]), ("b".to_owned(), PALETTE[1])]
+        );
+
+        let hands = hand_chart(&[("b", &other), ("a", &f)], &names);
+        assert_eq!(hands.rows.len(), 6);
+        let precision = &hands.rows[0];
+        assert_eq!(precision.label, "left hand precision");
+        let bar = &precision.bars[0];
+        // The second series, one bar down.
+        assert_eq!(bar.y, precision.y + 14.0);
+        assert_eq!(bar.colour, PALETTE[1]);
+        assert!((bar.width - PLOT_WIDTH * 0.8).abs() < 1e-9);
+        let (low, high) = bar.whisker.expect("a whisker");
+        assert!((low - (hands.plot_left + PLOT_WIDTH * 0.7)).abs() < 1e-9);
+        assert!((high - (hands.plot_left + PLOT_WIDTH * 0.9)).abs() < 1e-9);
+        assert_eq!(bar.title, "a: left hand precision 0.800 ± 0.100");
+        // A whisker past 100 % stops at the plot's edge.
+        let recall = &hands.rows[4].bars[0];
+        assert_eq!(
+            recall.whisker.map(|w| w.1),
+            Some(hands.plot_left + PLOT_WIDTH)
+        );
+        assert_rows_stacked(&hands, 2.0 * 14.0, 12.0);
+    }
+
+    #[test]
+    fn label_widths_follow_character_classes_and_the_column_its_widest_line() {
+        for (text, width) in [
+            ("W", 10.5),
+            ("i", 3.5),
+            ("A", 8.5),
+            ("f", 4.5),
+            ("a", 7.0),
+            ("结", 12.0),
+            ("Wi", 14.0),
+        ] {
+            assert!((label_width(text) - width * 1.1).abs() < 1e-9, "{text}");
+        }
+        assert_eq!(label_column(&[vec!["ab".to_owned()]]), MIN_LABEL_COLUMN);
+        let wide = "W".repeat(20);
+        assert_eq!(
+            label_column(&[vec!["a".to_owned()], vec![wide.clone()]]),
+            (label_width(&wide) + LABEL_GAP + 4.0).ceil()
+        );
+        let row = ChartRow {
+            label: "x y".to_owned(),
+            lines: vec!["x".to_owned(), "y".to_owned()],
+            y: 30.0,
+            bars: Vec::new(),
+        };
+        assert_eq!(row.label_lines(), vec![(42.0, "x"), (56.0, "y")]);
+        assert_eq!(wrap_label(""), vec![String::new()]);
+    }
 }

@@ -623,4 +623,16 @@ mod tests {
             assert_eq!(perfect.matched.len(), distinct(&truth));
         }
     }
+
+    /// The names written into reports and the API are the serialised names.
+    #[test]
+    fn each_class_is_named_as_it_is_serialised() {
+        for class in StructuralClass::ALL {
+            assert_eq!(
+                serde_json::to_value(class).expect("serialise"),
+                class.as_str(),
+                "{class:?}"
+            );
+        }
+    }
 }

@@ -673,6 +673,8 @@ mod tests {
         // '[007]' has leading zeros (SyntaxError), so the fallback reads 007 as 7.
         assert_eq!(enact("[007, 1]", 2).as_deref(), Some("[7, 1]"));
         assert_eq!(enact("[00, 1]", 2).as_deref(), Some("[1, 2]"));
+        // The fallback keeps the numbers as written; a literal would be re-based to start at 1.
+        assert_eq!(enact("[02, 03]", 2).as_deref(), Some("[2, 3]"));
         // A vertical tab matches \s but is not Python whitespace: SyntaxError, fallback.
         assert_eq!(enact("[3,\u{b}4]", 2).as_deref(), Some("[3, 4]"));
         assert_eq!(enact("[3,\u{c}4]", 2).as_deref(), Some("[1, 2]"));
@@ -696,6 +698,11 @@ mod tests {
         assert_eq!(
             ok("reasoning [1,2,3] </think> [3, 2, 1]").as_deref(),
             Ok("[3, 2, 1]")
+        );
+        // What comes before a closed block is kept, what is inside it is not.
+        assert_eq!(
+            ok("Answer: [2, 3, 1] <think>or [1, 2, 3]?</think>").as_deref(),
+            Ok("[2, 3, 1]")
         );
         assert_eq!(ok("[2, 3, 1,]").as_deref(), Ok("[2, 3, 1]"));
         assert_eq!(

@@ -667,6 +667,26 @@ mod tests {
         );
     }
 
+    /// A forward ground truth longer than L − 1 chains visible sets off the chronological
+    /// path: here kf2 → kf2, whose (empty) set the table must hold.
+    #[test]
+    fn a_ground_truth_longer_than_the_key_frames_chains_off_the_path() {
+        let lines = vec![line(
+            "long",
+            "forward_world_modeling_3_steps",
+            "[2, 1, 1]",
+            r#""[1, 2, 2]""#,
+        )];
+        let evaluation = run(&lines).expect("runs");
+        let verdict = &evaluation.evaluated[0].verdict;
+        assert!(!verdict.task_accuracy);
+        // Of C = (open, grasp, ∅) only the empty set is within the predicted chain's changes.
+        assert_eq!(
+            verdict.pairwise_accuracy,
+            PairwiseAccuracy::Float(1.0 / 3.0)
+        );
+    }
+
     #[test]
     fn unknown_frames_and_neither_direction() {
         let lines = vec![
@@ -725,6 +745,9 @@ mod tests {
             run(&list_task),
             Err(EnactRunError::FirstPassCrash { line: 1, .. })
         ));
+        // An empty list is falsy: ENACT never hashes it.
+        let empty_list_task = vec![r#"{"id": "a", "task_name": []}"#.to_owned()];
+        assert!(run(&empty_list_task).is_ok_and(|e| e.evaluated.is_empty()));
     }
 
     #[test]

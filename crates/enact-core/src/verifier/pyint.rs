@@ -315,6 +315,16 @@ mod tests {
         assert_eq!(over.sub(&PyInt::ONE).to_i64(), Some(i64::MAX));
         let huge = big("100000000000000000000");
         assert_eq!(huge.sub(&PyInt::ONE).to_string(), "99999999999999999999");
+        // A carry out of the top limb (10⁹ a limb) makes a limb of its own.
+        let nines = big(&"9".repeat(27));
+        assert_eq!(
+            nines.add(&PyInt::ONE).to_string(),
+            format!("1{}", "0".repeat(27))
+        );
+        assert_eq!(
+            nines.add(&nines).to_string(),
+            format!("1{}8", "9".repeat(26))
+        );
         assert_eq!(huge.sub(&huge).to_i64(), Some(0));
         assert_eq!(
             PyInt::Small(5).sub(&huge).to_string(),

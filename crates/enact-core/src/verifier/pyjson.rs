@@ -831,6 +831,8 @@ mod tests {
             value.to_json(true),
             "\"\\u00e9\\u2028\\u007f\\u001f\\\"\\\\\\ud834\\udd1e\""
         );
+        let escapes = parse(r#""\b\f\n\r\t\/""#);
+        assert_eq!(escapes.as_str(), Some("\u{8}\u{c}\n\r\t/"));
         let lone = parse(r#""\ud800x""#);
         assert_eq!(lone.as_str(), Some("\u{fffd}x"));
     }
@@ -867,6 +869,15 @@ mod tests {
         assert_eq!(parse("true").py_str(), "True");
         assert_eq!(parse("null").py_str(), "None");
         assert_eq!(parse("[1, \"a\"]").py_str(), "[1, 'a']");
+        assert_eq!(
+            parse(r#"{"k": [1, "b"], "n": null}"#).py_str(),
+            "{'k': [1, 'b'], 'n': None}"
+        );
+        // Control characters, C1 ones too, are escaped; a quote picks the other quote.
+        assert_eq!(
+            parse(r#"["a\u0001\u0085\t'"]"#).py_str(),
+            r#"["a\x01\x85\t'"]"#
+        );
     }
 
     #[test]

@@ -542,4 +542,83 @@ mod tests {
         value["full"] = serde_json::json!([0]);
         assert!(serde_json::from_value::<ItemSignatures>(value).is_err());
     }
+
+    /// A frame index past the key frames is no pair of the table, whichever end it is.
+    #[test]
+    fn pairs_past_the_key_frames_are_not_covered() {
+        for coverage in [VisibleCoverage::Chronological, VisibleCoverage::AllPairs] {
+            let table = ItemSignatures::build(&frames(&["a", "b", "c"]), coverage, toy);
+            for (from, to) in [(0, 3), (3, 0), (2, 3), (3, 3)] {
+                for view in [View::Visible, View::Full] {
+                    assert_eq!(
+                        table.signature_set(view, from, to),
+                        None,
+                        "{from} {to} {view:?}"
+                    );
+                    assert_eq!(table.lookup(view, from, to), PairLookup::NotCovered);
+                }
+            }
+        }
+    }
+
+    /// Tables of more than 64 signatures take several words a set, and survive being stored,
+    /// with visible sets of the chronological pairs or of every pair.
+    #[test]
+    fn a_table_of_many_signatures_survives_a_round_trip() {
+        let ids = frames(&["a", "b", "c"]);
+        for coverage in [VisibleCoverage::Chronological, VisibleCoverage::AllPairs] {
+            let table = ItemSignatures::build(&ids, coverage, |from, to, _| {
+                // Pair (a, c) changes 70 things, the others a few of them.
+                let count = match (from, to) {
+                    ("a", "c") => 70,
+                    (f, t) if f == t => 0,
+                    _ => 3,
+                };
+                Ok((0..count).map(|k| format!("sig{k:02}_{from}")).collect())
+            });
+            let stored = serde_json::to_string(&table).expect("serialise");
+            let back: ItemSignatures = serde_json::from_str(&stored).expect("read back");
+            assert_eq!(back, table);
+            let wide = back
+                .signature_set(View::Full, 0, 2)
+                .expect("covered")
+                .expect("a set");
+            assert_eq!(wide.len(), 70);
+            assert_eq!(wide[69], "sig69_a");
+        }
+    }
+
+    #[test]
+    fn a_stored_table_naming_what_it_lacks_is_refused() {
+        let refused = |json: &str| {
+            serde_json::from_str::<ItemSignatures>(json)
+                .expect_err("refused")
+                .to_string()
+        };
+        let table = |visible: &str, full: &str, errors: &str| {
+            format!(
+                r#"{{"key_frame_ids": ["a", "b"], "signatures": ["s"], "sets": [[0]],
+                   "visible_coverage": "chronological", "visible": {visible},
+                   "full": {full}, "errors": {errors}}}"#
+            )
+        };
+        assert!(
+            serde_json::from_str::<ItemSignatures>(&table("[0]", "[0, 0, 0, 0]", "[]")).is_ok()
+        );
+        assert!(
+            refused(&table("[0]", r#"[0, 0, 0, {"raised": 0}]"#, "[]"))
+                .contains("entry names error 0, only 0 exist")
+        );
+        assert!(
+            refused(&table("[1]", "[0, 0, 0, 0]", "[]"))
+                .contains("entry names set 1, only 1 exist")
+        );
+        assert!(
+            refused(&table("[0, 0]", "[0, 0, 0, 0]", "[]"))
+                .contains("2 visible entries for 2 key frames")
+        );
+        assert!(
+            refused(&table("[0]", "[0, 0, 0]", "[]")).contains("3 full entries for 2 key frames")
+        );
+    }
 }

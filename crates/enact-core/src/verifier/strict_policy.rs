@@ -546,4 +546,13 @@ mod tests {
             Err(StrictScoringError::GroundTruthLength { .. })
         ));
     }
+
+    #[test]
+    fn policies_are_read_by_the_names_they_are_written_with() {
+        for policy in [ScoringPolicy::Enact, ScoringPolicy::Strict] {
+            assert_eq!(ScoringPolicy::parse(policy.as_str()), Some(policy));
+        }
+        assert_eq!(ScoringPolicy::parse("Strict"), None);
+        assert_eq!(ScoringPolicy::default(), ScoringPolicy::Strict);
+    }
 }

@@ -816,4 +816,32 @@ mod tests {
         assert_eq!(entries[0], "bundle/report.json");
         assert_eq!(entries.len(), files.len());
     }
+
+    /// The Markdown export names each row (a model, or Human) with submitters' text escaped.
+    #[test]
+    fn the_markdown_export_names_rows_with_their_text_escaped() {
+        let mut inputs = inputs();
+        inputs.submissions[0].row.model = "<b>m7</b> | *best*".to_owned();
+        // Four human answers remain: one fewer than a Human figure needs.
+        inputs.answers.pop();
+        let report = build_report(&inputs).unwrap();
+        let markdown = export::markdown(&report);
+        assert!(
+            markdown.contains("| &lt;b&gt;m7&lt;/b&gt; \\| \\*best\\* |"),
+            "{markdown}"
+        );
+        assert!(markdown.contains("| Human |"), "{markdown}");
+        assert!(!markdown.contains("<b>"), "{markdown}");
+        // Human cells resting on fewer answers than a figure needs are marked, model cells not.
+        let human = markdown
+            .lines()
+            .find(|line| line.starts_with("| Human |"))
+            .expect("a Human row");
+        assert!(human.contains('†'), "{human}");
+        let model = markdown
+            .lines()
+            .find(|line| line.starts_with("| &lt;b&gt;"))
+            .expect("the model's row");
+        assert!(!model.contains('†'), "{model}");
+    }
 }
