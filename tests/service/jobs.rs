@@ -210,6 +210,11 @@ async fn paused_jobs_stop_and_resume_and_cancel_is_audited() {
         .await
         .unwrap();
     wait_for(&hub, id, JobState::Running).await;
+    // The job is running once a worker has claimed it; its code starts a moment later.
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while starts.lock().unwrap().get(&5) != Some(&2) && Instant::now() < deadline {
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
     assert_eq!(starts.lock().unwrap().get(&5), Some(&2));
     jobs::control(&hub, &admin, id, JobControl::Cancel)
         .await
