@@ -1,6 +1,7 @@
 //! The schema version this build's migrations bring each backend to, which `--version` and
-//! `GET /api/v1/version` report (`store::SQLITE_SCHEMA`, `store::POSTGRES_SCHEMA`). The git
-//! commit is enact-core's build script's (`core::version::COMMIT`).
+//! `GET /api/v1/version` report (`store::SQLITE_SCHEMA`, `store::POSTGRES_SCHEMA`), and the
+//! migrations themselves, embedded in the binary (`store::migrations`). The git commit is
+//! enact-core's build script's (`core::version::COMMIT`).
 
 use std::path::{Path, PathBuf};
 
@@ -15,7 +16,36 @@ fn main() {
             "cargo:rustc-env=ENACT_HUB_SCHEMA_{}={version}",
             backend.to_uppercase()
         );
+        write_embedded(&dir, backend);
     }
+}
+
+/// Writes `$OUT_DIR/<backend>_migrations.rs`: a slice of every `*.sql` file's name and text
+/// (`include_str!`, so that an edited migration rebuilds the crate), sorted by name. sqlx's
+/// `migrate!` did this before; its proc-macro crates were the longest chain of a cold build.
+fn write_embedded(dir: &Path, backend: &str) {
+    let mut files: Vec<(String, PathBuf)> = std::fs::read_dir(dir)
+        .map(|entries| {
+            entries
+                .filter_map(Result::ok)
+                .filter(|entry| entry.path().is_file())
+                .filter_map(|entry| Some((entry.file_name().into_string().ok()?, entry.path())))
+                .filter(|(name, _)| name.ends_with(".sql"))
+                .collect()
+        })
+        .unwrap_or_default();
+    files.sort();
+    let mut code = String::from("&[\n");
+    for (name, path) in files {
+        code.push_str(&format!(
+            "    ({name:?}, include_str!({:?})),\n",
+            path.display().to_string()
+        ));
+    }
+    code.push_str("]\n");
+    let out = PathBuf::from(std::env::var_os("OUT_DIR").expect("OUT_DIR"))
+        .join(format!("{backend}_migrations.rs"));
+    std::fs::write(&out, code).expect("write the embedded migrations");
 }
 
 /// The highest number among `NNNN_*.sql` files in `dir`.

@@ -245,7 +245,11 @@ pub async fn open_postgres(url: &str, max_connections: u32) -> Result<PgPool, sq
         .acquire_timeout(Duration::from_secs(15))
         .connect_with(options)
         .await?;
-    sqlx::migrate!("./migrations/postgres").run(&pool).await?;
+    super::migrations::POSTGRES
+        .migrator()
+        .await?
+        .run(&pool)
+        .await?;
     Ok(pool)
 }
 

@@ -22,6 +22,7 @@ pub mod gate;
 pub mod gold;
 pub mod items;
 pub mod jobs;
+pub mod migrations;
 pub mod model_metadata;
 pub mod red_flags;
 pub mod reported;
@@ -114,7 +115,7 @@ pub async fn open_with_page_cache(
         .test_before_acquire(false)
         .connect_with(options)
         .await?;
-    sqlx::migrate!("./migrations/sqlite").run(&pool).await?;
+    migrations::SQLITE.migrator().await?.run(&pool).await?;
     Ok(pool)
 }
 
@@ -222,11 +223,26 @@ pub async fn announce(
 }
 
 /// An announcement of the change feed: its id, the announcing process and the payload.
-#[derive(Debug, Clone, PartialEq, Eq, sqlx::FromRow)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Announcement {
     pub id: i64,
     pub origin: String,
     pub payload: String,
+}
+
+impl<'r, R: sqlx::Row> sqlx::FromRow<'r, R> for Announcement
+where
+    &'static str: sqlx::ColumnIndex<R>,
+    i64: sqlx::Decode<'r, R::Database> + sqlx::Type<R::Database>,
+    String: sqlx::Decode<'r, R::Database> + sqlx::Type<R::Database>,
+{
+    fn from_row(row: &'r R) -> Result<Self, sqlx::Error> {
+        Ok(Self {
+            id: row.try_get("id")?,
+            origin: row.try_get("origin")?,
+            payload: row.try_get("payload")?,
+        })
+    }
 }
 
 /// The change feed's announcements after `after`, oldest first (at most `limit`).

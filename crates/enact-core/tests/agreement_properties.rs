@@ -244,13 +244,12 @@ proptest! {
             .expect("a valid configuration");
         prop_assert_eq!(&first, &again);
         prop_assert_eq!(first.replicates, 200);
-        prop_assert!(first.undefined_replicates <= 200);
         prop_assert!(close(first.estimate.alpha, krippendorff_alpha(&data, MeasurementLevel::Interval).alpha));
         if let (Some(low), Some(high)) = (first.ci_low, first.ci_high) {
             prop_assert!(low <= high);
             prop_assert!(high <= 1.0 + 1e-12);
             let mean = first.replicate_mean.expect("a mean where an interval is");
-            prop_assert!(low - 1e-12 <= high && mean <= 1.0 + 1e-12);
+            prop_assert!(mean <= 1.0 + 1e-12);
         }
         prop_assert_eq!(first.ci_low.is_some(), first.undefined_replicates < 200);
     }
