@@ -711,6 +711,17 @@ mod tests {
         );
         assert_eq!(ok("2, 3, 1").as_deref(), Ok("[2, 3, 1]"));
         assert_eq!(ok("[２, ３, １]").as_deref(), Ok("[2, 3, 1]"));
+        // An unclosed bracket before the list: the search restarts at the inner one.
+        assert_eq!(ok("See [the list [2, 3, 1]").as_deref(), Ok("[2, 3, 1]"));
+    }
+
+    #[test]
+    fn enact_fallback_reads_a_run_at_python_s_digit_limit_and_fails_one_over_it() {
+        // Python's int() takes a string of exactly 4300 digits and raises on 4301.
+        let run = |digits: usize| PyValue::Str(format!("order: {}", "7".repeat(digits)));
+        let at_limit = parse_answer_enact(&run(PY_INT_MAX_STR_DIGITS), 3).expect("parsed");
+        assert_eq!(at_limit.labels().len(), 1);
+        assert!(parse_answer_enact(&run(PY_INT_MAX_STR_DIGITS + 1), 3).is_none());
     }
 
     #[test]

@@ -775,10 +775,10 @@ mod tests {
 
     #[test]
     fn ints_and_floats_stay_apart_and_big_ints_survive() {
-        let value = parse("[1, 1.0, 100000000000000000000, -0, 1e400, NaN, -Infinity]");
+        let value = parse("[1, 1.0, 100000000000000000000, -0, 1e400, NaN, -Infinity, Infinity]");
         assert_eq!(
             value.to_json(false),
-            "[1, 1.0, 100000000000000000000, 0, Infinity, NaN, -Infinity]"
+            "[1, 1.0, 100000000000000000000, 0, Infinity, NaN, -Infinity, Infinity]"
         );
     }
 
@@ -801,6 +801,8 @@ mod tests {
             "'a'",
             "\u{feff}1",
             "[\"\\x\"]",
+            "Infinite",
+            "[Infinit]",
         ] {
             assert!(
                 matches!(parse_python_json(bad), Err(PyJsonError::Decode { .. })),
@@ -813,6 +815,12 @@ mod tests {
             Err(PyJsonError::Fatal { .. })
         ));
         assert!(parse_python_json(&"1".repeat(4300)).is_ok());
+        // The limit counts digits, not the sign.
+        assert!(parse_python_json(&format!("-{}", "1".repeat(4300))).is_ok());
+        assert!(matches!(
+            parse_python_json(&format!("-{}", "1".repeat(4301))),
+            Err(PyJsonError::Fatal { .. })
+        ));
         let deep = format!("{}{}", "[".repeat(2000), "]".repeat(2000));
         assert!(matches!(
             parse_python_json(&deep),

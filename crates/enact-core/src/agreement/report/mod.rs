@@ -695,7 +695,14 @@ mod tests {
         assert_eq!(agreement.exact_agreement.agreeing_items, 1);
         assert_eq!(agreement.pairwise.len(), 1);
         assert_eq!(agreement.pairwise[0].a.name, "a1");
-        assert_eq!(agreement.counts[0].all_agree, 1);
+        // One cell (inverse, 4 steps): q1 and q2 with two answers each, q1's alike.
+        assert_eq!(agreement.counts.len(), 1);
+        let counts = &agreement.counts[0];
+        assert_eq!(
+            (counts.direction, counts.step_length),
+            (Direction::Inverse, l(4))
+        );
+        assert_eq!((counts.items, counts.answers, counts.all_agree), (2, 4, 1));
         assert_eq!(report.stamp.submission_ids, vec![4, 7]);
         assert_eq!(report.stamp.annotator_ids, vec![1, 2]);
         assert_eq!(report.rows.last().unwrap().source, RowSource::Human);
@@ -821,13 +828,14 @@ mod tests {
     #[test]
     fn the_markdown_export_names_rows_with_their_text_escaped() {
         let mut inputs = inputs();
-        inputs.submissions[0].row.model = "<b>m7</b> | *best*".to_owned();
+        // A literal "&lt;" must stay text: '&' is escaped too.
+        inputs.submissions[0].row.model = "<b>m7</b> | *best* &lt;".to_owned();
         // Four human answers remain: one fewer than a Human figure needs.
         inputs.answers.pop();
         let report = build_report(&inputs).unwrap();
         let markdown = export::markdown(&report);
         assert!(
-            markdown.contains("| &lt;b&gt;m7&lt;/b&gt; \\| \\*best\\* |"),
+            markdown.contains("| &lt;b&gt;m7&lt;/b&gt; \\| \\*best\\* &amp;lt; |"),
             "{markdown}"
         );
         assert!(markdown.contains("| Human |"), "{markdown}");
