@@ -24,16 +24,14 @@ fn main() {
 /// (`include_str!`, so that an edited migration rebuilds the crate), sorted by name. sqlx's
 /// `migrate!` did this before; its proc-macro crates were the longest chain of a cold build.
 fn write_embedded(dir: &Path, backend: &str) {
+    // A binary without its migrations would open no database: no folder is a build error.
     let mut files: Vec<(String, PathBuf)> = std::fs::read_dir(dir)
-        .map(|entries| {
-            entries
-                .filter_map(Result::ok)
-                .filter(|entry| entry.path().is_file())
-                .filter_map(|entry| Some((entry.file_name().into_string().ok()?, entry.path())))
-                .filter(|(name, _)| name.ends_with(".sql"))
-                .collect()
-        })
-        .unwrap_or_default();
+        .unwrap_or_else(|e| panic!("read the migrations in {}: {e}", dir.display()))
+        .filter_map(Result::ok)
+        .filter(|entry| entry.path().is_file())
+        .filter_map(|entry| Some((entry.file_name().into_string().ok()?, entry.path())))
+        .filter(|(name, _)| name.ends_with(".sql"))
+        .collect();
     files.sort();
     let mut code = String::from("&[\n");
     for (name, path) in files {
