@@ -379,13 +379,22 @@ async fn killed_imports_resume_after_their_last_batch_to_the_uninterrupted_resul
     let mut current = ('a', &digest_a);
     let mut next = ('b', &b, &digest_b);
     let (mut kills_done, mut landed, mut resumed) = (0, 0, 0);
+    // When to kill: between the latest kill that came before any batch was committed and the
+    // earliest that came after the import landed. The batches are a short stretch of the
+    // uninterrupted import's time, and one timing of it can be off (a cold page cache, a busy
+    // machine): kills at fixed shares of it once missed the stretch 50 times running.
+    let (initial_early, initial_late) = (whole.mul_f64(0.1), whole.mul_f64(0.75));
+    let (mut early, mut late) = (initial_early, initial_late);
     while kills_done < kills().max(30) {
         // Kill it up to three times, then let it run to the end.
         for _ in 0..3 {
             let mut child = import(&db, next.1);
             // Mostly while it writes its batches (it starts with the process and the file's
             // hash; a resumed run has less to write).
-            let at = whole.mul_f64(rng.random_range(0.1..0.75));
+            if late <= early + Duration::from_millis(5) {
+                (early, late) = (initial_early, initial_late);
+            }
+            let at = early + (late - early).mul_f64(rng.random_range(0.0..1.0));
             tokio::time::sleep(at).await;
             let _ = child.kill();
             let status = child.wait().expect("reaped");
@@ -394,7 +403,17 @@ async fn killed_imports_resume_after_their_last_batch_to_the_uninterrupted_resul
             let pool = open(&db).await;
             check_database(&pool, &after).await;
             let digest = main_digest(&pool).await;
+            let committed: i64 =
+                sqlx::query_scalar("SELECT coalesce(max(rows_done), 0) FROM staged_imports")
+                    .fetch_one(&pool)
+                    .await
+                    .expect("staged");
             pool.close().await;
+            if status.success() || digest == *next.2 {
+                late = late.min(at);
+            } else if committed == 0 {
+                early = early.max(at);
+            }
             if status.success() {
                 // It landed before the kill.
                 assert_eq!(&digest, next.2, "{after}: landed, but not whole");
