@@ -30,6 +30,12 @@
   const m = (key, values) =>
     (messages[key] || key).replace(/\{(\w+)\}/g, (whole, name) =>
       values && name in values ? String(values[name]) : whole);
+  // Why the server refused a draft or an answer, in the page's language when the reply's code
+  // is one the page handed over (`refusal-` and the code), else the server's English sentence.
+  const refusal = (reply) => {
+    const key = "refusal-" + String(reply.code || "").replace(/_/g, "-");
+    return key in messages ? m(key, reply.details) : reply.error;
+  };
   const announce = (text) => {
     announcer.textContent = text;
   };
@@ -77,7 +83,7 @@
         });
         if (!response.ok) {
           const error = await response.json().catch(() => ({ error: response.statusText }));
-          saveStatus.textContent = m("js-not-saved", { error: error.error });
+          saveStatus.textContent = m("js-not-saved", { error: refusal(error) });
           return;
         }
         saveStatus.textContent = m("js-saved");
@@ -237,7 +243,7 @@
       announce(m("js-submitted"));
       window.location.assign(reply.next);
     } else {
-      saveStatus.textContent = m("js-not-submitted", { error: reply.error });
+      saveStatus.textContent = m("js-not-submitted", { error: refusal(reply) });
       submitButton.disabled = false;
     }
   });

@@ -34,6 +34,29 @@ error-explain-500 = Something went wrong on the hub's side. It has been logged.
 error-reason-503 = Service Unavailable
 error-explain-503 = The hub cannot do this right now: please try again later.
 
+## Refusals: why a request was refused, one message per typed reason (src/app/refusal.rs).
+## The API answers with the same reasons' codes; these are what the pages say.
+refusal-no-dataset = no dataset named '{ $dataset }'
+refusal-no-item = no item '{ $item }' in dataset '{ $dataset }'
+refusal-no-annotator = no annotator named '{ $annotator }'
+refusal-no-episode = no episode named '{ $episode }'
+refusal-no-answer-yet = item '{ $item }' has no answer from you yet
+refusal-not-logged-in = you are not logged in, or your session has expired: log in again
+refusal-admin-only = the admin pages are for admins; '{ $annotator }' is an annotator
+refusal-stale-form = this page's form has expired: reload the page and try again
+refusal-not-assigned = item '{ $item }' of dataset '{ $dataset }' is not assigned to you
+refusal-item-finished = item '{ $item }' is already finished; its answer can no longer change
+refusal-queue-paused = your queue is paused by an admin (since { $since }): you cannot open, save, answer or skip items until it is resumed; your drafts are kept
+refusal-slots-empty = item '{ $item }': fill every slot before submitting (empty: { $slots })
+refusal-reason-missing = { $action ->
+        [flag] to flag item '{ $item }', say why in the reason field
+       *[skip] to skip item '{ $item }', say why in the reason field
+    }
+refusal-reason-too-long = the reason is over { $limit } characters
+refusal-passwords-differ = the two passwords differ
+refusal-password-too-short = the password has { $chars } characters; use at least { $least }
+refusal-episode-has-no-graphs = episode '{ $episode }' has no scene graphs yet: a curator must set them before it can be exported
+
 ## Logging in
 login-title = Log in
 login-heading = Log in to annotate

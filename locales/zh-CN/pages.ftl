@@ -33,6 +33,28 @@ error-explain-500 = 服务端出现问题，已记录在日志中。
 error-reason-503 = 服务暂不可用
 error-explain-503 = 本服务暂时无法完成此操作：请稍后再试。
 
+## 拒绝原因：请求被拒绝的原因，每个类型化原因一条消息（src/app/refusal.rs）。
+refusal-no-dataset = 没有名为“{ $dataset }”的数据集
+refusal-no-item = 数据集“{ $dataset }”中没有条目“{ $item }”
+refusal-no-annotator = 没有名为“{ $annotator }”的标注员
+refusal-no-episode = 没有名为“{ $episode }”的片段
+refusal-no-answer-yet = 您尚未作答条目“{ $item }”
+refusal-not-logged-in = 您尚未登录，或会话已过期：请重新登录
+refusal-admin-only = 管理页面仅供管理员使用；“{ $annotator }”是标注员
+refusal-stale-form = 此页面的表单已过期：请刷新页面后重试
+refusal-not-assigned = 数据集“{ $dataset }”的条目“{ $item }”未分配给您
+refusal-item-finished = 条目“{ $item }”已完成，其答案不能再更改
+refusal-queue-paused = 管理员已暂停您的队列（自 { $since } 起）：在队列恢复之前，您不能打开、保存、作答或跳过条目；您的草稿会保留
+refusal-slots-empty = 条目“{ $item }”：提交前请填满所有槽位（空槽位：{ $slots }）
+refusal-reason-missing = { $action ->
+        [flag] 要报告条目“{ $item }”的问题，请在原因栏中说明原因
+       *[skip] 要跳过条目“{ $item }”，请在原因栏中说明原因
+    }
+refusal-reason-too-long = 原因超过 { $limit } 个字符
+refusal-passwords-differ = 两次输入的密码不一致
+refusal-password-too-short = 密码只有 { $chars } 个字符；至少需要 { $least } 个
+refusal-episode-has-no-graphs = 片段“{ $episode }”还没有场景图：须由整理者设置后才能导出
+
 ## 登录
 login-title = 登录
 login-heading = 登录以进行标注

@@ -9,6 +9,7 @@ use std::sync::Arc;
 
 use super::annotators::now_ms;
 use super::changes::Change;
+use super::refusal::{Refusal, SkipAction};
 use super::{AppError, Hub, audit, datasets, items};
 use crate::core::annotation::{
     AssignmentState, Draft, Outcome, QueueEntry, QueueStatus, Session, Telemetry, balanced_split,
@@ -214,9 +215,10 @@ async fn assigned(
     let read = store::annotations::assignment_state(&mut conn, session.annotator, item.rowid)
         .await?
         .ok_or_else(|| {
-            AppError::NotPermitted(format!(
-                "item '{item_id}' of dataset '{dataset}' is not assigned to you"
-            ))
+            AppError::from(Refusal::NotAssigned {
+                dataset: dataset.to_owned(),
+                item: item_id.to_owned(),
+            })
         })?;
     hub.standings
         .remember(ticket, session.annotator, item.rowid, read.clone());
@@ -299,9 +301,10 @@ async fn unfinished(
 }
 
 fn finished_already(item_id: &str) -> AppError {
-    AppError::Conflict(format!(
-        "item '{item_id}' is already finished; its answer can no longer change"
-    ))
+    Refusal::ItemFinished {
+        item: item_id.to_owned(),
+    }
+    .into()
 }
 
 fn checked(item: &StoredItem, draft: &Draft) -> Result<(), AppError> {
@@ -348,17 +351,18 @@ pub async fn answer(
     let item = unfinished(hub, session, dataset, item_id).await?;
     checked(&item, draft)?;
     let Some(answer) = draft.answer() else {
-        let empty: Vec<String> = draft
+        let empty: Vec<usize> = draft
             .slots
             .iter()
             .enumerate()
             .filter(|(_, s)| s.is_none())
-            .map(|(i, _)| (i + 1).to_string())
+            .map(|(i, _)| i + 1)
             .collect();
-        return Err(AppError::Invalid(format!(
-            "item '{item_id}': slots {} are empty; fill every slot before submitting",
-            empty.join(", ")
-        )));
+        return Err(Refusal::SlotsEmpty {
+            item: item_id.to_owned(),
+            slots: empty,
+        }
+        .into());
     };
     finish(
         hub,
@@ -438,6 +442,9 @@ async fn finish(
     Ok(())
 }
 
+/// The longest reason a skip or flag may give, in characters.
+const MAX_REASON_CHARS: usize = 2000;
+
 /// Finishes an item without an answer: `action` is "skip" or "flag", with a reason.
 pub async fn skip(
     hub: &Hub,
@@ -448,26 +455,32 @@ pub async fn skip(
     reason: &str,
 ) -> Result<(), AppError> {
     let item = unfinished(hub, session, dataset, item_id).await?;
-    let reason = reason.trim().to_owned();
-    if reason.is_empty() {
-        return Err(AppError::Invalid(format!(
-            "to {} item '{item_id}', say why in the reason field",
-            if action == "flag" { "flag" } else { "skip" }
-        )));
-    }
-    if reason.chars().count() > 2000 {
-        return Err(AppError::Invalid(
-            "the reason is over 2000 characters".to_owned(),
-        ));
-    }
-    let outcome = match action {
-        "skip" => Outcome::Skipped(reason),
-        "flag" => Outcome::Flagged(reason),
+    let action = match action {
+        "skip" => SkipAction::Skip,
+        "flag" => SkipAction::Flag,
         other => {
             return Err(AppError::Invalid(format!(
                 "form field `action` is {other:?}; expected \"skip\" or \"flag\""
             )));
         }
+    };
+    let reason = reason.trim().to_owned();
+    if reason.is_empty() {
+        return Err(Refusal::ReasonMissing {
+            item: item_id.to_owned(),
+            action,
+        }
+        .into());
+    }
+    if reason.chars().count() > MAX_REASON_CHARS {
+        return Err(Refusal::ReasonTooLong {
+            limit: MAX_REASON_CHARS as u64,
+        }
+        .into());
+    }
+    let outcome = match action {
+        SkipAction::Skip => Outcome::Skipped(reason),
+        SkipAction::Flag => Outcome::Flagged(reason),
     };
     finish(hub, session, dataset, &item, None, outcome).await
 }
@@ -483,7 +496,11 @@ pub async fn own_answer(
     let mut conn = hub.conn().await?;
     store::annotations::annotation(&mut conn, session.annotator, item.rowid)
         .await?
-        .ok_or_else(|| AppError::NotFound(format!("item '{item_id}' has no answer from you yet")))
+        .ok_or_else(|| {
+            AppError::from(Refusal::NoAnswerYet {
+                item: item_id.to_owned(),
+            })
+        })
 }
 
 /// Skipped and flagged items with their reasons, newest first.

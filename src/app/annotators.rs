@@ -5,11 +5,13 @@ use std::time::Duration;
 
 use super::changes::Change;
 use super::metrics::LoginFailure;
+use super::refusal::Refusal;
 use super::{AppError, Hub, audit};
 use crate::core::annotation::Session;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{
-    self, hash_password, password_problem, random_token, token_hash, verify_password,
+    self, MIN_PASSWORD_CHARS, hash_password, random_token, token_hash, too_short_password,
+    verify_password,
 };
 use crate::store;
 use crate::store::annotations::Annotator;
@@ -102,10 +104,14 @@ pub async fn accept_invite(
     repeat: &str,
 ) -> Result<i64, AppError> {
     if password != repeat {
-        return Err(AppError::Invalid("the two passwords differ".to_owned()));
+        return Err(Refusal::PasswordsDiffer.into());
     }
-    if let Some(problem) = password_problem(password) {
-        return Err(AppError::Invalid(problem));
+    if let Some(chars) = too_short_password(password) {
+        return Err(Refusal::PasswordTooShort {
+            chars: chars as u64,
+            least: MIN_PASSWORD_CHARS as u64,
+        }
+        .into());
     }
     let password = password.to_owned();
     let hash = password_work(move || hash_password(&password))

@@ -22,6 +22,7 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::changes::Change;
+use super::refusal::Refusal;
 use super::{AppError, Hub, audit};
 use crate::core::annotation::{Session, handover_split};
 use crate::core::audit::{Actor, AuditAction};
@@ -53,7 +54,11 @@ async fn annotator_named(hub: &Hub, name: &str) -> Result<Annotator, AppError> {
         .await?
         .into_iter()
         .find(|a| a.name == name)
-        .ok_or_else(|| AppError::NotFound(format!("no annotator named '{name}'")))
+        .ok_or_else(|| {
+            AppError::from(Refusal::NoAnnotator {
+                annotator: name.to_owned(),
+            })
+        })
 }
 
 /// Pauses `annotator`'s queue, audited: they keep reading it but cannot open, save, answer or
@@ -128,11 +133,10 @@ pub async fn pauses(hub: &Hub) -> Result<Vec<PauseView>, AppError> {
 
 /// The refusal of any work on a paused queue.
 fn paused_refusal(pause: &Pause) -> AppError {
-    AppError::Conflict(format!(
-        "your queue is paused by an admin (since {}): you cannot open, save, answer or skip \
-         items until it is resumed; your drafts are kept",
-        pause.paused_at
-    ))
+    Refusal::QueuePaused {
+        since: pause.paused_at.clone(),
+    }
+    .into()
 }
 
 /// 409 when the session's annotator's queue is paused. Call inside the write's transaction
@@ -206,8 +210,11 @@ pub async fn handover(
     let paused = store::controls::pauses(&mut conn).await?;
     drop(conn);
     let by_name = |name: &str| accounts.iter().find(|a| a.name == name);
-    let giver =
-        by_name(from).ok_or_else(|| AppError::NotFound(format!("no annotator named '{from}'")))?;
+    let giver = by_name(from).ok_or_else(|| {
+        AppError::from(Refusal::NoAnnotator {
+            annotator: from.to_owned(),
+        })
+    })?;
     let is_paused = |id: i64| paused.iter().any(|p| p.annotator == id);
     let recipients: Vec<&Annotator> = if to.is_empty() {
         accounts

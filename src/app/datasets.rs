@@ -7,6 +7,7 @@ use std::collections::HashSet;
 use bytes::Bytes;
 use tokio::sync::mpsc;
 
+use super::refusal::Refusal;
 use super::{AppError, Hub, audit};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::dataset::AnswerVisibility;
@@ -25,7 +26,14 @@ pub async fn by_name(hub: &Hub, name: &str) -> Result<Dataset, AppError> {
     let mut conn = hub.conn().await?;
     store::datasets::by_name(&mut conn, name)
         .await?
-        .ok_or_else(|| AppError::NotFound(format!("no dataset named '{name}'")))
+        .ok_or_else(|| no_dataset(name))
+}
+
+fn no_dataset(name: &str) -> AppError {
+    Refusal::NoDataset {
+        dataset: name.to_owned(),
+    }
+    .into()
 }
 
 /// Every dataset with its item counts.
@@ -40,7 +48,7 @@ pub async fn overview_of(hub: &Hub, name: &str) -> Result<DatasetOverview, AppEr
         .await?
         .into_iter()
         .find(|o| o.dataset.name == name)
-        .ok_or_else(|| AppError::NotFound(format!("no dataset named '{name}'")))
+        .ok_or_else(|| no_dataset(name))
 }
 
 /// The tasks a dataset's items come from, for filters.

@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 
 use bytes::Bytes;
 
+use super::refusal::Refusal;
 use crate::app::annotators::now_ms;
 use crate::app::episodes::{self, Episode, EpisodeSummary, Resolution};
 use crate::app::{AppError, Hub};
@@ -28,7 +29,11 @@ pub struct CuratorView {
 async fn episode_id(conn: &mut store::Conn, name: &str) -> Result<i64, AppError> {
     Ok(store::episodes::by_name(conn, name)
         .await?
-        .ok_or_else(|| AppError::NotFound(format!("no episode named '{name}'")))?
+        .ok_or_else(|| {
+            AppError::from(Refusal::NoEpisode {
+                episode: name.to_owned(),
+            })
+        })?
         .id)
 }
 
@@ -70,7 +75,11 @@ pub async fn describe(
         let mut conn = hub.conn().await?;
         store::episodes::by_name(&mut conn, name)
             .await?
-            .ok_or_else(|| AppError::NotFound(format!("no episode named '{name}'")))?
+            .ok_or_else(|| {
+                AppError::from(Refusal::NoEpisode {
+                    episode: name.to_owned(),
+                })
+            })?
             .frame_count
     };
     let problems = episode::validate(graphs, usize::try_from(frame_count).unwrap_or_default())
@@ -240,7 +249,11 @@ pub async fn compare(
         let mut conn = hub.conn().await?;
         let row = store::episodes::by_name(&mut conn, name)
             .await?
-            .ok_or_else(|| AppError::NotFound(format!("no episode named '{name}'")))?;
+            .ok_or_else(|| {
+                AppError::from(Refusal::NoEpisode {
+                    episode: name.to_owned(),
+                })
+            })?;
         match row.resolved_graphs {
             Some(json) => by_frame(serde_json::from_str(&json).map_err(|e| {
                 AppError::internal(format!("the resolved graphs do not read back: {e}"))

@@ -10,6 +10,7 @@ use bytes::Bytes;
 use serde::Serialize;
 use sha2::{Digest, Sha256};
 
+use super::refusal::Refusal;
 use super::{AppError, Hub, audit};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::episode::{self, Comparison, EpisodeGraphs, GraphProblem};
@@ -416,9 +417,11 @@ pub async fn list(hub: &Hub) -> Result<Vec<EpisodeSummary>, AppError> {
 }
 
 async fn row(conn: &mut store::Conn, name: &str) -> Result<store::episodes::EpisodeRow, AppError> {
-    store::episodes::by_name(conn, name)
-        .await?
-        .ok_or_else(|| AppError::NotFound(format!("no episode named '{name}'")))
+    store::episodes::by_name(conn, name).await?.ok_or_else(|| {
+        AppError::from(Refusal::NoEpisode {
+            episode: name.to_owned(),
+        })
+    })
 }
 
 /// An episode and its frames in order.
@@ -586,10 +589,10 @@ async fn export_graphs(
     let stored = store::episodes::graphs(conn, row.id).await?;
     match stored.as_slice() {
         [only] => parse_stored(&only.graphs, "graphs"),
-        [] => Err(AppError::Invalid(format!(
-            "episode '{}' has no graphs yet: set them first (episode graphs --set)",
-            row.name
-        ))),
+        [] => Err(Refusal::EpisodeHasNoGraphs {
+            episode: row.name.clone(),
+        }
+        .into()),
         several => Err(AppError::Invalid(format!(
             "episode '{}' has graphs from {} curators ({}): choose the ones to export first \
              (episode resolve)",

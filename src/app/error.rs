@@ -3,10 +3,14 @@
 //! (`web::error`), the command line prints the message and exits non-zero. Everything
 //! unexpected is `Internal`: its details go to the log, never to the client.
 
+use super::refusal::{Refusal, RefusalKind};
 use crate::core::submission::LineProblem;
 
 #[derive(Debug, thiserror::Error)]
 pub enum AppError {
+    /// A refusal whose reason is typed ([`Refusal`]): each edge words it in its own way.
+    #[error("{0}")]
+    Refused(Refusal),
     /// What was asked for does not exist (or is not this caller's to see).
     #[error("{0}")]
     NotFound(String),
@@ -56,6 +60,55 @@ impl AppError {
     /// An unexpected failure with context for the log.
     pub fn internal(context: impl std::fmt::Display) -> AppError {
         AppError::Internal(anyhow::anyhow!("{context}"))
+    }
+
+    /// Whether what was asked for does not exist, typed or not.
+    pub fn is_not_found(&self) -> bool {
+        match self {
+            AppError::NotFound(_) => true,
+            AppError::Refused(r) => r.kind() == RefusalKind::NotFound,
+            _ => false,
+        }
+    }
+
+    /// The codes of the kinds, which a refusal not yet typed is answered with.
+    pub const KIND_CODES: [&'static str; 11] = [
+        "not_found",
+        "invalid",
+        "unauthenticated",
+        "not_permitted",
+        "conflict",
+        "too_large",
+        "unsupported_format",
+        "rejected",
+        "limit_reached",
+        "unavailable",
+        "internal",
+    ];
+
+    /// The stable code the API answers with: the refusal's own for a typed refusal, else the
+    /// kind's.
+    pub fn code(&self) -> &'static str {
+        match self {
+            AppError::Refused(r) => r.code(),
+            AppError::NotFound(_) => "not_found",
+            AppError::Invalid(_) => "invalid",
+            AppError::Unauthenticated(_) => "unauthenticated",
+            AppError::NotPermitted(_) => "not_permitted",
+            AppError::Conflict(_) => "conflict",
+            AppError::TooLarge(_) => "too_large",
+            AppError::UnsupportedFormat(_) => "unsupported_format",
+            AppError::Rejected { .. } => "rejected",
+            AppError::LimitReached { .. } => "limit_reached",
+            AppError::Unavailable(_) => "unavailable",
+            AppError::Internal(_) => "internal",
+        }
+    }
+}
+
+impl From<Refusal> for AppError {
+    fn from(r: Refusal) -> Self {
+        AppError::Refused(r)
     }
 }
 
@@ -108,5 +161,41 @@ impl From<std::io::Error> for AppError {
 impl From<anyhow::Error> for AppError {
     fn from(e: anyhow::Error) -> Self {
         AppError::Internal(e)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_kind_answers_with_a_listed_code_and_typed_reasons_with_their_own() {
+        let text = || "x".to_owned();
+        let kinds = [
+            AppError::NotFound(text()),
+            AppError::Invalid(text()),
+            AppError::Unauthenticated(text()),
+            AppError::NotPermitted(text()),
+            AppError::Conflict(text()),
+            AppError::TooLarge(text()),
+            AppError::UnsupportedFormat(text()),
+            AppError::Rejected {
+                message: text(),
+                problems: Vec::new(),
+            },
+            AppError::LimitReached {
+                message: text(),
+                retry_after: None,
+            },
+            AppError::Unavailable(text()),
+            AppError::internal("x"),
+        ];
+        let codes: Vec<&str> = kinds.iter().map(AppError::code).collect();
+        assert_eq!(codes, AppError::KIND_CODES);
+        for refusal in Refusal::examples() {
+            let code = refusal.code();
+            assert!(!AppError::KIND_CODES.contains(&code), "{code}");
+            assert_eq!(AppError::from(refusal).code(), code);
+        }
     }
 }

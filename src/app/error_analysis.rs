@@ -8,6 +8,7 @@
 
 use std::collections::HashMap;
 
+use super::refusal::Refusal;
 use super::scoring::{self, ScoreFileError, ScoringStep};
 use super::submissions::{self, DatasetTargets};
 use super::tokens::Caller;
@@ -178,7 +179,11 @@ pub async fn of_annotator(
         .into_iter()
         .find(|a| a.name == annotator)
         .map(|a| a.id)
-        .ok_or_else(|| AppError::NotFound(format!("no annotator named '{annotator}'")))?;
+        .ok_or_else(|| {
+            AppError::from(Refusal::NoAnnotator {
+                annotator: annotator.to_owned(),
+            })
+        })?;
     drop(conn);
     humans(hub, &dataset, Some(id)).await
 }

@@ -310,7 +310,7 @@ pub(super) async fn object_bytes(hub: &Hub, sha256: &str) -> Result<Bytes, AppEr
     let Some(objects) = hub.frame_store.objects() else {
         return Err(AppError::Unavailable(format!(
             "frame {sha256} is held in object storage, and this process has none configured \
-             (give --frames URL or set ENACT_HUB_FRAMES)"
+             (its operator names the store in ENACT_HUB_FRAMES)"
         )));
     };
     objects.get(sha256).await?.ok_or_else(|| {

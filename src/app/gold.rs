@@ -12,6 +12,7 @@ use std::collections::HashSet;
 use serde::Serialize;
 
 use super::changes::Change;
+use super::refusal::Refusal;
 use super::{AppError, Hub, audit, datasets};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::gold::{self, GoldChoice, GoldRate};
@@ -327,7 +328,11 @@ async fn change_exclusion(
         .await?
         .into_iter()
         .find(|a| a.name == annotator)
-        .ok_or_else(|| AppError::NotFound(format!("no annotator named '{annotator}'")))?;
+        .ok_or_else(|| {
+            AppError::from(Refusal::NoAnnotator {
+                annotator: annotator.to_owned(),
+            })
+        })?;
     drop(conn);
     let mut tx = hub.begin().await?;
     let changed = if exclude {

@@ -316,14 +316,14 @@ pub enum ImportError {
         path: String,
         source: std::io::Error,
     },
-    #[error("{file}: {} invalid rows of {rows}; nothing was imported (use --skip-invalid to import the valid rows)", lines.len())]
+    #[error("{file}: {} invalid rows of {rows}; nothing was imported (skip invalid rows to import the valid ones)", lines.len())]
     Invalid {
         file: String,
         rows: usize,
         /// Every problem, grouped by line.
         lines: Vec<SkippedLine>,
     },
-    #[error("{file}: {} items already exist in dataset '{dataset}' with different content; nothing was imported (use --replace to overwrite them)", conflicts.len())]
+    #[error("{file}: {} items already exist in dataset '{dataset}' with different content; nothing was imported (replace changed items to overwrite them)", conflicts.len())]
     Conflict {
         file: String,
         dataset: String,

@@ -127,8 +127,8 @@ fn release_under(root: &Path, path: &str) -> Result<(PathBuf, ReleaseLocation), 
 fn import_dir(hub: &Hub) -> Result<&Path, AppError> {
     hub.import_dir().ok_or_else(|| {
         AppError::NotPermitted(
-            "this server imports releases from its own disk only when started with \
-             --import-dir DIR (ENACT_HUB_IMPORT_DIR); use `enact-hub import` on the server"
+            "this server imports releases from its own disk only when its operator names an \
+             import folder (ENACT_HUB_IMPORT_DIR); otherwise import on the server itself"
                 .into(),
         )
     })

@@ -3,6 +3,7 @@
 
 use std::sync::Arc;
 
+use super::refusal::Refusal;
 use super::{AppError, Hub, datasets};
 use crate::store;
 pub use crate::store::items::{ItemFilter, ItemImage, ItemSummary, StoredItem};
@@ -20,6 +21,14 @@ pub async fn list(
     Ok(store::items::list(&mut conn, dataset.id, filter, per_page, offset).await?)
 }
 
+fn no_item(dataset: &str, item: &str) -> AppError {
+    Refusal::NoItem {
+        dataset: dataset.to_owned(),
+        item: item.to_owned(),
+    }
+    .into()
+}
+
 /// The item a URL names (ground truth included: callers choose what to show), or a 404 that
 /// names the dataset or the item.
 pub async fn get(hub: &Hub, dataset: &str, item_id: &str) -> Result<Arc<StoredItem>, AppError> {
@@ -28,16 +37,13 @@ pub async fn get(hub: &Hub, dataset: &str, item_id: &str) -> Result<Arc<StoredIt
     }
     // No stored id holds a NUL (PostgreSQL cannot even be asked about one).
     if item_id.contains('\0') {
-        return Err(AppError::NotFound(format!(
-            "no item '{}' in dataset '{dataset}'",
-            item_id.escape_debug()
-        )));
+        return Err(no_item(dataset, &item_id.escape_debug().to_string()));
     }
     let stored = datasets::by_name(hub, dataset).await?;
     let mut conn = hub.conn().await?;
     let item = store::items::get(&mut conn, stored.id, item_id)
         .await?
-        .ok_or_else(|| AppError::NotFound(format!("no item '{item_id}' in dataset '{dataset}'")))?;
+        .ok_or_else(|| no_item(dataset, item_id))?;
     let found = Arc::new(item);
     hub.items.insert_stored(dataset, item_id, found.clone());
     Ok(found)

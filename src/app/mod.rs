@@ -76,6 +76,7 @@ pub mod paper;
 pub mod pipeline;
 pub mod quality;
 pub mod red_flags;
+pub mod refusal;
 pub mod reported;
 pub mod rescore;
 pub mod runs;

@@ -215,7 +215,7 @@ async fn study_figures(
                     break;
                 }
                 // This row has no answers the study can compare: try the next.
-                Err(AppError::NotFound(_) | AppError::Invalid(_)) => {}
+                Err(e) if e.is_not_found() || matches!(e, AppError::Invalid(_)) => {}
                 Err(e) => return Err(e),
             }
         }

@@ -104,7 +104,7 @@ async fn alignments(
 
 async fn dataset_named(hub: &Hub, what: &str, name: &str) -> Result<Dataset, AppError> {
     match datasets::by_name(hub, name).await {
-        Err(AppError::NotFound(_)) => Err(AppError::Invalid(format!(
+        Err(e) if e.is_not_found() => Err(AppError::Invalid(format!(
             "{what}: no dataset named '{name}'"
         ))),
         other => other,
@@ -136,7 +136,7 @@ pub async fn create(
             return Err(AppError::Invalid(format!(
                 "variant {}/{}: none of dataset '{}''s {} items aligns with baseline '{}''s {} \
                  (by id, or by task, type and key frames); a variant asks the baseline's \
-                 questions with other images (see `generate --items-from`)",
+                 questions with other images (made from the baseline's items)",
                 spec.family,
                 spec.label,
                 spec.dataset,

@@ -200,6 +200,24 @@ pub(super) async fn import(args: ImportArgs) -> anyhow::Result<ExitCode> {
             );
             Ok(ExitCode::FAILURE)
         }
+        // The hub's own sentence names the import form's checkbox; here the flag.
+        Err(
+            ref e @ ImportError::Conflict {
+                ref file,
+                ref dataset,
+                ref conflicts,
+            },
+        ) => {
+            for detail in e.details() {
+                eprintln!("{detail}");
+            }
+            eprintln!(
+                "error: {file}: {} items already exist in dataset '{dataset}' with different \
+                 content; nothing was imported (use --replace to overwrite them)",
+                conflicts.len()
+            );
+            Ok(ExitCode::FAILURE)
+        }
         Err(e) => {
             for detail in e.details() {
                 eprintln!("{detail}");

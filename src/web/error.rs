@@ -9,12 +9,20 @@ use axum::response::{Html, IntoResponse, Response};
 use serde::Serialize;
 
 pub use crate::app::AppError;
+use crate::app::refusal::{Refusal, RefusalKind};
 
 use super::i18n::{Locale, Tr, msg};
 
 impl AppError {
     pub fn status(&self) -> StatusCode {
         match self {
+            AppError::Refused(r) => match r.kind() {
+                RefusalKind::NotFound => StatusCode::NOT_FOUND,
+                RefusalKind::Invalid => StatusCode::BAD_REQUEST,
+                RefusalKind::Unauthenticated => StatusCode::UNAUTHORIZED,
+                RefusalKind::NotPermitted => StatusCode::FORBIDDEN,
+                RefusalKind::Conflict => StatusCode::CONFLICT,
+            },
             AppError::NotFound(_) => StatusCode::NOT_FOUND,
             AppError::Invalid(_) => StatusCode::BAD_REQUEST,
             AppError::Unauthenticated(_) => StatusCode::UNAUTHORIZED,
@@ -47,6 +55,11 @@ impl From<askama::Error> for AppError {
 #[derive(Serialize)]
 struct ErrorBody<'a> {
     error: String,
+    /// The reason's stable code ([`AppError::code`]).
+    code: &'static str,
+    /// The values a typed refusal names, by name (`item`, `dataset`, `limit`, ...).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    details: Option<serde_json::Map<String, serde_json::Value>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     problems: Option<&'a [crate::core::submission::LineProblem]>,
 }
@@ -56,6 +69,16 @@ impl IntoResponse for AppError {
         self.log_if_internal();
         let body = ErrorBody {
             error: self.to_string(),
+            code: self.code(),
+            details: match &self {
+                AppError::Refused(r) => Some(
+                    r.details()
+                        .iter()
+                        .map(|(name, d)| ((*name).to_owned(), d.into()))
+                        .collect(),
+                ),
+                _ => None,
+            },
             problems: match &self {
                 AppError::Rejected { problems, .. } => Some(problems),
                 _ => None,
@@ -63,7 +86,7 @@ impl IntoResponse for AppError {
         };
         let mut response = (self.status(), Json(body)).into_response();
         match &self {
-            AppError::Unauthenticated(_) => {
+            AppError::Unauthenticated(_) | AppError::Refused(Refusal::NotLoggedIn) => {
                 response.headers_mut().insert(
                     header::WWW_AUTHENTICATE,
                     HeaderValue::from_static("Bearer realm=\"enact-hub\""),
@@ -113,8 +136,10 @@ struct ErrorPage<'a> {
     reason: String,
     /// What the status means, in the page's language.
     explanation: String,
-    /// The error's own message, in English as the use case wrote it (shown as a detail).
+    /// The error's own message: in the page's language for a typed refusal, else in English
+    /// as the use case wrote it (and marked so).
     message: &'a str,
+    message_in_english: bool,
 }
 
 /// An error page waiting for its language: [`PageError`] leaves this on the response, and
@@ -123,16 +148,19 @@ struct ErrorPage<'a> {
 struct ErrorPageParts {
     status: StatusCode,
     message: String,
+    refusal: Option<Refusal>,
 }
 
 impl ErrorPageParts {
     fn render(&self, tr: Tr) -> Response {
         let (reason, explanation) = status_keys(self.status);
+        let localized = self.refusal.as_ref().map(|r| tr.refusal(r));
         let page = ErrorPage {
             status: self.status.as_u16(),
             reason: tr.t(reason),
             explanation: tr.t(explanation),
-            message: &self.message,
+            message: localized.as_deref().unwrap_or(&self.message),
+            message_in_english: localized.is_none(),
             tr,
         };
         match page.render() {
@@ -167,6 +195,10 @@ impl IntoResponse for PageError {
         let parts = ErrorPageParts {
             status: error.status(),
             message: error.to_string(),
+            refusal: match &error {
+                AppError::Refused(r) => Some(r.clone()),
+                _ => None,
+            },
         };
         // English until `localize_error_pages` renders it in the request's language.
         let mut response = parts.render(Tr::new(Locale::English));

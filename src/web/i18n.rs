@@ -8,8 +8,9 @@
 //! field every translated page carries: `{{ tr.t("queue-title") }}`, with variables `t_n`, `t_s` and the like.
 //!
 //! Never translated: an item's question text and action descriptions (they are the benchmark)
-//! and the JSON API's error messages (clients parse them). `tests/service/i18n.rs` fails when a
-//! key used by a template, the page script or this crate is missing from a locale, or a
+//! and the JSON API's error sentences (English, beside their `code`). A page says a typed
+//! refusal in its own language, from the `refusal-*` messages. `tests/service/i18n.rs` fails
+//! when a key used by a template, the page script or this crate is missing from a locale, or a
 //! catalogue holds a key nothing uses.
 
 use std::sync::LazyLock;
@@ -23,6 +24,7 @@ use fluent_bundle::{FluentArgs, FluentResource, FluentValue};
 
 use super::AppState;
 use super::cookies::cookie;
+use crate::app::refusal::{Detail, Refusal};
 
 /// The cookie holding the locale a browser chose with the switch.
 pub const LOCALE_COOKIE: &str = "enact_lang";
@@ -456,6 +458,20 @@ impl Tr {
         self.with(key, vars.iter().map(|(name, value)| (*name, text(value))))
     }
 
+    /// Why a request was refused, in the page's language.
+    pub fn refusal(&self, refusal: &Refusal) -> String {
+        self.with(
+            refusal_key(refusal),
+            refusal.details().into_iter().map(|(name, detail)| {
+                let value = match detail {
+                    Detail::Text(t) => FluentValue::from(t),
+                    Detail::Number(n) => number(n),
+                };
+                (name, value)
+            }),
+        )
+    }
+
     /// A share (0–1) as a percentage with one decimal, without the sign: "12.5"; a dash when
     /// there is none.
     pub fn percent_figure(&self, share: Option<f64>) -> String {
@@ -522,6 +538,30 @@ impl Tr {
     }
 }
 
+/// The catalogue message of a refusal: `refusal-` and its code with dashes. Written out, as
+/// [`msg`] keys, so that the catalogue check sees every one.
+pub fn refusal_key(refusal: &Refusal) -> &'static str {
+    match refusal {
+        Refusal::NoDataset { .. } => msg("refusal-no-dataset"),
+        Refusal::NoItem { .. } => msg("refusal-no-item"),
+        Refusal::NoAnnotator { .. } => msg("refusal-no-annotator"),
+        Refusal::NoEpisode { .. } => msg("refusal-no-episode"),
+        Refusal::NoAnswerYet { .. } => msg("refusal-no-answer-yet"),
+        Refusal::NotLoggedIn => msg("refusal-not-logged-in"),
+        Refusal::AdminOnly { .. } => msg("refusal-admin-only"),
+        Refusal::StaleForm => msg("refusal-stale-form"),
+        Refusal::NotAssigned { .. } => msg("refusal-not-assigned"),
+        Refusal::ItemFinished { .. } => msg("refusal-item-finished"),
+        Refusal::QueuePaused { .. } => msg("refusal-queue-paused"),
+        Refusal::SlotsEmpty { .. } => msg("refusal-slots-empty"),
+        Refusal::ReasonMissing { .. } => msg("refusal-reason-missing"),
+        Refusal::ReasonTooLong { .. } => msg("refusal-reason-too-long"),
+        Refusal::PasswordsDiffer => msg("refusal-passwords-differ"),
+        Refusal::PasswordTooShort { .. } => msg("refusal-password-too-short"),
+        Refusal::EpisodeHasNoGraphs { .. } => msg("refusal-episode-has-no-graphs"),
+    }
+}
+
 /// The messages `static/annotate.js` shows (live-region announcements, status text, labels),
 /// with the variables each takes. The script reads them from the page, never its own copy.
 pub const SCRIPT_MESSAGES: &[(&str, &[&str])] = &[
@@ -550,6 +590,16 @@ pub const SCRIPT_MESSAGES: &[(&str, &[&str])] = &[
     (msg("js-transition-before"), &["index", "name"]),
     (msg("js-transition-after"), &["index", "name"]),
     (msg("js-not-placed"), &["name"]),
+    // The refusals a draft or an answer can meet, shown by their API code (`refusal-` and the
+    // code with dashes) with the reply's `details`.
+    (msg("refusal-item-finished"), &["item"]),
+    (msg("refusal-queue-paused"), &["since"]),
+    (msg("refusal-slots-empty"), &["item", "slots"]),
+    (msg("refusal-not-assigned"), &["dataset", "item"]),
+    (msg("refusal-no-item"), &["dataset", "item"]),
+    (msg("refusal-no-dataset"), &["dataset"]),
+    (msg("refusal-not-logged-in"), &[]),
+    (msg("refusal-stale-form"), &[]),
 ];
 
 /// The request's locale, for handlers that render pages.

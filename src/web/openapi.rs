@@ -23,6 +23,7 @@ use serde_json::{Map, Value, json};
 use super::auth::{ScopeGuard, require_scope};
 use super::error::PageError;
 use super::{AppError, AppState};
+use crate::app::refusal::Refusal;
 use crate::core::credentials::Scope;
 
 /// Where the table is mounted.
@@ -136,6 +137,13 @@ pub struct ApiRoute {
 }
 
 /// What an error status means on this API; every error body is the `Error` schema.
+/// Every `code` an error body can carry: the kinds' and the typed reasons'.
+fn error_codes() -> Vec<&'static str> {
+    let mut codes = AppError::KIND_CODES.to_vec();
+    codes.extend(Refusal::examples().iter().map(Refusal::code));
+    codes
+}
+
 fn error_meaning(status: u16) -> &'static str {
     match status {
         400 => "A malformed request: a missing or invalid query parameter or body field.",
@@ -530,9 +538,22 @@ pub fn document(routes: &[ApiRoute]) -> Value {
             "schemas": {
                 "Error": {
                     "type": "object",
-                    "required": ["error"],
+                    "required": ["error", "code"],
                     "properties": {
-                        "error": {"type": "string", "description": "What was wrong, for a person to act on."},
+                        "error": {"type": "string", "description": "What was wrong, for a person to act on (English)."},
+                        "code": {
+                            "type": "string",
+                            "enum": error_codes(),
+                            "description": "What was wrong, for a program to branch on; stable across \
+                                versions. A typed reason's own code (`no_item`, `item_finished`, ...), \
+                                or, for a refusal not yet typed, its kind's (`not_found`, `invalid`, ...).",
+                        },
+                        "details": {
+                            "type": "object",
+                            "description": "A typed reason only: the values it names (`dataset`, `item`, \
+                                `limit`, ...), as strings or numbers.",
+                            "additionalProperties": {"type": ["string", "integer"]},
+                        },
                         "problems": {
                             "type": "array",
                             "description": "422 only: each refused line of the body.",

@@ -34,6 +34,7 @@ use super::{AppError, AppState};
 use crate::app::annotators::{self, SESSION_LIFETIME, now_ms};
 use crate::app::cache::BoundedCache;
 use crate::app::changes::Change;
+use crate::app::refusal::Refusal;
 use crate::app::tokens;
 use crate::core::annotation::Session;
 use crate::core::credentials::{
@@ -279,10 +280,7 @@ impl FromRequestParts<AppState> for LoggedIn {
             None if parts.method == Method::GET && !wants_json(&parts.headers, &parts.uri) => {
                 Err(Redirect::to("/login").into_response())
             }
-            None => Err(AppError::Unauthenticated(
-                "not logged in, or the session has expired: log in at /login".to_owned(),
-            )
-            .into_response()),
+            None => Err(AppError::from(Refusal::NotLoggedIn).into_response()),
         }
     }
 }
@@ -308,10 +306,9 @@ impl FromRequestParts<AppState> for Admin {
         if session.is_admin {
             Ok(Admin(session))
         } else {
-            Err(PageError(AppError::NotPermitted(format!(
-                "the admin pages are for admins; '{}' is an annotator",
-                session.name
-            )))
+            Err(PageError(AppError::from(Refusal::AdminOnly {
+                annotator: session.name,
+            }))
             .into_response())
         }
     }
@@ -341,11 +338,7 @@ pub struct Protected<T> {
 }
 
 fn csrf_rejected(json: bool) -> Response {
-    let error = AppError::NotPermitted(
-        "this request lacks the page's CSRF token, or carries a stale one: reload the page and \
-         try again"
-            .to_owned(),
-    );
+    let error = AppError::from(Refusal::StaleForm);
     if json {
         error.into_response()
     } else {
@@ -630,8 +623,11 @@ async fn accept_invite(
     }
     match annotators::accept_invite(&state.hub, &token, &form.password, &form.repeat).await {
         Ok(annotator) => Ok(start_session(&state, &headers, annotator, "/annotate").await?),
-        // A password the rules refuse: the form again, saying why.
-        Err(AppError::Invalid(message)) => {
+        // A password the rules refuse: the form again, saying why in the page's language.
+        Err(AppError::Refused(
+            refusal @ (Refusal::PasswordsDiffer | Refusal::PasswordTooShort { .. }),
+        )) => {
+            let message = tr.refusal(&refusal);
             invite_form(
                 tr,
                 &state,

@@ -788,7 +788,13 @@ async fn drafts_resume_submissions_are_checked_and_scored_for_the_human_row() {
     let body: Value = r.json().await.expect("json");
     assert_eq!(
         body["error"],
-        format!("item '{fwd3}': slots 1 are empty; fill every slot before submitting")
+        format!("item '{fwd3}': slot 1 is empty; fill every slot before submitting")
+    );
+    // The reason is typed: a stable code and what it names, for a client to act on.
+    assert_eq!(body["code"], "slots_empty");
+    assert_eq!(
+        body["details"],
+        json!({"item": fwd3, "slots": "1", "count": 1})
     );
 
     // Right on the forward item, wrong on the inverse one.
@@ -828,6 +834,37 @@ async fn drafts_resume_submissions_are_checked_and_scored_for_the_human_row() {
             .expect("body")
             .contains("say why in the reason field")
     );
+    // An annotator reading the pages in Chinese is told why in Chinese; the API's sentence and
+    // code stay as they are.
+    alice
+        .cookies
+        .push(("enact_lang".to_owned(), "zh-CN".to_owned()));
+    let r = alice
+        .post_form(
+            &skip,
+            &[("csrf", &csrf), ("reason", ""), ("action", "skip")],
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::BAD_REQUEST);
+    let html = r.text().await.expect("body");
+    assert!(html.contains(r#"<html lang="zh-CN""#), "{html}");
+    assert!(
+        html.contains(&format!("要跳过条目“{}”，请在原因栏中说明原因", ids[2])),
+        "{html}"
+    );
+    assert!(!html.contains("say why"), "{html}");
+    let r = alice
+        .post_json(
+            &format!("/annotate/mini/{fwd3}/submit"),
+            Some(&csrf),
+            &json!({"slots": [1, 2], "counts": counts}),
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::CONFLICT);
+    let body: Value = r.json().await.expect("json");
+    assert_eq!(body["code"], "item_finished");
+    assert!(body["error"].as_str().expect("error").is_ascii(), "{body}");
+    alice.cookies.retain(|(name, _)| name != "enact_lang");
     let r = alice
         .post_form(
             &skip,

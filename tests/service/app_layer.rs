@@ -2,6 +2,7 @@
 //! command line, stored scores read back typed (and never read as zero when unreadable), and
 //! every refusal of a JSON route as the JSON error body.
 
+use enact_hub::app::refusal::Refusal;
 use enact_hub::app::{self, AppError, Hub};
 use enact_hub::core::credentials::Role;
 use reqwest::Method;
@@ -177,12 +178,11 @@ async fn a_draft_never_outlives_the_answer_that_finished_its_item() {
     // The late save is refused by the store itself, and leaves no draft.
     let mut draft = Draft::empty(opened.item.summary.step_length);
     draft.slots = vec![Some(1), None];
-    let Err(AppError::Conflict(message)) =
-        app::annotation::save_draft(&hub, &session, "mini", &item, &draft).await
-    else {
-        panic!("a save after the answer must be refused");
+    let refused = app::annotation::save_draft(&hub, &session, "mini", &item, &draft).await;
+    let Err(AppError::Refused(Refusal::ItemFinished { item: finished })) = refused else {
+        panic!("a save after the answer must be refused as finished: {refused:?}");
     };
-    assert!(message.contains("already finished"), "{message}");
+    assert_eq!(finished, item);
     let drafts: i64 = db!(
         server.pool,
         fetch_one,

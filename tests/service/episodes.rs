@@ -377,7 +377,9 @@ async fn an_incomplete_episode_is_hidden_and_the_next_import_of_its_name_replace
     assert!(episodes::list(&hub).await.unwrap().is_empty());
     assert!(matches!(
         episodes::get(&hub, "kitchen_real").await,
-        Err(AppError::NotFound(_))
+        Err(AppError::Refused(
+            enact_hub::app::refusal::Refusal::NoEpisode { .. }
+        ))
     ));
 
     // While the claim runs, the import that holds it might be alive: the next is refused, and

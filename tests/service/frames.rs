@@ -348,7 +348,7 @@ async fn a_frame_held_elsewhere_on_a_server_without_the_store_is_a_503_that_says
     assert_eq!(status, StatusCode::SERVICE_UNAVAILABLE);
     let error = body["error"].as_str().expect("error");
     assert!(error.contains("held in object storage"), "{error}");
-    assert!(error.contains("--frames URL"), "{error}");
+    assert!(error.contains("ENACT_HUB_FRAMES"), "{error}");
     server.stop().await;
 }
 

@@ -6,7 +6,8 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
-use enact_hub::web::i18n::{Locale, SCRIPT_MESSAGES, catalogue_keys};
+use enact_hub::app::refusal::{Detail, Refusal};
+use enact_hub::web::i18n::{Locale, SCRIPT_MESSAGES, Tr, catalogue_keys};
 use regex::Regex;
 use reqwest::StatusCode;
 
@@ -111,6 +112,50 @@ fn every_used_key_is_in_every_locale_and_every_key_is_used() {
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
 
+/// Every typed refusal has its message in every locale, and says it with each of its details;
+/// no message a page can show names a command-line flag (a reader of a page cannot give one).
+#[test]
+fn every_refusal_is_worded_in_every_locale_and_no_message_names_a_flag() {
+    let flag = Regex::new(r"(^|[\s(`'“])--[a-z]").expect("regex");
+    let mut problems = Vec::new();
+    for locale in Locale::ALL {
+        let tr = Tr::new(locale);
+        for refusal in Refusal::examples() {
+            let text = tr.refusal(&refusal);
+            if text.starts_with("refusal-") {
+                problems.push(format!(
+                    "{}: no message for {}",
+                    locale.tag(),
+                    refusal.code()
+                ));
+            }
+            for (name, detail) in refusal.details() {
+                let shown = match detail {
+                    Detail::Text(t) => t,
+                    Detail::Number(n) => enact_hub::web::i18n::decimal(n as f64, 0),
+                };
+                // The plural form's count is the sentence's grammar, not always shown.
+                if name != "count" && name != "action" && !text.contains(&shown) {
+                    problems.push(format!(
+                        "{}: {} does not show its {name} ({shown}): {text}",
+                        locale.tag(),
+                        refusal.code()
+                    ));
+                }
+            }
+        }
+        for line in locale.catalogue_source().lines() {
+            if !line.trim_start().starts_with('#') && flag.is_match(line) {
+                problems.push(format!("locales/{}: names a flag: {line}", locale.tag()));
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    // The scan sees a flag where one is.
+    assert!(flag.is_match("use --skip-invalid to import"));
+    assert!(!flag.is_match("2026-11-29 -- a note"));
+}
+
 #[test]
 fn the_check_sees_a_missing_key() {
     // The scan must find lookups in each kind of source, or the check above proves nothing.
@@ -157,14 +202,22 @@ async fn accept_language_chooses_the_pages_language() {
 }
 
 #[tokio::test]
-async fn error_pages_are_translated_and_api_errors_stay_english() {
+async fn error_pages_are_translated_and_api_errors_stay_english_with_a_code() {
     let (server, _) = spawn_app_with_release().await;
     let (status, html) = page(&server, "/datasets/nope", "zh-CN").await;
     assert_eq!(status, StatusCode::NOT_FOUND);
     assert!(html.contains(r#"<html lang="zh-CN" dir="ltr">"#), "{html}");
     assert!(html.contains("404 未找到"), "{html}");
-    // The detail is the use case's own message, marked as English.
-    assert!(html.contains(r#"<span lang="en">"#), "{html}");
+    // A typed refusal is said in the page's language.
+    assert!(html.contains("没有名为“nope”的数据集"), "{html}");
+    assert!(!html.contains(r#"<span lang="en">"#), "{html}");
+    // A refusal still worded by its use case is shown as it is, marked as English.
+    let (status, html) = page(&server, "/studies/nope", "zh-CN").await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
+    assert!(
+        html.contains(r#"<span lang="en">no study named &#39;nope&#39;</span>"#),
+        "{html}"
+    );
     let r = reqwest::Client::new()
         .get(server.url("/api/v1/datasets/nope/items"))
         .header("accept-language", "zh-CN")
@@ -175,6 +228,8 @@ async fn error_pages_are_translated_and_api_errors_stay_english() {
     let body: serde_json::Value = r.json().await.expect("json");
     let error = body["error"].as_str().expect("error");
     assert!(error.is_ascii() && error.contains("nope"), "{error}");
+    assert_eq!(body["code"], "no_dataset");
+    assert_eq!(body["details"], serde_json::json!({"dataset": "nope"}));
     server.stop().await;
 }
 

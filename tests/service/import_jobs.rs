@@ -178,7 +178,10 @@ async fn an_admin_imports_a_release_from_the_import_folder_as_a_job() {
     )
     .await
     .expect_err("no import folder");
-    assert!(refused.to_string().contains("--import-dir"), "{refused}");
+    assert!(
+        refused.to_string().contains("ENACT_HUB_IMPORT_DIR"),
+        "{refused}"
+    );
 }
 
 /// An import interrupted after some batches (a killed server), then queued as a job: the job

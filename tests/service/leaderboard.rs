@@ -458,7 +458,9 @@ async fn readers_that_miss_together_share_one_build_and_a_change_starts_another(
     let missing = leaderboard::board(&hub, "nope").await;
     assert!(matches!(
         missing,
-        Err(enact_hub::app::AppError::NotFound(_))
+        Err(enact_hub::app::AppError::Refused(
+            enact_hub::app::refusal::Refusal::NoDataset { .. }
+        ))
     ));
     server.stop().await;
 }

@@ -148,7 +148,20 @@ async fn the_document_covers_auth_bodies_parameters_and_errors() {
         "bearer"
     );
     let error = &doc["components"]["schemas"]["Error"];
-    assert_eq!(error["required"], json!(["error"]));
+    assert_eq!(error["required"], json!(["error", "code"]));
+    // Every code the hub answers with is listed: the kinds' and each typed reason's.
+    let codes = error["properties"]["code"]["enum"]
+        .as_array()
+        .expect("the codes are listed");
+    for code in [
+        "not_found",
+        "internal",
+        "no_dataset",
+        "item_finished",
+        "slots_empty",
+    ] {
+        assert!(codes.contains(&json!(code)), "{code} is not listed");
+    }
     assert!(error["properties"]["problems"]["items"]["properties"]["line"].is_object());
 
     let submit = &doc["paths"]["/api/v1/datasets/{dataset}/submissions"]["post"];

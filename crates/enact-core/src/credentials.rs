@@ -221,11 +221,11 @@ pub fn verify_password(password: &str, stored: &str) -> bool {
     })
 }
 
-/// Why a new password is refused.
-pub fn password_problem(password: &str) -> Option<String> {
+/// The length in characters of a new password too short to take (under
+/// [`MIN_PASSWORD_CHARS`]); `None` when it is long enough.
+pub fn too_short_password(password: &str) -> Option<usize> {
     let chars = password.chars().count();
-    (chars < MIN_PASSWORD_CHARS)
-        .then(|| format!("the password has {chars} characters; use at least {MIN_PASSWORD_CHARS}"))
+    (chars < MIN_PASSWORD_CHARS).then_some(chars)
 }
 
 /// The name of an API account (a person or team), trimmed: 1 to 100 characters.
@@ -310,8 +310,9 @@ mod tests {
         assert!(verify_password("correct horse", &hash));
         assert!(!verify_password("wrong horse", &hash));
         assert!(!verify_password("correct horse", "not a phc string"));
-        assert!(password_problem("short").is_some());
-        assert!(password_problem("long enough!").is_none());
+        assert_eq!(too_short_password("short"), Some(5));
+        assert_eq!(too_short_password("ninechars"), Some(9));
+        assert_eq!(too_short_password("long enough"), None);
         let (a, b) = (random_token(), random_token());
         assert_eq!(a.len(), 64);
         assert_ne!(a, b);

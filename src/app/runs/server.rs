@@ -71,7 +71,8 @@ impl EndpointKeys {
     pub fn key(&self, variable: &str) -> Result<ApiKey, AppError> {
         self.0.get(variable).cloned().ok_or_else(|| {
             let allowed = if self.0.is_empty() {
-                "the server allows none (start it with --endpoint-key VAR)".to_owned()
+                "the server allows none (its operator names them in ENACT_HUB_ENDPOINT_KEYS)"
+                    .to_owned()
             } else {
                 format!(
                     "the server allows {}",

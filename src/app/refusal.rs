@@ -1,0 +1,360 @@
+//! Why a request was refused, as data: which item, which field, which limit. A [`Refusal`] is
+//! put into words only at the edge that shows it:
+//! - the web's pages say it in the request's language, from the catalogues' `refusal-*`
+//!   messages (`web::error`);
+//! - the JSON API answers with its stable [`Refusal::code`] and its [`Refusal::details`],
+//!   beside the English sentence ([`std::fmt::Display`]);
+//! - the command line prints the English sentence, with its own flags where a flag helps.
+//!
+//! The English sentences name no command-line flag: a page or an API client cannot use one.
+//! Refusals not yet given a variant here are still `AppError`'s sentence variants, answered
+//! with their kind's code (`not_found`, `invalid`, ...).
+
+use std::fmt;
+
+/// What kind of refusal it is: the web answers each kind with one status code.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RefusalKind {
+    NotFound,
+    Invalid,
+    Unauthenticated,
+    NotPermitted,
+    Conflict,
+}
+
+/// Skipping an item or flagging it: both finish it without an answer, with a reason.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SkipAction {
+    Skip,
+    Flag,
+}
+
+impl SkipAction {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SkipAction::Skip => "skip",
+            SkipAction::Flag => "flag",
+        }
+    }
+}
+
+/// A value a refusal names, for the sentence made from it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Detail {
+    Text(String),
+    Number(u64),
+}
+
+impl From<&Detail> for serde_json::Value {
+    fn from(d: &Detail) -> Self {
+        match d {
+            Detail::Text(t) => serde_json::Value::from(t.as_str()),
+            Detail::Number(n) => serde_json::Value::from(*n),
+        }
+    }
+}
+
+/// A refusal with its reason typed. Each variant has a stable [`code`](Refusal::code), the
+/// API's promise to clients; renaming one is a breaking change.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Refusal {
+    /// No dataset has this name (or the caller may not see it).
+    NoDataset { dataset: String },
+    /// The dataset has no item with this id.
+    NoItem { dataset: String, item: String },
+    /// No annotator has this login name.
+    NoAnnotator { annotator: String },
+    /// No episode has this name.
+    NoEpisode { episode: String },
+    /// The annotator has not finished this item yet, so there is no answer of theirs to show.
+    NoAnswerYet { item: String },
+    /// A request that needs a login session came without a live one.
+    NotLoggedIn,
+    /// An annotator asked for an admin page.
+    AdminOnly { annotator: String },
+    /// A state-changing request without the page's CSRF token, or with a stale one.
+    StaleForm,
+    /// The item exists but is not in this annotator's queue.
+    NotAssigned { dataset: String, item: String },
+    /// The item is finished: its answer, skip or flag can no longer change.
+    ItemFinished { item: String },
+    /// An admin paused this annotator's queue at `since`.
+    QueuePaused { since: String },
+    /// An answer with empty slots (1-based).
+    SlotsEmpty { item: String, slots: Vec<usize> },
+    /// A skip or flag without a reason.
+    ReasonMissing { item: String, action: SkipAction },
+    /// A skip or flag reason over `limit` characters.
+    ReasonTooLong { limit: u64 },
+    /// The new password and its repetition differ.
+    PasswordsDiffer,
+    /// The new password has `chars` characters, fewer than `least`.
+    PasswordTooShort { chars: u64, least: u64 },
+    /// An export of an episode whose scene graphs no curator has set.
+    EpisodeHasNoGraphs { episode: String },
+}
+
+impl Refusal {
+    /// The kind, which chooses the HTTP status.
+    pub fn kind(&self) -> RefusalKind {
+        match self {
+            Refusal::NoDataset { .. }
+            | Refusal::NoItem { .. }
+            | Refusal::NoAnnotator { .. }
+            | Refusal::NoEpisode { .. }
+            | Refusal::NoAnswerYet { .. } => RefusalKind::NotFound,
+            Refusal::NotLoggedIn => RefusalKind::Unauthenticated,
+            Refusal::AdminOnly { .. } | Refusal::StaleForm | Refusal::NotAssigned { .. } => {
+                RefusalKind::NotPermitted
+            }
+            Refusal::ItemFinished { .. } | Refusal::QueuePaused { .. } => RefusalKind::Conflict,
+            Refusal::SlotsEmpty { .. }
+            | Refusal::ReasonMissing { .. }
+            | Refusal::ReasonTooLong { .. }
+            | Refusal::PasswordsDiffer
+            | Refusal::PasswordTooShort { .. }
+            | Refusal::EpisodeHasNoGraphs { .. } => RefusalKind::Invalid,
+        }
+    }
+
+    /// The stable code a client can branch on: snake case, never reworded.
+    pub fn code(&self) -> &'static str {
+        match self {
+            Refusal::NoDataset { .. } => "no_dataset",
+            Refusal::NoItem { .. } => "no_item",
+            Refusal::NoAnnotator { .. } => "no_annotator",
+            Refusal::NoEpisode { .. } => "no_episode",
+            Refusal::NoAnswerYet { .. } => "no_answer_yet",
+            Refusal::NotLoggedIn => "not_logged_in",
+            Refusal::AdminOnly { .. } => "admin_only",
+            Refusal::StaleForm => "stale_form",
+            Refusal::NotAssigned { .. } => "not_assigned",
+            Refusal::ItemFinished { .. } => "item_finished",
+            Refusal::QueuePaused { .. } => "queue_paused",
+            Refusal::SlotsEmpty { .. } => "slots_empty",
+            Refusal::ReasonMissing { .. } => "reason_missing",
+            Refusal::ReasonTooLong { .. } => "reason_too_long",
+            Refusal::PasswordsDiffer => "passwords_differ",
+            Refusal::PasswordTooShort { .. } => "password_too_short",
+            Refusal::EpisodeHasNoGraphs { .. } => "episode_has_no_graphs",
+        }
+    }
+
+    /// The values the refusal names, by the names the catalogues' messages and the API's
+    /// `details` use.
+    pub fn details(&self) -> Vec<(&'static str, Detail)> {
+        let text = |s: &str| Detail::Text(s.to_owned());
+        match self {
+            Refusal::NoDataset { dataset } => vec![("dataset", text(dataset))],
+            Refusal::NoItem { dataset, item } | Refusal::NotAssigned { dataset, item } => {
+                vec![("dataset", text(dataset)), ("item", text(item))]
+            }
+            Refusal::NoAnnotator { annotator } | Refusal::AdminOnly { annotator } => {
+                vec![("annotator", text(annotator))]
+            }
+            Refusal::NoEpisode { episode } | Refusal::EpisodeHasNoGraphs { episode } => {
+                vec![("episode", text(episode))]
+            }
+            Refusal::NoAnswerYet { item } | Refusal::ItemFinished { item } => {
+                vec![("item", text(item))]
+            }
+            Refusal::NotLoggedIn | Refusal::StaleForm | Refusal::PasswordsDiffer => Vec::new(),
+            Refusal::QueuePaused { since } => vec![("since", text(since))],
+            Refusal::SlotsEmpty { item, slots } => vec![
+                ("item", text(item)),
+                ("slots", Detail::Text(slot_list(slots))),
+                ("count", Detail::Number(slots.len() as u64)),
+            ],
+            Refusal::ReasonMissing { item, action } => {
+                vec![("item", text(item)), ("action", text(action.as_str()))]
+            }
+            Refusal::ReasonTooLong { limit } => vec![("limit", Detail::Number(*limit))],
+            Refusal::PasswordTooShort { chars, least } => vec![
+                ("chars", Detail::Number(*chars)),
+                ("least", Detail::Number(*least)),
+            ],
+        }
+    }
+
+    /// One refusal of every variant, for the checks that every code is documented and every
+    /// variant has its message in every catalogue.
+    pub fn examples() -> Vec<Refusal> {
+        let s = |v: &str| v.to_owned();
+        vec![
+            Refusal::NoDataset { dataset: s("demo") },
+            Refusal::NoItem {
+                dataset: s("demo"),
+                item: s("a1"),
+            },
+            Refusal::NoAnnotator {
+                annotator: s("ann"),
+            },
+            Refusal::NoEpisode {
+                episode: s("kitchen"),
+            },
+            Refusal::NoAnswerYet { item: s("a1") },
+            Refusal::NotLoggedIn,
+            Refusal::AdminOnly {
+                annotator: s("ann"),
+            },
+            Refusal::StaleForm,
+            Refusal::NotAssigned {
+                dataset: s("demo"),
+                item: s("a1"),
+            },
+            Refusal::ItemFinished { item: s("a1") },
+            Refusal::QueuePaused {
+                since: s("2026-11-29 12:00:00"),
+            },
+            Refusal::SlotsEmpty {
+                item: s("a1"),
+                slots: vec![2, 3],
+            },
+            Refusal::ReasonMissing {
+                item: s("a1"),
+                action: SkipAction::Flag,
+            },
+            Refusal::ReasonTooLong { limit: 2000 },
+            Refusal::PasswordsDiffer,
+            Refusal::PasswordTooShort {
+                chars: 3,
+                least: 10,
+            },
+            Refusal::EpisodeHasNoGraphs {
+                episode: s("kitchen"),
+            },
+        ]
+    }
+}
+
+/// "2, 3": slots as a person counts them.
+fn slot_list(slots: &[usize]) -> String {
+    slots
+        .iter()
+        .map(usize::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The English sentence: the API's `error` and what the command line prints.
+impl fmt::Display for Refusal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Refusal::NoDataset { dataset } => write!(f, "no dataset named '{dataset}'"),
+            Refusal::NoItem { dataset, item } => {
+                write!(f, "no item '{item}' in dataset '{dataset}'")
+            }
+            Refusal::NoAnnotator { annotator } => write!(f, "no annotator named '{annotator}'"),
+            Refusal::NoEpisode { episode } => write!(f, "no episode named '{episode}'"),
+            Refusal::NoAnswerYet { item } => write!(f, "item '{item}' has no answer from you yet"),
+            Refusal::NotLoggedIn => write!(
+                f,
+                "not logged in, or the session has expired: log in at /login"
+            ),
+            Refusal::AdminOnly { annotator } => write!(
+                f,
+                "the admin pages are for admins; '{annotator}' is an annotator"
+            ),
+            Refusal::StaleForm => write!(
+                f,
+                "this request lacks the page's CSRF token, or carries a stale one: reload the \
+                 page and try again"
+            ),
+            Refusal::NotAssigned { dataset, item } => write!(
+                f,
+                "item '{item}' of dataset '{dataset}' is not assigned to you"
+            ),
+            Refusal::ItemFinished { item } => write!(
+                f,
+                "item '{item}' is already finished; its answer can no longer change"
+            ),
+            Refusal::QueuePaused { since } => write!(
+                f,
+                "your queue is paused by an admin (since {since}): you cannot open, save, \
+                 answer or skip items until it is resumed; your drafts are kept"
+            ),
+            Refusal::SlotsEmpty { item, slots } => {
+                let (noun, verb) = if slots.len() == 1 {
+                    ("slot", "is")
+                } else {
+                    ("slots", "are")
+                };
+                write!(
+                    f,
+                    "item '{item}': {noun} {} {verb} empty; fill every slot before submitting",
+                    slot_list(slots)
+                )
+            }
+            Refusal::ReasonMissing { item, action } => write!(
+                f,
+                "to {} item '{item}', say why in the reason field",
+                action.as_str()
+            ),
+            Refusal::ReasonTooLong { limit } => {
+                write!(f, "the reason is over {limit} characters")
+            }
+            Refusal::PasswordsDiffer => write!(f, "the two passwords differ"),
+            Refusal::PasswordTooShort { chars, least } => write!(
+                f,
+                "the password has {chars} characters; use at least {least}"
+            ),
+            Refusal::EpisodeHasNoGraphs { episode } => write!(
+                f,
+                "episode '{episode}' has no scene graphs yet: a curator must set them before \
+                 it can be exported"
+            ),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_variant_has_an_example_with_its_own_code() {
+        let examples = Refusal::examples();
+        let mut codes: Vec<&str> = examples.iter().map(Refusal::code).collect();
+        codes.sort_unstable();
+        codes.dedup();
+        assert_eq!(codes.len(), examples.len(), "two variants share a code");
+        for code in codes {
+            assert!(
+                code.bytes().all(|b| b.is_ascii_lowercase() || b == b'_'),
+                "{code} is not snake case"
+            );
+        }
+    }
+
+    #[test]
+    fn no_english_sentence_names_a_command_line_flag() {
+        for r in Refusal::examples() {
+            let text = r.to_string();
+            assert!(
+                !text.split_whitespace().any(|w| w.starts_with("--")),
+                "{}: {text}",
+                r.code()
+            );
+        }
+    }
+
+    #[test]
+    fn details_name_what_the_sentence_names() {
+        let r = Refusal::SlotsEmpty {
+            item: "a1".into(),
+            slots: vec![2],
+        };
+        assert_eq!(
+            r.to_string(),
+            "item 'a1': slot 2 is empty; fill every slot before submitting"
+        );
+        assert_eq!(
+            r.details(),
+            vec![
+                ("item", Detail::Text("a1".into())),
+                ("slots", Detail::Text("2".into())),
+                ("count", Detail::Number(1)),
+            ]
+        );
+    }
+}
