@@ -15,6 +15,10 @@ class HubError(Exception):
     Attributes:
         status: the HTTP status, or None when no answer came (a connection error).
         message: the hub's own message (its JSON ``error``), or the start of the body.
+        code: the hub's stable name for the reason (its JSON ``code``: ``"no_item"``,
+            ``"limit_reached"``, ...), to branch on; None when no JSON error came.
+        details: what a typed reason names (``{"dataset": ..., "item": ...}``); empty when
+            there is none.
         problems: the hub's ``problems`` list (e.g. one per refused line of a submission:
             ``{"line": 3, "message": "..."}``); empty when there is none.
         body: the hub's whole JSON error, when it sent one.
@@ -34,6 +38,10 @@ class HubError(Exception):
         self.message = message if message is not None else text
         self.problems = problems or []
         self.body = body
+        code = body.get("code") if body is not None else None
+        self.code: Optional[str] = code if isinstance(code, str) else None
+        details = body.get("details") if body is not None else None
+        self.details: Dict[str, Any] = details if isinstance(details, dict) else {}
 
     @classmethod
     def from_response(cls, what: str, response: requests.Response) -> "HubError":

@@ -88,6 +88,9 @@ def test_a_bad_filter_raises_the_hubs_message(demo: Server) -> None:
     with pytest.raises(HubError) as missing:
         Hub(demo.url).dataset("no-such-dataset")
     assert missing.value.status == 404
+    # A typed reason: its code and what it names, for a program to act on.
+    assert missing.value.code == "no_dataset"
+    assert missing.value.details == {"dataset": "no-such-dataset"}
 
 
 def all_items(hub: Hub, dataset: str) -> List[Dict[str, Any]]:
@@ -170,6 +173,7 @@ def test_a_refused_submission_carries_the_hubs_problems(demo: Server, submitter:
     assert error.problems and {p["line"] for p in error.problems} == {1, 2}
     assert "not-an-item" in str(error)
     assert error.body is not None and error.body["error"] == error.message
+    assert error.code == "rejected" and error.details == {}
 
 
 def test_a_bad_token_raises_the_hubs_message(demo: Server) -> None:
@@ -178,6 +182,7 @@ def test_a_bad_token_raises_the_hubs_message(demo: Server) -> None:
         hub.submit("demo", "python-client", {})
     assert caught.value.status == 401
     assert caught.value.message == "the API token is unknown or has been revoked"
+    assert caught.value.code == "unauthenticated"
     assert str(caught.value).startswith("posting the submission: HTTP 401: ")
     with pytest.raises(HubError, match="needs a token"):
         Hub(demo.url).errors(1)

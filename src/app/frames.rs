@@ -15,6 +15,7 @@ use object_store::signer::Signer;
 use object_store::{Attribute, Attributes, ObjectStore, PutOptions, PutPayload};
 use sha2::{Digest, Sha256};
 
+use super::refusal::Refusal;
 use super::{AppError, Hub};
 use crate::store;
 
@@ -274,7 +275,12 @@ pub async fn png_or_redirect(
         store::frames::png(&mut conn, sha256).await?
     };
     let png = match held {
-        None => return Err(AppError::NotFound(format!("no frame with hash '{sha256}'"))),
+        None => {
+            return Err(Refusal::NoFrame {
+                frame: sha256.to_owned(),
+            }
+            .into());
+        }
         Some(Some(png)) => Bytes::from(png),
         Some(None) => {
             let signed = match (redirect, hub.frame_store.objects()) {

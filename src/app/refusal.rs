@@ -66,6 +66,12 @@ pub enum Refusal {
     NoAnnotator { annotator: String },
     /// No episode has this name.
     NoEpisode { episode: String },
+    /// No submission has this id (or it is another account's).
+    NoSubmission { submission: String },
+    /// No model run has this id or name.
+    NoRun { run: String },
+    /// No frame has this SHA-256.
+    NoFrame { frame: String },
     /// The annotator has not finished this item yet, so there is no answer of theirs to show.
     NoAnswerYet { item: String },
     /// A request that needs a login session came without a live one.
@@ -102,6 +108,9 @@ impl Refusal {
             | Refusal::NoItem { .. }
             | Refusal::NoAnnotator { .. }
             | Refusal::NoEpisode { .. }
+            | Refusal::NoSubmission { .. }
+            | Refusal::NoRun { .. }
+            | Refusal::NoFrame { .. }
             | Refusal::NoAnswerYet { .. } => RefusalKind::NotFound,
             Refusal::NotLoggedIn => RefusalKind::Unauthenticated,
             Refusal::AdminOnly { .. } | Refusal::StaleForm | Refusal::NotAssigned { .. } => {
@@ -124,6 +133,9 @@ impl Refusal {
             Refusal::NoItem { .. } => "no_item",
             Refusal::NoAnnotator { .. } => "no_annotator",
             Refusal::NoEpisode { .. } => "no_episode",
+            Refusal::NoSubmission { .. } => "no_submission",
+            Refusal::NoRun { .. } => "no_run",
+            Refusal::NoFrame { .. } => "no_frame",
             Refusal::NoAnswerYet { .. } => "no_answer_yet",
             Refusal::NotLoggedIn => "not_logged_in",
             Refusal::AdminOnly { .. } => "admin_only",
@@ -158,6 +170,9 @@ impl Refusal {
             Refusal::NoAnswerYet { item } | Refusal::ItemFinished { item } => {
                 vec![("item", text(item))]
             }
+            Refusal::NoSubmission { submission } => vec![("submission", text(submission))],
+            Refusal::NoRun { run } => vec![("run", text(run))],
+            Refusal::NoFrame { frame } => vec![("frame", text(frame))],
             Refusal::NotLoggedIn | Refusal::StaleForm | Refusal::PasswordsDiffer => Vec::new(),
             Refusal::QueuePaused { since } => vec![("since", text(since))],
             Refusal::SlotsEmpty { item, slots } => vec![
@@ -192,6 +207,9 @@ impl Refusal {
             Refusal::NoEpisode {
                 episode: s("kitchen"),
             },
+            Refusal::NoSubmission { submission: s("7") },
+            Refusal::NoRun { run: s("3") },
+            Refusal::NoFrame { frame: s("ab12") },
             Refusal::NoAnswerYet { item: s("a1") },
             Refusal::NotLoggedIn,
             Refusal::AdminOnly {
@@ -246,6 +264,9 @@ impl fmt::Display for Refusal {
             }
             Refusal::NoAnnotator { annotator } => write!(f, "no annotator named '{annotator}'"),
             Refusal::NoEpisode { episode } => write!(f, "no episode named '{episode}'"),
+            Refusal::NoSubmission { submission } => write!(f, "no submission {submission}"),
+            Refusal::NoRun { run } => write!(f, "no model run {run}"),
+            Refusal::NoFrame { frame } => write!(f, "no frame with hash '{frame}'"),
             Refusal::NoAnswerYet { item } => write!(f, "item '{item}' has no answer from you yet"),
             Refusal::NotLoggedIn => write!(
                 f,

@@ -8,6 +8,7 @@ use sha2::{Digest, Sha256};
 
 use super::cache::{BoundedCache, CacheLimits};
 use super::changes::Change;
+use super::refusal::Refusal;
 use super::tokens::Caller;
 use super::{AppError, Hub, audit, datasets, statements};
 use crate::core::audit::{Actor, AuditAction};
@@ -430,7 +431,11 @@ pub async fn read(hub: &Hub, caller: &Caller, id: &str) -> Result<SubmissionDeta
 /// account's submission is answered like a missing one. (The `read_own` scope is the route's
 /// to check, before this is called.)
 pub async fn readable(hub: &Hub, caller: &Caller, id: &str) -> Result<SubmissionRow, AppError> {
-    let not_found = || AppError::NotFound(format!("no submission {id}"));
+    let not_found = || {
+        AppError::from(Refusal::NoSubmission {
+            submission: id.to_owned(),
+        })
+    };
     let numeric: i64 = id.parse().map_err(|_| not_found())?;
     let admin = caller.has(Scope::Admin);
     by_id(hub, numeric)
@@ -447,7 +452,11 @@ pub async fn update_listing(
     baseline: Option<bool>,
     visibility: Option<&str>,
 ) -> Result<SubmissionRow, AppError> {
-    let not_found = || AppError::NotFound(format!("no submission {id}"));
+    let not_found = || {
+        AppError::from(Refusal::NoSubmission {
+            submission: id.to_owned(),
+        })
+    };
     let numeric: i64 = id.parse().map_err(|_| not_found())?;
     let visibility = visibility
         .map(|v| {

@@ -18,6 +18,7 @@ use crate::app::datasets::{self, DatasetOverview};
 use crate::app::frames;
 use crate::app::item_answers::{self, ItemAnswers};
 use crate::app::items::{self, ItemFilter, ItemSummary, StoredItem};
+use crate::app::refusal::Refusal;
 use crate::core::dataset::{Direction, StepLength};
 
 /// The read API's routes (see [`super::openapi`]).
@@ -458,7 +459,11 @@ async fn get_frame(
     Path(sha256): Path<String>,
     headers: HeaderMap,
 ) -> Result<Response, AppError> {
-    let not_found = || AppError::NotFound(format!("no frame with hash '{sha256}'"));
+    let not_found = || {
+        AppError::from(Refusal::NoFrame {
+            frame: sha256.clone(),
+        })
+    };
     if !is_sha256_hex(&sha256) {
         return Err(not_found());
     }

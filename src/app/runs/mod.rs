@@ -35,6 +35,7 @@ pub use server::{
     EndpointKeys, MOST_CONCURRENCY, RunCalls, ServerRunView, control, start, view, views, work,
 };
 
+use super::refusal::Refusal;
 use super::submissions::{self, SubmissionRow, Submitted};
 use super::tokens::{self, Caller};
 use super::{AppError, Hub, datasets, frames, items};
@@ -323,9 +324,11 @@ pub async fn open(hub: &Hub, actor: &Actor, spec: &RunSpec) -> Result<RunRow, Ap
 /// A run by name.
 pub async fn by_name(hub: &Hub, name: &str) -> Result<RunRow, AppError> {
     let mut conn = hub.conn().await?;
-    store::runs::by_name(&mut conn, name)
-        .await?
-        .ok_or_else(|| AppError::NotFound(format!("no model run '{name}'")))
+    store::runs::by_name(&mut conn, name).await?.ok_or_else(|| {
+        AppError::from(Refusal::NoRun {
+            run: name.to_owned(),
+        })
+    })
 }
 
 /// Every run, newest first.

@@ -7,6 +7,7 @@ use bytes::Bytes;
 use tokio::sync::mpsc;
 
 use super::RunRow;
+use crate::app::refusal::Refusal;
 use crate::app::{AppError, Hub};
 use crate::core::dataset::AnswerVisibility;
 use crate::core::release::model_output_line;
@@ -54,7 +55,10 @@ pub async fn visible_run(hub: &Hub, id: i64, audience: Audience) -> Result<RunRo
         (None, _) => None,
     };
     run.ok_or_else(|| match audience {
-        Audience::Admin => AppError::NotFound(format!("no model run {id}")),
+        Audience::Admin => Refusal::NoRun {
+            run: id.to_string(),
+        }
+        .into(),
         Audience::Public => AppError::NotFound(format!(
             "no model run {id} with public responses (a run's responses are public only \
              when its dataset's answers are)"

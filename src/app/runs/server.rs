@@ -17,6 +17,7 @@ use tokio::sync::watch;
 
 use super::{ApiKey, CallSettings, Prices, RunProgress, RunRow, RunSpec, execute};
 use crate::app::jobs::{self, JobContext, JobId, JobKind};
+use crate::app::refusal::Refusal;
 use crate::app::{AppError, Hub, audit};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::model_run::GenerationParams;
@@ -407,9 +408,11 @@ async fn view_with_job(conn: &mut store::Conn, run: &RunRow) -> Result<ServerRun
 /// One run by id with the job it was last started with.
 pub async fn view(hub: &Hub, id: i64) -> Result<ServerRunView, AppError> {
     let mut conn = hub.conn().await?;
-    let run = store::runs::by_id(&mut conn, id)
-        .await?
-        .ok_or_else(|| AppError::NotFound(format!("no model run {id}")))?;
+    let run = store::runs::by_id(&mut conn, id).await?.ok_or_else(|| {
+        AppError::from(Refusal::NoRun {
+            run: id.to_string(),
+        })
+    })?;
     view_with_job(&mut conn, &run).await
 }
 
