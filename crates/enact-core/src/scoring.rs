@@ -492,6 +492,45 @@ mod tests {
     }
 
     #[test]
+    fn a_task_with_a_scene_graph_lends_its_signatures() {
+        let replayed = tempfile::tempdir().expect("tempdir");
+        let task = replayed.path().join("t");
+        std::fs::create_dir(&task).expect("task folder");
+        std::fs::write(
+            task.join("scene_graph_0.json"),
+            r#"{
+  "0": {"nodes": [{"name": "robot_r1", "category": "agent", "states": [], "visibility": {"external_sensor1": [900, 0, 0, 30, 30, 512, 512]}},
+                  {"name": "apple_1", "category": "apple", "states": [],
+                   "visibility": {"external_sensor1": [900, 0, 0, 30, 30, 512, 512]}}],
+        "edges": [], "type": "full"},
+  "2": {"type": "diff",
+        "add": {"nodes": [],
+                "edges": [{"from": "robot_r1", "to": "apple_1", "states": ["LeftGrasping"]}]},
+        "remove": {"nodes": [], "edges": []}, "update": {"nodes": [], "edges": []}},
+  "3": {"type": "diff", "add": {"nodes": [], "edges": []}, "remove": {"nodes": [], "edges": []},
+        "update": {"nodes": [{"name": "apple_1", "category": "apple", "states": ["Cooked"],
+                   "visibility": {"external_sensor1": [900, 0, 0, 30, 30, 512, 512]}}], "edges": []}}
+}"#,
+        )
+        .expect("write");
+        let ids: Vec<String> = ["0", "2", "3"].map(str::to_owned).to_vec();
+        let signatures = SceneGraphSignatures::for_predictions(
+            replayed.path(),
+            [r#"{"task_name": "t", "key_frame_ids": ["0", "2", "3"]}"#],
+        )
+        .expect("a readable scene graph");
+        assert!(signatures.has_task("t"));
+        assert!(!signatures.has_task("u"));
+        let made = signatures.item_signatures("t", &ids, VisibleCoverage::Chronological);
+        // The grasp between the first two key frames is a change the verifier can compare.
+        assert!(
+            matches!(made.signature_set(View::Full, 0, 1), Some(Ok(set)) if !set.is_empty()),
+            "{:?}",
+            made.signature_set(View::Full, 0, 1)
+        );
+    }
+
+    #[test]
     fn semantic_coverage_counts_items_by_source_and_says_so() {
         let targets = [
             target(

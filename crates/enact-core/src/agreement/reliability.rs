@@ -429,6 +429,9 @@ mod tests {
             pair.coder_rows(),
             vec![vec![Some(5.0), Some(6.0)], vec![Some(1.0), Some(2.0)]]
         );
+        // An index one past the last coder is out of range too, and skipped.
+        let kept = data.select_coders(&[1, 3, 4]);
+        assert_eq!(kept.coder_rows(), vec![vec![Some(3.0), None]]);
     }
 
     #[test]

@@ -440,6 +440,15 @@ mod tests {
         );
         // A node and a transition never pair.
         assert_eq!(classes(&[t], &["node_add_the apple_Cooked"]).len(), 2);
+        // Inverted needs both ends swapped: starting from the true end state is not enough.
+        let half = classes(
+            &[t],
+            &["node_transition_from_the half apple_to_the diced apple"],
+        );
+        assert_eq!(
+            half.iter().map(|e| e.0).collect::<Vec<_>>(),
+            [Omission, Hallucination]
+        );
     }
 
     #[test]

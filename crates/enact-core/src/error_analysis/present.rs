@@ -230,4 +230,37 @@ mod tests {
         assert_eq!(lines[0][..3], ["m", "overall", "0"]);
         assert!(lines.iter().all(|l| l.len() == header.len()));
     }
+
+    #[test]
+    fn the_text_table_adds_up_what_was_not_analysed() {
+        let mut a = analyse([]);
+        a.overall.excluded_unequal_length = 3;
+        a.overall.excluded_unreadable = 2;
+        a.overall.excluded_missing = 1;
+        a.overall.excluded_without_signatures = 4;
+        let table = text_table(&a);
+        assert!(
+            table.contains(
+                "10 not analysed: 3 of another length, 2 unreadable, 1 missing, 4 without \
+                 signature sets"
+            ),
+            "{table}"
+        );
+    }
+
+    #[test]
+    fn the_table_names_its_columns_by_class_and_category() {
+        let (header, _) = super::table(&[]);
+        for name in [
+            "polarity_inversion",
+            "spatial_relations",
+            "functional_states",
+            "material_states",
+            "agent_interaction",
+            "left_precision_se",
+            "pair_level_incomplete",
+        ] {
+            assert!(header.iter().any(|h| h == name), "{name}: {header:?}");
+        }
+    }
 }

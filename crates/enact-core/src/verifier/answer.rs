@@ -683,6 +683,15 @@ mod tests {
     }
 
     #[test]
+    fn a_bracket_without_its_closing_bracket_is_not_a_list_for_enact() {
+        // `\[[\d\s,]+\]` needs its `]`: the unclosed "[1, 2 " is no match, the earlier list wins.
+        assert_eq!(
+            enact("Answer: [2, 1] ([1, 2 was my first guess)", 2).as_deref(),
+            Some("[2, 1]")
+        );
+    }
+
+    #[test]
     fn strict_accepts_wrapped_answers() {
         let ok = |text: &str| parse_answer_text_strict(text, 3).map(|p| p.to_string());
         assert_eq!(ok("[2, 1, 3]").as_deref(), Ok("[2, 1, 3]"));
@@ -764,6 +773,18 @@ mod tests {
         assert_eq!(
             parse_answer_strict(None, 2).unwrap_err(),
             StrictParseFailure::Missing
+        );
+    }
+
+    #[test]
+    fn strict_labels_past_255_are_out_of_range_not_wrapped_to_a_byte() {
+        // 257 would wrap to the byte 1 and make [2, 1] a valid permutation.
+        assert_eq!(
+            parse_answer_text_strict("[2, 257]", 2),
+            Err(StrictParseFailure::OutOfRange {
+                label: "257".to_owned(),
+                max: 2
+            })
         );
     }
 

@@ -687,6 +687,36 @@ mod tests {
         );
     }
 
+    /// The dataset's stored tables hold visible sets along the chronological path only, which is
+    /// all a record whose ground truth has L − 1 labels needs.
+    #[test]
+    fn a_ground_truth_of_l_minus_1_labels_is_scored_from_chronological_tables() {
+        let frames: Vec<String> = ["10", "20", "30"].map(String::from).to_vec();
+        let table = Kitchen.item_signatures("kitchen", &frames, VisibleCoverage::Chronological);
+        let stored = crate::scoring::StoredSignatures::new([(
+            "kitchen".to_owned(),
+            frames,
+            table.into_owned(),
+        )]);
+        let lines = [line(
+            "p",
+            "forward_world_modeling_3_steps",
+            "[1, 2]",
+            r#""[1, 1]""#,
+        )];
+        let evaluation = score_enact_predictions(
+            lines.iter().enumerate().map(|(i, l)| (i + 1, l.as_str())),
+            "toy",
+            &stored,
+        )
+        .expect("runs");
+        // [1, 1] chains 10→20 (open ⊆ open) then 20→20 (grasp ⊄ ∅).
+        assert_eq!(
+            evaluation.evaluated[0].verdict.pairwise_accuracy,
+            PairwiseAccuracy::Float(0.5)
+        );
+    }
+
     #[test]
     fn unknown_frames_and_neither_direction() {
         let lines = vec![

@@ -871,6 +871,22 @@ mod tests {
     }
 
     #[test]
+    fn strings_are_equal_exactly_when_their_text_is() {
+        assert!(parse("[\"1\", \"2\"]").py_eq(&parse("[\"1\", \"2\"]")));
+        assert!(!parse("\"1\"").py_eq(&parse("\"2\"")));
+    }
+
+    #[test]
+    fn nested_objects_count_toward_the_recursion_limit_as_lists_do() {
+        // CPython's decoder recurses for `{` as for `[`: 1000 nested objects raise RecursionError.
+        let deep = format!("{}1{}", "{\"a\": ".repeat(1000), "}".repeat(1000));
+        assert!(matches!(
+            parse_python_json(&deep),
+            Err(PyJsonError::Fatal { .. })
+        ));
+    }
+
+    #[test]
     fn python_str_of_frame_ids() {
         assert_eq!(parse("2691").py_str(), "2691");
         assert_eq!(parse("2691.0").py_str(), "2691.0");

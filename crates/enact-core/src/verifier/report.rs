@@ -263,6 +263,14 @@ mod tests {
     }
 
     #[test]
+    fn numpy_splits_long_inputs_at_half_rounded_down_to_eight() {
+        // 165 values: numpy splits 80 + 85 (82 rounded down); np.mean printed 0.3333333333333333,
+        // a split at 84 would give 0.33333333333333337.
+        let values: Vec<f64> = (0..165).map(|k| (k % 3) as f64 / 3.0).collect();
+        assert_eq!(numpy_mean(&values), 0.3333333333333333);
+    }
+
+    #[test]
     fn groups_steps_and_neither_direction() {
         let entries = [
             entry(Some(Direction::Forward), 3, true, Some(1.0)),

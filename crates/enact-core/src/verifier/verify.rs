@@ -979,6 +979,15 @@ mod tests {
     }
 
     #[test]
+    fn items_longer_than_the_inline_list_are_verified_on_the_heap() {
+        // 18 key frames: more than SHORT_LIST slots for the shuffled order.
+        let labels: Vec<u8> = (1..=17).rev().collect();
+        let text = format!("{labels:?}");
+        let v = verify(Direction::Forward, &perm(&labels), &answer(&text), None).expect("scored");
+        assert!(v.exact_match && v.task_accuracy);
+    }
+
+    #[test]
     fn malformed_ground_truths_raise_like_python() {
         let record = |gt: &str, kf: &str, pred: &str, direction| {
             let gt_value = parse_python_json(gt).expect("json");

@@ -692,6 +692,7 @@ mod tests {
         let report = build_report(&inputs()).unwrap();
         let agreement = report.agreement.as_ref().unwrap();
         assert_eq!(agreement.items, 2, "q3 has one answer");
+        assert_eq!(agreement.answers, 4, "q1's and q2's");
         assert_eq!(agreement.exact_agreement.agreeing_items, 1);
         assert_eq!(agreement.pairwise.len(), 1);
         assert_eq!(agreement.pairwise[0].a.name, "a1");
@@ -732,6 +733,33 @@ mod tests {
             .unwrap();
         assert_eq!(cell.welch.n_a, 2);
         assert_eq!(chosen.cells.len(), 16);
+        // A cell holds the items of its direction and its step length, not of either.
+        for (direction, step_length) in [(Direction::Inverse, l(3)), (Direction::Forward, l(4))] {
+            let other = chosen
+                .cells
+                .iter()
+                .find(|c| c.direction == direction && c.step_length == step_length)
+                .unwrap();
+            assert_eq!(other.welch.n_a, 0, "{direction} {step_length}");
+        }
+    }
+
+    #[test]
+    fn an_item_counts_as_all_agreeing_only_when_every_answer_is_alike() {
+        let mut alike = inputs();
+        // q2's second answer now matches its first: both overlapping items agree.
+        alike.answers[3] = answer(2, "q2", &[3, 2, 1]);
+        let report = build_report(&alike).unwrap();
+        let counts = &report.agreement.as_ref().unwrap().counts[0];
+        assert_eq!((counts.items, counts.all_agree), (2, 2));
+        // Three answers where the first and last agree but the middle one does not.
+        let mut split = inputs();
+        split.answers[3] = answer(2, "q2", &[3, 2, 1]);
+        split.answers.push(answer(3, "q2", &[1, 2, 3]));
+        split.answers.push(answer(4, "q2", &[3, 2, 1]));
+        let report = build_report(&split).unwrap();
+        let counts = &report.agreement.as_ref().unwrap().counts[0];
+        assert_eq!((counts.items, counts.answers, counts.all_agree), (2, 6, 1));
     }
 
     #[test]
@@ -822,6 +850,34 @@ mod tests {
             .collect();
         assert_eq!(entries[0], "bundle/report.json");
         assert_eq!(entries.len(), files.len());
+    }
+
+    /// Each step length's figure sits in its own column, and a Human figure on enough answers
+    /// (exactly the minimum here) is not marked.
+    #[test]
+    fn the_markdown_export_puts_each_cell_in_its_column() {
+        let report = build_report(&inputs()).unwrap();
+        let markdown = export::markdown(&report);
+        let human = markdown
+            .lines()
+            .find(|line| line.starts_with("| Human |"))
+            .expect("a Human row");
+        let cells: Vec<&str> = human
+            .trim_matches('|')
+            .split('|')
+            .map(str::trim)
+            .skip(1)
+            .collect();
+        assert_eq!(cells.len(), 16, "{human}");
+        // Five answers, every one inverse with 4 images, four of them exact: column I4 only.
+        let filled: Vec<(usize, &str)> = cells
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| !c.is_empty())
+            .map(|(i, c)| (i, *c))
+            .collect();
+        assert_eq!(filled, [(8 + 1, "80.00")], "{human}");
+        assert!(!human.contains('†'), "{human}");
     }
 
     /// The Markdown export names each row (a model, or Human) with submitters' text escaped.
