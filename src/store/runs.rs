@@ -154,13 +154,41 @@ pub async fn of_dataset(conn: &mut Conn, dataset: i64) -> Result<Vec<RunRow>, sq
     })
 }
 
+/// How an item of a run ended, as its row's `state` column holds it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ItemOutcome {
+    /// The model replied and the reply was kept.
+    Answered,
+    /// Every attempt failed; `error` says why.
+    Failed,
+}
+
+impl ItemOutcome {
+    fn as_str(self) -> &'static str {
+        match self {
+            ItemOutcome::Answered => "answered",
+            ItemOutcome::Failed => "failed",
+        }
+    }
+
+    fn column(state: &str) -> Result<ItemOutcome, sqlx::Error> {
+        match state {
+            "answered" => Ok(ItemOutcome::Answered),
+            "failed" => Ok(ItemOutcome::Failed),
+            other => Err(sqlx::Error::Decode(
+                format!("model_run_items.state is {other:?}, not answered or failed").into(),
+            )),
+        }
+    }
+}
+
 /// An item of the run's dataset in import order, with the state of its row when it has one.
 #[derive(Debug, Clone)]
 pub struct RunItemState {
     pub item_row: i64,
     pub item_id: String,
-    /// `answered`, `failed`, or `None` when never finished.
-    pub state: Option<String>,
+    /// `None` when never finished.
+    pub state: Option<ItemOutcome>,
 }
 
 /// The first `limit` items of the run's dataset (all when `None`), in import order.
@@ -183,10 +211,11 @@ pub async fn item_states(
         .await?;
         rows.iter()
             .map(|row| {
+                let state: Option<String> = row.try_get("state")?;
                 Ok(RunItemState {
                     item_row: row.try_get("id")?,
                     item_id: row.try_get("item_id")?,
-                    state: row.try_get("state")?,
+                    state: state.as_deref().map(ItemOutcome::column).transpose()?,
                 })
             })
             .collect()
@@ -232,7 +261,14 @@ pub async fn record_item(
         sqlx::query(&query)
             .bind(run)
             .bind(item_row)
-            .bind(if row.answered { "answered" } else { "failed" })
+            .bind(
+                if row.answered {
+                    ItemOutcome::Answered
+                } else {
+                    ItemOutcome::Failed
+                }
+                .as_str(),
+            )
             .bind(&row.response)
             .bind(&row.finish_reason)
             .bind(row.prompt_tokens)
@@ -265,7 +301,7 @@ fn item_from_row(row: &impl Fields) -> Result<RunItemRow, sqlx::Error> {
     let state: String = row.try_get("state")?;
     Ok(RunItemRow {
         item_id: row.try_get("item_id")?,
-        answered: state == "answered",
+        answered: ItemOutcome::column(&state)? == ItemOutcome::Answered,
         response: row.try_get("response")?,
         finish_reason: row.try_get("finish_reason")?,
         prompt_tokens: row.try_get("prompt_tokens")?,

@@ -608,7 +608,7 @@ pub async fn execute(
 
     let todo = pending(
         states.iter().map(|s| {
-            let answered = s.state.as_deref().map(|state| state == "answered");
+            let answered = s.state.map(|o| o == store::runs::ItemOutcome::Answered);
             (s.item_row, s.item_id.as_str(), answered)
         }),
         spec.retry_failed,
