@@ -479,14 +479,20 @@ mod tests {
             ..BootstrapConfig::default()
         };
         assert_eq!(prepared.bootstrap(&zero), Err(BootstrapError::NoReplicates));
-        let full = BootstrapConfig {
-            confidence_level: 1.0,
-            ..BootstrapConfig::default()
-        };
-        assert!(matches!(
-            prepared.bootstrap(&full),
-            Err(BootstrapError::ConfidenceLevel { .. })
-        ));
+        // A level is strictly between 0 and 1: neither end is an interval.
+        for level in [0.0, 1.0] {
+            let config = BootstrapConfig {
+                confidence_level: level,
+                ..BootstrapConfig::default()
+            };
+            assert!(
+                matches!(
+                    prepared.bootstrap(&config),
+                    Err(BootstrapError::ConfidenceLevel { .. })
+                ),
+                "{level}"
+            );
+        }
         let err = prepared
             .bootstrap_replicates(&[vec![0, 1], vec![0, 6]], 0.95)
             .unwrap_err();

@@ -269,6 +269,21 @@ mod tests {
     }
 
     #[test]
+    fn a_cell_of_exactly_k_items_is_no_shortfall() {
+        let plan = plan_cross_assignments(&balanced(5), &[1, 2, 3], 5, 0).unwrap();
+        assert!(plan.shortfalls.is_empty(), "{:?}", plan.shortfalls);
+        assert_eq!(plan.samples.len(), 3 * 2 * 2 * 5);
+    }
+
+    #[test]
+    fn assignment_kinds_read_back_what_they_write() {
+        for kind in [AssignmentKind::Primary, AssignmentKind::Agreement] {
+            assert_eq!(AssignmentKind::parse(kind.as_str()), Some(kind));
+        }
+        assert_eq!(AssignmentKind::parse("Primary"), None);
+    }
+
+    #[test]
     fn small_cells_are_taken_whole_and_reported() {
         let answers = balanced(2);
         let plan = plan_cross_assignments(&answers, &[1, 2, 3], 5, 0).unwrap();

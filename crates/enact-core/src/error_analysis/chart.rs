@@ -428,6 +428,21 @@ mod tests {
         let height = bars_height.max(last.lines.len() as f64 * LINE_HEIGHT);
         assert_eq!(chart.height, last.y + height + gap + 20.0);
         assert_eq!(chart.rows[0].y, 10.0);
+        // The box is the plot and a 20 px margin, wider than anything drawn: a full bar and a
+        // whisker at 100 % included.
+        assert_eq!(chart.width, chart.plot_left + chart.plot_width + 20.0);
+        assert!(
+            chart.width > chart.plot_left + chart.plot_width,
+            "{chart:?}"
+        );
+        for bar in chart.rows.iter().flat_map(|r| &r.bars) {
+            let right = bar.whisker.map_or(bar.x + bar.width, |(_, high)| high);
+            assert!(
+                right < chart.width,
+                "{bar:?} leaves the box of {}",
+                chart.width
+            );
+        }
     }
 
     #[test]

@@ -267,6 +267,9 @@ mod tests {
             "node_add_the a_the b_Open",
             "node_transition_from__to_the b",
             "node_transition_from_the a_to_",
+            // No source, or a target of two fields: a transition has one of each at least.
+            "node_transition_from_to_the b",
+            "node_transition_from_the a_to_the b_the c",
             "thing_add_the a_Open",
         ] {
             assert!(Component::parse(bad).is_err(), "{bad:?} was accepted");

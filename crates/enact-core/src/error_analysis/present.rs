@@ -249,6 +249,26 @@ mod tests {
     }
 
     #[test]
+    fn the_text_table_gives_each_class_its_share_of_the_errors() {
+        let mut a = analyse([]);
+        a.overall.errors = 4;
+        a.overall.structural.omission = 3;
+        a.overall.structural.hallucination = 1;
+        let table = text_table(&a);
+        let line = |name: &str| {
+            table
+                .lines()
+                .find(|l| l.trim_start().starts_with(name))
+                .unwrap_or_else(|| panic!("no {name} line in {table}"))
+                .to_owned()
+        };
+        assert!(line("omission").contains("3 (75.0%)"), "{table}");
+        assert!(line("hallucination").contains("1 (25.0%)"), "{table}");
+        // The directions had no errors: a dash, not a share of nothing.
+        assert!(line("omission").contains("0 (-)"), "{table}");
+    }
+
+    #[test]
     fn the_table_names_its_columns_by_class_and_category() {
         let (header, _) = super::table(&[]);
         for name in [

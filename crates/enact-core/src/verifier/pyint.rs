@@ -292,6 +292,14 @@ mod tests {
     }
 
     #[test]
+    fn only_integral_finite_floats_are_integers() {
+        assert_eq!(PyInt::from_integral_f64(-3.0), Some(PyInt::Small(-3)));
+        for value in [1.5, -2.5, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            assert_eq!(PyInt::from_integral_f64(value), None, "{value}");
+        }
+    }
+
+    #[test]
     fn small_values_stay_small_and_big_values_print_exactly() {
         assert_eq!(big("42").to_i64(), Some(42));
         assert_eq!(big("-0").to_i64(), Some(0));

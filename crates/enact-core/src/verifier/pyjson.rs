@@ -902,6 +902,17 @@ mod tests {
             parse(r#"["a\u0001\u0085\t'"]"#).py_str(),
             r#"["a\x01\x85\t'"]"#
         );
+        // A space and DEL's neighbours below it are printable, as Python prints them.
+        assert_eq!(parse(r#"["a b~"]"#).py_str(), "['a b~']");
+    }
+
+    #[test]
+    fn dicts_are_equal_with_the_same_keys_and_equal_values() {
+        let eq = |a: &str, b: &str| parse(a).py_eq(&parse(b));
+        assert!(eq(r#"{"a": 1, "b": [2]}"#, r#"{"b": [2.0], "a": true}"#));
+        assert!(!eq(r#"{"a": 1}"#, r#"{"a": 1, "b": 2}"#));
+        assert!(!eq(r#"{"a": 1, "b": 2}"#, r#"{"a": 1}"#));
+        assert!(!eq(r#"{"a": 1}"#, r#"{"a": 2}"#));
     }
 
     #[test]

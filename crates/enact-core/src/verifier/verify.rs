@@ -979,6 +979,31 @@ mod tests {
     }
 
     #[test]
+    fn a_table_of_other_key_frames_than_the_item_is_refused() {
+        // Four key frames in the table, three images in the item (two actions).
+        let wrong = table(&["a", "b", "c", "d"]);
+        assert_eq!(
+            verify(
+                Direction::Forward,
+                &perm(&[1, 2]),
+                &answer("[1, 2]"),
+                Some(&wrong)
+            ),
+            Err(VerifyError::FrameCountMismatch { table: 4, item: 3 })
+        );
+        let right = table(&["a", "b", "c"]);
+        assert!(
+            verify(
+                Direction::Forward,
+                &perm(&[1, 2]),
+                &answer("[1, 2]"),
+                Some(&right)
+            )
+            .is_ok()
+        );
+    }
+
+    #[test]
     fn items_longer_than_the_inline_list_are_verified_on_the_heap() {
         // 18 key frames: more than SHORT_LIST slots for the shuffled order.
         let labels: Vec<u8> = (1..=17).rev().collect();

@@ -824,6 +824,13 @@ mod tests {
                 file.name
             );
         }
+        // The agreement table: alpha over everyone, then each pair of annotators.
+        let agreement_csv = String::from_utf8(files[1].bytes.clone()).unwrap();
+        assert!(
+            agreement_csv.contains("\nall annotators,"),
+            "{agreement_csv}"
+        );
+        assert!(agreement_csv.contains("\na1,a2,"), "{agreement_csv}");
         let tex = String::from_utf8(files[6].bytes.clone()).unwrap();
         assert!(tex.contains("\\toprule") && tex.contains("Human Performance"));
         // The chosen pair's overall Welch row, in both table formats.
