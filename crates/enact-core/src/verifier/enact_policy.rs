@@ -691,13 +691,33 @@ mod tests {
     /// all a record whose ground truth has L − 1 labels needs.
     #[test]
     fn a_ground_truth_of_l_minus_1_labels_is_scored_from_chronological_tables() {
-        let frames: Vec<String> = ["10", "20", "30"].map(String::from).to_vec();
-        let table = Kitchen.item_signatures("kitchen", &frames, VisibleCoverage::Chronological);
-        let stored = crate::scoring::StoredSignatures::new([(
-            "kitchen".to_owned(),
-            frames,
-            table.into_owned(),
-        )]);
+        // Like a stored dataset: chronological tables only, any other coverage is an error.
+        struct ChronologicalOnly;
+        impl EnactSignatureSource for ChronologicalOnly {
+            fn has_task(&self, task_name: &str) -> bool {
+                Kitchen.has_task(task_name)
+            }
+            fn item_signatures(
+                &self,
+                task: &str,
+                key_frame_ids: &[String],
+                coverage: VisibleCoverage,
+            ) -> Cow<'_, ItemSignatures> {
+                match coverage {
+                    VisibleCoverage::Chronological => Cow::Owned(
+                        Kitchen
+                            .item_signatures(task, key_frame_ids, coverage)
+                            .into_owned(),
+                    ),
+                    VisibleCoverage::AllPairs => {
+                        Cow::Owned(ItemSignatures::build(key_frame_ids, coverage, |_, _, _| {
+                            Err("not stored".to_owned())
+                        }))
+                    }
+                }
+            }
+        }
+        let stored = ChronologicalOnly;
         let lines = [line(
             "p",
             "forward_world_modeling_3_steps",
