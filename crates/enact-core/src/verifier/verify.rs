@@ -1078,6 +1078,11 @@ mod tests {
         )
         .expect("scored");
         assert!(v.exact_match && !v.semantic_match);
+        // A dict of one key frame has no transition to index, so nothing raises: zero
+        // transitions all match, and a wrong answer is a semantic match (int 1).
+        let v = record("[1]", "{\"a\": 1}", "[2]", Direction::Inverse).expect("scored");
+        assert!(!v.exact_match && v.semantic_match && v.task_accuracy);
+        assert_eq!(v.pairwise_accuracy, PairwiseAccuracy::IntOne);
         // A ground truth longer than L-1 chains past the chronological path (visible a→b→c→b).
         let v = record(
             "[1, 2, 1]",

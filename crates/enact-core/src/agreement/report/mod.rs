@@ -795,6 +795,44 @@ mod tests {
     }
 
     #[test]
+    fn error_files_hold_each_row_and_are_stamped() {
+        let report = build_report(&inputs()).unwrap();
+        let analysis = crate::error_analysis::analyse(std::iter::empty());
+        let rows = [
+            export::ErrorRow {
+                label: "model-a".into(),
+                submission: Some(7),
+                analysis: &analysis,
+            },
+            export::ErrorRow {
+                label: "Human".into(),
+                submission: None,
+                analysis: &analysis,
+            },
+        ];
+        let files = export::error_files(&report.stamp, &rows).unwrap();
+        let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
+        assert_eq!(names, ["errors.json", "errors.csv"]);
+        let json: serde_json::Value = serde_json::from_slice(&files[0].bytes).unwrap();
+        let labels: Vec<(&str, Option<i64>)> = json["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| (r["label"].as_str().unwrap(), r["submission"].as_i64()))
+            .collect();
+        assert_eq!(labels, [("model-a", Some(7)), ("Human", None)]);
+        let csv = String::from_utf8(files[1].bytes.clone()).unwrap();
+        assert!(
+            csv.contains("\nmodel-a,") && csv.contains("\nHuman,"),
+            "{csv}"
+        );
+        for file in &files {
+            let text = String::from_utf8(file.bytes.clone()).unwrap();
+            assert!(text.contains(&report.stamp.dataset_hash), "{}", file.name);
+        }
+    }
+
+    #[test]
     fn bundle_files_are_stamped() {
         let report = build_report(&inputs()).unwrap();
         let files = export::bundle_files(&report).unwrap();
