@@ -154,6 +154,12 @@ pub fn job_handlers() -> jobs::JobHandlers {
 #[derive(Clone)]
 pub struct Hub {
     pool: Pool,
+    /// Where write transactions begin ([`Hub::begin_in`]): the pool itself, or for a server on
+    /// SQLite a connection of its own ([`store::open_serving_pools`]).
+    writer: Pool,
+    /// Whether [`Hub::watch_content`] also checkpoints the write-ahead log, which the writer's
+    /// own connection then leaves to it.
+    checkpoints_beside: bool,
     items: Arc<cache::ItemCache>,
     standings: Arc<standings::StandingCache>,
     targets: Arc<submissions::TargetCache>,
@@ -208,6 +214,8 @@ impl Hub {
             None,
         ));
         Hub {
+            writer: pool.clone(),
+            checkpoints_beside: false,
             pool,
             items: caches.items,
             standings: caches.standings,
@@ -276,12 +284,27 @@ impl Hub {
     }
 
     /// Opens the database for a server: every cache bounded by `limits`, SQLite's page cache
-    /// (shared out over the pool's connections) included.
+    /// (shared out over the connections) included. On SQLite the write transactions get a
+    /// connection of their own beside the pool.
     pub async fn open_serving(location: &Path, limits: &cache::CacheLimits) -> anyhow::Result<Hub> {
-        let per_connection = limits.db_page_cache_bytes / 1024 / u64::from(store::MAX_CONNECTIONS);
-        Ok(Hub::open_with(location, per_connection)
-            .await?
-            .with_cache_limits(limits))
+        let cache_kib = limits.db_page_cache_bytes / 1024;
+        let hub = match store::Location::of(location) {
+            store::Location::Sqlite(path) => {
+                let per_connection = cache_kib / u64::from(store::MAX_CONNECTIONS + 1);
+                let (pool, writer) = store::open_serving_pools(&path, per_connection)
+                    .await
+                    .map_err(|e| anyhow::anyhow!("cannot open database {}: {e}", path.display()))?;
+                Hub {
+                    writer: Pool::Sqlite(writer),
+                    checkpoints_beside: true,
+                    ..Hub::new(Pool::Sqlite(pool), Quotas::default())
+                }
+            }
+            store::Location::Postgres(_) => {
+                Hub::open_with(location, cache_kib / u64::from(store::MAX_CONNECTIONS)).await?
+            }
+        };
+        Ok(hub.with_cache_limits(limits))
     }
 
     async fn open_with(location: &Path, page_cache_kib: u64) -> anyhow::Result<Hub> {
@@ -384,6 +407,7 @@ impl Hub {
 
     /// Waits for the connections in use and closes the database.
     pub async fn close(&self) {
+        self.writer.close().await;
         self.pool.close().await;
     }
 
@@ -415,10 +439,17 @@ impl Hub {
 
     /// Clears the caches whenever stored items change, also through another process's
     /// import, and whatever other processes announce: other instances on PostgreSQL, the
-    /// command line on either database. Runs until the database is closed.
+    /// command line on either database; and for a server on SQLite, checkpoints the
+    /// write-ahead log. Runs until the database is closed.
     pub async fn watch_content(self) {
         let caches = self.caches();
+        let checkpoints = async {
+            if let (true, Some(pool)) = (self.checkpoints_beside, self.pool.sqlite()) {
+                store::checkpoint_log(pool.clone()).await;
+            }
+        };
         tokio::join!(
+            checkpoints,
             watch::watch_generation(self.pool.clone(), caches.clone()),
             watch::listen(
                 self.pool.clone(),
@@ -479,7 +510,7 @@ impl Hub {
         let turn = tokio::time::timeout(store::WRITE_WAIT, self.gate.enter(lane))
             .await
             .map_err(|_| sqlx::Error::PoolTimedOut)?;
-        let tx = self.pool.begin().await?.holding(turn);
+        let tx = self.writer.begin().await?.holding(turn);
         self.metrics.write_waited(lane, asked.elapsed());
         Ok(tx)
     }

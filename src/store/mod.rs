@@ -89,6 +89,60 @@ pub async fn open_with_page_cache(
     path: &Path,
     page_cache_kib: u64,
 ) -> Result<SqlitePool, sqlx::Error> {
+    let pool = sqlite_pool(path, page_cache_kib, MAX_CONNECTIONS, true).await?;
+    migrations::SQLITE.migrator().await?.run(&pool).await?;
+    Ok(pool)
+}
+
+/// A server's pools on the SQLite file at `path` (migrated): [`MAX_CONNECTIONS`] for reads
+/// and for writes outside the write gate, and one more, the gate's own, which only the writer
+/// holding the gate's turn uses. A writer given the turn then never waits for a connection
+/// that readers hold, with the turn (and every writer behind it) held meanwhile. Nor does it
+/// copy the write-ahead log into the database when its commit fills the log (SQLite's
+/// automatic checkpoint, tens of milliseconds after a few submissions): [`checkpoint_log`]
+/// does that beside it.
+pub async fn open_serving_pools(
+    path: &Path,
+    page_cache_kib: u64,
+) -> Result<(SqlitePool, SqlitePool), sqlx::Error> {
+    let pool = sqlite_pool(path, page_cache_kib, MAX_CONNECTIONS, true).await?;
+    migrations::SQLITE.migrator().await?.run(&pool).await?;
+    let writer = sqlite_pool(path, page_cache_kib, 1, false).await?;
+    Ok((pool, writer))
+}
+
+/// How often a server copies the write-ahead log into the database ([`checkpoint_log`]).
+pub const CHECKPOINT_INTERVAL: Duration = Duration::from_millis(250);
+
+/// Copies what the write-ahead log holds into the database every [`CHECKPOINT_INTERVAL`], on
+/// one of `pool`'s connections, without waiting for readers or the writer (a passive
+/// checkpoint: what readers still use is copied at a later pass), until the pool is closed.
+/// For the gate's connection, which checkpoints nothing itself ([`open_serving_pools`]).
+pub async fn checkpoint_log(pool: SqlitePool) {
+    let mut ticker = tokio::time::interval(CHECKPOINT_INTERVAL);
+    ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    loop {
+        ticker.tick().await;
+        if pool.is_closed() {
+            return;
+        }
+        if let Err(e) = sqlx::query("PRAGMA wal_checkpoint(PASSIVE)")
+            .execute(&pool)
+            .await
+        {
+            tracing::debug!(error = %e, "checkpointing the write-ahead log failed");
+        }
+    }
+}
+
+/// `connections` to the file at `path`; `autocheckpoint`: whether a commit that fills the
+/// write-ahead log copies it into the database (SQLite's default).
+async fn sqlite_pool(
+    path: &Path,
+    page_cache_kib: u64,
+    connections: u32,
+    autocheckpoint: bool,
+) -> Result<SqlitePool, sqlx::Error> {
     // A negative cache_size is in KiB.
     let cache_size = format!("-{}", page_cache_kib.max(1));
     let options = SqliteConnectOptions::from_str("sqlite://")?
@@ -106,17 +160,20 @@ pub async fn open_with_page_cache(
         // frames. SQLite reuses the log file from the start after a checkpoint but keeps its
         // size; this limit makes it cut the file back once the log is reset.
         .pragma("journal_size_limit", JOURNAL_SIZE_LIMIT_BYTES.to_string());
-    let pool = SqlitePoolOptions::new()
-        .max_connections(MAX_CONNECTIONS)
+    let options = if autocheckpoint {
+        options
+    } else {
+        options.pragma("wal_autocheckpoint", "0")
+    };
+    SqlitePoolOptions::new()
+        .max_connections(connections)
         .min_connections(1)
         .acquire_timeout(Duration::from_secs(15))
         // A local file connection does not go stale; pinging it on every acquire would cost a
         // round trip to its worker thread on every request.
         .test_before_acquire(false)
         .connect_with(options)
-        .await?;
-    migrations::SQLITE.migrator().await?.run(&pool).await?;
-    Ok(pool)
+        .await
 }
 
 /// Where a database is, as a command line or the environment names it.
@@ -408,4 +465,64 @@ pub async fn integrity_check(conn: &mut sqlx::SqliteConnection) -> Result<String
         .fetch_all(conn)
         .await?;
     Ok(lines.join("; "))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    async fn autocheckpoint(pool: &SqlitePool) -> i64 {
+        sqlx::query_scalar("PRAGMA wal_autocheckpoint")
+            .fetch_one(pool)
+            .await
+            .unwrap()
+    }
+
+    /// The gate's connection leaves the write-ahead log to [`checkpoint_log`], which copies it
+    /// into the database: without it, the database file would stay as the migrations left it.
+    #[tokio::test]
+    async fn the_writer_checkpoints_nothing_and_the_checkpointer_copies_the_log() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("hub.db");
+        let (pool, writer) = open_serving_pools(&path, 1024).await.unwrap();
+        assert_eq!(autocheckpoint(&writer).await, 0);
+        assert_eq!(autocheckpoint(&pool).await, 1000);
+        sqlx::query("PRAGMA wal_checkpoint(TRUNCATE)")
+            .execute(&pool)
+            .await
+            .unwrap();
+        let before = std::fs::metadata(&path).unwrap().len();
+
+        // About 2,500 pages: past the 1,000 at which a connection of the pool would checkpoint.
+        let mut tx = writer.begin().await.unwrap();
+        sqlx::query("CREATE TABLE filler (bytes BLOB)")
+            .execute(&mut *tx)
+            .await
+            .unwrap();
+        for _ in 0..2500 {
+            sqlx::query("INSERT INTO filler VALUES (randomblob(3000))")
+                .execute(&mut *tx)
+                .await
+                .unwrap();
+        }
+        tx.commit().await.unwrap();
+        assert_eq!(
+            std::fs::metadata(&path).unwrap().len(),
+            before,
+            "the writer's commit copied the log into the database"
+        );
+
+        let checkpointer = tokio::spawn(checkpoint_log(pool.clone()));
+        let deadline = tokio::time::Instant::now() + Duration::from_secs(30);
+        while std::fs::metadata(&path).unwrap().len() < before + 2500 * 3000 {
+            assert!(
+                tokio::time::Instant::now() < deadline,
+                "the checkpointer did not copy the log within 30 s"
+            );
+            tokio::time::sleep(CHECKPOINT_INTERVAL).await;
+        }
+        pool.close().await;
+        writer.close().await;
+        checkpointer.await.unwrap();
+    }
 }
