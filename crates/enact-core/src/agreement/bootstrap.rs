@@ -251,6 +251,10 @@ mod tests {
         assert_eq!(mean, Some(2.5));
         // Σ(x − 2.5)² = 5 over n − 1 = 3.
         assert!((sd.expect("two or more values") - (5.0f64 / 3.0).sqrt()).abs() < 1e-12);
+        // Squared deviations, not Σx² − n·mean²: far from zero the mean's rounding would swamp
+        // a spread of one (Python: statistics.stdev([1e9, 1e9 + 1, 1e9 + 1]) = 0.5773…).
+        let (_, sd) = mean_and_sd(&[1e9, 1e9 + 1.0, 1e9 + 1.0]);
+        assert!((sd.expect("three values") - (1.0f64 / 3.0).sqrt()).abs() < 1e-6);
     }
 
     #[test]

@@ -335,6 +335,9 @@ mod tests {
         assert_eq!((data.coders(), data.units()), (2, 2));
         assert_eq!(data.value(0, 1), None);
         assert_eq!(data.value(1, 1), Some(3.0));
+        // Out of range on either side: nothing, not another cell.
+        assert_eq!(data.value(0, 2), None);
+        assert_eq!(data.value(2, 1), None);
         assert_eq!(data.unit_values(0), &[Some(1.0), Some(2.0)]);
         assert_eq!(
             data.coder_rows(),

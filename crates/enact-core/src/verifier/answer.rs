@@ -749,6 +749,11 @@ mod tests {
             "no list found"
         );
         assert_eq!(fail("<think>[1, 2, 3, 4] unclosed", 4), "no list found");
+        // A closing tag without an opening one: the list before it was thinking.
+        assert_eq!(
+            fail("maybe [1, 2, 3, 4] </think> no idea", 4),
+            "no list found"
+        );
         assert_eq!(fail("[-1, 2, 3, 4]", 4), "label -1 out of range 1..4");
         assert_eq!(
             fail("[1, 2, 3, 100000000000000000000]", 4),
