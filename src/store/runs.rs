@@ -175,8 +175,9 @@ impl ItemOutcome {
         match state {
             "answered" => Ok(ItemOutcome::Answered),
             "failed" => Ok(ItemOutcome::Failed),
-            other => Err(sqlx::Error::Decode(
-                format!("model_run_items.state is {other:?}, not answered or failed").into(),
+            other => Err(super::corrupt(
+                "state",
+                format!("model_run_items.state is {other:?}, not answered or failed"),
             )),
         }
     }
