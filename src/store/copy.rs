@@ -461,6 +461,7 @@ pub const TABLES: &[Table] = &[
             ("run", Int),
             ("item", Int),
             ("state", Text),
+            ("failure", Text),
             ("response", Text),
             ("finish_reason", Text),
             ("prompt_tokens", Int),

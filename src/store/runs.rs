@@ -6,6 +6,7 @@ use super::corrupt;
 use super::db::{Conn, Dialect, Fields, on};
 use super::items::json_column;
 
+use crate::core::model_run::{ItemOutcome, RunFailure};
 use crate::core::release::ReleaseItem;
 
 use crate::core::credentials::{Scope, scopes_from_text};
@@ -154,32 +155,32 @@ pub async fn of_dataset(conn: &mut Conn, dataset: i64) -> Result<Vec<RunRow>, sq
     })
 }
 
-/// How an item of a run ended, as its row's `state` column holds it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ItemOutcome {
-    /// The model replied and the reply was kept.
-    Answered,
-    /// Every attempt failed; `error` says why.
-    Failed,
+/// An item's outcome as its row's `state` and `failure` columns hold it.
+fn outcome_columns(outcome: ItemOutcome) -> (&'static str, Option<String>) {
+    match outcome {
+        ItemOutcome::Answered => ("answered", None),
+        ItemOutcome::Failed(failure) => ("failed", Some(failure.code())),
+    }
 }
 
-impl ItemOutcome {
-    fn as_str(self) -> &'static str {
-        match self {
-            ItemOutcome::Answered => "answered",
-            ItemOutcome::Failed => "failed",
-        }
-    }
-
-    fn column(state: &str) -> Result<ItemOutcome, sqlx::Error> {
-        match state {
-            "answered" => Ok(ItemOutcome::Answered),
-            "failed" => Ok(ItemOutcome::Failed),
-            other => Err(super::corrupt(
-                "state",
-                format!("model_run_items.state is {other:?}, not answered or failed"),
-            )),
-        }
+/// The outcome a row's `state` and `failure` columns hold. A failed row without a kind was
+/// written by a hub older than the column (an instance not yet upgraded beside this one).
+fn outcome_of(state: &str, failure: Option<&str>) -> Result<ItemOutcome, sqlx::Error> {
+    match (state, failure) {
+        ("answered", _) => Ok(ItemOutcome::Answered),
+        ("failed", None) => Ok(ItemOutcome::Failed(RunFailure::Unrecorded)),
+        ("failed", Some(code)) => RunFailure::from_code(code)
+            .map(ItemOutcome::Failed)
+            .ok_or_else(|| {
+                corrupt(
+                    "failure",
+                    format!("model_run_items.failure is {code:?}, not a failure's code"),
+                )
+            }),
+        (other, _) => Err(corrupt(
+            "state",
+            format!("model_run_items.state is {other:?}, not answered or failed"),
+        )),
     }
 }
 
@@ -201,7 +202,7 @@ pub async fn item_states(
 ) -> Result<Vec<RunItemState>, sqlx::Error> {
     on!(conn, |c| {
         let rows = sqlx::query(
-            "SELECT i.id, i.item_id, r.state FROM items i \
+            "SELECT i.id, i.item_id, r.state, r.failure FROM items i \
              LEFT JOIN model_run_items r ON r.run = $1 AND r.item = i.id \
              WHERE i.dataset_id = $2 ORDER BY i.id LIMIT $3",
         )
@@ -213,10 +214,14 @@ pub async fn item_states(
         rows.iter()
             .map(|row| {
                 let state: Option<String> = row.try_get("state")?;
+                let failure: Option<String> = row.try_get("failure")?;
                 Ok(RunItemState {
                     item_row: row.try_get("id")?,
                     item_id: row.try_get("item_id")?,
-                    state: state.as_deref().map(ItemOutcome::column).transpose()?,
+                    state: state
+                        .as_deref()
+                        .map(|state| outcome_of(state, failure.as_deref()))
+                        .transpose()?,
                 })
             })
             .collect()
@@ -227,7 +232,7 @@ pub async fn item_states(
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RunItemRow {
     pub item_id: String,
-    pub answered: bool,
+    pub outcome: ItemOutcome,
     pub response: Option<String>,
     pub finish_reason: Option<String>,
     pub prompt_tokens: i64,
@@ -247,10 +252,11 @@ pub async fn record_item(
 ) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         let query = format!(
-            "INSERT INTO model_run_items (run, item, state, response, finish_reason, \
+            "INSERT INTO model_run_items (run, item, state, failure, response, finish_reason, \
              prompt_tokens, completion_tokens, latency_ms, attempts, error) \
-             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10) \
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11) \
              ON CONFLICT (run, item) DO UPDATE SET state = excluded.state, \
+             failure = excluded.failure, \
              response = excluded.response, finish_reason = excluded.finish_reason, \
              prompt_tokens = model_run_items.prompt_tokens + excluded.prompt_tokens, \
              completion_tokens = model_run_items.completion_tokens + excluded.completion_tokens, \
@@ -259,17 +265,12 @@ pub async fn record_item(
              error = excluded.error, done_at = {}",
             c.utc_now()
         );
+        let (state, failure) = outcome_columns(row.outcome);
         sqlx::query(&query)
             .bind(run)
             .bind(item_row)
-            .bind(
-                if row.answered {
-                    ItemOutcome::Answered
-                } else {
-                    ItemOutcome::Failed
-                }
-                .as_str(),
-            )
+            .bind(state)
+            .bind(failure)
             .bind(&row.response)
             .bind(&row.finish_reason)
             .bind(row.prompt_tokens)
@@ -287,7 +288,7 @@ pub async fn record_item(
 pub async fn items(conn: &mut Conn, run: i64) -> Result<Vec<RunItemRow>, sqlx::Error> {
     on!(conn, |c| {
         let rows = sqlx::query(
-            "SELECT i.item_id, r.state, r.response, r.finish_reason, r.prompt_tokens, \
+            "SELECT i.item_id, r.state, r.failure, r.response, r.finish_reason, r.prompt_tokens, \
              r.completion_tokens, r.latency_ms, r.attempts, r.error, r.done_at \
              FROM model_run_items r JOIN items i ON i.id = r.item WHERE r.run = $1 ORDER BY i.id",
         )
@@ -300,9 +301,10 @@ pub async fn items(conn: &mut Conn, run: i64) -> Result<Vec<RunItemRow>, sqlx::E
 
 fn item_from_row(row: &impl Fields) -> Result<RunItemRow, sqlx::Error> {
     let state: String = row.try_get("state")?;
+    let failure: Option<String> = row.try_get("failure")?;
     Ok(RunItemRow {
         item_id: row.try_get("item_id")?,
-        answered: ItemOutcome::column(&state)? == ItemOutcome::Answered,
+        outcome: outcome_of(&state, failure.as_deref())?,
         response: row.try_get("response")?,
         finish_reason: row.try_get("finish_reason")?,
         prompt_tokens: row.try_get("prompt_tokens")?,
@@ -333,7 +335,7 @@ pub async fn item_page(
 ) -> Result<Vec<RunItemRow>, sqlx::Error> {
     on!(conn, |c| {
         let rows = sqlx::query(
-            "SELECT i.item_id, r.state, r.response, r.finish_reason, r.prompt_tokens, \
+            "SELECT i.item_id, r.state, r.failure, r.response, r.finish_reason, r.prompt_tokens, \
              r.completion_tokens, r.latency_ms, r.attempts, r.error, r.done_at \
              FROM model_run_items r JOIN items i ON i.id = r.item WHERE r.run = $1 \
              ORDER BY i.id LIMIT $2 OFFSET $3",

@@ -137,6 +137,8 @@ fn progress_shown(view: &ServerRunView) -> ProgressShown {
 struct ResponseShown {
     item: String,
     outcome: &'static str,
+    /// Why a failed item failed, in words; empty when answered.
+    failure: String,
     finish_reason: String,
     tokens: String,
     latency_ms: i64,
@@ -149,7 +151,16 @@ fn responses_shown(rows: &[RunItemRow]) -> Vec<ResponseShown> {
     rows.iter()
         .map(|r| ResponseShown {
             item: r.item_id.clone(),
-            outcome: if r.answered { "answered" } else { "failed" },
+            outcome: if r.outcome.is_answered() {
+                "answered"
+            } else {
+                "failed"
+            },
+            failure: r
+                .outcome
+                .failure()
+                .map(|f| f.to_string())
+                .unwrap_or_default(),
             finish_reason: r.finish_reason.clone().unwrap_or_default(),
             tokens: format!("{} / {}", r.prompt_tokens, r.completion_tokens),
             latency_ms: r.latency_ms,

@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use enact_hub::app::Hub;
 use enact_hub::app::runs::{self, ApiKey, CallSettings, RunSpec};
-use enact_hub::core::model_run::{GenerationParams, Prices};
+use enact_hub::core::model_run::{GenerationParams, ItemOutcome, Prices, RunFailure};
 use serde_json::Value;
 use tempfile::TempDir;
 
@@ -197,6 +197,25 @@ async fn a_run_keeps_every_reply_stores_failures_as_failures_and_submits_its_sco
     assert_eq!(report.progress.answered, 14, "{report:?}");
     assert_eq!(report.progress.failed, 4, "{report:?}");
     assert!(!report.stopped);
+    // Failures counted by kind, not by their words (which name attempts and messages).
+    assert_eq!(
+        report
+            .failures
+            .iter()
+            .map(|(f, n)| (*f, *n))
+            .collect::<Vec<_>>(),
+        [
+            (RunFailure::Status(400), 1),
+            (RunFailure::Status(503), 1),
+            (RunFailure::Empty, 1),
+            (RunFailure::Cut, 1),
+        ],
+        "{report:?}"
+    );
+    assert_eq!(
+        serde_json::to_value(&report.failures).expect("JSON"),
+        serde_json::json!({"http_400": 1, "http_503": 1, "empty": 1, "cut": 1})
+    );
 
     // Each item's row says what happened.
     let run = runs::by_name(&hub, "first").await.expect("the run");
@@ -207,18 +226,19 @@ async fn a_run_keeps_every_reply_stores_failures_as_failures_and_submits_its_sco
         .map(|r| (r.item_id.clone(), r))
         .collect();
     let row = |i: usize| &rows[records[i]["id"].as_str().expect("id")];
-    assert!(row(0).answered && row(0).attempts == 2);
+    let answered = ItemOutcome::Answered;
+    assert!(row(0).outcome == answered && row(0).attempts == 2);
     assert!(row(0).error.as_deref().is_some_and(|e| e.contains("500")));
-    assert!(row(1).answered && row(1).attempts == 2);
-    assert!(row(2).answered && row(2).attempts == 2);
-    assert!(row(3).answered, "{:?}", row(3));
+    assert!(row(1).outcome == answered && row(1).attempts == 2);
+    assert!(row(2).outcome == answered && row(2).attempts == 2);
+    assert_eq!(row(3).outcome, answered, "{:?}", row(3));
     assert!(
         row(3)
             .error
             .as_deref()
             .is_some_and(|e| e.contains("timed out"))
     );
-    assert!(!row(4).answered);
+    assert_eq!(row(4).outcome, ItemOutcome::Failed(RunFailure::Cut));
     assert_eq!(row(4).finish_reason.as_deref(), Some("length"));
     assert!(
         row(4)
@@ -230,25 +250,25 @@ async fn a_run_keeps_every_reply_stores_failures_as_failures_and_submits_its_sco
         row(4).response.as_deref(),
         Some(answer_text(&records[4], true).as_str())
     );
-    assert!(!row(5).answered && row(5).error.as_deref() == Some("empty response"));
-    assert!(
-        !row(6).answered && row(6).attempts == 1,
-        "a 400 is not retried"
-    );
+    assert_eq!(row(5).outcome, ItemOutcome::Failed(RunFailure::Empty));
+    assert_eq!(row(5).error.as_deref(), Some("empty response"));
+    assert_eq!(row(6).outcome, ItemOutcome::Failed(RunFailure::Status(400)));
+    assert!(row(6).attempts == 1, "a 400 is not retried");
     assert!(
         row(6)
             .error
             .as_deref()
             .is_some_and(|e| e.contains("image too large"))
     );
-    assert!(!row(7).answered && row(7).attempts == 4, "{:?}", row(7));
+    assert_eq!(row(7).outcome, ItemOutcome::Failed(RunFailure::Status(503)));
+    assert!(row(7).attempts == 4, "{:?}", row(7));
     assert!(
         row(7)
             .error
             .as_deref()
             .is_some_and(|e| e.contains("gave up after 4"))
     );
-    assert!(row(8).answered && row(8).attempts == 1);
+    assert!(row(8).outcome == answered && row(8).attempts == 1);
 
     // Every answered item was asked successfully exactly once.
     let calls = standin.calls();
@@ -545,4 +565,106 @@ async fn a_run_killed_part_way_goes_on_where_it_stopped() {
     .await;
     assert_eq!(starts, 2);
     assert_key_stored_nowhere(&Hub::from(pool.clone()), dir.path()).await;
+}
+
+/// The migration that gave run items a failure kind (SQLite 0032, PostgreSQL 0024) reads the
+/// kind of each older failed row from its words, in every form the hub wrote them.
+#[tokio::test]
+async fn older_failed_items_get_the_failure_kind_their_words_name() {
+    let (dir, pool, records) = run_fixture(2).await;
+    let root = dir.path().join("release");
+    let standin = StandIn::start(StandInConfig {
+        scripts: scripts(&root, &records, |_, _| vec![Step::Status(400, "no".into())]),
+        ..StandInConfig::default()
+    })
+    .await;
+    let hub = Hub::from(pool.clone());
+    let spec = RunSpec {
+        submit_as: None,
+        ..spec(&standin, "legacy")
+    };
+    let report = execute(&hub, &spec, &settings(4)).await;
+    let legacy = [
+        ("empty response", RunFailure::Empty),
+        ("response cut off (finish_reason: length)", RunFailure::Cut),
+        (
+            "gave up after 50 rate-limited calls: HTTP 429: slow down",
+            RunFailure::RateLimited,
+        ),
+        (
+            "gave up after 4 attempts: HTTP 200 OK: not a chat completion: missing field `choices`",
+            RunFailure::Unreadable,
+        ),
+        ("HTTP 400: image too large", RunFailure::Status(400)),
+        (
+            "HTTP 404: gave up after 3 attempts",
+            RunFailure::Status(404),
+        ),
+        (
+            "gave up after 4 attempts: HTTP 503: overloaded",
+            RunFailure::Status(503),
+        ),
+        ("gave up after 6 attempts: timed out", RunFailure::NoReply),
+        (
+            "gave up after 2 attempts: cannot connect: error sending request",
+            RunFailure::NoReply,
+        ),
+        ("a reply nobody wrote", RunFailure::Unrecorded),
+    ];
+    assert!(report.progress.failed > legacy.len(), "{report:?}");
+    let run = runs::by_name(&hub, "legacy").await.expect("the run");
+    let rows = runs::item_rows(&hub, &run).await.expect("rows");
+    let mut expected = HashMap::new();
+    for ((words, kind), row) in legacy.iter().zip(&rows) {
+        db!(
+            pool,
+            execute,
+            sqlx::query(
+                "UPDATE model_run_items SET error = $1, failure = NULL WHERE run = $2 AND item = \
+                 (SELECT id FROM items WHERE item_id = $3)"
+            )
+            .bind(*words)
+            .bind(run.id)
+            .bind(&row.item_id)
+        )
+        .expect("make the row as an older hub wrote it");
+        expected.insert(row.item_id.clone(), ItemOutcome::Failed(*kind));
+    }
+    // One answered row: the migration leaves it without a kind.
+    let answered = &rows[legacy.len()].item_id;
+    db!(
+        pool,
+        execute,
+        sqlx::query(
+            "UPDATE model_run_items SET state = 'answered', error = NULL, failure = NULL \
+             WHERE run = $1 AND item = (SELECT id FROM items WHERE item_id = $2)"
+        )
+        .bind(run.id)
+        .bind(answered)
+    )
+    .expect("an answered row");
+    expected.insert(answered.clone(), ItemOutcome::Answered);
+
+    // The migration's backfill, as the file has it, on this backend.
+    let (migrations, number) = if on_sqlite() {
+        (enact_hub::store::migrations::SQLITE, "0032_")
+    } else {
+        (enact_hub::store::migrations::POSTGRES, "0024_")
+    };
+    let (_, sql) = migrations
+        .0
+        .iter()
+        .find(|(name, _)| name.starts_with(number))
+        .expect("the migration");
+    let backfill = &sql[sql.find("UPDATE model_run_items").expect("its backfill")..];
+    db!(pool, execute, sqlx::query(backfill)).expect("the backfill runs");
+
+    let rows = runs::item_rows(&hub, &run).await.expect("rows");
+    for row in &rows {
+        let want = expected
+            .get(&row.item_id)
+            .copied()
+            .unwrap_or(ItemOutcome::Failed(RunFailure::Status(400)));
+        assert_eq!(row.outcome, want, "{row:?}");
+    }
 }

@@ -247,6 +247,127 @@ impl CallFailure {
     }
 }
 
+/// Why an item of a run has no answer: what its last call met. Kept with the item
+/// (`model_run_items.failure`, a remote run's cache file) by its [`code`](RunFailure::code),
+/// and what a run's report counts failures by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum RunFailure {
+    /// No reply: the request timed out, or the connection failed.
+    NoReply,
+    /// An error status other than 429.
+    Status(u16),
+    /// 429 more often than an item may meet.
+    RateLimited,
+    /// A reply that is not a chat completion.
+    Unreadable,
+    /// An empty reply.
+    Empty,
+    /// A reply cut off at `max_tokens`.
+    Cut,
+    /// Failed before the hub kept a failure's kind: only its text tells why.
+    Unrecorded,
+}
+
+impl RunFailure {
+    /// The stable code a failure is stored and reported by: `no_reply`, `http_503`,
+    /// `rate_limited`, `unreadable`, `empty`, `cut`, `unrecorded`.
+    pub fn code(self) -> String {
+        match self {
+            RunFailure::NoReply => "no_reply".to_owned(),
+            RunFailure::Status(status) => format!("http_{status}"),
+            RunFailure::RateLimited => "rate_limited".to_owned(),
+            RunFailure::Unreadable => "unreadable".to_owned(),
+            RunFailure::Empty => "empty".to_owned(),
+            RunFailure::Cut => "cut".to_owned(),
+            RunFailure::Unrecorded => "unrecorded".to_owned(),
+        }
+    }
+
+    /// The failure a [`code`](RunFailure::code) names; `None` for any other text.
+    pub fn from_code(code: &str) -> Option<RunFailure> {
+        Some(match code {
+            "no_reply" => RunFailure::NoReply,
+            "rate_limited" => RunFailure::RateLimited,
+            "unreadable" => RunFailure::Unreadable,
+            "empty" => RunFailure::Empty,
+            "cut" => RunFailure::Cut,
+            "unrecorded" => RunFailure::Unrecorded,
+            _ => {
+                let status = code.strip_prefix("http_")?;
+                // Three digits, as `code` writes them: "http_+99" or "http_0503" is not one.
+                if status.len() != 3 || !status.bytes().all(|b| b.is_ascii_digit()) {
+                    return None;
+                }
+                RunFailure::Status(status.parse().ok()?)
+            }
+        })
+    }
+
+    /// How a call that failed so is handled: `None` for what ends the item at once (an empty
+    /// or cut reply is final; `Unrecorded` only describes stored rows).
+    pub fn handling(self) -> Option<CallFailure> {
+        match self {
+            RunFailure::NoReply | RunFailure::Unreadable => Some(CallFailure::Transient),
+            RunFailure::Status(status) => Some(CallFailure::of_status(status)),
+            RunFailure::RateLimited => Some(CallFailure::RateLimited),
+            RunFailure::Empty | RunFailure::Cut | RunFailure::Unrecorded => None,
+        }
+    }
+}
+
+impl From<NotAnAnswer> for RunFailure {
+    fn from(not: NotAnAnswer) -> RunFailure {
+        match not {
+            NotAnAnswer::Empty => RunFailure::Empty,
+            NotAnAnswer::Cut => RunFailure::Cut,
+        }
+    }
+}
+
+impl std::fmt::Display for RunFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RunFailure::NoReply => f.write_str("no reply (timed out or no connection)"),
+            RunFailure::Status(status) => write!(f, "HTTP {status}"),
+            RunFailure::RateLimited => f.write_str("rate limited (429) too often"),
+            RunFailure::Unreadable => f.write_str("a reply that is not a chat completion"),
+            RunFailure::Empty => NotAnAnswer::Empty.fmt(f),
+            RunFailure::Cut => NotAnAnswer::Cut.fmt(f),
+            RunFailure::Unrecorded => f.write_str("failed (kind not recorded)"),
+        }
+    }
+}
+
+/// Reports count failures in a map keyed by [`RunFailure::code`].
+impl Serialize for RunFailure {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(&self.code())
+    }
+}
+
+/// How an item of a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ItemOutcome {
+    /// The model replied with an answer, which was kept.
+    Answered,
+    /// No answer: every attempt failed, or the reply ended the item without one.
+    Failed(RunFailure),
+}
+
+impl ItemOutcome {
+    pub fn is_answered(self) -> bool {
+        self == ItemOutcome::Answered
+    }
+
+    /// Why the item has no answer; `None` when answered.
+    pub fn failure(self) -> Option<RunFailure> {
+        match self {
+            ItemOutcome::Answered => None,
+            ItemOutcome::Failed(failure) => Some(failure),
+        }
+    }
+}
+
 /// A `Retry-After` header's delay from `now`: delta-seconds or an HTTP date (a date in the
 /// past is no delay). `None` when the header reads as neither.
 pub fn retry_after(header: &str, now: SystemTime) -> Option<Duration> {
@@ -333,6 +454,73 @@ impl ConcurrencyWindow {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_failure_code_reads_back_as_the_failure_and_nothing_else_reads_as_one() {
+        let every = [
+            RunFailure::NoReply,
+            RunFailure::Status(400),
+            RunFailure::Status(503),
+            RunFailure::RateLimited,
+            RunFailure::Unreadable,
+            RunFailure::Empty,
+            RunFailure::Cut,
+            RunFailure::Unrecorded,
+        ];
+        for failure in every {
+            assert_eq!(
+                RunFailure::from_code(&failure.code()),
+                Some(failure),
+                "{failure}"
+            );
+            assert_eq!(
+                serde_json::to_value(failure).expect("code"),
+                json!(failure.code())
+            );
+        }
+        assert_eq!(RunFailure::Status(503).code(), "http_503");
+        for other in [
+            "",
+            "http_",
+            "http_50",
+            "http_5034",
+            "http_+99",
+            "HTTP 503",
+            "failed",
+        ] {
+            assert_eq!(RunFailure::from_code(other), None, "{other:?}");
+        }
+    }
+
+    #[test]
+    fn a_failure_is_handled_as_its_kind_says() {
+        assert_eq!(RunFailure::NoReply.handling(), Some(CallFailure::Transient));
+        assert_eq!(
+            RunFailure::Unreadable.handling(),
+            Some(CallFailure::Transient)
+        );
+        assert_eq!(
+            RunFailure::Status(503).handling(),
+            Some(CallFailure::Transient)
+        );
+        assert_eq!(
+            RunFailure::Status(400).handling(),
+            Some(CallFailure::Permanent)
+        );
+        assert_eq!(
+            RunFailure::RateLimited.handling(),
+            Some(CallFailure::RateLimited)
+        );
+        assert_eq!(RunFailure::Empty.handling(), None);
+        assert_eq!(RunFailure::Cut.handling(), None);
+        assert_eq!(RunFailure::Unrecorded.handling(), None);
+        assert_eq!(RunFailure::from(NotAnAnswer::Cut), RunFailure::Cut);
+        assert_eq!(
+            RunFailure::Empty.to_string(),
+            NotAnAnswer::Empty.to_string(),
+            "the words a stored row has always had"
+        );
+    }
+
     use super::*;
 
     fn images() -> Vec<(String, Vec<u8>)> {

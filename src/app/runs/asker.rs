@@ -9,7 +9,7 @@ use bytes::Bytes;
 use tokio::sync::Notify;
 
 use crate::core::model_run::{
-    CallFailure, Completion, ConcurrencyWindow, NotAnAnswer, Usage, answer_text, backoff,
+    CallFailure, Completion, ConcurrencyWindow, RunFailure, Usage, answer_text, backoff,
     read_completion, retry_after,
 };
 
@@ -67,8 +67,8 @@ const LONGEST_WAIT: Duration = Duration::from_secs(300);
 /// How an item's calls ended.
 #[derive(Debug)]
 pub struct Asked {
-    /// The answer text, or why there is none.
-    pub outcome: Result<String, String>,
+    /// The answer text, or why there is none: the failure's kind and what was said.
+    pub outcome: Result<String, (RunFailure, String)>,
     /// The last reply's text when it was not an answer (a cut reply), or the answer.
     pub response: Option<String>,
     pub finish_reason: Option<String>,
@@ -176,7 +176,7 @@ impl Asker {
     /// Sends `body` until it is answered, fails for good, or the retries are spent.
     pub async fn ask(&self, body: Bytes) -> Asked {
         let mut asked = Asked {
-            outcome: Err(String::new()),
+            outcome: Err((RunFailure::NoReply, String::new())),
             response: None,
             finish_reason: None,
             usage: Usage::default(),
@@ -190,27 +190,28 @@ impl Asker {
                 Ok(()) => return asked,
                 Err(e) => e,
             };
-            let wait = match failure {
-                CallFailure::Permanent => {
-                    asked.outcome = Err(message);
+            let wait = match failure.handling() {
+                None | Some(CallFailure::Permanent) => {
+                    asked.outcome = Err((failure, message));
                     return asked;
                 }
-                CallFailure::RateLimited => {
+                Some(CallFailure::RateLimited) => {
                     rate_limited += 1;
                     if rate_limited >= RATE_LIMITED_TRIES {
-                        asked.outcome = Err(format!(
-                            "gave up after {rate_limited} rate-limited calls: {message}"
+                        asked.outcome = Err((
+                            failure,
+                            format!("gave up after {rate_limited} rate-limited calls: {message}"),
                         ));
                         return asked;
                     }
                     wait.unwrap_or_else(|| self.backoff(rate_limited))
                 }
-                CallFailure::Transient => {
+                Some(CallFailure::Transient) => {
                     retries += 1;
                     if retries > self.settings.max_retries {
-                        asked.outcome = Err(format!(
-                            "gave up after {} attempts: {message}",
-                            asked.attempts
+                        asked.outcome = Err((
+                            failure,
+                            format!("gave up after {} attempts: {message}", asked.attempts),
                         ));
                         return asked;
                     }
@@ -237,7 +238,7 @@ impl Asker {
         &self,
         body: &Bytes,
         asked: &mut Asked,
-    ) -> Result<(), (CallFailure, String, Option<Duration>)> {
+    ) -> Result<(), (RunFailure, String, Option<Duration>)> {
         let slot = self.window.acquire().await;
         asked.attempts += 1;
         self.requests.fetch_add(1, Ordering::Relaxed);
@@ -253,7 +254,7 @@ impl Asker {
         let reply = request.send().await;
         let reply = match reply {
             Ok(r) => r,
-            Err(e) => return Err((CallFailure::Transient, describe(&e), None)),
+            Err(e) => return Err((RunFailure::NoReply, describe(&e), None)),
         };
         let status = reply.status();
         let wait = reply
@@ -265,13 +266,13 @@ impl Asker {
         asked.latency = started.elapsed();
         let text = match text {
             Ok(t) => t,
-            Err(e) => return Err((CallFailure::Transient, describe(&e), None)),
+            Err(e) => return Err((RunFailure::NoReply, describe(&e), None)),
         };
         if status.as_u16() == 429 {
             self.refused.fetch_add(1, Ordering::Relaxed);
             self.window.lock().0.on_refused(slot.epoch);
             return Err((
-                CallFailure::RateLimited,
+                RunFailure::RateLimited,
                 format!("HTTP 429: {}", error_message(&text)),
                 wait,
             ));
@@ -280,19 +281,19 @@ impl Asker {
         drop(slot);
         if !status.is_success() {
             return Err((
-                CallFailure::of_status(status.as_u16()),
+                RunFailure::Status(status.as_u16()),
                 format!("HTTP {}: {}", status.as_u16(), error_message(&text)),
                 None,
             ));
         }
         let completion: Completion = read_completion(&text)
-            .map_err(|e| (CallFailure::Transient, format!("HTTP {status}: {e}"), None))?;
+            .map_err(|e| (RunFailure::Unreadable, format!("HTTP {status}: {e}"), None))?;
         asked.usage += completion.usage;
         asked.finish_reason = completion.finish_reason.clone();
         asked.response = completion.text.clone();
         asked.outcome = match answer_text(&completion) {
             Ok(text) => Ok(text.to_owned()),
-            Err(e @ (NotAnAnswer::Empty | NotAnAnswer::Cut)) => Err(e.to_string()),
+            Err(not) => Err((RunFailure::from(not.clone()), not.to_string())),
         };
         Ok(())
     }

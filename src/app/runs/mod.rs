@@ -41,7 +41,7 @@ use super::tokens::{self, Caller};
 use super::{AppError, Hub, datasets, frames, items};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{NewToken, Role};
-pub use crate::core::model_run::{GenerationParams, Prices, Usage};
+pub use crate::core::model_run::{GenerationParams, ItemOutcome, Prices, RunFailure, Usage};
 use crate::core::model_run::{
     PROMPT_VERSION, PromptImage, chat_request, prompt_template_hash, user_message,
 };
@@ -112,8 +112,8 @@ pub struct RunReport {
     pub run_id: Option<i64>,
     pub dataset: String,
     pub progress: RunProgress,
-    /// Failure reasons and how many items each failed.
-    pub failures: BTreeMap<String, usize>,
+    /// How many items failed with each kind of failure (keyed by the kind's code).
+    pub failures: BTreeMap<RunFailure, usize>,
     /// The submission made (or found, when the same answers were submitted before).
     pub submission: Option<i64>,
     /// Whether items are left unasked (the run was stopped).
@@ -386,7 +386,7 @@ fn tally<'a>(rows: impl IntoIterator<Item = &'a RunItemRow>, prices: Prices) -> 
     let mut state = RunProgress::default();
     for row in rows {
         state.usage += row_usage(row);
-        if row.answered {
+        if row.outcome.is_answered() {
             state.answered += 1;
         } else {
             state.failed += 1;
@@ -404,13 +404,11 @@ fn row_usage(row: &RunItemRow) -> Usage {
     }
 }
 
-/// Failure reasons of `rows` and how many items failed with each.
-fn failures<'a>(rows: impl IntoIterator<Item = &'a RunItemRow>) -> BTreeMap<String, usize> {
+/// The kinds of failure of `rows` and how many items failed with each.
+fn failures<'a>(rows: impl IntoIterator<Item = &'a RunItemRow>) -> BTreeMap<RunFailure, usize> {
     let mut failures = BTreeMap::new();
-    for row in rows.into_iter().filter(|r| !r.answered) {
-        *failures
-            .entry(failure_kind(row.error.as_deref()))
-            .or_insert(0) += 1;
+    for failure in rows.into_iter().filter_map(|r| r.outcome.failure()) {
+        *failures.entry(failure).or_insert(0) += 1;
     }
     failures
 }
@@ -469,16 +467,20 @@ async fn ask_pending<L: Ledger>(
             tasks.spawn(async move {
                 let body = ledger.body(&item, &model, &params).await?;
                 let asked = asker.ask(body).await;
+                let (outcome, error) = match asked.outcome {
+                    Ok(_) => (ItemOutcome::Answered, asked.last_error),
+                    Err((failure, message)) => (ItemOutcome::Failed(failure), Some(message)),
+                };
                 let row = RunItemRow {
                     item_id: item.item_id.clone(),
-                    answered: asked.outcome.is_ok(),
+                    outcome,
                     response: asked.response,
                     finish_reason: asked.finish_reason,
                     prompt_tokens: asked.usage.prompt_tokens as i64,
                     completion_tokens: asked.usage.completion_tokens as i64,
                     latency_ms: asked.latency.as_millis() as i64,
                     attempts: i64::from(asked.attempts),
-                    error: asked.outcome.err().or(asked.last_error),
+                    error,
                     done_at: String::new(),
                 };
                 // Durable before it counts: a crash after this never asks the item again.
@@ -493,17 +495,20 @@ async fn ask_pending<L: Ledger>(
         if failed_before {
             state.failed -= 1;
         }
-        if row.answered {
-            state.answered += 1;
-        } else {
+        if let Some(failure) = row.outcome.failure() {
             state.failed += 1;
-            let reason = row.error.as_deref().unwrap_or("failed");
+            let reason = match &row.error {
+                Some(words) => words.clone(),
+                None => failure.to_string(),
+            };
             state
                 .recent_errors
                 .push(format!("{}: {reason}", row.item_id));
             if state.recent_errors.len() > RECENT_ERRORS {
                 state.recent_errors.remove(0);
             }
+        } else {
+            state.answered += 1;
         }
         state.asked_now += 1;
         state.done = state.answered + state.failed;
@@ -608,7 +613,7 @@ pub async fn execute(
 
     let todo = pending(
         states.iter().map(|s| {
-            let answered = s.state.map(|o| o == store::runs::ItemOutcome::Answered);
+            let answered = s.state.map(ItemOutcome::is_answered);
             (s.item_row, s.item_id.as_str(), answered)
         }),
         spec.retry_failed,
@@ -666,20 +671,6 @@ fn check_settings(spec: &RunSpec, settings: &CallSettings) -> Result<(), AppErro
     Ok(())
 }
 
-/// A failure's reason without the item-specific detail, for counting reasons.
-fn failure_kind(error: Option<&str>) -> String {
-    let error = error.unwrap_or("failed");
-    let short: String = error
-        .split(": ")
-        .take(2)
-        .collect::<Vec<_>>()
-        .join(": ")
-        .chars()
-        .take(120)
-        .collect();
-    short
-}
-
 /// The request body for one item from its images' labels and PNG bytes (dropped as soon as
 /// the body is written) and its question.
 async fn request_body(
@@ -707,7 +698,7 @@ async fn request_body(
 /// count as unanswered.
 fn answers_jsonl(rows: &[RunItemRow]) -> Result<String, AppError> {
     let mut body = String::new();
-    for row in rows.iter().filter(|r| r.answered) {
+    for row in rows.iter().filter(|r| r.outcome.is_answered()) {
         let Some(answer) = &row.response else {
             continue;
         };

@@ -21,9 +21,10 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use super::{
-    AppError, CallSettings, GenerationParams, Ledger, Named, Pending, ProgressFn, RunItemRow,
-    RunReport, RunSpec, StampOf, Stamped, StopFn, answers_jsonl, ask_pending, asker,
-    check_settings, failures, named, pending, request_body, stamped, submission_key, tally,
+    AppError, CallSettings, GenerationParams, ItemOutcome, Ledger, Named, Pending, ProgressFn,
+    RunFailure, RunItemRow, RunReport, RunSpec, StampOf, Stamped, StopFn, answers_jsonl,
+    ask_pending, asker, check_settings, failures, named, pending, request_body, stamped,
+    submission_key, tally,
 };
 use crate::core::model_run::{PROMPT_VERSION, backoff, prompt_template_hash, retry_after};
 
@@ -72,6 +73,10 @@ const CACHE_VERSION: u32 = 1;
 struct CacheLine {
     item: String,
     answered: bool,
+    /// Why an item that was not answered failed ([`RunFailure::code`]); absent from the lines
+    /// of a hub older than failure kinds, which read as `unrecorded`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    failure: Option<String>,
     response: Option<String>,
     finish_reason: Option<String>,
     prompt_tokens: i64,
@@ -86,7 +91,8 @@ impl CacheLine {
     fn of(row: &RunItemRow) -> CacheLine {
         CacheLine {
             item: row.item_id.clone(),
-            answered: row.answered,
+            answered: row.outcome.is_answered(),
+            failure: row.outcome.failure().map(RunFailure::code),
             response: row.response.clone(),
             finish_reason: row.finish_reason.clone(),
             prompt_tokens: row.prompt_tokens,
@@ -98,10 +104,19 @@ impl CacheLine {
         }
     }
 
-    fn into_row(self) -> RunItemRow {
-        RunItemRow {
+    /// The row this line keeps; an error when its failure is no failure's code.
+    fn into_row(self) -> Result<RunItemRow, String> {
+        let outcome = match (self.answered, self.failure.as_deref()) {
+            (true, _) => ItemOutcome::Answered,
+            (false, None) => ItemOutcome::Failed(RunFailure::Unrecorded),
+            (false, Some(code)) => ItemOutcome::Failed(
+                RunFailure::from_code(code)
+                    .ok_or_else(|| format!("failure {code:?} is not a failure's code"))?,
+            ),
+        };
+        Ok(RunItemRow {
             item_id: self.item,
-            answered: self.answered,
+            outcome,
             response: self.response,
             finish_reason: self.finish_reason,
             prompt_tokens: self.prompt_tokens,
@@ -110,7 +125,7 @@ impl CacheLine {
             attempts: self.attempts,
             error: self.error,
             done_at: self.done_at,
-        }
+        })
     }
 }
 
@@ -184,7 +199,9 @@ fn read_cache(path: &Path) -> Result<Option<Cached>, AppError> {
     for (at, line) in lines {
         let line: CacheLine = serde_json::from_str(line)
             .map_err(|e| AppError::Invalid(format!("{shown} line {}: {e}", at + 1)))?;
-        let mut row = line.into_row();
+        let mut row = line
+            .into_row()
+            .map_err(|e| AppError::Invalid(format!("{shown} line {}: {e}", at + 1)))?;
         if let Some(before) = rows.get(&row.item_id) {
             row.prompt_tokens += before.prompt_tokens;
             row.completion_tokens += before.completion_tokens;
@@ -584,7 +601,7 @@ pub async fn execute_remote(
     progress(&state);
     let todo = pending(
         ids.iter().enumerate().map(|(at, id)| {
-            let answered = stored.get(id.as_str()).map(|row| row.answered);
+            let answered = stored.get(id.as_str()).map(|row| row.outcome.is_answered());
             (at as i64, id.as_str(), answered)
         }),
         spec.retry_failed,
@@ -652,7 +669,11 @@ mod tests {
     fn row(item: &str, answered: bool, tokens: i64) -> RunItemRow {
         RunItemRow {
             item_id: item.to_owned(),
-            answered,
+            outcome: if answered {
+                ItemOutcome::Answered
+            } else {
+                ItemOutcome::Failed(RunFailure::Status(500))
+            },
             response: answered.then(|| "[1, 2]".to_owned()),
             finish_reason: Some("stop".to_owned()),
             prompt_tokens: tokens,
@@ -697,7 +718,7 @@ mod tests {
         assert_eq!(found, header());
         assert_eq!(rows.len(), 2);
         let a = &rows["a"];
-        assert!(a.answered);
+        assert_eq!(a.outcome, ItemOutcome::Answered);
         assert_eq!(
             (a.prompt_tokens, a.completion_tokens, a.attempts),
             (30, 2, 2)
