@@ -928,6 +928,25 @@ mod tests {
     }
 
     #[test]
+    fn interval_alpha_is_the_same_for_values_far_from_zero() {
+        // δ² = (c − k)² does not see where the values sit, and the expected disagreement,
+        // summed around the mean, keeps them: the raw moments (Σ n_c c² − n·mean²) of values
+        // near 10⁹ would cancel away every digit of the spread.
+        let near: [&[f64]; 2] = [&[1.0, 2.0, 3.0, 3.0, 1.0], &[1.0, 3.0, 3.0, 2.0, 2.0]];
+        let shifted = |by: f64| -> Vec<Vec<Option<f64>>> {
+            near.iter()
+                .map(|row| row.iter().map(|v| Some(v + by)).collect())
+                .collect()
+        };
+        let alpha = |data: Vec<Vec<Option<f64>>>| {
+            let data = ReliabilityData::from_coder_rows(data).unwrap();
+            krippendorff_alpha(&data, MeasurementLevel::Interval).alpha
+        };
+        let at_zero = alpha(shifted(0.0)).unwrap();
+        close(alpha(shifted(1e9)), at_zero);
+    }
+
+    #[test]
     fn ordinal_two_coder_case_by_hand() {
         // Units (1,1), (1,2), (2,3), (3,3): counts 1:3, 2:2, 3:3, n = 8.
         // Mid-ranks: s1 = 1.5, s2 = 4, s3 = 6.5; δ²(1,2) = 6.25, δ²(2,3) = 6.25, δ²(1,3) = 25.

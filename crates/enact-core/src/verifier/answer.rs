@@ -680,6 +680,9 @@ mod tests {
         assert_eq!(enact("[3,\u{c}4]", 2).as_deref(), Some("[1, 2]"));
         // findall resumes after a failed '[': only '[2]' matches in '[1 [2]'.
         assert_eq!(enact("[1 [2]", 1).as_deref(), Some("[1]"));
+        // Two values with no comma between are a SyntaxError too: the fallback keeps every
+        // number as written, where a literal would be cut to the last three and re-based.
+        assert_eq!(enact("[0 1 2 3]", 3).as_deref(), Some("[0, 1, 2, 3]"));
     }
 
     #[test]
