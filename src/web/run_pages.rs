@@ -11,7 +11,6 @@ use axum::extract::State;
 use axum::response::{Html, IntoResponse, Redirect, Response};
 use axum::routing::{get, post};
 use serde::Deserialize;
-use serde_json::Value;
 
 use super::error::PageError;
 use super::extract::{Path, Query};
@@ -78,14 +77,6 @@ struct ProgressShown {
     recent_errors: Vec<String>,
 }
 
-fn count(progress: &Value, field: &str) -> u64 {
-    progress.get(field).and_then(Value::as_u64).unwrap_or(0)
-}
-
-fn number(progress: &Value, field: &str) -> f64 {
-    progress.get(field).and_then(Value::as_f64).unwrap_or(0.0)
-}
-
 /// Seconds as "1 h 02 min", "3 min 05 s" or "12 s".
 fn duration(seconds: f64) -> String {
     let s = seconds.max(0.0).round() as u64;
@@ -97,39 +88,24 @@ fn duration(seconds: f64) -> String {
 }
 
 fn progress_shown(view: &ServerRunView) -> ProgressShown {
-    let p = &view.progress;
-    let total = count(p, "total");
+    let p = view.progress.clone().unwrap_or_default();
     ProgressShown {
-        stage: match (&view.state, p.get("stage").and_then(Value::as_str)) {
-            (Some(state), Some(stage)) if stage != state => format!("{state} ({stage})"),
+        stage: match (&view.state, &view.progress) {
+            (Some(state), Some(p)) if p.stage.as_str() != state => {
+                format!("{state} ({})", p.stage.as_str())
+            }
             (Some(state), _) => state.clone(),
             (None, _) => "not started on the server".to_owned(),
         },
-        done: format!("{} of {total}", count(p, "done")),
-        answered: count(p, "answered").to_string(),
-        failed: count(p, "failed").to_string(),
-        in_flight: count(p, "in_flight").to_string(),
-        items_per_s: format!("{:.2}", number(p, "items_per_s")),
-        eta: p
-            .get("eta_s")
-            .and_then(Value::as_f64)
-            .map_or_else(|| "–".to_owned(), duration),
-        tokens: format!(
-            "{} in, {} out",
-            count(p, "prompt_tokens"),
-            count(p, "completion_tokens")
-        ),
-        cost: format!("${:.4}", number(p, "cost_usd")),
-        recent_errors: p
-            .get("recent_errors")
-            .and_then(Value::as_array)
-            .map(|errors| {
-                errors
-                    .iter()
-                    .filter_map(|e| e.as_str().map(str::to_owned))
-                    .collect()
-            })
-            .unwrap_or_default(),
+        done: format!("{} of {}", p.done, p.total),
+        answered: p.answered.to_string(),
+        failed: p.failed.to_string(),
+        in_flight: p.in_flight.to_string(),
+        items_per_s: format!("{:.2}", p.items_per_s),
+        eta: p.eta_s.map_or_else(|| "–".to_owned(), duration),
+        tokens: format!("{} in, {} out", p.prompt_tokens, p.completion_tokens),
+        cost: format!("${:.4}", p.cost_usd),
+        recent_errors: p.recent_errors,
     }
 }
 

@@ -32,7 +32,8 @@ pub use responses::{
     response_page, stamp, visible_run,
 };
 pub use server::{
-    EndpointKeys, MOST_CONCURRENCY, RunCalls, ServerRunView, control, start, view, views, work,
+    EndpointKeys, MOST_CONCURRENCY, RunCalls, RunJobProgress, RunStage, ServerRunView, control,
+    start, view, views, work,
 };
 
 use super::refusal::Refusal;

@@ -289,7 +289,12 @@ pub async fn work(hub: &Hub, job: &JobContext) -> Result<(), AppError> {
         while seen.changed().await.is_ok() {
             let current = seen.borrow_and_update().clone();
             if let Some(p) = current
-                && let Err(e) = job.progress(hub, shown_progress(&p, "running")).await
+                && let Err(e) = job
+                    .progress(
+                        hub,
+                        serde_json::json!(RunJobProgress::of(&p, RunStage::Running)),
+                    )
+                    .await
             {
                 tracing::warn!(job = job.id.0, error = %e, "storing a run's progress failed");
             }
@@ -299,43 +304,109 @@ pub async fn work(hub: &Hub, job: &JobContext) -> Result<(), AppError> {
     let (report, ()) = tokio::join!(ran, writer);
     let report = report?;
     let stage = if report.stopped {
-        "stopped"
+        RunStage::Stopped
     } else if report.submission.is_some() {
-        "submitted"
+        RunStage::Submitted
     } else {
-        "finished"
+        RunStage::Finished
     };
-    let mut last = shown_progress(&report.progress, stage);
-    last["submission"] = serde_json::json!(report.submission);
-    last["failures"] = serde_json::json!(report.failures);
-    job.progress(hub, last).await
+    let mut last = RunJobProgress::of(&report.progress, stage);
+    last.submission = report.submission;
+    last.failures = report
+        .failures
+        .iter()
+        .map(|(failure, n)| (failure.code(), *n))
+        .collect();
+    job.progress(hub, serde_json::json!(last)).await
 }
 
-/// The progress a page shows: the run's counts with the rate and the time left.
-fn shown_progress(p: &RunProgress, stage: &str) -> serde_json::Value {
-    let rate = if p.elapsed_s > 0.0 {
-        p.asked_now as f64 / p.elapsed_s
-    } else {
-        0.0
-    };
-    let left = p.total.saturating_sub(p.done);
-    let eta_s = (rate > 0.0).then(|| left as f64 / rate);
-    serde_json::json!({
-        "stage": stage,
-        "total": p.total,
-        "done": p.done,
-        "answered": p.answered,
-        "failed": p.failed,
-        "in_flight": p.in_flight,
-        "items_per_s": rate,
-        "eta_s": eta_s,
-        "prompt_tokens": p.usage.prompt_tokens,
-        "completion_tokens": p.usage.completion_tokens,
-        "cost_usd": p.cost_usd,
-        "requests": p.requests,
-        "refused": p.refused,
-        "recent_errors": p.recent_errors,
-    })
+/// Where a run's job has got.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum RunStage {
+    /// Asking items.
+    #[default]
+    Running,
+    /// Stopped (paused, cancelled or released) with items left.
+    Stopped,
+    /// Every item done and the answers submitted.
+    Submitted,
+    /// Every item done, not submitted (the run submits under no name).
+    Finished,
+}
+
+impl RunStage {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            RunStage::Running => "running",
+            RunStage::Stopped => "stopped",
+            RunStage::Submitted => "submitted",
+            RunStage::Finished => "finished",
+        }
+    }
+}
+
+/// A run job's progress, as the job stores it and the API and the run's page show it: the
+/// run's counts with the rate and the time left and, once it ended, the submission and the
+/// failures by kind. Written and read only as this struct.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(default)]
+pub struct RunJobProgress {
+    pub stage: RunStage,
+    /// Items the run covers.
+    pub total: usize,
+    /// Items with a row: answered or failed.
+    pub done: usize,
+    pub answered: usize,
+    pub failed: usize,
+    pub in_flight: usize,
+    /// Items asked per second by this job so far.
+    pub items_per_s: f64,
+    /// Seconds left at that rate; none before the first item.
+    pub eta_s: Option<f64>,
+    pub prompt_tokens: u64,
+    pub completion_tokens: u64,
+    pub cost_usd: f64,
+    pub requests: u64,
+    /// Requests refused with 429.
+    pub refused: u64,
+    /// The last few failures, newest last.
+    pub recent_errors: Vec<String>,
+    /// The submission made, once the run ended submitted.
+    pub submission: Option<i64>,
+    /// Items failed by kind (`RunFailure` codes: `http_503`, `no_reply`, …), once ended.
+    pub failures: BTreeMap<String, usize>,
+}
+
+impl RunJobProgress {
+    fn of(p: &RunProgress, stage: RunStage) -> RunJobProgress {
+        let rate = if p.elapsed_s > 0.0 {
+            p.asked_now as f64 / p.elapsed_s
+        } else {
+            0.0
+        };
+        let left = p.total.saturating_sub(p.done);
+        RunJobProgress {
+            stage,
+            total: p.total,
+            done: p.done,
+            answered: p.answered,
+            failed: p.failed,
+            in_flight: p.in_flight,
+            items_per_s: rate,
+            eta_s: (rate > 0.0).then(|| left as f64 / rate),
+            prompt_tokens: p.usage.prompt_tokens,
+            completion_tokens: p.usage.completion_tokens,
+            cost_usd: p.cost_usd,
+            requests: p.requests,
+            refused: p.refused,
+            recent_errors: p.recent_errors.clone(),
+            submission: None,
+            failures: BTreeMap::new(),
+        }
+    }
 }
 
 /// A server-side run as the API shows it: the run, its newest job and that job's progress.
@@ -359,9 +430,8 @@ pub struct ServerRunView {
     pub state: Option<String>,
     /// The job's last error, when it failed.
     pub last_error: Option<String>,
-    /// What the job last reported: stage, total, done, answered, failed, in_flight,
-    /// items_per_s, eta_s, tokens, cost_usd, recent_errors.
-    pub progress: serde_json::Value,
+    /// What the job last reported; none before it was started on the server.
+    pub progress: Option<RunJobProgress>,
 }
 
 fn view_of(run: &RunRow, job: Option<&jobs::JobRow>) -> ServerRunView {
@@ -381,8 +451,7 @@ fn view_of(run: &RunRow, job: Option<&jobs::JobRow>) -> ServerRunView {
         last_error: job.and_then(|j| j.last_error.clone()),
         progress: job
             .and_then(|j| j.progress.as_deref())
-            .and_then(|p| serde_json::from_str(p).ok())
-            .unwrap_or(serde_json::Value::Null),
+            .and_then(|p| serde_json::from_str(p).ok()),
     }
 }
 
@@ -431,4 +500,59 @@ pub async fn control(
     })?;
     jobs::control(hub, actor, JobId(job), change).await?;
     view(hub, id).await
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_progress_a_job_stored_before_the_struct_reads_back_whole() {
+        // As 0.1's `shown_progress` wrote an ended run's progress, failures keyed by words.
+        let stored = r#"{"stage":"submitted","total":18,"done":18,"answered":14,"failed":4,
+            "in_flight":0,"items_per_s":3.5,"eta_s":null,"prompt_tokens":1000,
+            "completion_tokens":200,"cost_usd":0.0045,"requests":23,"refused":2,
+            "recent_errors":["a: HTTP 400: no"],"submission":7,
+            "failures":{"gave up after 4 attempts: HTTP 503":1}}"#;
+        let read: RunJobProgress = serde_json::from_str(stored).expect("reads");
+        assert_eq!(read.stage, RunStage::Submitted);
+        assert_eq!(
+            (read.total, read.done, read.answered, read.failed),
+            (18, 18, 14, 4)
+        );
+        assert_eq!(
+            (read.requests, read.refused, read.submission),
+            (23, 2, Some(7))
+        );
+        assert_eq!(read.eta_s, None);
+        assert_eq!(read.failures["gave up after 4 attempts: HTTP 503"], 1);
+        // A running job's progress had neither the submission nor the failures.
+        let running: RunJobProgress =
+            serde_json::from_str(r#"{"stage":"running","total":5,"done":1,"eta_s":12.0}"#)
+                .expect("reads");
+        assert_eq!(running.stage, RunStage::Running);
+        assert_eq!((running.done, running.eta_s), (1, Some(12.0)));
+        assert!(running.failures.is_empty() && running.submission.is_none());
+        let again: RunJobProgress =
+            serde_json::from_value(serde_json::json!(read.clone())).expect("round trip");
+        assert_eq!(again, read);
+    }
+
+    #[test]
+    fn a_run_s_progress_counts_its_rate_and_time_left() {
+        let progress = RunProgress {
+            total: 100,
+            done: 40,
+            answered: 30,
+            failed: 10,
+            asked_now: 20,
+            elapsed_s: 10.0,
+            ..RunProgress::default()
+        };
+        let shown = RunJobProgress::of(&progress, RunStage::Running);
+        assert_eq!(shown.items_per_s, 2.0);
+        assert_eq!(shown.eta_s, Some(30.0), "60 items left at 2 a second");
+        let idle = RunJobProgress::of(&RunProgress::default(), RunStage::Running);
+        assert_eq!((idle.items_per_s, idle.eta_s), (0.0, None));
+    }
 }
