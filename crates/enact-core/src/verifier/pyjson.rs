@@ -852,6 +852,12 @@ mod tests {
             value.to_json_indented(2),
             "{\n  \"a\": [],\n  \"b\": {},\n  \"c\": {\n    \"d\": 1.0,\n    \"e\": [\n      1,\n      2\n    ]\n  }\n}"
         );
+        // Lists inside lists indent one level deeper each, as json.dumps(indent=2) writes
+        // [[1, 2], [], [[3]], {"a": [4]}].
+        assert_eq!(
+            parse(r#"[[1, 2], [], [[3]], {"a": [4]}]"#).to_json_indented(2),
+            "[\n  [\n    1,\n    2\n  ],\n  [],\n  [\n    [\n      3\n    ]\n  ],\n  {\n    \"a\": [\n      4\n    ]\n  }\n]"
+        );
     }
 
     #[test]

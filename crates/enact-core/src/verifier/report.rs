@@ -268,6 +268,12 @@ mod tests {
         // a split at 84 would give 0.33333333333333337.
         let values: Vec<f64> = (0..165).map(|k| (k % 3) as f64 / 3.0).collect();
         assert_eq!(numpy_mean(&values), 0.3333333333333333);
+        // 132 values: 64 + 68 (66 rounded down to eight). numpy 2.4.6's np.mean of this list
+        // printed 2.5129870129870135; any other split point sums them to another last bit.
+        let values: Vec<f64> = (0..132)
+            .map(|i| ((i * 7919) % 13) as f64 / 7.0 + ((i * 104_729) % 11) as f64 / 3.0)
+            .collect();
+        assert_eq!(numpy_mean(&values), 2.5129870129870135);
     }
 
     #[test]

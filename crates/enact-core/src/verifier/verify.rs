@@ -1013,6 +1013,28 @@ mod tests {
     }
 
     #[test]
+    fn a_bool_label_is_the_int_python_takes_it_for() {
+        // bool is an int subclass: ["a", "b", "c"][True] is "b", True - 1 is 0. A label that
+        // is neither (a float, a string) is Python's TypeError.
+        let yes = PyValue::Bool(true);
+        assert_eq!(yes.index(3, false), Ok(1));
+        assert_eq!(PyValue::Bool(false).index(3, true), Ok(0));
+        assert!(
+            yes.minus_one()
+                .expect("an int")
+                .py_eq(&PyValue::Int(PyInt::ZERO))
+        );
+        assert!(
+            matches!(yes.minus_one(), Ok(PyValue::Int(_))),
+            "True - 1 is an int"
+        );
+        assert_eq!(
+            PyValue::Float(1.0).index(3, false),
+            Err("list indices must be integers or slices, not float".to_owned())
+        );
+    }
+
+    #[test]
     fn malformed_ground_truths_raise_like_python() {
         let record = |gt: &str, kf: &str, pred: &str, direction| {
             let gt_value = parse_python_json(gt).expect("json");
