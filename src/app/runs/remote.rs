@@ -727,6 +727,35 @@ mod tests {
     }
 
     #[test]
+    fn a_failure_s_kind_is_kept_in_the_cache_and_an_older_line_reads_as_unrecorded() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.jsonl");
+        let mut bytes = line(&header());
+        bytes.extend(line(&CacheLine::of(&row("a", false, 1))));
+        // A line as a hub before failure kinds wrote it: no `failure`.
+        let mut older = serde_json::to_value(CacheLine::of(&row("b", false, 1))).unwrap();
+        older.as_object_mut().unwrap().remove("failure");
+        bytes.extend(line(&older));
+        std::fs::write(&path, &bytes).unwrap();
+        let (_, rows) = read_cache(&path).unwrap().unwrap();
+        assert_eq!(
+            rows["a"].outcome,
+            ItemOutcome::Failed(RunFailure::Status(500))
+        );
+        assert_eq!(
+            rows["b"].outcome,
+            ItemOutcome::Failed(RunFailure::Unrecorded)
+        );
+
+        let mut unknown = serde_json::to_value(CacheLine::of(&row("c", false, 1))).unwrap();
+        unknown["failure"] = "gremlins".into();
+        bytes.extend(line(&unknown));
+        std::fs::write(&path, &bytes).unwrap();
+        let e = read_cache(&path).unwrap_err().to_string();
+        assert!(e.contains("line 4") && e.contains("gremlins"), "{e}");
+    }
+
+    #[test]
     fn a_line_cut_by_a_crash_is_dropped_and_cut_off_the_file() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("c.jsonl");
