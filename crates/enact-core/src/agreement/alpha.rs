@@ -773,6 +773,22 @@ mod tests {
     }
 
     #[test]
+    fn a_subset_of_items_counts_only_the_values_it_holds() {
+        // Unit 0 holds 1 and 2, unit 1 holds 3 twice; each unit is an item.
+        let data = rows(&[&[Some(1.0), Some(3.0)], &[Some(2.0), Some(3.0)]]);
+        let prepared = PreparedAlpha::new(&data, MeasurementLevel::Nominal);
+        let whole = prepared.estimate();
+        assert_eq!((whole.pairable_values, whole.distinct_values), (4, 3));
+        let first = prepared.alpha_for_items(&[0]).unwrap();
+        assert_eq!((first.pairable_values, first.distinct_values), (2, 2));
+        let second_twice = prepared.alpha_for_items(&[1, 1]).unwrap();
+        assert_eq!(
+            (second_twice.pairable_values, second_twice.distinct_values),
+            (4, 1)
+        );
+    }
+
+    #[test]
     fn canonical_example_counts_and_disagreements() {
         let result = krippendorff_alpha(&canonical(), MeasurementLevel::Nominal);
         // Unit 12 has a single value and is dropped.
