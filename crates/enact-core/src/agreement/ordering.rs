@@ -451,6 +451,18 @@ mod tests {
     }
 
     #[test]
+    fn an_encoding_is_written_as_its_name_and_read_back() {
+        for (encoding, name) in [
+            (OrderingEncoding::Answer, "answer"),
+            (OrderingEncoding::Position, "position"),
+            (OrderingEncoding::Rank, "rank"),
+        ] {
+            assert_eq!(encoding.to_string(), name);
+            assert_eq!(name.parse::<OrderingEncoding>(), Ok(encoding));
+        }
+    }
+
+    #[test]
     fn position_encoding_lists_labels_by_position() {
         let encoded = tiny().encode(OrderingEncoding::Position);
         assert_eq!(encoded.level, MeasurementLevel::Ordinal);

@@ -745,6 +745,38 @@ mod tests {
     }
 
     #[test]
+    fn only_the_answer_encoding_is_held_to_the_nominal_level() {
+        let with = |encoding, level| ReportInputs {
+            encoding,
+            level: Some(level),
+            ..inputs()
+        };
+        // Whole answers are unordered categories: no ordinal or interval reading of them.
+        for level in [MeasurementLevel::Ordinal, MeasurementLevel::Interval] {
+            assert!(matches!(
+                build_report(&with(OrderingEncoding::Answer, level)),
+                Err(ReportError::Agreement(
+                    AgreementUnavailable::AnswerEncodingLevel(l)
+                )) if l == level
+            ));
+        }
+        let nominal = build_report(&with(OrderingEncoding::Answer, MeasurementLevel::Nominal));
+        assert_eq!(
+            nominal.unwrap().agreement.unwrap().level,
+            MeasurementLevel::Nominal
+        );
+        // Positions and ranks are ordered: any level is theirs to ask for.
+        for encoding in [OrderingEncoding::Position, OrderingEncoding::Rank] {
+            let report = build_report(&with(encoding, MeasurementLevel::Interval)).unwrap();
+            assert_eq!(
+                report.agreement.unwrap().level,
+                MeasurementLevel::Interval,
+                "{encoding}"
+            );
+        }
+    }
+
+    #[test]
     fn an_item_counts_as_all_agreeing_only_when_every_answer_is_alike() {
         let mut alike = inputs();
         // q2's second answer now matches its first: both overlapping items agree.
