@@ -182,6 +182,21 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn samples_far_from_zero_give_the_same_test_as_near_it() {
+        // Moved up by 10⁹, the means are no longer exact: the variances, summed around them,
+        // keep the digits that Σ(x − m)(x + m) = Σx² − n·m² would lose (a's s² of 1/3 came
+        // out 119.5 that way). Only the means' rounding (10⁻⁷) is left.
+        let (a, b) = ([1.0, 2.0, 2.0], [1.0, 1.0, 4.0]);
+        let near = welch_t_test(&a, &b).unwrap();
+        let far = welch_t_test(&a.map(|v| v + 1e9), &b.map(|v| v + 1e9)).unwrap();
+        close(near.se, (10.0f64 / 9.0).sqrt(), 1e-15);
+        close(near.df, 100.0 / 41.0, 1e-12);
+        close(far.se, near.se.unwrap(), 1e-9);
+        close(far.t, near.t.unwrap(), 1e-6);
+        close(far.df, near.df.unwrap(), 1e-9);
+    }
+
+    #[test]
     fn unequal_sizes_and_variances() {
         // a: mean 0.7, s² = 0.025 (n 5); b: mean 0.25, s² = 0.0025 (n 3).
         // se² = 7/1200, df = 98/19, p by numerical integration: 0.00180117936.
