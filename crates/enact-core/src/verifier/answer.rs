@@ -678,6 +678,9 @@ mod tests {
         // A vertical tab matches \s but is not Python whitespace: SyntaxError, fallback.
         assert_eq!(enact("[3,\u{b}4]", 2).as_deref(), Some("[3, 4]"));
         assert_eq!(enact("[3,\u{c}4]", 2).as_deref(), Some("[1, 2]"));
+        // `\[[\d\s,]+\]` needs something inside: the later "[]" is no match, so the literal
+        // [0, 1] is read and re-based; the fallback would keep 0.
+        assert_eq!(enact("[0, 1] []", 2).as_deref(), Some("[1, 2]"));
         // findall resumes after a failed '[': only '[2]' matches in '[1 [2]'.
         assert_eq!(enact("[1 [2]", 1).as_deref(), Some("[1]"));
         // Two values with no comma between are a SyntaxError too: the fallback keeps every
@@ -757,6 +760,14 @@ mod tests {
             fail("maybe [1, 2, 3, 4] </think> no idea", 4),
             "no list found"
         );
+        // The same with a block after it: what precedes the stray tag is still thinking.
+        assert_eq!(
+            fail(
+                "maybe [1, 2, 3, 4] </think> no idea <think>[4, 3, 2, 1]</think>",
+                4
+            ),
+            "no list found"
+        );
         assert_eq!(fail("[-1, 2, 3, 4]", 4), "label -1 out of range 1..4");
         assert_eq!(
             fail("[1, 2, 3, 100000000000000000000]", 4),
@@ -798,7 +809,8 @@ mod tests {
 
     #[test]
     fn permutation_validation() {
-        assert!(Permutation::new(vec![2, 3, 1]).is_ok());
+        let three = Permutation::new(vec![2, 3, 1]).unwrap();
+        assert_eq!((three.len(), three.is_empty()), (3, false));
         assert_eq!(
             Permutation::new(vec![1, 1]).unwrap_err().to_string(),
             "label 1 repeated"
