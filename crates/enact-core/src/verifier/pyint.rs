@@ -359,6 +359,11 @@ mod tests {
         assert_eq!(PyInt::Small(-2).cmp_f64(-1.5), Some(Ordering::Less));
         assert_eq!(PyInt::Small(0).cmp_f64(f64::NAN), None);
         assert_eq!(huge.cmp_f64(f64::INFINITY), Some(Ordering::Less));
+        // Equality is the ordering's: equal values are equal, others are not.
+        assert_eq!(huge, big("100000000000000000000"));
+        assert_ne!(huge, huge.negate());
+        assert_ne!(huge, PyInt::Small(i64::MAX));
+        assert_ne!(PyInt::Small(1), PyInt::Small(2));
     }
 
     #[test]
