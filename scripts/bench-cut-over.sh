@@ -4,8 +4,9 @@
 # copies share the sample's images, which do not matter here), imported, SUBMISSIONS full-size
 # submissions stored (default 300: one scored through the API, the rest copied in SQL, for
 # ITEMS × SUBMISSIONS verdicts), then the same items with every ground truth changed imported
-# with --replace. Prints the import's cut-over, its longest write transaction, the verdicts
-# swept after the cut-over and the longest of those transactions, from the import's report.
+# with --replace. Prints the import's cut-over, its longest write transaction, the replaced
+# items and verdicts deleted after the cut-over and the longest of those transactions, from the
+# import's report.
 # BIN=path runs another build (an A/B against an older commit).
 #
 #   scripts/bench-cut-over.sh
@@ -84,11 +85,15 @@ python3 - "$OUT/replace.json" "$OUT/replace.time" "$DB" <<'PY'
 import json, re, sqlite3, sys
 report = json.load(open(sys.argv[1]))
 wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (\S+)", open(sys.argv[2]).read()).group(1)
-(left,) = sqlite3.connect(sys.argv[3]).execute(
+db = sqlite3.connect(sys.argv[3])
+(left,) = db.execute(
     "SELECT count(*) FROM submission_items v WHERE NOT EXISTS (SELECT 1 FROM items i WHERE i.id = v.item)").fetchone()
+(rows,) = db.execute("SELECT count(*) FROM datasets").fetchone()
 print(f"replacing import: {report['replaced_items']} items replaced in {report['seconds']:.1f} s "
       f"(process wall {wall}); cut-over {report['cut_over_ms']:.1f} ms; "
+      f"{report['retired_items']} replaced items deleted after it; "
       f"{report['swept_verdicts']} verdicts swept after it, longest sweep transaction "
       f"{report['longest_sweep_ms']:.1f} ms; longest write transaction of the import "
-      f"{report['longest_transaction_ms']:.1f} ms; verdicts naming no item left: {left}")
+      f"{report['longest_transaction_ms']:.1f} ms; verdicts naming no item left: {left}; "
+      f"dataset rows left: {rows}")
 PY

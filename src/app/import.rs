@@ -230,9 +230,11 @@ pub struct ImportReport {
     /// writers may have waited for it.
     pub longest_transaction_ms: f64,
     pub cut_over_ms: f64,
-    /// Verdicts of replaced items deleted after the cut-over (a submission per transaction),
-    /// and the longest of those transactions in milliseconds.
+    /// Verdicts of replaced items deleted after the cut-over (a submission per transaction);
+    /// replaced items deleted after a cut-over that retired the dataset's old row (a few
+    /// hundred per transaction); the longest of those transactions in milliseconds.
     pub swept_verdicts: u64,
+    pub retired_items: u64,
     pub longest_sweep_ms: f64,
     pub seconds: f64,
     /// Public datasets holding some of the imported dataset's items or frames (its ground
@@ -293,6 +295,12 @@ impl ImportReport {
             s.push_str(&format!(
                 "; {} stored verdicts of replaced items deleted after the cut-over",
                 self.swept_verdicts
+            ));
+        }
+        if self.retired_items > 0 {
+            s.push_str(&format!(
+                "; {} replaced items deleted after the cut-over",
+                self.retired_items
             ));
         }
         for leak in &self.leaks {
@@ -880,6 +888,16 @@ pub async fn import_release(
             tracing::warn!(dataset = %options.dataset, error = %e, "sweeping the replaced items' verdicts failed; the next import or server start finishes it");
         }
     }
+    match delete_retired_datasets(hub).await {
+        Ok(deleted) => {
+            report.retired_items = deleted.items;
+            report.longest_sweep_ms = report.longest_sweep_ms.max(deleted.longest_ms);
+            report.longest_transaction_ms = report.longest_transaction_ms.max(deleted.longest_ms);
+        }
+        Err(e) => {
+            tracing::warn!(dataset = %options.dataset, error = %e, "deleting the replaced items failed; the next import or server start finishes it");
+        }
+    }
     // The import is in: a failed check is logged, never turned into a failed import.
     match super::red_flags::leak_at_import(hub, actor, &options.dataset).await {
         Ok(leaks) => report.leaks = leaks,
@@ -1063,16 +1081,23 @@ async fn publish(
         None => store::staged::remove(&mut tx, staged).await?,
         Some(target) => {
             let source = location.root.display().to_string();
-            store::staged::publish_into(&mut tx, staged, target.id, &source).await?;
-            store::staged::remove(&mut tx, staged).await?;
+            let published =
+                store::staged::publish_into(&mut tx, staged, target.id, &source).await?;
+            tracing::info!(
+                dataset = %dataset,
+                replaced = published.replaced,
+                kept = published.kept,
+                swapped = published.swapped,
+                "cut-over"
+            );
             // Stored error analyses were computed from the old items or signatures.
             if report.signatures_updated + report.replaced_items > 0 {
-                store::submissions::clear_error_analyses(&mut tx, target.id).await?;
+                store::submissions::clear_error_analyses(&mut tx, published.dataset).await?;
             }
             // Human verdicts were judged with the old signatures (answers on replaced items
             // went with them): judged again here, in the same transaction.
             if report.signatures_updated > 0 {
-                super::rescore::rejudge_dataset(&mut tx, target.id).await?;
+                super::rescore::rejudge_dataset(&mut tx, published.dataset).await?;
             }
         }
     }
@@ -1152,6 +1177,60 @@ pub async fn sweep_replaced_verdicts(hub: &super::Hub) -> Result<Swept, sqlx::Er
 
 /// How many rows one cleanup transaction deletes.
 const DELETE_BATCH: i64 = 256;
+
+/// What [`delete_retired_datasets`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RetiredDeleted {
+    pub datasets: u64,
+    pub items: u64,
+    /// Rows written to a retired row after its cut-over, pointed at its successor.
+    pub repointed: u64,
+    /// The longest of its transactions, in milliseconds.
+    pub longest_ms: f64,
+}
+
+/// Deletes the rows swapping cut-overs retired (`store::staged::publish_into`): their items a
+/// few hundred per short bulk transaction, then the row, then the frames nothing uses any
+/// more. Run after every cut-over and when a server starts, so what a killed process left is
+/// finished by the next; two processes at it at once delete nothing twice.
+pub async fn delete_retired_datasets(hub: &super::Hub) -> Result<RetiredDeleted, sqlx::Error> {
+    let mut done = RetiredDeleted::default();
+    let pending = {
+        let mut conn = hub.pool.acquire().await?;
+        store::staged::retired(&mut conn).await?
+    };
+    if pending.is_empty() {
+        return Ok(done);
+    }
+    for retired in pending {
+        loop {
+            let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+            let held = Instant::now();
+            let deleted =
+                store::staged::delete_items(&mut tx, retired.dataset, DELETE_BATCH).await?;
+            tx.commit().await?;
+            done.longest_ms = done.longest_ms.max(held.elapsed().as_secs_f64() * 1000.0);
+            done.items += deleted;
+            if deleted == 0 {
+                break;
+            }
+        }
+        let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+        let held = Instant::now();
+        done.repointed += store::staged::delete_retired(&mut tx, &retired).await?;
+        tx.commit().await?;
+        done.longest_ms = done.longest_ms.max(held.elapsed().as_secs_f64() * 1000.0);
+        done.datasets += 1;
+    }
+    if done.repointed > 0 {
+        tracing::warn!(
+            rows = done.repointed,
+            "rows written to a replaced dataset's retired row after its cut-over were moved to the dataset"
+        );
+    }
+    delete_unused_frames(hub).await?;
+    Ok(done)
+}
 
 /// Removes a staged import and everything it wrote, a few hundred rows per transaction.
 async fn discard(

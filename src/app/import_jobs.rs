@@ -63,7 +63,7 @@ enum ImportOutcome {
     /// Imported: the import's report (as `import --json` prints it).
     Imported {
         dataset: String,
-        report: super::import::ImportReport,
+        report: Box<super::import::ImportReport>,
     },
     /// Refused for what the release holds (invalid lines, conflicts): retrying cannot help,
     /// so the job ends here with the reasons.
@@ -241,7 +241,10 @@ pub async fn work(hub: &Hub, job: &Arc<JobContext>) -> Result<(), AppError> {
             if report.new_frames > 0 {
                 hub.truncate_log().await;
             }
-            ImportOutcome::Imported { dataset, report }
+            ImportOutcome::Imported {
+                dataset,
+                report: Box::new(report),
+            }
         }
         Err(ImportError::Stopped { .. }) => {
             if job.stop_requested() != Some(JobState::Cancelled) {

@@ -90,6 +90,10 @@ pub async fn dataset_targets(hub: &Hub, dataset: i64) -> Result<Arc<DatasetTarge
     Ok(targets)
 }
 
+/// Times a submission is scored while imports keep changing its dataset under it before it is
+/// refused as unavailable (to be sent again).
+const SCORING_ATTEMPTS: usize = 3;
+
 /// Seconds until the next UTC midnight, when daily quotas reset.
 fn seconds_until_utc_midnight() -> u64 {
     let now = std::time::SystemTime::now()
@@ -191,7 +195,7 @@ async fn score_body(
     hub: &Hub,
     targets: Arc<DatasetTargets>,
     dataset_name: &str,
-    body: Vec<u8>,
+    body: Arc<Vec<u8>>,
 ) -> Result<ScoredSubmission, AppError> {
     let dataset_name = dataset_name.to_owned();
     hub.heavy()
@@ -319,13 +323,35 @@ async fn store_submission<B>(
 where
     B: Future<Output = Result<Vec<u8>, AppError>>,
 {
-    let body = body.await?;
-    let targets = dataset_targets(hub, dataset.id).await?;
+    let body = Arc::new(body.await?);
     let sha256 = body_sha256(&body);
-    let scored = score_body(hub, targets.clone(), &dataset.name, body).await?;
-    let verdicts = statements::scored_verdicts(&targets.targets, &scored.items);
-
-    let mut tx = hub.begin_bulk().await?;
+    let mut dataset = dataset.clone();
+    let mut attempt = 1;
+    let (mut tx, targets, scored, verdicts) = loop {
+        let generation = {
+            let mut conn = hub.conn().await?;
+            store::content_generation(&mut conn).await?
+        };
+        let targets = dataset_targets(hub, dataset.id).await?;
+        let scored = score_body(hub, targets.clone(), &dataset.name, body.clone()).await?;
+        let verdicts = statements::scored_verdicts(&targets.targets, &scored.items);
+        let mut tx = hub.begin_bulk().await?;
+        if store::content_generation(&mut tx).await? == generation {
+            break (tx, targets, scored, verdicts);
+        }
+        // An import changed the items while the body was scored (or a replacing import's
+        // cut-over gave the dataset another row): scored again against what it left, under
+        // the dataset's row as it is now.
+        tx.rollback().await?;
+        if attempt == SCORING_ATTEMPTS {
+            return Err(AppError::Unavailable(format!(
+                "dataset {} changed {attempt} times while the submission was scored; send it again",
+                dataset.name
+            )));
+        }
+        attempt += 1;
+        dataset = datasets::by_name(hub, &dataset.name).await?;
+    };
     let new = NewSubmission {
         dataset: dataset.id,
         account: caller.account_id,
@@ -516,12 +542,29 @@ pub async fn file_baseline(
     if already {
         return Ok(false);
     }
+    let generation = {
+        let mut conn = hub.conn().await?;
+        store::content_generation(&mut conn).await?
+    };
     let targets = dataset_targets(hub, dataset.id).await?;
     let body = answer_body(&targets);
     let sha256 = body_sha256(body.as_bytes());
-    let scored = score_body(hub, targets.clone(), &dataset.name, body.into_bytes()).await?;
+    let scored = score_body(
+        hub,
+        targets.clone(),
+        &dataset.name,
+        Arc::new(body.into_bytes()),
+    )
+    .await?;
     let verdicts = statements::scored_verdicts(&targets.targets, &scored.items);
     let mut tx = hub.begin_bulk().await?;
+    if store::content_generation(&mut tx).await? != generation {
+        tx.rollback().await?;
+        return Err(AppError::Unavailable(format!(
+            "dataset {} changed while the baseline was scored; file it again",
+            dataset.name
+        )));
+    }
     let account = super::tokens::ensure_account(&mut tx, account_name, Role::Submitter).await?;
     let token = NewToken::generate();
     let token_id =

@@ -213,7 +213,7 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
             eprintln!("(the demo database is temporary; give --db FILE to keep it)");
         }
     }
-    // Verdicts a replacing import killed after its cut-over left naming no item.
+    // Verdicts and items a replacing import killed after its cut-over left.
     let sweeper = hub.clone();
     tokio::spawn(async move {
         match app::import::sweep_replaced_verdicts(&sweeper).await {
@@ -224,6 +224,16 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
             ),
             Ok(_) => {}
             Err(e) => tracing::warn!(error = %e, "sweeping replaced items' verdicts failed"),
+        }
+        // Replaced items a swapping cut-over left under its retired row.
+        match app::import::delete_retired_datasets(&sweeper).await {
+            Ok(deleted) if deleted.items > 0 || deleted.datasets > 0 => tracing::info!(
+                items = deleted.items,
+                datasets = deleted.datasets,
+                "deleted the items replacing imports replaced"
+            ),
+            Ok(_) => {}
+            Err(e) => tracing::warn!(error = %e, "deleting replaced items failed"),
         }
     });
     let worker = app::jobs::Worker::spawn(

@@ -512,6 +512,11 @@ pub const TABLES: &[Table] = &[
         false,
     ),
     table(
+        "retired_datasets",
+        &[("dataset", Int), ("name", Text), ("retired_at", Text)],
+        false,
+    ),
+    table(
         "episodes",
         &[
             ("id", Int),

@@ -47,8 +47,10 @@ pub struct DatasetOverview {
     pub tasks: i64,
 }
 
-/// Leaves out the hidden rows staged imports write under (see `store::staged`).
-const PUBLISHED: &str = "NOT EXISTS (SELECT 1 FROM staged_imports s WHERE s.staging = datasets.id)";
+/// Leaves out the hidden rows staged imports write under and the retired rows of replaced
+/// datasets (see `store::staged`).
+const PUBLISHED: &str = "NOT EXISTS (SELECT 1 FROM staged_imports s WHERE s.staging = datasets.id) \
+     AND NOT EXISTS (SELECT 1 FROM retired_datasets r WHERE r.dataset = datasets.id)";
 
 fn dataset_from_row(row: &impl Fields) -> Result<Dataset, sqlx::Error> {
     Ok(Dataset {

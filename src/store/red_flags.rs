@@ -55,6 +55,7 @@ pub async fn leaks(conn: &mut Conn, dataset: i64) -> Result<Vec<Leak>, sqlx::Err
              FROM datasets o JOIN dataset_settings s ON s.dataset = o.id \
              WHERE o.id <> $1 AND s.answers = 'public' \
                AND o.id NOT IN (SELECT staging FROM staged_imports) \
+               AND o.id NOT IN (SELECT dataset FROM retired_datasets) \
              ORDER BY o.name",
         )
         .bind(dataset)

@@ -236,8 +236,8 @@ pub async fn stage_signatures(
     })
 }
 
-/// Deletes up to `limit` of the staged items (their images and signatures go with them);
-/// returns how many.
+/// Deletes up to `limit` of the items of a staged import's hidden row or of a retired row
+/// (their images and signatures, and anything made on them, go with them); returns how many.
 pub async fn delete_items(conn: &mut Conn, staging: i64, limit: i64) -> Result<u64, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query(
@@ -305,63 +305,295 @@ pub async fn publish_as_new(conn: &mut Conn, staged: &StagedImport) -> Result<()
     })
 }
 
-/// Cut-over into an existing dataset: its items the staged version replaces are deleted
-/// (what was made on them goes with them, but their verdicts: see [`sweep_submission`]), the
-/// staged items move in keeping their row ids, and the staged signature tables are applied.
-/// Returns (items replaced, signatures applied).
+/// What a cut-over into an existing dataset did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Published {
+    /// The `datasets` row that is the dataset now: the target's, or (when the staged version
+    /// replaced most of it) the staged import's hidden row, which took the target's place.
+    pub dataset: i64,
+    /// Items of the dataset the staged version replaced.
+    pub replaced: u64,
+    /// Items of the dataset the staged version left as they were.
+    pub kept: u64,
+    /// Whether the staged row took the target's place (the target then retired, its replaced
+    /// items deleted afterwards), rather than the staged items moving into the target.
+    pub swapped: bool,
+}
+
+/// Every table that names a dataset by its `datasets` row, besides `items` (moved item by item),
+/// a staged import's record and the list of retired rows; and the columns that, with the
+/// dataset, make a row unique (`None`: nothing does). A cut-over that swaps rows points all of
+/// them at the new row; a retired row's late writes are pointed at its successor where that
+/// does not collide with one of its own rows. A test compares this with the schema.
+pub const DATASET_REFERENCES: &[(&str, &str, Option<&[&str]>)] = &[
+    ("agreement_rounds", "dataset", Some(&[])),
+    ("annotator_exclusions", "dataset", Some(&["annotator"])),
+    ("attention_sets", "dataset", Some(&[])),
+    ("challenges", "dataset", Some(&[])),
+    ("dataset_settings", "dataset", Some(&[])),
+    ("gold_sets", "dataset", Some(&[])),
+    ("model_metadata", "dataset", Some(&["model"])),
+    ("model_runs", "dataset", None),
+    ("reported_results", "dataset", Some(&["model", "source"])),
+    ("studies", "baseline", None),
+    ("study_variants", "dataset", Some(&["study"])),
+    ("submissions", "dataset", None),
+    ("verdict_sweeps", "dataset", Some(&[])),
+];
+
+/// Every table of what people and models made on an item (besides its images and signatures,
+/// which are part of it), deleted with the item. A swapping cut-over deletes these rows of the
+/// replaced items at once, as deleting the items would, and leaves the items for later. A test
+/// compares this with the schema.
+pub const MADE_ON_ITEMS: &[&str] = &[
+    "agreement_samples",
+    "annotations",
+    "assignments",
+    "attention_items",
+    "challenge_items",
+    "drafts",
+    "gold_items",
+    "model_run_items",
+];
+
+/// The hidden name a retired `datasets` row is given: a name no import gives (it starts with a
+/// control character), unique per row.
+fn retired_name(dataset: &str, id: i64) -> String {
+    format!("\u{2}retired {dataset} {id}")
+}
+
+/// Cut-over into an existing dataset. Whichever moves fewer rows:
+/// - the staged items move into the dataset, keeping their row ids, and the items they replace
+///   are deleted (with what was made on them);
+/// - or, when the staged version replaces most of the dataset, its hidden row takes the
+///   dataset's place: the kept items move to it, it takes the name and everything that names
+///   the dataset ([`DATASET_REFERENCES`]) is pointed at it, and the old row is retired under a
+///   hidden name. What was made on the replaced items is deleted now ([`MADE_ON_ITEMS`]); the
+///   items themselves, with their images and signatures, afterwards, a few hundred per
+///   transaction (see [`retired`]), so that the cut-over does not hold the write lock for
+///   seconds at full size.
+///
+/// Either way the replaced items' verdicts are left for [`sweep_submission`], the staged
+/// signature tables are applied, and the staged import's record is removed.
 pub async fn publish_into(
     conn: &mut Conn,
     staged: &StagedImport,
     target: i64,
     source: &str,
-) -> Result<(u64, u64), sqlx::Error> {
+) -> Result<Published, sqlx::Error> {
     on!(conn, |c| {
-        let replaced = sqlx::query(
-            "DELETE FROM items WHERE dataset_id = $1 AND item_id IN \
-             (SELECT item_id FROM items WHERE dataset_id = $2)",
+        let staged_items: i64 =
+            sqlx::query_scalar("SELECT count(*) FROM items WHERE dataset_id = $1")
+                .bind(staged.staging)
+                .fetch_one(&mut *c)
+                .await?;
+        let target_items: i64 =
+            sqlx::query_scalar("SELECT count(*) FROM items WHERE dataset_id = $1")
+                .bind(target)
+                .fetch_one(&mut *c)
+                .await?;
+        let replaced: i64 = sqlx::query_scalar(
+            "SELECT count(*) FROM items o JOIN items n ON n.dataset_id = $2 \
+             AND n.item_id = o.item_id WHERE o.dataset_id = $1",
         )
         .bind(target)
         .bind(staged.staging)
-        .execute(&mut *c)
-        .await?
-        .rows_affected();
+        .fetch_one(&mut *c)
+        .await?;
+        let kept = target_items - replaced;
+        // Deleting an item row with its cascade costs about 2.7 times moving one (measured at
+        // full size, BENCHMARKS.md), so the swap wins once the kept items are fewer than the
+        // staged ones plus twice the replaced.
+        let swapped = kept < staged_items + 2 * replaced;
+        let dataset = if swapped {
+            for table in MADE_ON_ITEMS {
+                sqlx::query(&format!(
+                    "DELETE FROM {table} WHERE item IN (SELECT o.id FROM items o \
+                     JOIN items n ON n.dataset_id = $2 AND n.item_id = o.item_id \
+                     WHERE o.dataset_id = $1)"
+                ))
+                .bind(target)
+                .bind(staged.staging)
+                .execute(&mut *c)
+                .await?;
+            }
+            sqlx::query(
+                "UPDATE items SET dataset_id = $2 WHERE dataset_id = $1 AND item_id NOT IN \
+                 (SELECT item_id FROM items WHERE dataset_id = $2)",
+            )
+            .bind(target)
+            .bind(staged.staging)
+            .execute(&mut *c)
+            .await?;
+            let (name, created_at, origin, scene): (String, String, String, String) =
+                sqlx::query_as(
+                    "SELECT name, created_at, origin, scene FROM datasets WHERE id = $1",
+                )
+                .bind(target)
+                .fetch_one(&mut *c)
+                .await?;
+            sqlx::query("UPDATE datasets SET name = $1 WHERE id = $2")
+                .bind(retired_name(&name, target))
+                .bind(target)
+                .execute(&mut *c)
+                .await?;
+            sqlx::query("INSERT INTO retired_datasets (dataset, name) VALUES ($1, $2)")
+                .bind(target)
+                .bind(&name)
+                .execute(&mut *c)
+                .await?;
+            sqlx::query(
+                "UPDATE datasets SET name = $1, created_at = $2, origin = $3, scene = $4 \
+                 WHERE id = $5",
+            )
+            .bind(&name)
+            .bind(&created_at)
+            .bind(&origin)
+            .bind(&scene)
+            .bind(staged.staging)
+            .execute(&mut *c)
+            .await?;
+            for (table, column, _) in DATASET_REFERENCES {
+                sqlx::query(&format!(
+                    "UPDATE {table} SET {column} = $1 WHERE {column} = $2"
+                ))
+                .bind(staged.staging)
+                .bind(target)
+                .execute(&mut *c)
+                .await?;
+            }
+            staged.staging
+        } else {
+            sqlx::query(
+                "DELETE FROM items WHERE dataset_id = $1 AND item_id IN \
+                 (SELECT item_id FROM items WHERE dataset_id = $2)",
+            )
+            .bind(target)
+            .bind(staged.staging)
+            .execute(&mut *c)
+            .await?;
+            sqlx::query("UPDATE items SET dataset_id = $1 WHERE dataset_id = $2")
+                .bind(target)
+                .bind(staged.staging)
+                .execute(&mut *c)
+                .await?;
+            target
+        };
         // Verdicts do not reference items (they are written by the thousand per submission,
         // and an index by item to delete by would cost every submission a write per item): the
-        // replaced items' verdicts now name no item, and are deleted after the cut-over, a
-        // submission per transaction, rather than by the million in this one.
+        // replaced items' verdicts now name none of the dataset's items, and are deleted after
+        // the cut-over, a submission per transaction, rather than by the million in this one.
         if replaced > 0 {
             sqlx::query(
                 "INSERT INTO verdict_sweeps (dataset, generation, swept_through) \
                  VALUES ($1, 1, 0) ON CONFLICT (dataset) DO UPDATE SET \
                  generation = verdict_sweeps.generation + 1, swept_through = 0",
             )
-            .bind(target)
+            .bind(dataset)
             .execute(&mut *c)
             .await?;
         }
-        sqlx::query("UPDATE items SET dataset_id = $1 WHERE dataset_id = $2")
-            .bind(target)
-            .bind(staged.staging)
-            .execute(&mut *c)
-            .await?;
-        let signatures = sqlx::query(
+        sqlx::query(
             "INSERT INTO item_signatures (item, source, signatures) \
              SELECT i.id, s.source, s.signatures FROM staged_signatures s \
              JOIN items i ON i.dataset_id = $1 AND i.item_id = s.item_id WHERE s.staged = $2 \
              ON CONFLICT (item) DO UPDATE SET source = excluded.source, \
              signatures = excluded.signatures",
         )
-        .bind(target)
+        .bind(dataset)
         .bind(staged.id)
         .execute(&mut *c)
-        .await?
-        .rows_affected();
+        .await?;
         sqlx::query("UPDATE datasets SET source = $1 WHERE id = $2")
             .bind(source)
-            .bind(target)
+            .bind(dataset)
             .execute(&mut *c)
             .await?;
-        Ok((replaced, signatures))
+        // The record last: its staged signatures go with it. When the hidden row is the
+        // dataset now, only the record goes.
+        sqlx::query("DELETE FROM staged_imports WHERE id = $1")
+            .bind(staged.id)
+            .execute(&mut *c)
+            .await?;
+        if !swapped {
+            sqlx::query("DELETE FROM datasets WHERE id = $1")
+                .bind(staged.staging)
+                .execute(&mut *c)
+                .await?;
+        }
+        let count = |n: i64| u64::try_from(n).unwrap_or(0);
+        Ok(Published {
+            dataset,
+            replaced: count(replaced),
+            kept: count(kept),
+            swapped,
+        })
+    })
+}
+
+/// A `datasets` row a swapping cut-over retired, with the name its dataset had.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Retired {
+    pub dataset: i64,
+    pub name: String,
+}
+
+/// Every retired row still to delete, oldest first.
+pub async fn retired(conn: &mut Conn) -> Result<Vec<Retired>, sqlx::Error> {
+    on!(conn, |c| {
+        let rows: Vec<(i64, String)> = sqlx::query_as(
+            "SELECT dataset, name FROM retired_datasets ORDER BY retired_at, dataset",
+        )
+        .fetch_all(&mut *c)
+        .await?;
+        Ok(rows
+            .into_iter()
+            .map(|(dataset, name)| Retired { dataset, name })
+            .collect())
+    })
+}
+
+/// Deletes a retired row whose items are deleted (any left go with it). Rows written to it
+/// after its cut-over, by a write that had resolved the dataset just before, are first pointed
+/// at the dataset now holding its name, unless one of that dataset's own rows has their key;
+/// returns how many were.
+pub async fn delete_retired(conn: &mut Conn, retired: &Retired) -> Result<u64, sqlx::Error> {
+    on!(conn, |c| {
+        // Hidden rows (staged, retired) have names no dataset has.
+        let successor: Option<i64> = sqlx::query_scalar("SELECT id FROM datasets WHERE name = $1")
+            .bind(&retired.name)
+            .fetch_optional(&mut *c)
+            .await?;
+        let mut repointed = 0;
+        if let Some(successor) = successor {
+            for (table, column, unique_with) in DATASET_REFERENCES {
+                let collision = match unique_with {
+                    None => String::new(),
+                    Some(columns) => {
+                        let same: String = columns
+                            .iter()
+                            .map(|k| format!(" AND o.{k} = {table}.{k}"))
+                            .collect();
+                        format!(
+                            " AND NOT EXISTS (SELECT 1 FROM {table} o WHERE o.{column} = $1{same})"
+                        )
+                    }
+                };
+                repointed += sqlx::query(&format!(
+                    "UPDATE {table} SET {column} = $1 WHERE {column} = $2{collision}"
+                ))
+                .bind(successor)
+                .bind(retired.dataset)
+                .execute(&mut *c)
+                .await?
+                .rows_affected();
+            }
+        }
+        sqlx::query("DELETE FROM datasets WHERE id = $1")
+            .bind(retired.dataset)
+            .execute(&mut *c)
+            .await?;
+        Ok(repointed)
     })
 }
 

@@ -561,15 +561,7 @@ async fn a_replacing_import_sweeps_the_replaced_items_verdicts_after_its_cut_ove
     let verdicts = "SELECT count(*) FROM submission_items";
     assert_eq!(count(&pool, verdicts).await, 2 * items);
 
-    for record in &mut records[..2] {
-        let mut reversed = record["gt_answer"].as_array().expect("gt").clone();
-        reversed.reverse();
-        record["gt_answer"] = Value::Array(reversed);
-    }
-    write_qa_file(
-        &root,
-        &records.iter().map(Value::to_string).collect::<Vec<_>>(),
-    );
+    reverse_first(&root, &mut records, 2);
     let mut replace = options("mini");
     replace.replace = true;
     let report = import(&pool, &root, &replace).await;
@@ -664,6 +656,297 @@ async fn verdicts_left_to_sweep_are_not_counted_and_a_restarted_sweep_supersedes
     assert_eq!(count(&pool, "SELECT count(*) FROM verdict_sweeps").await, 0);
     assert_eq!(
         sweep_replaced_verdicts(&hub).await.expect("again"),
+        Default::default()
+    );
+}
+
+/// Every table with a foreign key to `referenced`, with the column, as the database lists them.
+async fn references_to(pool: &Pool, referenced: &str) -> Vec<(String, String)> {
+    let mut found: Vec<(String, String)> = match pool {
+        Pool::Sqlite(p) => sqlx::query_as(
+            "SELECT t.name, f.\"from\" FROM sqlite_master t, pragma_foreign_key_list(t.name) f \
+             WHERE t.type = 'table' AND f.\"table\" = $1",
+        )
+        .bind(referenced)
+        .fetch_all(p)
+        .await
+        .expect("sqlite foreign keys"),
+        Pool::Pg(p) => sqlx::query_as(
+            "SELECT k.table_name::text, k.column_name::text \
+             FROM information_schema.referential_constraints r \
+             JOIN information_schema.key_column_usage k ON k.constraint_name = r.constraint_name \
+              AND k.constraint_schema = r.constraint_schema \
+             JOIN information_schema.constraint_column_usage u \
+              ON u.constraint_name = r.unique_constraint_name \
+              AND u.constraint_schema = r.unique_constraint_schema \
+             WHERE r.constraint_schema = current_schema() AND u.table_name = $1",
+        )
+        .bind(referenced)
+        .fetch_all(p)
+        .await
+        .expect("postgres foreign keys"),
+    };
+    found.sort();
+    found
+}
+
+#[tokio::test]
+async fn a_swapping_cut_over_knows_every_table_that_names_a_dataset_or_an_item() {
+    // A table a migration adds that names a dataset and is missing from the list would be
+    // left on the retired row by a swapping cut-over and deleted with it; one that names an
+    // item would keep what was made on a replaced item until its deletion.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pool = fresh_db(&dir).await;
+    let mut datasets: Vec<(String, String)> = store::staged::DATASET_REFERENCES
+        .iter()
+        .map(|(table, column, _)| (table.to_string(), column.to_string()))
+        .chain(
+            [
+                ("items", "dataset_id"),
+                ("retired_datasets", "dataset"),
+                ("staged_imports", "staging"),
+            ]
+            .map(|(t, c)| (t.to_owned(), c.to_owned())),
+        )
+        .collect();
+    datasets.sort();
+    assert_eq!(references_to(&pool, "datasets").await, datasets);
+    let mut items: Vec<(String, String)> = store::staged::MADE_ON_ITEMS
+        .iter()
+        .map(|table| (table.to_string(), "item".to_owned()))
+        .chain(["item_images", "item_signatures"].map(|t| (t.to_owned(), "item".to_owned())))
+        .collect();
+    items.sort();
+    assert_eq!(references_to(&pool, "items").await, items);
+}
+
+/// Reverses the ground truth of `records[..n]` and writes the release again.
+fn reverse_first(root: &std::path::Path, records: &mut [Value], n: usize) {
+    for record in &mut records[..n] {
+        let mut reversed = record["gt_answer"].as_array().expect("gt").clone();
+        reversed.reverse();
+        record["gt_answer"] = Value::Array(reversed);
+    }
+    write_qa_file(
+        root,
+        &records.iter().map(Value::to_string).collect::<Vec<_>>(),
+    );
+}
+
+/// The row id of dataset `name`.
+async fn dataset_row(pool: &Pool, name: &str) -> i64 {
+    let mut conn = pool.acquire().await.expect("conn");
+    store::datasets::by_name(&mut conn, name)
+        .await
+        .expect("query")
+        .expect("the dataset")
+        .id
+}
+
+/// Assigns `items` (row ids) to a new annotator named `name`.
+async fn assign_to_new_annotator(pool: &Pool, name: &str, items: &[i64]) {
+    let mut conn = pool.acquire().await.expect("conn");
+    let annotator = store::annotations::create_annotator(&mut conn, name, false, name)
+        .await
+        .expect("annotator");
+    let pairs: Vec<(i64, i64)> = items.iter().map(|&item| (annotator, item)).collect();
+    store::annotations::assign(&mut conn, &pairs)
+        .await
+        .expect("assign");
+}
+
+#[tokio::test]
+async fn a_cut_over_replacing_most_of_a_dataset_retires_its_row_and_keeps_all_that_names_it() {
+    use enact_hub::core::dataset::AnswerVisibility;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let mut records = write_release(&root, &[3, 4]);
+    let pool = fresh_db(&dir).await;
+    import(&pool, &root, &options("mini")).await;
+    set_mini_answers(&pool, AnswerVisibility::Public).await;
+    submit_truth(&pool, "mini", "m1", &records).await;
+    submit_truth(&pool, "mini", "m2", &records).await;
+    let before = dataset_row(&pool, "mini").await;
+    let item_row = |dataset: i64, item: &Value| {
+        let item = item["id"].as_str().expect("id");
+        format!("SELECT id FROM items WHERE item_id = '{item}' AND dataset_id = {dataset}")
+    };
+    let kept = count(&pool, &item_row(before, &records[3])).await;
+    let replaced = count(&pool, &item_row(before, &records[0])).await;
+    assign_to_new_annotator(&pool, "ann", &[kept, replaced]).await;
+
+    // Three of the four items replaced: moving them in would move more rows than moving the
+    // kept one out, so the staged row takes the dataset's place.
+    reverse_first(&root, &mut records, 3);
+    let mut replace = options("mini");
+    replace.replace = true;
+    let report = import(&pool, &root, &replace).await;
+    assert_eq!((report.replaced_items, report.unchanged_items), (3, 1));
+    let after = dataset_row(&pool, "mini").await;
+    assert_ne!(after, before, "the staged row is the dataset now");
+    assert_eq!(report.retired_items, 3, "{}", report.summary_line());
+    assert_eq!(report.swept_verdicts, 2 * 3);
+    assert!(report.longest_transaction_ms >= report.longest_sweep_ms);
+
+    // Nothing of the old row is left, and everything that named the dataset names the new one.
+    assert_eq!(count(&pool, "SELECT count(*) FROM datasets").await, 1);
+    assert_eq!(
+        count(&pool, "SELECT count(*) FROM retired_datasets").await,
+        0
+    );
+    assert_eq!(count(&pool, "SELECT count(*) FROM staged_imports").await, 0);
+    let on_new = |table: &str| format!("SELECT count(*) FROM {table} WHERE dataset = {after}");
+    assert_eq!(count(&pool, &on_new("submissions")).await, 2);
+    assert_eq!(count(&pool, &on_new("dataset_settings")).await, 1);
+    assert_eq!(
+        count(
+            &pool,
+            &format!("SELECT count(*) FROM items WHERE dataset_id = {after}")
+        )
+        .await,
+        4
+    );
+    assert_eq!(
+        count(&pool, &item_row(after, &records[3])).await,
+        kept,
+        "the kept item keeps its row"
+    );
+    // The kept item's verdicts and assignment stay; the replaced one's are gone.
+    assert_eq!(
+        count(&pool, "SELECT count(*) FROM submission_items").await,
+        2
+    );
+    assert_eq!(
+        count(&pool, "SELECT count(*) FROM assignments").await,
+        1,
+        "only the kept item's assignment is left"
+    );
+    assert_eq!(
+        count(
+            &pool,
+            &format!("SELECT count(*) FROM assignments WHERE item = {kept}")
+        )
+        .await,
+        1
+    );
+    assert_eq!(
+        count(
+            &pool,
+            "SELECT count(*) FROM frames f WHERE NOT EXISTS \
+             (SELECT 1 FROM item_images ii WHERE ii.frame = f.id)"
+        )
+        .await,
+        0
+    );
+    let mut conn = pool.acquire().await.expect("conn");
+    let overview = store::datasets::overview(&mut conn)
+        .await
+        .expect("overview");
+    assert_eq!(
+        overview
+            .iter()
+            .map(|d| (d.dataset.name.as_str(), d.items.total))
+            .collect::<Vec<_>>(),
+        vec![("mini", 4)]
+    );
+}
+
+#[tokio::test]
+async fn a_cut_over_replacing_a_few_items_moves_them_into_the_dataset_row() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let mut records = write_balanced_release(&root, &[3, 4], 3);
+    let pool = fresh_db(&dir).await;
+    import(&pool, &root, &options("mini")).await;
+    submit_truth(&pool, "mini", "m1", &records).await;
+    let before = dataset_row(&pool, "mini").await;
+
+    reverse_first(&root, &mut records, 1);
+    let mut replace = options("mini");
+    replace.replace = true;
+    let report = import(&pool, &root, &replace).await;
+    assert_eq!((report.replaced_items, report.unchanged_items), (1, 11));
+    assert_eq!(dataset_row(&pool, "mini").await, before, "the same row");
+    assert_eq!((report.retired_items, report.swept_verdicts), (0, 1));
+    assert_eq!(count(&pool, "SELECT count(*) FROM datasets").await, 1);
+    assert_eq!(count(&pool, "SELECT count(*) FROM items").await, 12);
+    assert_eq!(
+        count(&pool, "SELECT count(*) FROM submission_items").await,
+        11
+    );
+}
+
+#[tokio::test]
+async fn what_is_written_to_a_retired_row_after_its_cut_over_moves_to_the_dataset() {
+    use enact_hub::app::Hub;
+    use enact_hub::app::import::delete_retired_datasets;
+    use enact_hub::core::dataset::AnswerVisibility;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let records = write_release(&root, &[3, 4]);
+    let pool = fresh_db(&dir).await;
+    import(&pool, &root, &options("mini")).await;
+    set_mini_answers(&pool, AnswerVisibility::Public).await;
+    submit_truth(&pool, "mini", "m1", &records).await;
+    let mini = dataset_row(&pool, "mini").await;
+
+    // As a cut-over leaves it when a submission and a settings change resolved the dataset
+    // just before it and wrote just after: a retired row of mini's with an item, a submission
+    // and a settings row of its own (mini has one too: mini's wins).
+    let retired: i64 = db!(
+        pool,
+        fetch_one,
+        sqlx::query_scalar::<_, i64>(
+            "INSERT INTO datasets (name) VALUES ('\u{2}retired mini') RETURNING id"
+        )
+    )
+    .expect("retired row");
+    for sql in [
+        "INSERT INTO retired_datasets (dataset, name) VALUES ($1, 'mini')",
+        "UPDATE submissions SET dataset = $1",
+        "UPDATE items SET dataset_id = $1 WHERE id = (SELECT min(id) FROM items)",
+        "INSERT INTO dataset_settings (dataset, answers) VALUES ($1, 'hidden')",
+    ] {
+        db!(pool, execute, sqlx::query(sql).bind(retired)).unwrap_or_else(|e| panic!("{sql}: {e}"));
+    }
+    assert_eq!(
+        count(
+            &pool,
+            &format!("SELECT count(*) FROM items WHERE dataset_id = {mini}")
+        )
+        .await,
+        3,
+        "the retired row's item is not mini's"
+    );
+
+    let hub = Hub::from(pool.clone());
+    let done = delete_retired_datasets(&hub).await.expect("delete");
+    assert_eq!((done.datasets, done.items, done.repointed), (1, 1, 1));
+    assert_eq!(count(&pool, "SELECT count(*) FROM datasets").await, 1);
+    assert_eq!(
+        count(
+            &pool,
+            &format!("SELECT count(*) FROM submissions WHERE dataset = {mini}")
+        )
+        .await,
+        1,
+        "the late submission is mini's"
+    );
+    assert_eq!(
+        count(
+            &pool,
+            &format!("SELECT count(*) FROM dataset_settings WHERE dataset = {mini} AND answers = 'public'")
+        )
+        .await,
+        1,
+        "mini's own settings row wins"
+    );
+    assert_eq!(
+        count(&pool, "SELECT count(*) FROM dataset_settings").await,
+        1
+    );
+    assert_eq!(
+        delete_retired_datasets(&hub).await.expect("again"),
         Default::default()
     );
 }
