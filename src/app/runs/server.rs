@@ -449,9 +449,16 @@ fn view_of(run: &RunRow, job: Option<&jobs::JobRow>) -> ServerRunView {
         job: job.map(|j| j.id),
         state: job.map(|j| j.state.as_str().to_owned()),
         last_error: job.and_then(|j| j.last_error.clone()),
-        progress: job
-            .and_then(|j| j.progress.as_deref())
-            .and_then(|p| serde_json::from_str(p).ok()),
+        progress: job.and_then(|j| {
+            let stored = j.progress.as_deref()?;
+            // Written by this code's job only; an older build's wording is shown as none,
+            // and said in the log rather than failing the page.
+            serde_json::from_str(stored)
+                .inspect_err(|e| {
+                    tracing::warn!(run = %run.name, job = j.id, error = %e, "a run job's stored progress is unreadable");
+                })
+                .ok()
+        }),
     }
 }
 
