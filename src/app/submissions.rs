@@ -325,19 +325,21 @@ where
 {
     let body = Arc::new(body.await?);
     let sha256 = body_sha256(&body);
-    let mut dataset = dataset.clone();
     let mut attempt = 1;
-    let (mut tx, targets, scored, verdicts) = loop {
+    let (dataset, mut tx, targets, scored, verdicts) = loop {
         let generation = {
             let mut conn = hub.conn().await?;
             store::content_generation(&mut conn).await?
         };
+        // Looked up again after the generation: the body may have taken seconds to arrive,
+        // and a replacing import may have given the dataset another row meanwhile.
+        let dataset = datasets::by_name(hub, &dataset.name).await?;
         let targets = dataset_targets(hub, dataset.id).await?;
         let scored = score_body(hub, targets.clone(), &dataset.name, body.clone()).await?;
         let verdicts = statements::scored_verdicts(&targets.targets, &scored.items);
         let mut tx = hub.begin_bulk().await?;
         if store::content_generation(&mut tx).await? == generation {
-            break (tx, targets, scored, verdicts);
+            break (dataset, tx, targets, scored, verdicts);
         }
         // An import changed the items while the body was scored (or a replacing import's
         // cut-over gave the dataset another row): scored again against what it left, under
@@ -350,8 +352,8 @@ where
             )));
         }
         attempt += 1;
-        dataset = datasets::by_name(hub, &dataset.name).await?;
     };
+    let dataset = &dataset;
     let new = NewSubmission {
         dataset: dataset.id,
         account: caller.account_id,
@@ -533,6 +535,12 @@ pub async fn file_baseline(
     metadata: SubmissionMetadata,
     answer_body: impl FnOnce(&DatasetTargets) -> String,
 ) -> Result<bool, AppError> {
+    // The generation first: a replacing import that gives the dataset another row after it
+    // is caught below, before anything is stored under the old one.
+    let generation = {
+        let mut conn = hub.conn().await?;
+        store::content_generation(&mut conn).await?
+    };
     let dataset = datasets::by_name(hub, dataset_name).await?;
     let mut conn = hub.conn().await?;
     let already =
@@ -542,10 +550,6 @@ pub async fn file_baseline(
     if already {
         return Ok(false);
     }
-    let generation = {
-        let mut conn = hub.conn().await?;
-        store::content_generation(&mut conn).await?
-    };
     let targets = dataset_targets(hub, dataset.id).await?;
     let body = answer_body(&targets);
     let sha256 = body_sha256(body.as_bytes());

@@ -950,3 +950,68 @@ async fn what_is_written_to_a_retired_row_after_its_cut_over_moves_to_the_datase
         Default::default()
     );
 }
+
+#[tokio::test]
+async fn a_submission_whose_dataset_is_replaced_while_its_body_arrives_is_scored_on_the_new_one() {
+    use enact_hub::app::submissions::{self, Submitted};
+    use enact_hub::app::{Hub, tokens};
+    use enact_hub::core::credentials::{Role, Scope};
+    use enact_hub::core::submission::{Provenance, SubmissionMetadata};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = dir.path().join("release");
+    let mut records = write_release(&root, &[3, 4]);
+    let pool = fresh_db(&dir).await;
+    import(&pool, &root, &options("mini")).await;
+    let before = dataset_row(&pool, "mini").await;
+    let (_, token) = api_token(&pool, "m1", Role::Submitter, None, None).await;
+    let hub = Hub::from(pool.clone());
+    let caller = tokens::authorize(&hub, &token, Scope::Submit)
+        .await
+        .expect("caller");
+    let body = ground_truth_answers(&records).into_bytes();
+    // The dataset is looked up when the request starts; its body arrives after a replacing
+    // import swapped the dataset's row (and deleted the old one).
+    reverse_first(&root, &mut records, 3);
+    let (import_pool, import_root) = (pool.clone(), root.clone());
+    let arriving = async move {
+        let mut replace = options("mini");
+        replace.replace = true;
+        let report = import(&import_pool, &import_root, &replace).await;
+        assert_eq!(report.retired_items, 3);
+        Ok(body)
+    };
+    let metadata = SubmissionMetadata {
+        model: "m1".to_owned(),
+        ..SubmissionMetadata::default()
+    };
+    let stored = submissions::submit(
+        &hub,
+        &caller,
+        "mini",
+        metadata,
+        Provenance::Submitted,
+        None,
+        arriving,
+    )
+    .await
+    .expect("stored");
+    let Submitted::Created(row) = stored else {
+        panic!("a new submission");
+    };
+    let after = dataset_row(&pool, "mini").await;
+    assert_ne!(after, before);
+    assert_eq!(row.dataset_id, after);
+    assert_eq!(
+        count(
+            &pool,
+            &format!(
+                "SELECT count(*) FROM submission_items v JOIN items i ON i.id = v.item \
+                 WHERE v.submission = {} AND i.dataset_id = {after}",
+                row.id
+            )
+        )
+        .await,
+        4,
+        "scored against the new version's four items"
+    );
+}
