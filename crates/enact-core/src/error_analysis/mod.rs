@@ -637,4 +637,31 @@ mod tests {
         );
         assert_eq!(analysis.examples.len(), 2 * EXAMPLES_PER_CELL);
     }
+
+    #[test]
+    fn errors_are_counted_under_their_own_semantic_category() {
+        let truth = Permutation::new(vec![1, 2]).expect("a permutation");
+        let swapped = Permutation::new(vec![2, 1]).expect("a permutation");
+        // As the first test's nested item, with the fridge's opening as the change the swapped
+        // answer leaves out of step 1 and adds to step 2: a functional state, not a spatial one.
+        let nested = table(&[OPEN, INSIDE], &[INSIDE]);
+        let analysis = analyse([AnsweredItem {
+            item: item("nested", &truth, &nested),
+            reading: Reading::Answer {
+                answer: &swapped,
+                task_accuracy: true,
+            },
+        }]);
+        let semantic = &analysis.overall.semantic;
+        let totals = SemanticCategory::ALL.map(|c| semantic.get(c).total);
+        assert_eq!(totals, [0, 2, 0, 0], "{semantic:?}");
+        let functional = semantic.get(SemanticCategory::FunctionalStates);
+        assert_eq!(
+            (
+                functional.classes.omission,
+                functional.classes.hallucination
+            ),
+            (1, 1)
+        );
+    }
 }

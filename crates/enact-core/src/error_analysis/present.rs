@@ -232,6 +232,29 @@ mod tests {
     }
 
     #[test]
+    fn the_text_table_gives_the_hands_figures_with_their_standard_errors() {
+        let mut a = analyse([]);
+        a.overall.handedness.left.precision = Some(0.5);
+        a.overall.handedness.left.precision_se = Some(0.125);
+        a.overall.handedness.right.recall = Some(0.75);
+        let table = text_table(&a);
+        let line = |name: &str| {
+            table
+                .lines()
+                .find(|l| l.starts_with(name))
+                .unwrap_or_else(|| panic!("no {name} line in {table}"))
+                .to_owned()
+        };
+        assert!(
+            line("left hand precision").contains("0.500 ± 0.125"),
+            "{table}"
+        );
+        // A figure without its standard error is not printed as if it had none.
+        assert!(!line("right hand recall").contains("0.750"), "{table}");
+        assert!(line("right hand recall").contains('-'), "{table}");
+    }
+
+    #[test]
     fn the_text_table_adds_up_what_was_not_analysed() {
         let mut a = analyse([]);
         a.overall.excluded_unequal_length = 3;
