@@ -686,6 +686,13 @@ mod tests {
         // Two values with no comma between are a SyntaxError too: the fallback keeps every
         // number as written, where a literal would be cut to the last three and re-based.
         assert_eq!(enact("[0 1 2 3]", 3).as_deref(), Some("[0, 1, 2, 3]"));
+        // Python's 4,300-digit limit spares a literal of zeros (`ast.literal_eval` reads 5,000
+        // of them as 0, re-based here) but not `int()`, which the fallback would need; and it
+        // refuses a literal of 4,301 nines, whose fallback then fails too (Python 3.11).
+        let zeros = format!("[{}, 1]", "0".repeat(5000));
+        assert_eq!(enact(&zeros, 2).as_deref(), Some("[1, 2]"));
+        let nines = format!("[1, {}]", "9".repeat(4301));
+        assert_eq!(enact(&nines, 2), None);
     }
 
     #[test]
