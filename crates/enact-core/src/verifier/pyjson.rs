@@ -829,6 +829,25 @@ mod tests {
     }
 
     #[test]
+    fn decode_errors_are_placed_where_python_places_them() {
+        // Positions as Python 3.11's json.loads reports them ("… (char N)").
+        for (bad, message, position) in [
+            ("\"abc", "Unterminated string starting at", 0),
+            ("[1, \"ab", "Unterminated string starting at", 4),
+            ("\"\\u12\"", "Invalid \\uXXXX escape", 2),
+            ("[\"x\", \"\\u12G4\"]", "Invalid \\uXXXX escape", 8),
+        ] {
+            match parse_python_json(bad) {
+                Err(PyJsonError::Decode {
+                    message: m,
+                    position: p,
+                }) => assert_eq!((m.as_str(), p), (message, position), "{bad:?}"),
+                other => panic!("{bad:?}: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
     fn strings_escape_like_python() {
         let value = parse(r#""é\u2028\u007f\u001f\"\\\ud834\udd1e""#);
         assert_eq!(
@@ -910,6 +929,8 @@ mod tests {
         );
         // A space and DEL's neighbours below it are printable, as Python prints them.
         assert_eq!(parse(r#"["a b~"]"#).py_str(), "['a b~']");
+        // With both quotes in it, the string keeps the single quote and escapes its own.
+        assert_eq!(parse(r#"["it's \"x\""]"#).py_str(), r#"['it\'s "x"']"#);
     }
 
     #[test]
