@@ -903,6 +903,18 @@ mod tests {
         assert!(agreement_csv.contains("\na1,a2,"), "{agreement_csv}");
         let tex = String::from_utf8(files[6].bytes.clone()).unwrap();
         assert!(tex.contains("\\toprule") && tex.contains("Human Performance"));
+        // Only the Human row is bold: a model's row is printed as it is.
+        let model_rows: Vec<&str> = tex
+            .lines()
+            .filter(|l| l.starts_with("m4 &") || l.starts_with("m7 &"))
+            .collect();
+        assert_eq!(model_rows.len(), 4, "{tex}");
+        assert!(model_rows.iter().all(|l| !l.contains("\\textbf")), "{tex}");
+        let human_rows: Vec<&str> = tex
+            .lines()
+            .filter(|l| l.starts_with("\\textbf{Human Performance} &"))
+            .collect();
+        assert_eq!(human_rows.len(), 2, "{tex}");
         // The chosen pair's overall Welch row, in both table formats.
         let chosen = report.comparisons.last().unwrap();
         let delta = format!("{:.4}", chosen.overall.delta.unwrap());
