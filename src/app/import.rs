@@ -1203,18 +1203,9 @@ pub async fn delete_retired_datasets(hub: &super::Hub) -> Result<RetiredDeleted,
         return Ok(done);
     }
     for retired in pending {
-        loop {
-            let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
-            let held = Instant::now();
-            let deleted =
-                store::staged::delete_items(&mut tx, retired.dataset, DELETE_BATCH).await?;
-            tx.commit().await?;
-            done.longest_ms = done.longest_ms.max(held.elapsed().as_secs_f64() * 1000.0);
-            done.items += deleted;
-            if deleted == 0 {
-                break;
-            }
-        }
+        let (items, longest_ms) = delete_items_in_batches(hub, retired.dataset).await?;
+        done.items += items;
+        done.longest_ms = done.longest_ms.max(longest_ms);
         let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
         let held = Instant::now();
         done.repointed += store::staged::delete_retired(&mut tx, &retired).await?;
@@ -1232,6 +1223,27 @@ pub async fn delete_retired_datasets(hub: &super::Hub) -> Result<RetiredDeleted,
     Ok(done)
 }
 
+/// Deletes every item of a hidden `datasets` row (a staged import's or a retired one's),
+/// [`DELETE_BATCH`] per short bulk transaction; returns how many, and the longest of those
+/// transactions in milliseconds.
+async fn delete_items_in_batches(
+    hub: &super::Hub,
+    dataset: i64,
+) -> Result<(u64, f64), sqlx::Error> {
+    let (mut items, mut longest_ms) = (0, 0.0_f64);
+    loop {
+        let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+        let held = Instant::now();
+        let deleted = store::staged::delete_items(&mut tx, dataset, DELETE_BATCH).await?;
+        tx.commit().await?;
+        longest_ms = longest_ms.max(held.elapsed().as_secs_f64() * 1000.0);
+        items += deleted;
+        if deleted == 0 {
+            return Ok((items, longest_ms));
+        }
+    }
+}
+
 /// Removes a staged import and everything it wrote, a few hundred rows per transaction.
 async fn discard(
     hub: &super::Hub,
@@ -1243,14 +1255,7 @@ async fn discard(
     let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
     store::staged::forget(&mut tx, staged.id).await?;
     tx.commit().await?;
-    loop {
-        let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
-        let deleted = store::staged::delete_items(&mut tx, staged.staging, DELETE_BATCH).await?;
-        tx.commit().await?;
-        if deleted == 0 {
-            break;
-        }
-    }
+    delete_items_in_batches(hub, staged.staging).await?;
     let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
     store::staged::remove(&mut tx, staged).await?;
     tx.commit().await?;
