@@ -2,7 +2,7 @@
 # Multi-stage build: compile in the Rust image, run from a slim Debian as a non-root user.
 FROM rust:1.95-bookworm AS build
 WORKDIR /src
-COPY Cargo.toml Cargo.lock build.rs askama.toml ./
+COPY Cargo.toml Cargo.lock askama.toml ./
 COPY crates ./crates
 COPY src ./src
 COPY migrations ./migrations

@@ -1,14 +1,14 @@
 //! enact-hub: a self-hosted evaluation service for the ENACT benchmark.
 //!
-//! Four layers, each allowed to use only the ones below it. The benchmark is a crate of its own
-//! (`crates/enact-core`), so Cargo keeps it from naming anything above it; within this crate a
-//! test, `tests/layers.rs`, reads every `crate::` path and fails on a step up or a cycle:
+//! Four layers, each allowed to use only the ones below it. The two lowest are crates of their
+//! own, so Cargo keeps them from naming anything above them; within this crate a test,
+//! `tests/layers.rs`, reads every `crate::` path and fails on a step up or a cycle:
 //!
-//! | folder        | what lives there                                                     |
+//! | where         | what lives there                                                     |
 //! |---------------|----------------------------------------------------------------------|
-//! | `src/cli/`, `src/web/` | adapters: parse arguments or requests, call one [`app`] use case, render text, JSON or HTML |
-//! | `src/app/`    | use cases: import, submit, tokens, annotators, assignment, drafts and answers, the agreement protocol and report, error analyses, leaderboards, the demo |
-//! | `src/store/`  | SQLite or PostgreSQL: connection setup, migrations, rows in and rows out, no decisions |
+//! | `src/cli/`, `src/web/` | adapters: parse arguments or requests, call one [`app`] use case, render text, JSON or HTML; neither names the store |
+//! | `src/app/`    | use cases: import, submit, tokens, annotators, assignment, drafts and answers, the agreement protocol and report, error analyses, leaderboards, the demo; and `Hub`, the service they share |
+//! | `crates/enact-store/` ([`store`]) | SQLite or PostgreSQL: connection setup, migrations, the write gate, rows in and rows out, no decisions |
 //! | `crates/enact-core/` ([`core`]) | the benchmark, pure: dataset, scene graphs, verifier, error analysis, pipeline, agreement statistics, world; no database, HTTP, async or command line |
 //!
 //! Start with `migrations/` for the schema, then [`core`] for the benchmark, then [`app`] for
@@ -16,8 +16,11 @@
 
 pub mod app;
 pub mod cli;
-pub mod store;
 pub mod web;
 
 /// The benchmark (the `enact-core` crate), named `core` here as every layer above it calls it.
 pub use enact_core as core;
+
+/// Rows on SQLite or PostgreSQL (the `enact-store` crate), named `store` here as the use cases
+/// call it.
+pub use enact_store as store;

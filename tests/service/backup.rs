@@ -194,7 +194,7 @@ async fn a_snapshot_read_lets_writers_commit_and_sees_none_of_their_writes() {
         .begin()
         .await
         .expect("the write lock while the snapshot is open");
-    enact_hub::on_db!(&mut write, |c| sqlx::query(
+    enact_hub::store::on_db!(&mut write, |c| sqlx::query(
         "INSERT INTO audit_log (actor_kind, actor, action, target) \
          VALUES ('operator', 'tests', 'backup.create', 'file x')"
     )
@@ -217,7 +217,7 @@ async fn a_snapshot_read_lets_writers_commit_and_sees_none_of_their_writes() {
 }
 
 async fn audit_rows(tx: &mut enact_hub::store::Tx) -> i64 {
-    enact_hub::on_db!(tx, |c| sqlx::query_scalar::<_, i64>(
+    enact_hub::store::on_db!(tx, |c| sqlx::query_scalar::<_, i64>(
         "SELECT count(*) FROM audit_log"
     )
     .fetch_one(&mut *c)

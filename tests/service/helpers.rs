@@ -24,11 +24,11 @@ macro_rules! db {
     // Each database has its own result type for a statement: only success is kept.
     ($pool:expr, execute, $query:expr) => {{
         let mut conn = $pool.acquire().await.expect("a database connection");
-        enact_hub::on_db!(&mut conn, |c| $query.execute(&mut *c).await.map(|_| ()))
+        enact_hub::store::on_db!(&mut conn, |c| $query.execute(&mut *c).await.map(|_| ()))
     }};
     ($pool:expr, $method:ident, $query:expr) => {{
         let mut conn = $pool.acquire().await.expect("a database connection");
-        enact_hub::on_db!(&mut conn, |c| $query.$method(&mut *c).await)
+        enact_hub::store::on_db!(&mut conn, |c| $query.$method(&mut *c).await)
     }};
 }
 pub(crate) use db;

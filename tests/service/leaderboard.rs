@@ -372,7 +372,7 @@ pub async fn crowded_board(server: &TestServer, records: &[Value], total: usize,
     for i in templates.len()..total {
         let (token, _) = &tokens[i % accounts];
         let model = format!("model-{i:03}");
-        enact_hub::on_db!(&mut tx, |c| sqlx::query(
+        enact_hub::store::on_db!(&mut tx, |c| sqlx::query(
             "INSERT INTO submissions (dataset, account, token, body_sha256, model, scores) \
              SELECT s.dataset, t.account, t.id, s.body_sha256, $1, s.scores \
              FROM submissions s, api_tokens t WHERE s.id = $2 AND t.id = $3",

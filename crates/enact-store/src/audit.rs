@@ -2,7 +2,7 @@
 
 use super::db::{Conn, Fields, on};
 
-use crate::core::audit::{AuditEntry, AuditFilter, AuditRecord};
+use enact_core::audit::{AuditEntry, AuditFilter, AuditRecord};
 
 /// Writes one entry; call inside the transaction of the action it records.
 pub async fn insert(conn: &mut Conn, record: &AuditRecord<'_>) -> Result<(), sqlx::Error> {

@@ -2,7 +2,7 @@
 //! answered exactly as the truth, and what the dataset shares with public datasets.
 
 use super::db::{Conn, Fields, on};
-use crate::core::red_flags::{ExactAnswers, Leak};
+use enact_core::red_flags::{ExactAnswers, Leak};
 
 /// Every submission to `dataset` (listed or not) with its count of exactly right answers (of
 /// the dataset's items: not verdicts a replacing import left to be swept).

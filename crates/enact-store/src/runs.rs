@@ -6,10 +6,10 @@ use super::corrupt;
 use super::db::{Conn, Dialect, Fields, on};
 use super::items::json_column;
 
-use crate::core::model_run::{ItemOutcome, RunFailure};
-use crate::core::release::ReleaseItem;
+use enact_core::model_run::{ItemOutcome, RunFailure};
+use enact_core::release::ReleaseItem;
 
-use crate::core::credentials::{Scope, scopes_from_text};
+use enact_core::credentials::{Scope, scopes_from_text};
 
 /// A stored model run.
 #[derive(Debug, Clone)]

@@ -55,9 +55,9 @@ impl Connection for PoolConnection<Postgres> {
 #[macro_export]
 macro_rules! on_db {
     ($conn:expr, |$c:ident| $body:expr) => {
-        match $crate::store::db::Connection::handle($conn) {
-            $crate::store::db::Handle::Sqlite($c) => $body,
-            $crate::store::db::Handle::Pg($c) => $body,
+        match $crate::db::Connection::handle($conn) {
+            $crate::db::Handle::Sqlite($c) => $body,
+            $crate::db::Handle::Pg($c) => $body,
         }
     };
 }

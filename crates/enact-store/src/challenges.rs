@@ -5,8 +5,8 @@ use sqlx::QueryBuilder;
 
 use super::corrupt;
 use super::db::{Conn, Fields, on};
-use crate::core::challenge::Part;
-use crate::core::submission::VerdictOutcome;
+use enact_core::challenge::Part;
+use enact_core::submission::VerdictOutcome;
 
 /// A split dataset's challenge as stored.
 #[derive(Debug, Clone, PartialEq)]

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use super::db::{Conn, Fields, on};
 use serde::Serialize;
 
-use crate::core::dataset::{Direction, StepLength};
+use enact_core::dataset::{Direction, StepLength};
 
 #[derive(Debug, Clone, Serialize)]
 pub struct Dataset {

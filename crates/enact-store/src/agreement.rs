@@ -11,8 +11,8 @@ use super::db::{Conn, Fields, on};
 use super::annotations::human_answer_from_row;
 use super::kind_from_row;
 
-use crate::core::agreement::protocol::{PrimaryAnswer, ProtocolPlan};
-use crate::core::agreement::report::AnnotatorAnswer;
+use enact_core::agreement::protocol::{PrimaryAnswer, ProtocolPlan};
+use enact_core::agreement::report::AnnotatorAnswer;
 
 /// Every answered item of a dataset, per annotator, with the item's ground truth and
 /// signatures and the kind of assignment it was answered under; by item, then annotator.

@@ -4,7 +4,7 @@ use super::db::{Conn, Dialect, Fields, on};
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use crate::core::credentials::{NewToken, Role, Scope, scopes_from_text, scopes_to_text};
+use enact_core::credentials::{NewToken, Role, Scope, scopes_from_text, scopes_to_text};
 
 /// A token as `token list` shows it: never its secret.
 #[derive(Debug, Clone, Serialize, JsonSchema)]

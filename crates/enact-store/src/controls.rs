@@ -4,7 +4,7 @@ use std::collections::{HashMap, HashSet};
 
 use super::db::{Conn, Fields, on};
 use super::kind_from_row;
-use crate::core::annotation::SplitItem;
+use enact_core::annotation::SplitItem;
 
 /// A paused queue: who paused it and when.
 #[derive(Debug, Clone, PartialEq, Eq)]

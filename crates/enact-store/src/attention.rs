@@ -4,9 +4,9 @@
 use super::db::{Conn, Fields, on};
 use super::gold::GoldStanding;
 use super::{corrupt, kind_from_row};
-use crate::core::annotation::OutcomeKind;
-use crate::core::attention::Instruction;
-use crate::core::dataset::StepLength;
+use enact_core::annotation::OutcomeKind;
+use enact_core::attention::Instruction;
+use enact_core::dataset::StepLength;
 
 /// A dataset's attention checks as stored.
 #[derive(Debug, Clone, PartialEq)]

@@ -5,12 +5,12 @@ use sqlx::QueryBuilder;
 use super::db::{Conn, Dialect, Fields, on};
 
 use super::{corrupt, kind_from_row};
-use crate::core::dataset::{AnswerVisibility, Direction, StepLength};
-use crate::core::submission::{
+use enact_core::dataset::{AnswerVisibility, Direction, StepLength};
+use enact_core::submission::{
     ItemVerdict, Provenance, SubmissionMetadata, SubmissionScores, SubmissionStatus,
     VerdictOutcome, Visibility,
 };
-use crate::core::verifier::{ScoringPolicy, StrictOutcome};
+use enact_core::verifier::{ScoringPolicy, StrictOutcome};
 
 pub async fn answer_visibility(
     conn: &mut Conn,
@@ -117,7 +117,7 @@ fn submission_from_row(row: &impl Fields) -> Result<SubmissionRow, sqlx::Error> 
 }
 
 /// A metric version column (a 64-bit integer in the store).
-pub(crate) fn version_column(row: &impl Fields, column: &str) -> Result<u32, sqlx::Error> {
+pub fn version_column(row: &impl Fields, column: &str) -> Result<u32, sqlx::Error> {
     let version: i64 = row.try_get(column)?;
     u32::try_from(version).map_err(|e| corrupt(column, e))
 }

@@ -2,7 +2,7 @@
 
 use super::db::{Conn, Fields, on};
 
-use crate::core::study::VariantSpec;
+use enact_core::study::VariantSpec;
 
 /// A stored study, with its datasets by name and id.
 #[derive(Debug, Clone)]

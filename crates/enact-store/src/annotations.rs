@@ -5,13 +5,13 @@ use super::db::{Conn, Fields, on};
 
 use super::{corrupt, kind_from_row};
 
-use crate::core::annotation::{
+use enact_core::annotation::{
     AssignmentState, CountedAnswer, CountedVerdict, Draft, HumanAnswer, HumanVerdict, Outcome,
     OutcomeKind, Session, SplitItem, StoredDraft, Telemetry,
 };
-use crate::core::dataset::{Direction, StepLength};
-use crate::core::quality::FinishedItem;
-use crate::core::verifier::Permutation;
+use enact_core::dataset::{Direction, StepLength};
+use enact_core::quality::FinishedItem;
+use enact_core::verifier::Permutation;
 
 #[derive(Debug, Clone)]
 pub struct Annotator {
@@ -669,7 +669,7 @@ pub async fn human_answers_of(
 
 /// A human answer from a row holding the item's `direction`, `step_length`, `gt_answer` and
 /// `signatures`, and the annotation's `answer`.
-pub(crate) fn human_answer_from_row(r: &impl Fields) -> Result<HumanAnswer, sqlx::Error> {
+pub fn human_answer_from_row(r: &impl Fields) -> Result<HumanAnswer, sqlx::Error> {
     let (direction, step_length) = kind_from_row(r)?;
     let permutation = |column: &str| -> Result<Permutation, sqlx::Error> {
         let text: String = r.try_get(column)?;

@@ -1,7 +1,7 @@
 //! The schema version this build's migrations bring each backend to, which `--version` and
-//! `GET /api/v1/version` report (`store::SQLITE_SCHEMA`, `store::POSTGRES_SCHEMA`), and the
-//! migrations themselves, embedded in the binary (`store::migrations`). The git commit is
-//! enact-core's build script's (`core::version::COMMIT`).
+//! `GET /api/v1/version` report (`SQLITE_SCHEMA`, `POSTGRES_SCHEMA`), and the migrations
+//! themselves, embedded in the binary (`migrations`). They are read from the workspace's
+//! top-level `migrations/` folder, where the schema lives beside the code that uses it.
 
 use std::path::{Path, PathBuf};
 
@@ -9,7 +9,7 @@ fn main() {
     let manifest_dir = PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").unwrap_or_default());
     println!("cargo:rerun-if-changed=build.rs");
     for backend in ["sqlite", "postgres"] {
-        let dir = manifest_dir.join("migrations").join(backend);
+        let dir = manifest_dir.join("../../migrations").join(backend);
         println!("cargo:rerun-if-changed={}", dir.display());
         let version = latest_migration(&dir).unwrap_or(0);
         println!(

@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use super::db::{Conn, Fields, on};
-use crate::core::paper::{Category, CellKey, ReportedModel};
+use enact_core::paper::{Category, CellKey, ReportedModel};
 
 /// A reported result as stored.
 #[derive(Debug, Clone, PartialEq)]

@@ -3,7 +3,7 @@
 //! (`app::import`) decides when each runs.
 
 use super::db::{Conn, Dialect, Fields, on};
-use crate::core::semantics::SignatureSource;
+use enact_core::semantics::SignatureSource;
 
 /// One import in progress.
 #[derive(Debug, Clone)]

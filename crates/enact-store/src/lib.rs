@@ -1,5 +1,7 @@
-//! Storage in SQLite or PostgreSQL: connection setup, migrations, and the queries the rest of
-//! the app runs.
+//! enact-hub's storage in SQLite or PostgreSQL: connection setup, migrations, the write gate,
+//! and the queries the use cases run. It may name the benchmark's types (`enact-core`) and the
+//! codecs of columns stored as text, and decides nothing: what to write, and when, is the use
+//! cases' (the hub's `app`), which this crate cannot name.
 //!
 //! Functions take a [`Conn`] (a pooled connection or an open transaction of either database),
 //! so a caller that writes several rows decides where the transaction begins and ends. Each
@@ -339,7 +341,7 @@ pub async fn bump_content_generation(conn: &mut Conn) -> Result<(), sqlx::Error>
 }
 
 /// A column that holds something this version cannot read, as a decode error naming it.
-pub(crate) fn corrupt(column: &str, detail: impl std::fmt::Display) -> sqlx::Error {
+pub fn corrupt(column: &str, detail: impl std::fmt::Display) -> sqlx::Error {
     sqlx::Error::ColumnDecode {
         index: column.to_owned(),
         source: detail.to_string().into(),
@@ -347,23 +349,23 @@ pub(crate) fn corrupt(column: &str, detail: impl std::fmt::Display) -> sqlx::Err
 }
 
 /// The `direction` and `step_length` columns of an item row.
-pub(crate) fn kind_from_row(
+pub fn kind_from_row(
     row: &impl Fields,
 ) -> Result<
     (
-        crate::core::dataset::Direction,
-        crate::core::dataset::StepLength,
+        enact_core::dataset::Direction,
+        enact_core::dataset::StepLength,
     ),
     sqlx::Error,
 > {
     let direction: String = row.try_get("direction")?;
     let step_length: i64 = row.try_get("step_length")?;
     Ok((
-        crate::core::dataset::Direction::parse(&direction)
+        enact_core::dataset::Direction::parse(&direction)
             .ok_or_else(|| corrupt("direction", format!("unknown direction {direction:?}")))?,
         usize::try_from(step_length)
             .ok()
-            .and_then(crate::core::dataset::StepLength::new)
+            .and_then(enact_core::dataset::StepLength::new)
             .ok_or_else(|| corrupt("step_length", format!("bad step length {step_length}")))?,
     ))
 }

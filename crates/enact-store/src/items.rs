@@ -6,9 +6,9 @@ use super::db::{Conn, Dialect, Fields, on};
 
 use super::{corrupt, kind_from_row};
 
-use crate::core::dataset::{Direction, QaItem, StepLength};
-use crate::core::scoring::ScoringItem;
-use crate::core::semantics::SignatureSource;
+use enact_core::dataset::{Direction, QaItem, StepLength};
+use enact_core::scoring::ScoringItem;
+use enact_core::semantics::SignatureSource;
 
 /// What a list of items shows of each one.
 #[derive(Debug, Clone)]
@@ -358,7 +358,7 @@ pub async fn scoring_items(
 pub async fn release_items(
     conn: &mut Conn,
     dataset_id: i64,
-) -> Result<Vec<(i64, crate::core::release::ReleaseItem)>, sqlx::Error> {
+) -> Result<Vec<(i64, enact_core::release::ReleaseItem)>, sqlx::Error> {
     on!(conn, |c| {
         let mut paths: HashMap<i64, Vec<String>> = HashMap::new();
         let image_rows = sqlx::query(
@@ -386,7 +386,7 @@ pub async fn release_items(
                 let row_id: i64 = row.try_get("id")?;
                 Ok((
                     row_id,
-                    crate::core::release::ReleaseItem {
+                    enact_core::release::ReleaseItem {
                         id: row.try_get("item_id")?,
                         item_type: row.try_get("item_type")?,
                         task_name: row.try_get("task_name")?,
