@@ -1,20 +1,20 @@
 //! enact-hub: a self-hosted evaluation service for the ENACT benchmark.
 //!
-//! Four layers, each allowed to use only the ones below it. The two lowest are crates of their
+//! Four layers, each allowed to use only the ones below it. The three lowest are crates of their
 //! own, so Cargo keeps them from naming anything above them; within this crate a test,
-//! `tests/layers.rs`, reads every `crate::` path and fails on a step up or a cycle:
+//! `tests/layers.rs`, reads every `crate::` path and fails when the web reaches past the use
+//! cases into the store, or on a cycle:
 //!
 //! | where         | what lives there                                                     |
 //! |---------------|----------------------------------------------------------------------|
 //! | `src/cli/`, `src/web/` | adapters: parse arguments or requests, call one [`app`] use case, render text, JSON or HTML; neither names the store |
-//! | `src/app/`    | use cases: import, submit, tokens, annotators, assignment, drafts and answers, the agreement protocol and report, error analyses, leaderboards, the demo; and `Hub`, the service they share |
+//! | `crates/enact-app/` ([`app`]) | use cases: import, submit, tokens, annotators, assignment, drafts and answers, the agreement protocol and report, error analyses, leaderboards, the demo; and `Hub`, the service they share |
 //! | `crates/enact-store/` ([`store`]) | SQLite or PostgreSQL: connection setup, migrations, the write gate, rows in and rows out, no decisions |
 //! | `crates/enact-core/` ([`core`]) | the benchmark, pure: dataset, scene graphs, verifier, error analysis, pipeline, agreement statistics, world; no database, HTTP, async or command line |
 //!
 //! Start with `migrations/` for the schema, then [`core`] for the benchmark, then [`app`] for
 //! what the service does with it. `src/main.rs` only calls [`cli::main`].
 
-pub mod app;
 pub mod cli;
 pub mod web;
 
@@ -24,3 +24,7 @@ pub use enact_core as core;
 /// Rows on SQLite or PostgreSQL (the `enact-store` crate), named `store` here as the use cases
 /// call it.
 pub use enact_store as store;
+
+/// The use cases and the service they share (the `enact-app` crate), named `app` here as the
+/// adapters call it.
+pub use enact_app as app;

@@ -10,6 +10,7 @@ use axum::routing::{get, post};
 use serde::Deserialize;
 
 use super::error::PageError;
+use super::error::RenderPage;
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
 use crate::app::annotation::{self, Assignment};
@@ -196,7 +197,7 @@ pub(super) async fn render_admin(
         notice,
         invite,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 async fn admin_page(

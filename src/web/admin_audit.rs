@@ -10,6 +10,7 @@ use serde::Deserialize;
 
 use super::AppState;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::Query;
 use super::session::Admin;
 use crate::app::audit;
@@ -92,5 +93,5 @@ async fn audit_page(
         entries,
         older,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }

@@ -10,7 +10,9 @@ use axum::response::{Html, IntoResponse, Response};
 use axum::routing::{get, post};
 use serde::Deserialize;
 
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::session::{Admin, Protected};
 use super::submissions::parse_role;
 use super::{AppError, AppState};
@@ -50,7 +52,11 @@ async fn render(
         created,
     };
     // The page may carry a secret: keep it out of every cache, the browser's included.
-    Ok(([(header::CACHE_CONTROL, "no-store")], Html(page.render()?)).into_response())
+    Ok((
+        [(header::CACHE_CONTROL, "no-store")],
+        Html(page.render_page()?),
+    )
+        .into_response())
 }
 
 async fn tokens_page(
@@ -73,16 +79,19 @@ struct NewTokenForm {
     total_quota: String,
 }
 
-fn optional_quota(field: &str, text: &str) -> Result<Option<i64>, AppError> {
+fn optional_quota(field: &str, text: &str) -> Result<Option<i64>, ApiError> {
     let text = text.trim();
     if text.is_empty() {
         return Ok(None);
     }
-    text.parse::<i64>().map(Some).map_err(|_| {
-        AppError::Invalid(format!(
-            "{field}: '{text}' is not a whole number (leave it empty for the server's default)"
-        ))
-    })
+    text.parse::<i64>()
+        .map(Some)
+        .map_err(|_| {
+            AppError::Invalid(format!(
+                "{field}: '{text}' is not a whole number (leave it empty for the server's default)"
+            ))
+        })
+        .map_err(ApiError)
 }
 
 async fn create(

@@ -9,7 +9,9 @@ use axum::routing::{get, post};
 use serde::Deserialize;
 
 use super::admin::render_admin;
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Json, Path};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
@@ -46,16 +48,18 @@ struct ProtocolForm {
     seed: String,
 }
 
-fn parse_field<T: std::str::FromStr>(name: &str, text: &str, default: T) -> Result<T, AppError> {
+fn parse_field<T: std::str::FromStr>(name: &str, text: &str, default: T) -> Result<T, ApiError> {
     let text = text.trim();
     if text.is_empty() {
         return Ok(default);
     }
-    text.parse().map_err(|_| {
-        AppError::Invalid(format!(
-            "form field `{name}`: '{text}' is not a whole number ≥ 0"
-        ))
-    })
+    text.parse()
+        .map_err(|_| {
+            AppError::Invalid(format!(
+                "form field `{name}`: '{text}' is not a whole number ≥ 0"
+            ))
+        })
+        .map_err(ApiError)
 }
 
 async fn run_protocol(
@@ -118,7 +122,7 @@ struct ReportQuery {
     b: String,
 }
 
-fn optional<T: std::str::FromStr>(name: &str, text: &str) -> Result<Option<T>, AppError>
+fn optional<T: std::str::FromStr>(name: &str, text: &str) -> Result<Option<T>, ApiError>
 where
     T::Err: std::fmt::Display,
 {
@@ -129,15 +133,17 @@ where
     text.parse()
         .map(Some)
         .map_err(|e| AppError::Invalid(format!("query parameter `{name}`: '{text}': {e}")))
+        .map_err(ApiError)
 }
 
 impl ReportQuery {
-    fn parse(raw: Option<&str>) -> Result<ReportQuery, AppError> {
+    fn parse(raw: Option<&str>) -> Result<ReportQuery, ApiError> {
         serde_urlencoded::from_str(raw.unwrap_or(""))
             .map_err(|e| AppError::Invalid(format!("query string: {e}")))
+            .map_err(ApiError)
     }
 
-    fn settings(&self) -> Result<ReportSettings, AppError> {
+    fn settings(&self) -> Result<ReportSettings, ApiError> {
         let chosen_pair = match (
             optional::<i64>("a", &self.a)?,
             optional::<i64>("b", &self.b)?,
@@ -145,26 +151,26 @@ impl ReportQuery {
             (Some(a), Some(b)) => Some((a, b)),
             (None, None) => None,
             _ => {
-                return Err(AppError::Invalid(
+                return Err(ApiError(AppError::Invalid(
                     "query parameters `a` and `b`: give both submission ids to compare, or neither"
                         .to_owned(),
-                ));
+                )));
             }
         };
         let confidence_level =
             optional::<f64>("confidence", &self.confidence)?.unwrap_or(DEFAULT_CONFIDENCE_LEVEL);
         if !(confidence_level > 0.0 && confidence_level < 1.0) {
-            return Err(AppError::Invalid(format!(
+            return Err(ApiError(AppError::Invalid(format!(
                 "query parameter `confidence`: {confidence_level} is not strictly between 0 and 1"
-            )));
+            ))));
         }
         let replicates =
             optional::<usize>("bootstrap", &self.bootstrap)?.unwrap_or(DEFAULT_REPLICATES);
         // A page request must stay bounded; the command line has no such limit.
         if replicates > 20_000 {
-            return Err(AppError::Invalid(format!(
+            return Err(ApiError(AppError::Invalid(format!(
                 "query parameter `bootstrap`: {replicates} replicates; at most 20000 here"
-            )));
+            ))));
         }
         Ok(ReportSettings {
             encoding: optional::<OrderingEncoding>("encoding", &self.encoding)?
@@ -185,7 +191,7 @@ async fn dataset_report(
     state: &AppState,
     name: &str,
     raw: Option<&str>,
-) -> Result<(AgreementReport, ReportSettings), AppError> {
+) -> Result<(AgreementReport, ReportSettings), ApiError> {
     let settings = ReportQuery::parse(raw)?.settings()?;
     let report = agreement::report(&state.hub, name, &settings).await?;
     Ok((report, settings))
@@ -196,9 +202,11 @@ async fn dataset_bundle(
     state: &AppState,
     name: &str,
     raw: Option<&str>,
-) -> Result<(AgreementReport, Vec<BundleFile>), AppError> {
+) -> Result<(AgreementReport, Vec<BundleFile>), ApiError> {
     let settings = ReportQuery::parse(raw)?.settings()?;
-    agreement::report_bundle(&state.hub, name, &settings).await
+    agreement::report_bundle(&state.hub, name, &settings)
+        .await
+        .map_err(ApiError)
 }
 
 async fn report_json(
@@ -206,7 +214,7 @@ async fn report_json(
     Admin(_): Admin,
     Path(name): Path<String>,
     RawQuery(raw): RawQuery,
-) -> Result<Json<AgreementReport>, AppError> {
+) -> Result<Json<AgreementReport>, ApiError> {
     Ok(Json(dataset_report(&state, &name, raw.as_deref()).await?.0))
 }
 
@@ -388,7 +396,7 @@ async fn report_page(
             e.annotator, e.excluded_by, e.excluded_at
         ));
     }
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 impl AgreementText {

@@ -11,12 +11,14 @@ use axum::response::{Html, IntoResponse, Redirect, Response};
 use axum::routing::{get, post};
 use serde::{Deserialize, Serialize};
 
+use super::AppState;
 use super::api::frame_url;
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Json, Path};
 use super::i18n::{Tr, msg};
 use super::session::{LoggedIn, Protected};
-use super::{AppError, AppState};
 use crate::app::annotation::{self, AssignedItem};
 use crate::app::controls;
 use crate::app::items::StoredItem;
@@ -163,7 +165,7 @@ async fn queue_page(
             })
             .collect(),
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 async fn next_item(
@@ -238,7 +240,7 @@ async fn item_page(
 ) -> Result<Html<String>, PageError> {
     let opened = annotation::open(&state.hub, &session, &dataset, &item_id).await?;
     let page = ItemPage::new(tr, &opened, session.csrf_token, dataset)?;
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 /// A state image of `item` by position.
@@ -282,7 +284,7 @@ impl ItemPage {
         opened: &AssignedItem,
         csrf: String,
         dataset: String,
-    ) -> Result<ItemPage, AppError> {
+    ) -> Result<ItemPage, ApiError> {
         let item = &opened.item;
         let step_length = item.summary.step_length;
         let forward = item.summary.direction == Direction::Forward;
@@ -343,7 +345,7 @@ async fn save_draft(
     State(state): State<AppState>,
     Path((dataset, item_id)): Path<(String, String)>,
     request: Protected<Draft>,
-) -> Result<Json<Saved>, AppError> {
+) -> Result<Json<Saved>, ApiError> {
     annotation::save_draft(
         &state.hub,
         &request.session,
@@ -364,7 +366,7 @@ async fn submit(
     State(state): State<AppState>,
     Path((dataset, item_id)): Path<(String, String)>,
     request: Protected<Draft>,
-) -> Result<Json<Submitted>, AppError> {
+) -> Result<Json<Submitted>, ApiError> {
     annotation::answer(
         &state.hub,
         &request.session,
@@ -426,7 +428,7 @@ async fn own_answer(
     State(state): State<AppState>,
     LoggedIn(session): LoggedIn,
     Path((dataset, item_id)): Path<(String, String)>,
-) -> Result<Json<OwnAnswer>, AppError> {
+) -> Result<Json<OwnAnswer>, ApiError> {
     let a = annotation::own_answer(&state.hub, &session, &dataset, &item_id).await?;
     Ok(Json(OwnAnswer {
         dataset: a.dataset,

@@ -11,6 +11,8 @@ use axum::routing::post;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use super::auth::TokenCaller;
+use super::error::ApiError;
 use super::error::PageError;
 use super::extract::{Json, Path, required_whole_number};
 use super::openapi::{ApiRoute, Verb};
@@ -19,7 +21,6 @@ use super::session::Protected;
 use super::{AppError, AppState};
 use crate::app::attention::{AttentionCleared, AttentionQueues, AttentionSet};
 use crate::app::controls::Handover;
-use crate::app::tokens::Caller;
 use crate::app::{attention, controls};
 use crate::core::attention::{Instruction, parse_check_list};
 use crate::core::credentials::Scope;
@@ -153,8 +154,8 @@ struct PauseChanged {
 async fn pause_api(
     State(state): State<AppState>,
     Path(annotator): Path<String>,
-    caller: Caller,
-) -> Result<axum::Json<PauseChanged>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<axum::Json<PauseChanged>, ApiError> {
     let changed = controls::pause(&state.hub, &caller.actor(), &annotator).await?;
     Ok(axum::Json(PauseChanged {
         annotator,
@@ -166,8 +167,8 @@ async fn pause_api(
 async fn resume_api(
     State(state): State<AppState>,
     Path(annotator): Path<String>,
-    caller: Caller,
-) -> Result<axum::Json<PauseChanged>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<axum::Json<PauseChanged>, ApiError> {
     let changed = controls::resume(&state.hub, &caller.actor(), &annotator).await?;
     Ok(axum::Json(PauseChanged {
         annotator,
@@ -189,9 +190,9 @@ struct HandoverRequest {
 async fn handover_api(
     State(state): State<AppState>,
     Path(annotator): Path<String>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(request): Json<HandoverRequest>,
-) -> Result<axum::Json<Handover>, AppError> {
+) -> Result<axum::Json<Handover>, ApiError> {
     Ok(axum::Json(
         controls::handover(&state.hub, &caller.actor(), &annotator, &request.to).await?,
     ))
@@ -207,7 +208,7 @@ struct AttentionOfDataset {
 async fn attention_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-) -> Result<axum::Json<AttentionOfDataset>, AppError> {
+) -> Result<axum::Json<AttentionOfDataset>, ApiError> {
     let attention = attention::show(&state.hub, &dataset).await?;
     Ok(axum::Json(AttentionOfDataset { dataset, attention }))
 }
@@ -244,9 +245,9 @@ struct AttentionChanged {
 async fn set_attention_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(request): Json<AttentionRequest>,
-) -> Result<axum::Json<AttentionChanged>, AppError> {
+) -> Result<axum::Json<AttentionChanged>, ApiError> {
     let rate =
         GoldRate::new(request.rate).map_err(|e| AppError::Invalid(format!("`rate`: {e}")))?;
     let checks: Vec<(String, Instruction)> = request
@@ -262,8 +263,8 @@ async fn set_attention_api(
 async fn clear_attention_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-    caller: Caller,
-) -> Result<axum::Json<AttentionCleared>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<axum::Json<AttentionCleared>, ApiError> {
     Ok(axum::Json(
         attention::clear(&state.hub, &caller.actor(), &dataset).await?,
     ))

@@ -10,6 +10,7 @@ use axum::response::{IntoResponse, Response};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use super::error::ApiError;
 use super::extract::{Json, Path, Query};
 use super::openapi::{ApiRoute, Verb};
 use super::session::ReaderIsAdmin;
@@ -160,7 +161,7 @@ struct DatasetList {
     datasets: Vec<DatasetView>,
 }
 
-async fn list_datasets(State(state): State<AppState>) -> Result<Json<DatasetList>, AppError> {
+async fn list_datasets(State(state): State<AppState>) -> Result<Json<DatasetList>, ApiError> {
     let all = datasets::overview(&state.hub).await?;
     Ok(Json(DatasetList {
         datasets: all.into_iter().map(DatasetView::from).collect(),
@@ -170,7 +171,7 @@ async fn list_datasets(State(state): State<AppState>) -> Result<Json<DatasetList
 async fn get_dataset(
     State(state): State<AppState>,
     Path(name): Path<String>,
-) -> Result<Json<DatasetView>, AppError> {
+) -> Result<Json<DatasetView>, ApiError> {
     Ok(Json(datasets::overview_of(&state.hub, &name).await?.into()))
 }
 
@@ -220,7 +221,7 @@ impl ItemSelection {
         &self,
         state: &AppState,
         dataset: &str,
-    ) -> Result<(Vec<ItemSummary>, i64), AppError> {
+    ) -> Result<(Vec<ItemSummary>, i64), ApiError> {
         items::list(
             &state.hub,
             dataset,
@@ -229,6 +230,7 @@ impl ItemSelection {
             self.offset(),
         )
         .await
+        .map_err(ApiError)
     }
 }
 
@@ -311,7 +313,7 @@ async fn list_items(
     State(state): State<AppState>,
     Path(name): Path<String>,
     Query(query): Query<ItemQuery>,
-) -> Result<Json<ItemList>, AppError> {
+) -> Result<Json<ItemList>, ApiError> {
     let selection = query.selection()?;
     let (items, total) = selection.fetch(&state, &name).await?;
     let shown = i64::from(selection.offset()) + items.len() as i64;
@@ -405,7 +407,7 @@ async fn get_item_answers(
     State(state): State<AppState>,
     ReaderIsAdmin(admin): ReaderIsAdmin,
     Path((name, item_id)): Path<(String, String)>,
-) -> Result<axum::Json<ItemAnswers>, AppError> {
+) -> Result<axum::Json<ItemAnswers>, ApiError> {
     Ok(axum::Json(
         item_answers::of(&state.hub, &name, &item_id, admin).await?,
     ))
@@ -414,7 +416,7 @@ async fn get_item_answers(
 async fn get_item(
     State(state): State<AppState>,
     Path((name, item_id)): Path<(String, String)>,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let cache = state.hub.items();
     let json = match cache.json(&name, &item_id) {
         Some(json) => json,
@@ -458,14 +460,14 @@ async fn get_frame(
     State(state): State<AppState>,
     Path(sha256): Path<String>,
     headers: HeaderMap,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let not_found = || {
         AppError::from(Refusal::NoFrame {
             frame: sha256.clone(),
         })
     };
     if !is_sha256_hex(&sha256) {
-        return Err(not_found());
+        return Err(ApiError(not_found()));
     }
     let etag = format!("\"{sha256}\"");
     // The hash is the content: a client that has it needs nothing read.

@@ -8,6 +8,7 @@ use axum::extract::State;
 use axum::http::{HeaderValue, header};
 use axum::response::{IntoResponse, Response};
 
+use super::error::ApiError;
 use super::extract::Path;
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
@@ -43,7 +44,7 @@ fn archive_file_name(dataset: &str) -> String {
 pub(super) fn bundle_download(
     folder: &str,
     files: &[crate::core::bundle::BundleFile],
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let archive = crate::core::bundle::tar_archive(folder, files).map_err(AppError::from)?;
     let disposition = HeaderValue::from_str(&format!("attachment; filename=\"{folder}.tar\""))
         .map_err(anyhow::Error::from)?;
@@ -81,7 +82,7 @@ pub(super) fn tar_download(
 async fn download(
     State(state): State<AppState>,
     Path(name): Path<String>,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let archive = datasets::release_archive(&state.hub, &name).await?;
     let mut response = tar_download(archive.chunks, &archive_file_name(&archive.dataset.name));
     let headers = response.headers_mut();

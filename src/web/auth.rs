@@ -9,7 +9,7 @@ use axum::http::{HeaderMap, header};
 use axum::middleware::Next;
 use axum::response::Response;
 
-use super::{AppError, AppState};
+use super::{ApiError, AppError, AppState};
 use crate::app::tokens::{self, Caller};
 use crate::core::credentials::Scope;
 
@@ -26,7 +26,7 @@ pub(super) async fn require_scope(
     State(guard): State<ScopeGuard>,
     mut request: Request,
     next: Next,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let token = bearer_token(request.headers())?.to_owned();
     let caller = tokens::authorize(&guard.state.hub, &token, guard.scope).await?;
     request.extensions_mut().insert(caller);
@@ -34,7 +34,7 @@ pub(super) async fn require_scope(
 }
 
 /// The token of an `Authorization: Bearer TOKEN` header.
-pub(super) fn bearer_token(headers: &HeaderMap) -> Result<&str, AppError> {
+pub(super) fn bearer_token(headers: &HeaderMap) -> Result<&str, ApiError> {
     let header = headers
         .get(header::AUTHORIZATION)
         .ok_or_else(|| {
@@ -56,21 +56,25 @@ pub(super) fn bearer_token(headers: &HeaderMap) -> Result<&str, AppError> {
                 "the Authorization header must read `Bearer TOKEN`".to_owned(),
             )
         })
+        .map_err(ApiError)
 }
 
 /// The caller [`require_scope`] let through. A handler that asks for one on a route the table
 /// calls public is a mistake in the table, answered with 500 (the authorization tests call
 /// every route).
-impl<S: Send + Sync> FromRequestParts<S> for Caller {
-    type Rejection = AppError;
+pub struct TokenCaller(pub Caller);
 
-    async fn from_request_parts(parts: &mut Parts, _: &S) -> Result<Self, AppError> {
-        parts.extensions.get::<Caller>().cloned().ok_or_else(|| {
-            AppError::internal(format!(
+impl<S: Send + Sync> FromRequestParts<S> for TokenCaller {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, _: &S) -> Result<Self, ApiError> {
+        let caller = parts.extensions.get::<Caller>().cloned().map(TokenCaller);
+        caller.ok_or_else(|| {
+            ApiError(AppError::internal(format!(
                 "{} {} reads its caller, but its route table entry asks for no token",
                 parts.method,
                 parts.uri.path()
-            ))
+            )))
         })
     }
 }

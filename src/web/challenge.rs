@@ -13,7 +13,10 @@ use axum::routing::{get, post};
 use schemars::JsonSchema;
 use serde::Deserialize;
 
+use super::auth::TokenCaller;
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Json, MOST_WHOLE_NUMBER, Path, Query};
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
@@ -24,7 +27,6 @@ use crate::app::challenge::{
 };
 use crate::app::datasets;
 use crate::app::leaderboard::Board;
-use crate::app::tokens::Caller;
 use crate::core::challenge::{Part, Standing};
 use crate::core::credentials::Scope;
 use crate::core::dataset::AnswerVisibility;
@@ -233,9 +235,9 @@ impl From<SettingsRequest> for SettingsChange {
 async fn split_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(request): Json<SplitRequest>,
-) -> Result<(StatusCode, Json<ChallengeView>), AppError> {
+) -> Result<(StatusCode, Json<ChallengeView>), ApiError> {
     let view = challenge::split(
         &state.hub,
         &caller.actor(),
@@ -250,16 +252,16 @@ async fn split_api(
 async fn status_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-) -> Result<Json<ChallengeView>, AppError> {
+) -> Result<Json<ChallengeView>, ApiError> {
     Ok(Json(challenge::status(&state.hub, &dataset).await?))
 }
 
 async fn settings_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(request): Json<SettingsRequest>,
-) -> Result<Json<ChallengeView>, AppError> {
+) -> Result<Json<ChallengeView>, ApiError> {
     let change = SettingsChange::from(request);
     Ok(Json(
         challenge::configure(&state.hub, &caller.actor(), &dataset, &change).await?,
@@ -269,8 +271,8 @@ async fn settings_api(
 async fn reveal_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-    caller: Caller,
-) -> Result<Json<ChallengeView>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<Json<ChallengeView>, ApiError> {
     Ok(Json(
         challenge::reveal(&state.hub, &caller.actor(), &dataset).await?,
     ))
@@ -279,8 +281,8 @@ async fn reveal_api(
 async fn selection_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-    caller: Caller,
-) -> Result<Json<SelectionView>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<Json<SelectionView>, ApiError> {
     Ok(Json(
         challenge::selection(&state.hub, &caller, &dataset).await?,
     ))
@@ -289,8 +291,8 @@ async fn selection_api(
 async fn select_api(
     State(state): State<AppState>,
     Path(id): Path<String>,
-    caller: Caller,
-) -> Result<Json<SelectionView>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<Json<SelectionView>, ApiError> {
     Ok(Json(
         challenge::set_selected(&state.hub, &caller, &id, true).await?,
     ))
@@ -299,17 +301,18 @@ async fn select_api(
 async fn unselect_api(
     State(state): State<AppState>,
     Path(id): Path<String>,
-    caller: Caller,
-) -> Result<Json<SelectionView>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<Json<SelectionView>, ApiError> {
     Ok(Json(
         challenge::set_selected(&state.hub, &caller, &id, false).await?,
     ))
 }
 
 /// The leaderboard's `part` parameter.
-pub(super) fn parse_part(value: &str) -> Result<Part, AppError> {
+pub(super) fn parse_part(value: &str) -> Result<Part, ApiError> {
     Part::parse(value)
         .ok_or_else(|| AppError::Invalid(format!("part must be public or private, not {value:?}")))
+        .map_err(ApiError)
 }
 
 /// The rows a leaderboard request for `part` (the default part when `None`) reads, and what
@@ -319,13 +322,13 @@ pub(super) fn board_rows(
     board: &Board,
     part: Option<Part>,
     admin: bool,
-) -> Result<(&[LeaderboardRow], Option<BoardChallenge>), AppError> {
+) -> Result<(&[LeaderboardRow], Option<BoardChallenge>), ApiError> {
     let Some(challenge) = &board.challenge else {
         return Ok((&board.rows, None));
     };
     let part = part.unwrap_or(challenge.shown.part);
     if part == Part::Private && challenge.shown.revealed_at.is_none() && !admin {
-        return Err(AppError::NotPermitted(format!(
+        return Err(ApiError(AppError::NotPermitted(format!(
             "part=private: the private part of dataset '{}' is not revealed yet{}; until then \
              its figures are for admins",
             board.dataset.name,
@@ -335,7 +338,7 @@ pub(super) fn board_rows(
                 .as_deref()
                 .map(|at| format!(" (it will be at {at})"))
                 .unwrap_or_default()
-        )));
+        ))));
     }
     let rows = challenge.rows_over(part).unwrap_or(&board.rows);
     Ok((rows, Some(challenge.showing(part))))
@@ -507,7 +510,7 @@ async fn challenges_page(
         challenge,
         max_limit: MAX_SELECTION_LIMIT,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 /// Back to the page of `dataset` (a reload does not send the form again).
@@ -516,12 +519,12 @@ fn back_to(dataset: &str) -> Response {
     Redirect::to(&format!("/admin/challenges?{query}")).into_response()
 }
 
-fn form_dataset(dataset: &str) -> Result<&str, AppError> {
+fn form_dataset(dataset: &str) -> Result<&str, ApiError> {
     let dataset = dataset.trim();
     if dataset.is_empty() {
-        return Err(AppError::Invalid(
+        return Err(ApiError(AppError::Invalid(
             "dataset: the form names no dataset".to_owned(),
-        ));
+        )));
     }
     Ok(dataset)
 }

@@ -11,7 +11,9 @@ use axum::routing::get;
 use serde::Deserialize;
 use serde_json::json;
 
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Path, Query};
 use super::i18n::Tr;
 use super::openapi::{ApiRoute, Verb};
@@ -71,14 +73,16 @@ pub fn routes() -> Vec<ApiRoute> {
 }
 
 /// The query parameter `resample`: what a bootstrap resamples, activities when absent.
-pub(super) fn resample_param(value: Option<&str>) -> Result<Resampling, AppError> {
+pub(super) fn resample_param(value: Option<&str>) -> Result<Resampling, ApiError> {
     match value.unwrap_or_default().trim() {
         "" => Ok(Resampling::default()),
-        other => Resampling::parse(other).ok_or_else(|| {
-            AppError::Invalid(format!(
-                "query parameter `resample`: {other:?} is not `activities` or `items`"
-            ))
-        }),
+        other => Resampling::parse(other)
+            .ok_or_else(|| {
+                AppError::Invalid(format!(
+                    "query parameter `resample`: {other:?} is not `activities` or `items`"
+                ))
+            })
+            .map_err(ApiError),
     }
 }
 
@@ -99,7 +103,7 @@ struct CompareQuery {
 }
 
 impl CompareQuery {
-    fn config(&self) -> Result<PairedConfig, AppError> {
+    fn config(&self) -> Result<PairedConfig, ApiError> {
         let resampling = resample_param(self.resample.as_deref())?;
         Ok(PairedConfig {
             resampling,
@@ -122,13 +126,13 @@ async fn compare_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
     Query(query): Query<CompareQuery>,
-) -> Result<axum::Json<RowComparison>, AppError> {
+) -> Result<axum::Json<RowComparison>, ApiError> {
     let config = query.config()?;
     let Some((a, b)) = query.rows() else {
-        return Err(AppError::Invalid(
+        return Err(ApiError(AppError::Invalid(
             "query parameters `a` and `b` are required: each a model name or a submission id"
                 .to_owned(),
-        ));
+        )));
     };
     let comparison = compare::rows(&state.hub, &dataset, a, b, config, false).await?;
     Ok(axum::Json(comparison))
@@ -330,5 +334,5 @@ async fn compare_page(
         comparison,
         tr,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }

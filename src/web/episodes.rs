@@ -15,7 +15,9 @@ use axum::routing::{get, post};
 use serde::{Deserialize, Serialize};
 
 use super::api::frame_url;
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Json, Path};
 use super::session::{Admin, LoggedIn, Protected};
 use super::{AppError, AppState};
@@ -89,7 +91,7 @@ async fn list_page(
             })
             .collect(),
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 /// A frame of the filmstrip. Frames are named by their 0-based position everywhere (the
@@ -170,7 +172,7 @@ async fn episode_page(
         unary_states,
         binary_states,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 /// One transition as the editor shows it.
@@ -251,7 +253,7 @@ async fn describe(
     State(state): State<AppState>,
     Path(name): Path<String>,
     request: Protected<EpisodeGraphs>,
-) -> Result<Json<Described>, AppError> {
+) -> Result<Json<Described>, ApiError> {
     let (transitions, problems) =
         episode_curation::describe(&state.hub, &name, &request.body).await?;
     Ok(Json(described(transitions, problems)))
@@ -266,7 +268,7 @@ async fn save_draft(
     State(state): State<AppState>,
     Path(name): Path<String>,
     request: Protected<EpisodeGraphs>,
-) -> Result<Json<Saved>, AppError> {
+) -> Result<Json<Saved>, ApiError> {
     episode_curation::save_draft(&state.hub, &request.session.name, &name, &request.body).await?;
     Ok(Json(Saved { saved: true }))
 }
@@ -277,7 +279,7 @@ async fn save_graphs(
     State(state): State<AppState>,
     Path(name): Path<String>,
     request: Protected<EpisodeGraphs>,
-) -> Result<Json<Described>, AppError> {
+) -> Result<Json<Described>, ApiError> {
     let session = &request.session;
     let transitions = episode_curation::save(
         &state.hub,
@@ -303,7 +305,7 @@ async fn upload_page(Admin(session): Admin) -> Result<Html<String>, PageError> {
             csrf: session.csrf_token,
             error: None,
         }
-        .render()?,
+        .render_page()?,
     ))
 }
 
@@ -514,7 +516,7 @@ async fn compare_page(
         curators: compared.curators.clone(),
         notice: query.notice,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 /// The resolution form: `a`, `b` (to come back to the same comparison) and one

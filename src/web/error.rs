@@ -1,6 +1,7 @@
-//! The one error type at the HTTP boundary, [`AppError`] (defined with the use cases in
-//! [`crate::app`]), as a JSON body or as a page: its status codes, headers and rendering.
-//! Internal details go to the log only.
+//! The one error type at the HTTP boundary: a use case's [`AppError`] (defined with the use cases
+//! in [`crate::app`], which know nothing of HTTP) answered as a JSON body ([`ApiError`]) or as a
+//! page ([`PageError`]): its status codes, headers and rendering. Internal details go to the log
+//! only.
 
 use askama::Template;
 use axum::Json;
@@ -13,44 +14,71 @@ use crate::app::refusal::{Refusal, RefusalKind};
 
 use super::i18n::{Locale, Tr, msg};
 
-impl AppError {
+/// The status an error is answered with.
+pub fn status_of(error: &AppError) -> StatusCode {
+    match error {
+        AppError::Refused(r) => match r.kind() {
+            RefusalKind::NotFound => StatusCode::NOT_FOUND,
+            RefusalKind::Invalid => StatusCode::BAD_REQUEST,
+            RefusalKind::Unauthenticated => StatusCode::UNAUTHORIZED,
+            RefusalKind::NotPermitted => StatusCode::FORBIDDEN,
+            RefusalKind::Conflict => StatusCode::CONFLICT,
+        },
+        AppError::NotFound(_) => StatusCode::NOT_FOUND,
+        AppError::Invalid(_) => StatusCode::BAD_REQUEST,
+        AppError::Unauthenticated(_) => StatusCode::UNAUTHORIZED,
+        AppError::NotPermitted(_) => StatusCode::FORBIDDEN,
+        AppError::Conflict(_) => StatusCode::CONFLICT,
+        AppError::TooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
+        AppError::UnsupportedFormat(_) => StatusCode::UNSUPPORTED_MEDIA_TYPE,
+        AppError::Rejected { .. } => StatusCode::UNPROCESSABLE_ENTITY,
+        AppError::LimitReached { .. } => StatusCode::TOO_MANY_REQUESTS,
+        AppError::Unavailable(_) => StatusCode::SERVICE_UNAVAILABLE,
+        AppError::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
+    }
+}
+
+fn log_if_internal(error: &AppError) {
+    match error {
+        AppError::Internal(e) => tracing::error!(error = ?e, "request failed"),
+        AppError::Unavailable(why) => tracing::error!(error = %why, "request failed"),
+        _ => {}
+    }
+}
+
+/// A use case's error answered as JSON: what every API handler returns. Anything a use case
+/// returns converts with `?`.
+#[derive(Debug)]
+pub struct ApiError(pub AppError);
+
+impl<E: Into<AppError>> From<E> for ApiError {
+    fn from(e: E) -> Self {
+        ApiError(e.into())
+    }
+}
+
+impl ApiError {
     pub fn status(&self) -> StatusCode {
-        match self {
-            AppError::Refused(r) => match r.kind() {
-                RefusalKind::NotFound => StatusCode::NOT_FOUND,
-                RefusalKind::Invalid => StatusCode::BAD_REQUEST,
-                RefusalKind::Unauthenticated => StatusCode::UNAUTHORIZED,
-                RefusalKind::NotPermitted => StatusCode::FORBIDDEN,
-                RefusalKind::Conflict => StatusCode::CONFLICT,
-            },
-            AppError::NotFound(_) => StatusCode::NOT_FOUND,
-            AppError::Invalid(_) => StatusCode::BAD_REQUEST,
-            AppError::Unauthenticated(_) => StatusCode::UNAUTHORIZED,
-            AppError::NotPermitted(_) => StatusCode::FORBIDDEN,
-            AppError::Conflict(_) => StatusCode::CONFLICT,
-            AppError::TooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
-            AppError::UnsupportedFormat(_) => StatusCode::UNSUPPORTED_MEDIA_TYPE,
-            AppError::Rejected { .. } => StatusCode::UNPROCESSABLE_ENTITY,
-            AppError::LimitReached { .. } => StatusCode::TOO_MANY_REQUESTS,
-            AppError::Unavailable(_) => StatusCode::SERVICE_UNAVAILABLE,
-            AppError::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
-        }
-    }
-
-    fn log_if_internal(&self) {
-        match self {
-            AppError::Internal(e) => tracing::error!(error = ?e, "request failed"),
-            AppError::Unavailable(why) => tracing::error!(error = %why, "request failed"),
-            _ => {}
-        }
+        status_of(&self.0)
     }
 }
 
-impl From<askama::Error> for AppError {
-    fn from(e: askama::Error) -> Self {
-        AppError::Internal(e.into())
+impl std::fmt::Display for ApiError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
     }
 }
+
+/// A template rendered for a response; a template that fails to render is the server's fault.
+pub trait RenderPage: Template {
+    fn render_page(&self) -> Result<String, ApiError> {
+        self.render()
+            .map_err(|e| AppError::Internal(e.into()))
+            .map_err(ApiError)
+    }
+}
+
+impl<T: Template> RenderPage for T {}
 
 #[derive(Serialize)]
 struct ErrorBody<'a> {
@@ -64,13 +92,14 @@ struct ErrorBody<'a> {
     problems: Option<&'a [crate::core::submission::LineProblem]>,
 }
 
-impl IntoResponse for AppError {
+impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
-        self.log_if_internal();
+        let ApiError(error) = self;
+        log_if_internal(&error);
         let body = ErrorBody {
-            error: self.to_string(),
-            code: self.code(),
-            details: match &self {
+            error: error.to_string(),
+            code: error.code(),
+            details: match &error {
                 AppError::Refused(r) => Some(
                     r.details()
                         .iter()
@@ -79,13 +108,13 @@ impl IntoResponse for AppError {
                 ),
                 _ => None,
             },
-            problems: match &self {
+            problems: match &error {
                 AppError::Rejected { problems, .. } => Some(problems),
                 _ => None,
             },
         };
-        let mut response = (self.status(), Json(body)).into_response();
-        match &self {
+        let mut response = (status_of(&error), Json(body)).into_response();
+        match &error {
             AppError::Unauthenticated(_) | AppError::Refused(Refusal::NotLoggedIn) => {
                 response.headers_mut().insert(
                     header::WWW_AUTHENTICATE,
@@ -125,6 +154,12 @@ pub struct PageError(pub AppError);
 impl<E: Into<AppError>> From<E> for PageError {
     fn from(e: E) -> Self {
         PageError(e.into())
+    }
+}
+
+impl From<ApiError> for PageError {
+    fn from(ApiError(e): ApiError) -> Self {
+        PageError(e)
     }
 }
 
@@ -191,9 +226,9 @@ fn status_keys(status: StatusCode) -> (&'static str, &'static str) {
 impl IntoResponse for PageError {
     fn into_response(self) -> Response {
         let error = self.0;
-        error.log_if_internal();
+        log_if_internal(&error);
         let parts = ErrorPageParts {
-            status: error.status(),
+            status: status_of(&error),
             message: error.to_string(),
             refusal: match &error {
                 AppError::Refused(r) => Some(r.clone()),

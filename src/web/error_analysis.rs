@@ -12,14 +12,16 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
+use super::auth::TokenCaller;
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Json, Path, Query};
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
 use super::session::ReaderIsAdmin;
 use super::{AppError, AppState};
 use crate::app::error_analysis::{self, Analysed, ComparedRow};
-use crate::app::tokens::Caller;
 use crate::core::credentials::Scope;
 use crate::core::error_analysis::chart::{self, BarChart, ChartNames};
 use crate::core::error_analysis::{
@@ -107,8 +109,8 @@ impl From<&Analysed> for AnalysisJson {
 async fn submission_errors(
     State(state): State<AppState>,
     Path(id): Path<String>,
-    caller: Caller,
-) -> Result<Json<AnalysisJson>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<Json<AnalysisJson>, ApiError> {
     let (_, analysed) = error_analysis::of_submission(&state.hub, &caller, &id).await?;
     Ok(Json(AnalysisJson::from(&analysed)))
 }
@@ -122,13 +124,13 @@ struct CompareQuery {
 }
 
 impl CompareQuery {
-    fn top(&self) -> Result<usize, AppError> {
+    fn top(&self) -> Result<usize, ApiError> {
         match self.top {
             None => Ok(DEFAULT_ROWS),
             Some(n @ 1..=50) => Ok(n),
-            Some(n) => Err(AppError::Invalid(format!(
+            Some(n) => Err(ApiError(AppError::Invalid(format!(
                 "query parameter `top`: {n} is outside 1..=50"
-            ))),
+            )))),
         }
     }
 
@@ -147,14 +149,14 @@ impl CompareQuery {
             .collect()
     }
 
-    fn direction(&self) -> Result<Option<Direction>, AppError> {
+    fn direction(&self) -> Result<Option<Direction>, ApiError> {
         match self.direction.as_deref() {
             None | Some("" | "overall") => Ok(None),
             Some("forward") => Ok(Some(Direction::Forward)),
             Some("inverse") => Ok(Some(Direction::Inverse)),
-            Some(other) => Err(AppError::Invalid(format!(
+            Some(other) => Err(ApiError(AppError::Invalid(format!(
                 "query parameter `direction`: `{other}` is not overall, forward or inverse"
-            ))),
+            )))),
         }
     }
 }
@@ -178,7 +180,7 @@ async fn dataset_errors(
     State(state): State<AppState>,
     Path(name): Path<String>,
     Query(query): Query<CompareQuery>,
-) -> Result<Json<ComparisonJson>, AppError> {
+) -> Result<Json<ComparisonJson>, ApiError> {
     let (dataset, rows) =
         error_analysis::comparison(&state.hub, &name, query.top()?, &query.picked()?, false)
             .await?;
@@ -421,7 +423,7 @@ async fn comparison_page(
             .then(|| tr.t_s("errors-examples-withheld", "dataset", &dataset.name)),
         tr,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 /// Examples of one semantic category, per structural class.
@@ -559,5 +561,5 @@ async fn row_page(
             .map(|_| tr.t_s("errors-examples-withheld", "dataset", &dataset.name)),
         tr,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }

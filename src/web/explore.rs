@@ -14,7 +14,9 @@ use serde::Deserialize;
 use serde_json::json;
 
 use super::annotate::direction_key;
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Path, Query};
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
@@ -145,7 +147,7 @@ impl ExploreQuery {
     }
 
     /// The page and the items per page.
-    fn paging(&self) -> Result<(usize, usize), AppError> {
+    fn paging(&self) -> Result<(usize, usize), ApiError> {
         let number = |name: &str, v: &Option<String>, default: usize, max: usize| match v
             .as_deref()
             .map(str::trim)
@@ -174,14 +176,14 @@ async fn explore_api(
     Path(dataset): Path<String>,
     Query(query): Query<ExploreQuery>,
     ReaderIsAdmin(admin): ReaderIsAdmin,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let csv = match query.format.as_deref().map(str::trim).unwrap_or_default() {
         "" | "json" => false,
         "csv" => true,
         other => {
-            return Err(AppError::Invalid(format!(
+            return Err(ApiError(AppError::Invalid(format!(
                 "`format` must be `json` or `csv`, not {other:?}"
-            )));
+            ))));
         }
     };
     let (page, per_page) = query.paging()?;
@@ -540,5 +542,5 @@ async fn explore_page(
     let (page, per_page) = query.paging()?;
     let explored = explore::view(&state.hub, &dataset, &query.text(), admin).await?;
     let page = page_view(tr, &explored, page, per_page);
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }

@@ -1,19 +1,30 @@
-//! The extractors handlers use, each refusing bad input with [`AppError`]'s JSON body (or
+//! The extractors handlers use, each refusing bad input with [`ApiError`]'s JSON body (or
 //! page) rather than axum's plain-text rejections: `Json`, `Query` and `Path` wrap axum's own,
 //! and [`IdempotencyKey`] reads the header the submission route honours.
 
 use axum::extract::rejection::{JsonRejection, PathRejection, QueryRejection};
-use axum::extract::{FromRequest, FromRequestParts};
+use axum::extract::{FromRequest, FromRequestParts, Request};
 use axum::http::request::Parts;
 use axum::response::{IntoResponse, Response};
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use super::AppError;
+use super::error::ApiError;
 
 /// A JSON body in, or a JSON body out.
-#[derive(FromRequest)]
-#[from_request(via(axum::Json), rejection(AppError))]
 pub struct Json<T>(pub T);
+
+impl<T: DeserializeOwned, S: Send + Sync> FromRequest<S> for Json<T> {
+    type Rejection = ApiError;
+
+    async fn from_request(request: Request, state: &S) -> Result<Self, ApiError> {
+        match axum::Json::<T>::from_request(request, state).await {
+            Ok(axum::Json(value)) => Ok(Json(value)),
+            Err(rejection) => Err(ApiError(json_refused(rejection))),
+        }
+    }
+}
 
 impl<T: Serialize> IntoResponse for Json<T> {
     fn into_response(self) -> Response {
@@ -22,53 +33,66 @@ impl<T: Serialize> IntoResponse for Json<T> {
 }
 
 /// Query parameters.
-#[derive(FromRequestParts)]
-#[from_request(via(axum::extract::Query), rejection(AppError))]
 pub struct Query<T>(pub T);
 
+impl<T: DeserializeOwned, S: Send + Sync> FromRequestParts<S> for Query<T> {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, state: &S) -> Result<Self, ApiError> {
+        match axum::extract::Query::<T>::from_request_parts(parts, state).await {
+            Ok(axum::extract::Query(value)) => Ok(Query(value)),
+            Err(rejection) => Err(ApiError(query_refused(rejection))),
+        }
+    }
+}
+
 /// Path parameters.
-#[derive(FromRequestParts)]
-#[from_request(via(axum::extract::Path), rejection(AppError))]
 pub struct Path<T>(pub T);
 
-impl From<JsonRejection> for AppError {
-    fn from(rejection: JsonRejection) -> Self {
-        let detail = rejection.body_text();
-        if rejection.status() == axum::http::StatusCode::PAYLOAD_TOO_LARGE {
-            return AppError::TooLarge(format!("the body is too large: {detail}"));
-        }
-        match rejection {
-            JsonRejection::JsonDataError(_) => AppError::Rejected {
-                message: format!("the JSON body does not fit this route: {detail}"),
-                problems: Vec::new(),
-            },
-            JsonRejection::MissingJsonContentType(_) => AppError::UnsupportedFormat(
-                "this route takes a JSON body: send `Content-Type: application/json`".to_owned(),
-            ),
-            _ => AppError::Invalid(format!("the body is not valid JSON: {detail}")),
+impl<T: DeserializeOwned + Send, S: Send + Sync> FromRequestParts<S> for Path<T> {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, state: &S) -> Result<Self, ApiError> {
+        match axum::extract::Path::<T>::from_request_parts(parts, state).await {
+            Ok(axum::extract::Path(value)) => Ok(Path(value)),
+            Err(rejection) => Err(ApiError(path_refused(rejection))),
         }
     }
 }
 
-impl From<QueryRejection> for AppError {
-    fn from(rejection: QueryRejection) -> Self {
-        AppError::Invalid(format!("query string: {}", rejection.body_text()))
+/// What a body that is not the route's JSON is refused as.
+fn json_refused(rejection: JsonRejection) -> AppError {
+    let detail = rejection.body_text();
+    if rejection.status() == axum::http::StatusCode::PAYLOAD_TOO_LARGE {
+        return AppError::TooLarge(format!("the body is too large: {detail}"));
+    }
+    match rejection {
+        JsonRejection::JsonDataError(_) => AppError::Rejected {
+            message: format!("the JSON body does not fit this route: {detail}"),
+            problems: Vec::new(),
+        },
+        JsonRejection::MissingJsonContentType(_) => AppError::UnsupportedFormat(
+            "this route takes a JSON body: send `Content-Type: application/json`".to_owned(),
+        ),
+        _ => AppError::Invalid(format!("the body is not valid JSON: {detail}")),
     }
 }
 
-impl From<PathRejection> for AppError {
-    fn from(rejection: PathRejection) -> Self {
-        AppError::Invalid(format!("path: {}", rejection.body_text()))
-    }
+fn query_refused(rejection: QueryRejection) -> AppError {
+    AppError::Invalid(format!("query string: {}", rejection.body_text()))
+}
+
+fn path_refused(rejection: PathRejection) -> AppError {
+    AppError::Invalid(format!("path: {}", rejection.body_text()))
 }
 
 /// The `Idempotency-Key` header, when sent: 1 to 200 printable characters.
 pub struct IdempotencyKey(pub Option<String>);
 
 impl<S: Send + Sync> FromRequestParts<S> for IdempotencyKey {
-    type Rejection = AppError;
+    type Rejection = ApiError;
 
-    async fn from_request_parts(parts: &mut Parts, _: &S) -> Result<Self, AppError> {
+    async fn from_request_parts(parts: &mut Parts, _: &S) -> Result<Self, ApiError> {
         let Some(value) = parts.headers.get("idempotency-key") else {
             return Ok(IdempotencyKey(None));
         };
@@ -79,9 +103,9 @@ impl<S: Send + Sync> FromRequestParts<S> for IdempotencyKey {
             .filter(|k| !k.is_empty() && k.len() <= 200)
             .map(|k| IdempotencyKey(Some(k.to_owned())))
             .ok_or_else(|| {
-                AppError::Invalid(
+                ApiError(AppError::Invalid(
                     "the Idempotency-Key header must be 1 to 200 printable characters".to_owned(),
-                )
+                ))
             })
     }
 }

@@ -10,15 +10,16 @@ use axum::routing::post;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use super::AppState;
 use super::admin::render_admin;
+use super::auth::TokenCaller;
+use super::error::ApiError;
 use super::error::PageError;
 use super::extract::{Json, Path};
 use super::openapi::{ApiRoute, Verb};
 use super::session::Protected;
-use super::{AppError, AppState};
 use crate::app::import_jobs::{self, ImportRequest};
 use crate::app::jobs::{self, JobControl, JobId, JobView};
-use crate::app::tokens::Caller;
 use crate::core::credentials::Scope;
 
 pub fn routes() -> Vec<ApiRoute> {
@@ -86,9 +87,9 @@ struct ImportQueued {
 
 async fn queue_import(
     State(state): State<AppState>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(request): Json<ImportRequest>,
-) -> Result<(StatusCode, axum::Json<ImportQueued>), AppError> {
+) -> Result<(StatusCode, axum::Json<ImportQueued>), ApiError> {
     let job = import_jobs::request(&state.hub, &caller.actor(), &request).await?;
     Ok((
         StatusCode::ACCEPTED,
@@ -112,15 +113,15 @@ struct JobChange {
 async fn get_job(
     State(state): State<AppState>,
     Path(JobPath { job }): Path<JobPath>,
-) -> Result<axum::Json<JobView>, AppError> {
+) -> Result<axum::Json<JobView>, ApiError> {
     Ok(axum::Json(jobs::view(&state.hub, JobId(job)).await?))
 }
 
 async fn change_job(
     State(state): State<AppState>,
     Path(JobChange { job, change }): Path<JobChange>,
-    caller: Caller,
-) -> Result<axum::Json<JobView>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<axum::Json<JobView>, ApiError> {
     let change = JobControl::parse(&change)?;
     let changed = jobs::control(&state.hub, &caller.actor(), JobId(job), change).await?;
     Ok(axum::Json(JobView::from(changed)))

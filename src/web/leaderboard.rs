@@ -16,7 +16,9 @@ use axum::routing::get;
 use serde::Serialize;
 
 use super::api::matches_etag;
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::Path;
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
@@ -148,7 +150,7 @@ struct BoardRequest {
 }
 
 impl BoardRequest {
-    fn parse(raw: Option<&str>) -> Result<BoardRequest, AppError> {
+    fn parse(raw: Option<&str>) -> Result<BoardRequest, ApiError> {
         let pairs: Vec<(String, String)> = serde_urlencoded::from_str(raw.unwrap_or(""))
             .map_err(|e| AppError::Invalid(format!("query string: {e}")))?;
         let mut query = BoardQuery::default();
@@ -260,8 +262,8 @@ impl BoardRequest {
         &self,
         board: &Board,
         kind: &str,
-        render: impl FnOnce() -> Result<Vec<u8>, AppError>,
-    ) -> Result<Bytes, AppError> {
+        render: impl FnOnce() -> Result<Vec<u8>, ApiError>,
+    ) -> Result<Bytes, ApiError> {
         let key = self.key(kind);
         if let Some(view) = board.view(&key) {
             return Ok(view);
@@ -381,7 +383,7 @@ async fn leaderboard_json(
     RawQuery(raw): RawQuery,
     headers: HeaderMap,
     ReaderIsAdmin(admin): ReaderIsAdmin,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let request = BoardRequest::parse(raw.as_deref())?;
     let board = leaderboard::board(&state.hub, &name).await?;
     // Refused before anything is served, a kept view or a 304 included.
@@ -961,7 +963,7 @@ async fn leaderboard_page(
     }
     let html = request.view(&board, &kind, || {
         Ok(LeaderboardPage::new(tr, &board, shown, admin, &request)
-            .render()?
+            .render_page()?
             .into_bytes())
     })?;
     let body = ([(header::CONTENT_TYPE, "text/html; charset=utf-8")], html);

@@ -13,7 +13,8 @@ use axum::http::{HeaderValue, header};
 use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 
-use super::{AppError, AppState, auth};
+use super::error::ApiError;
+use super::{AppState, auth};
 use crate::app;
 use crate::core::credentials::{self, Scope};
 
@@ -29,7 +30,7 @@ pub(super) fn router(state: &AppState) -> Router<AppState> {
         ))
 }
 
-async fn metrics(State(state): State<AppState>) -> Result<Response, AppError> {
+async fn metrics(State(state): State<AppState>) -> Result<Response, ApiError> {
     let text = app::metrics::exposition(&state.hub).await?;
     let mut response = text.into_response();
     response
@@ -43,7 +44,7 @@ async fn scraper_only(
     State(state): State<AppState>,
     request: Request,
     next: Next,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let presented = auth::bearer_token(request.headers())?;
     let is_metrics_token = state
         .metrics_token_hash

@@ -67,7 +67,7 @@ use tower_http::request_id::{MakeRequestUuid, PropagateRequestIdLayer, SetReques
 use tower_http::timeout::TimeoutLayer;
 use tower_http::trace::TraceLayer;
 
-pub use error::AppError;
+pub use error::{ApiError, AppError};
 
 use crate::app::Hub;
 
@@ -137,7 +137,7 @@ async fn healthz(axum::extract::State(state): axum::extract::State<AppState>) ->
 
 async fn version(
     axum::extract::State(state): axum::extract::State<AppState>,
-) -> Result<extract::Json<crate::app::version::BuildReport>, AppError> {
+) -> Result<extract::Json<crate::app::version::BuildReport>, ApiError> {
     Ok(extract::Json(
         crate::app::version::describe(&state.hub).await?,
     ))

@@ -22,6 +22,7 @@ use serde_json::{Map, Value, json};
 
 use super::auth::{ScopeGuard, require_scope};
 use super::error::PageError;
+use super::error::{ApiError, RenderPage};
 use super::{AppError, AppState};
 use crate::app::refusal::Refusal;
 use crate::core::credentials::Scope;
@@ -353,11 +354,11 @@ pub fn api_router(routes: Vec<ApiRoute>, state: &AppState) -> Router<AppState> {
 }
 
 /// A path under `/api/v1` that no route serves: the JSON error body, like every refusal.
-async fn unknown_route(uri: axum::http::Uri) -> AppError {
-    AppError::NotFound(format!(
+async fn unknown_route(uri: axum::http::Uri) -> ApiError {
+    ApiError(AppError::NotFound(format!(
         "no API route {}: the routes are listed at /api/docs",
         uri.path()
-    ))
+    )))
 }
 
 /// The HTML docs page, outside `/api/v1`.
@@ -726,5 +727,5 @@ async fn docs_page() -> Result<Html<String>, PageError> {
         description: spans(&text(&doc["info"]["description"])),
         operations: operations(doc),
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }

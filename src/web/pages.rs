@@ -10,6 +10,7 @@ use super::AppState;
 use super::annotate::direction_key;
 use super::api::{ItemQuery, frame_url};
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Path, Query};
 use super::i18n::{Tr, msg};
 use super::session::ReaderIsAdmin;
@@ -95,7 +96,7 @@ async fn home(State(state): State<AppState>, tr: Tr) -> Result<Html<String>, Pag
         datasets,
         step_lengths: StepLength::all().map(StepLength::get).collect(),
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 struct ItemRow {
@@ -198,7 +199,7 @@ async fn browse(
         dataset: name,
         runs,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 struct ImageCard {
@@ -432,5 +433,5 @@ async fn item(
             })
             .collect(),
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }

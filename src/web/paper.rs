@@ -12,7 +12,9 @@ use axum::response::{Html, IntoResponse, Response};
 use axum::routing::get;
 use serde::Deserialize;
 
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Path, Query};
 use super::i18n::Tr;
 use super::{AppError, AppState};
@@ -43,7 +45,7 @@ struct PaperQuery {
 }
 
 impl PaperQuery {
-    fn options(&self) -> Result<PaperOptions, AppError> {
+    fn options(&self) -> Result<PaperOptions, ApiError> {
         let models: Vec<String> = self
             .models
             .as_deref()
@@ -58,9 +60,9 @@ impl PaperQuery {
             "ta" => vec![Metric::TaskAccuracy],
             "pa" => vec![Metric::PairwiseAccuracy],
             other => {
-                return Err(AppError::Invalid(format!(
+                return Err(ApiError(AppError::Invalid(format!(
                     "query parameter `metric`: {other:?} is not `ta`, `pa` or empty"
-                )));
+                ))));
             }
         };
         Ok(PaperOptions {
@@ -248,8 +250,10 @@ fn page_query(raw: Option<&str>) -> String {
         .map_or_else(String::new, |q| format!("?{q}"))
 }
 
-async fn made(state: &AppState, dataset: &str, query: &PaperQuery) -> Result<Paper, AppError> {
-    paper::paper(&state.hub, dataset, &query.options()?).await
+async fn made(state: &AppState, dataset: &str, query: &PaperQuery) -> Result<Paper, ApiError> {
+    paper::paper(&state.hub, dataset, &query.options()?)
+        .await
+        .map_err(ApiError)
 }
 
 async fn paper_page(
@@ -302,7 +306,7 @@ async fn paper_page(
         dataset: paper.dataset,
         tr,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 /// `enact-hub-paper-{dataset}`, safe as a file name and header value.
@@ -314,7 +318,7 @@ async fn paper_tar(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
     Query(query): Query<PaperQuery>,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let paper = made(&state, &dataset, &query).await?;
     let folder = folder(&paper.dataset);
     super::archive::bundle_download(&folder, &paper.files(true)?)
@@ -336,16 +340,16 @@ async fn paper_file(
     State(state): State<AppState>,
     Path((dataset, file)): Path<(String, String)>,
     Query(query): Query<PaperQuery>,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let paper = made(&state, &dataset, &query).await?;
     let files = paper.files(true)?;
     let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
     let Some(found) = files.iter().find(|f| f.name == file) else {
-        return Err(AppError::NotFound(format!(
+        return Err(ApiError(AppError::NotFound(format!(
             "the paper folder of dataset '{}' has no file '{file}' (it has {})",
             paper.dataset,
             names.join(", ")
-        )));
+        ))));
     };
     Ok((
         [(

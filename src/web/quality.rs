@@ -13,14 +13,16 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
+use super::auth::TokenCaller;
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Json, MOST_WHOLE_NUMBER, Path, Query, required_whole_number};
 use super::openapi::{ApiRoute, Verb};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
 use crate::app::gold::{GoldCleared, GoldQueues, GoldSet};
 use crate::app::quality::QualityReport;
-use crate::app::tokens::Caller;
 use crate::app::{annotators, attention, controls, datasets, gold, quality};
 use crate::core::annotation::Session;
 use crate::core::credentials::Scope;
@@ -150,7 +152,7 @@ struct QualityQuery {
 async fn quality_api(
     State(state): State<AppState>,
     Query(query): Query<QualityQuery>,
-) -> Result<axum::Json<QualityReport>, AppError> {
+) -> Result<axum::Json<QualityReport>, ApiError> {
     let fast = quality::fast_seconds(query.fast_seconds)?;
     Ok(axum::Json(
         quality::report(&state.hub, &query.dataset, fast).await?,
@@ -167,7 +169,7 @@ struct GoldOfDataset {
 async fn gold_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-) -> Result<axum::Json<GoldOfDataset>, AppError> {
+) -> Result<axum::Json<GoldOfDataset>, ApiError> {
     let gold = gold::show(&state.hub, &dataset).await?;
     Ok(axum::Json(GoldOfDataset { dataset, gold }))
 }
@@ -219,7 +221,7 @@ pub(super) fn whole_seed<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Optio
 }
 
 impl GoldRequest {
-    fn choice(&self) -> Result<(GoldChoice, GoldRate), AppError> {
+    fn choice(&self) -> Result<(GoldChoice, GoldRate), ApiError> {
         let rate =
             GoldRate::new(self.rate).map_err(|e| AppError::Invalid(format!("`rate`: {e}")))?;
         let choice = match (self.share, &self.items) {
@@ -227,17 +229,17 @@ impl GoldRequest {
                 .map_err(|e| AppError::Invalid(format!("`share`: {e}")))?,
             (None, Some(items)) => {
                 if self.seed.is_some() {
-                    return Err(AppError::Invalid(
+                    return Err(ApiError(AppError::Invalid(
                         "`seed` goes with `share`, not with `items`".to_owned(),
-                    ));
+                    )));
                 }
                 GoldChoice::list(&items.join("\n"))
                     .map_err(|e| AppError::Invalid(format!("`items`: {e}")))?
             }
             _ => {
-                return Err(AppError::Invalid(
+                return Err(ApiError(AppError::Invalid(
                     "give either `share` (with an optional `seed`) or `items`, not both".to_owned(),
-                ));
+                )));
             }
         };
         Ok((choice, rate))
@@ -253,9 +255,9 @@ struct GoldChanged {
 async fn set_gold_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(request): Json<GoldRequest>,
-) -> Result<axum::Json<GoldChanged>, AppError> {
+) -> Result<axum::Json<GoldChanged>, ApiError> {
     let (choice, rate) = request.choice()?;
     let (gold, queues) = gold::set(&state.hub, &caller.actor(), &dataset, &choice, rate).await?;
     Ok(axum::Json(GoldChanged { gold, queues }))
@@ -264,8 +266,8 @@ async fn set_gold_api(
 async fn clear_gold_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-    caller: Caller,
-) -> Result<axum::Json<GoldCleared>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<axum::Json<GoldCleared>, ApiError> {
     Ok(axum::Json(
         gold::clear(&state.hub, &caller.actor(), &dataset).await?,
     ))
@@ -283,8 +285,8 @@ struct ExclusionChanged {
 async fn exclude_api(
     State(state): State<AppState>,
     Path((dataset, annotator)): Path<(String, String)>,
-    caller: Caller,
-) -> Result<axum::Json<ExclusionChanged>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<axum::Json<ExclusionChanged>, ApiError> {
     let changed = gold::exclude(&state.hub, &caller.actor(), &dataset, &annotator).await?;
     Ok(axum::Json(ExclusionChanged {
         dataset,
@@ -297,8 +299,8 @@ async fn exclude_api(
 async fn include_api(
     State(state): State<AppState>,
     Path((dataset, annotator)): Path<(String, String)>,
-    caller: Caller,
-) -> Result<axum::Json<ExclusionChanged>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<axum::Json<ExclusionChanged>, ApiError> {
     let changed = gold::include(&state.hub, &caller.actor(), &dataset, &annotator).await?;
     Ok(axum::Json(ExclusionChanged {
         dataset,
@@ -664,7 +666,7 @@ pub(super) async fn render(
         checks,
         notice,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 async fn quality_page(
@@ -689,7 +691,7 @@ struct GoldForm {
     rate: String,
 }
 
-fn form_number<T: std::str::FromStr>(field: &str, text: &str) -> Result<Option<T>, AppError> {
+fn form_number<T: std::str::FromStr>(field: &str, text: &str) -> Result<Option<T>, ApiError> {
     let text = text.trim();
     if text.is_empty() {
         return Ok(None);
@@ -697,6 +699,7 @@ fn form_number<T: std::str::FromStr>(field: &str, text: &str) -> Result<Option<T
     text.parse()
         .map(Some)
         .map_err(|_| AppError::Invalid(format!("{field}: {text:?} is not a number")))
+        .map_err(ApiError)
 }
 
 async fn set_gold_page(

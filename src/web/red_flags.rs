@@ -9,7 +9,9 @@ use axum::routing::get;
 use serde::Deserialize;
 use serde_json::json;
 
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Path, Query};
 use super::openapi::{ApiRoute, Verb};
 use super::session::Admin;
@@ -62,10 +64,12 @@ struct FlagsQuery {
 }
 
 impl FlagsQuery {
-    fn share(&self) -> Result<f64, AppError> {
+    fn share(&self) -> Result<f64, ApiError> {
         match self.share.as_deref().map(str::trim) {
             None | Some("") => Ok(DEFAULT_TRUTH_SHARE),
-            Some(text) => parse_share(text).map_err(AppError::Invalid),
+            Some(text) => parse_share(text)
+                .map_err(AppError::Invalid)
+                .map_err(ApiError),
         }
     }
 }
@@ -74,7 +78,7 @@ async fn flags_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
     Query(query): Query<FlagsQuery>,
-) -> Result<axum::Json<RedFlags>, AppError> {
+) -> Result<axum::Json<RedFlags>, ApiError> {
     let share = query.share()?;
     Ok(axum::Json(
         red_flags::of(&state.hub, &dataset, share).await?,
@@ -111,5 +115,5 @@ async fn flags_page(
         share_percent: FlagsPage::percent(&share),
         flags,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }

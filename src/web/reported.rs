@@ -13,14 +13,16 @@ use axum::routing::{get, post};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use super::auth::TokenCaller;
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Json, Path};
 use super::openapi::{ApiRoute, Verb};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
 use crate::app::models::{self, MetadataEditor, ModelMetadata, ModelMetadataEntry};
 use crate::app::reported::{self, ReportedModelSchema, ReportedResult};
-use crate::app::tokens::Caller;
 use crate::core::annotation::Session;
 use crate::core::credentials::Scope;
 use crate::core::paper::ReportedModel;
@@ -101,7 +103,7 @@ struct ReportedList {
 async fn list_reported_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-) -> Result<axum::Json<ReportedList>, AppError> {
+) -> Result<axum::Json<ReportedList>, ApiError> {
     let reported = reported::list(&state.hub, &dataset).await?;
     Ok(axum::Json(ReportedList { dataset, reported }))
 }
@@ -109,9 +111,9 @@ async fn list_reported_api(
 async fn add_reported_api(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(model): Json<ReportedModel>,
-) -> Result<(StatusCode, axum::Json<ReportedResult>), AppError> {
+) -> Result<(StatusCode, axum::Json<ReportedResult>), ApiError> {
     let stored = reported::add(&state.hub, &caller.actor(), &dataset, &model).await?;
     Ok((StatusCode::CREATED, axum::Json(stored)))
 }
@@ -119,8 +121,8 @@ async fn add_reported_api(
 async fn remove_reported_api(
     State(state): State<AppState>,
     Path((dataset, id)): Path<(String, i64)>,
-    caller: Caller,
-) -> Result<StatusCode, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<StatusCode, ApiError> {
     reported::remove(&state.hub, &caller.actor(), &dataset, id).await?;
     Ok(StatusCode::NO_CONTENT)
 }
@@ -128,9 +130,9 @@ async fn remove_reported_api(
 async fn set_metadata_api(
     State(state): State<AppState>,
     Path((dataset, model)): Path<(String, String)>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(body): Json<serde_json::Map<String, serde_json::Value>>,
-) -> Result<axum::Json<ModelMetadataEntry>, AppError> {
+) -> Result<axum::Json<ModelMetadataEntry>, ApiError> {
     // Taken as an object first: serde would read a struct from an array of its fields.
     let metadata: ModelMetadata =
         serde_json::from_value(serde_json::Value::Object(body)).map_err(|e| {
@@ -275,7 +277,7 @@ async fn render_admin(
         error,
         pasted,
     };
-    Ok((status, Html(page.render()?)).into_response())
+    Ok((status, Html(page.render_page()?)).into_response())
 }
 
 /// The page after a use case ran: its notice, or the refusal of a mistake the admin can fix in

@@ -9,14 +9,15 @@ use axum::routing::post;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use super::AppState;
 use super::admin::render_admin;
+use super::auth::TokenCaller;
+use super::error::ApiError;
 use super::error::PageError;
 use super::extract::Json;
 use super::openapi::{ApiRoute, Verb};
 use super::session::Protected;
-use super::{AppError, AppState};
 use crate::app::rescore;
-use crate::app::tokens::Caller;
 use crate::core::credentials::Scope;
 use crate::core::metric::METRIC_VERSION;
 
@@ -87,9 +88,9 @@ struct RescoreQueued {
 
 async fn queue_rescore(
     State(state): State<AppState>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(request): Json<RescoreRequest>,
-) -> Result<(StatusCode, axum::Json<RescoreQueued>), AppError> {
+) -> Result<(StatusCode, axum::Json<RescoreQueued>), ApiError> {
     let job = rescore::request(&state.hub, &caller.actor(), request.dataset.as_deref()).await?;
     Ok((
         StatusCode::ACCEPTED,

@@ -12,7 +12,9 @@ use axum::response::{Html, IntoResponse, Redirect, Response};
 use axum::routing::{get, post};
 use serde::Deserialize;
 
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Path, Query};
 use super::runs::{RunRequest, responses_download};
 use super::session::{Admin, Protected};
@@ -224,7 +226,7 @@ async fn render_list(
             .collect(),
         notice,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 async fn runs_page(
@@ -270,7 +272,7 @@ struct StartForm {
 }
 
 /// A form field's number, `None` when left empty.
-fn optional<T: std::str::FromStr>(field: &str, text: &str) -> Result<Option<T>, AppError> {
+fn optional<T: std::str::FromStr>(field: &str, text: &str) -> Result<Option<T>, ApiError> {
     let text = text.trim();
     if text.is_empty() {
         return Ok(None);
@@ -279,7 +281,7 @@ fn optional<T: std::str::FromStr>(field: &str, text: &str) -> Result<Option<T>, 
         AppError::Invalid(format!(
             "{field}: '{text}' is not a number of the right kind (leave it empty for the default)"
         ))
-    })
+    }).map_err(ApiError)
 }
 
 fn text(value: &str) -> Option<String> {
@@ -287,7 +289,7 @@ fn text(value: &str) -> Option<String> {
 }
 
 impl StartForm {
-    fn request(self) -> Result<RunRequest, AppError> {
+    fn request(self) -> Result<RunRequest, ApiError> {
         Ok(RunRequest {
             temperature: optional("temperature", &self.temperature)?,
             max_tokens: optional("max tokens", &self.max_tokens)?,
@@ -343,7 +345,7 @@ async fn render_run(
         total: responses.total,
         notice,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 async fn run_page(
@@ -359,7 +361,7 @@ async fn run_page(
 async fn progress(
     State(state): State<AppState>,
     Path(id): Path<i64>,
-) -> Result<axum::Json<ServerRunView>, AppError> {
+) -> Result<axum::Json<ServerRunView>, ApiError> {
     Ok(axum::Json(runs::view(&state.hub, id).await?))
 }
 
@@ -415,7 +417,7 @@ async fn public_page(
         pages: responses.pages,
         total: responses.total,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 async fn public_download(

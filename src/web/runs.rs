@@ -9,13 +9,14 @@ use axum::response::{IntoResponse, Response};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use super::auth::TokenCaller;
+use super::error::ApiError;
 use super::extract::{Json, Path, whole_number};
 use super::openapi::{ApiRoute, Verb};
 use super::session::ReaderIsAdmin;
 use super::{AppError, AppState};
 use crate::app::jobs::JobControl;
 use crate::app::runs::{self, Audience, RunCalls, RunOutput, RunSpec, ServerRunView};
-use crate::app::tokens::Caller;
 use crate::core::credentials::Scope;
 use crate::core::model_run::{GenerationParams, Prices};
 
@@ -137,7 +138,7 @@ async fn run_stamp(
     State(state): State<AppState>,
     ReaderIsAdmin(admin): ReaderIsAdmin,
     Path(RunPath { run }): Path<RunPath>,
-) -> Result<Json<RunStampView>, AppError> {
+) -> Result<Json<RunStampView>, ApiError> {
     let audience = if admin {
         Audience::Admin
     } else {
@@ -147,9 +148,9 @@ async fn run_stamp(
     let stamp = match stamped.stamp {
         serde_json::Value::Object(map) => map,
         other => {
-            return Err(AppError::internal(format!(
+            return Err(ApiError(AppError::internal(format!(
                 "model run {run}: stored stamp is not an object: {other}"
-            )));
+            ))));
         }
     };
     Ok(Json(RunStampView {
@@ -189,7 +190,7 @@ pub(super) fn responses_download(output: RunOutput) -> Response {
 async fn admin_responses(
     State(state): State<AppState>,
     Path(RunPath { run }): Path<RunPath>,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let output = runs::output(&state.hub, run, Audience::Admin).await?;
     Ok(responses_download(output))
 }
@@ -197,7 +198,7 @@ async fn admin_responses(
 async fn public_responses(
     State(state): State<AppState>,
     Path(RunPath { run }): Path<RunPath>,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let output = runs::output(&state.hub, run, Audience::Public).await?;
     Ok(responses_download(output))
 }
@@ -268,7 +269,7 @@ fn counted<T: TryFrom<i64>>(
     value: Option<i64>,
     least: i64,
     most: i64,
-) -> Result<Option<T>, AppError> {
+) -> Result<Option<T>, ApiError> {
     value
         .map(|v| {
             (least..=most)
@@ -280,6 +281,7 @@ fn counted<T: TryFrom<i64>>(
                 })
         })
         .transpose()
+        .map_err(ApiError)
 }
 
 #[derive(Serialize, JsonSchema)]
@@ -292,9 +294,9 @@ struct RunStarted {
 
 async fn start_run(
     State(state): State<AppState>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(request): Json<RunRequest>,
-) -> Result<(StatusCode, Json<RunStarted>), AppError> {
+) -> Result<(StatusCode, Json<RunStarted>), ApiError> {
     let (spec, calls) = request.into_run()?;
     let (run, job) = runs::start(&state.hub, &caller.actor(), &spec, &calls).await?;
     Ok((
@@ -309,15 +311,15 @@ async fn start_run(
 
 impl RunRequest {
     /// The run asked for and how to call its endpoint; shared with the admin page's form.
-    pub(super) fn into_run(self) -> Result<(RunSpec, RunCalls), AppError> {
+    pub(super) fn into_run(self) -> Result<(RunSpec, RunCalls), ApiError> {
         for (field, price) in [
             ("price_input", self.price_input),
             ("price_output", self.price_output),
         ] {
             if !(price.is_finite() && price >= 0.0) {
-                return Err(AppError::Invalid(format!(
+                return Err(ApiError(AppError::Invalid(format!(
                     "{field} must be a price of 0 or more, not {price}"
-                )));
+                ))));
             }
         }
         let max_tokens = counted("max_tokens", self.max_tokens, 0, MOST_U32)?;
@@ -352,22 +354,22 @@ impl RunRequest {
     }
 }
 
-async fn list_runs(State(state): State<AppState>) -> Result<Json<Vec<ServerRunView>>, AppError> {
+async fn list_runs(State(state): State<AppState>) -> Result<Json<Vec<ServerRunView>>, ApiError> {
     Ok(Json(runs::views(&state.hub).await?))
 }
 
 async fn get_run(
     State(state): State<AppState>,
     Path(RunPath { run }): Path<RunPath>,
-) -> Result<Json<ServerRunView>, AppError> {
+) -> Result<Json<ServerRunView>, ApiError> {
     Ok(Json(runs::view(&state.hub, run).await?))
 }
 
 async fn change_run(
     State(state): State<AppState>,
     Path(RunChange { run, change }): Path<RunChange>,
-    caller: Caller,
-) -> Result<Json<ServerRunView>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<Json<ServerRunView>, ApiError> {
     let change = JobControl::parse(&change)?;
     Ok(Json(
         runs::control(&state.hub, &caller.actor(), run, change).await?,

@@ -28,7 +28,9 @@ use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
 use super::cookies::cookie;
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::i18n::{Locale, Tr, locale_cookie};
 use super::{AppError, AppState};
 use crate::app::annotators::{self, SESSION_LIFETIME, now_ms};
@@ -92,7 +94,7 @@ impl LoginLimiter {
     }
 
     /// `Err` with a message saying what is blocked and for how long.
-    pub fn check(&self, account: &str, address: Option<IpAddr>) -> Result<(), AppError> {
+    pub fn check(&self, account: &str, address: Option<IpAddr>) -> Result<(), ApiError> {
         let now = Instant::now();
         let mut failures = self.failures.lock().unwrap_or_else(|p| p.into_inner());
         for (i, (key, limit)) in Self::keys(account, address).into_iter().enumerate() {
@@ -115,14 +117,14 @@ impl LoginLimiter {
                 } else {
                     "your address".to_owned()
                 };
-                return Err(AppError::LimitReached {
+                return Err(ApiError(AppError::LimitReached {
                     message: format!(
                         "too many failed logins for {what} ({limit} in {} minutes); try again in \
                          {minutes} minutes",
                         FAILURE_WINDOW.as_secs() / 60
                     ),
                     retry_after: Some(wait.as_secs().max(1)),
-                });
+                }));
             }
         }
         Ok(())
@@ -280,7 +282,7 @@ impl FromRequestParts<AppState> for LoggedIn {
             None if parts.method == Method::GET && !wants_json(&parts.headers, &parts.uri) => {
                 Err(Redirect::to("/login").into_response())
             }
-            None => Err(AppError::from(Refusal::NotLoggedIn).into_response()),
+            None => Err(ApiError::from(Refusal::NotLoggedIn).into_response()),
         }
     }
 }
@@ -340,7 +342,7 @@ pub struct Protected<T> {
 fn csrf_rejected(json: bool) -> Response {
     let error = AppError::from(Refusal::StaleForm);
     if json {
-        error.into_response()
+        ApiError(error).into_response()
     } else {
         PageError(error).into_response()
     }
@@ -372,8 +374,9 @@ impl<T: DeserializeOwned + Send> FromRequest<AppState> for Protected<T> {
             if !token_ok(header_token.as_deref()) {
                 return Err(csrf_rejected(true));
             }
-            serde_json::from_slice::<T>(&bytes)
-                .map_err(|e| AppError::Invalid(format!("request body: {e}")).into_response())?
+            serde_json::from_slice::<T>(&bytes).map_err(|e| {
+                ApiError(AppError::Invalid(format!("request body: {e}"))).into_response()
+            })?
         } else {
             let fields: Vec<(String, String)> =
                 serde_urlencoded::from_bytes(&bytes).unwrap_or_default();
@@ -417,7 +420,12 @@ fn login_form(
         error,
     };
     let cookie = set_cookie(headers, LOGIN_CSRF_COOKIE, &csrf, Duration::from_secs(3600));
-    Ok((status, [(header::SET_COOKIE, cookie)], Html(page.render()?)).into_response())
+    Ok((
+        status,
+        [(header::SET_COOKIE, cookie)],
+        Html(page.render_page()?),
+    )
+        .into_response())
 }
 
 async fn login_page(tr: Tr, headers: HeaderMap) -> Result<Response, PageError> {
@@ -451,7 +459,7 @@ async fn start_session(
     headers: &HeaderMap,
     annotator: i64,
     to: &str,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let token = annotators::start_session(&state.hub, annotator).await?;
     let cookie = set_cookie(headers, SESSION_COOKIE, &token, SESSION_LIFETIME);
     let mut cookies = vec![(header::SET_COOKIE, cookie)];
@@ -482,10 +490,10 @@ async fn login(
     }
     if let Err(e) = state.logins.check(&name, address) {
         let (error, retry_after) = match &e {
-            AppError::LimitReached {
+            ApiError(AppError::LimitReached {
                 retry_after: Some(seconds),
                 ..
-            } => (
+            }) => (
                 tr.t_ns(
                     "login-error-limited",
                     "minutes",
@@ -571,7 +579,12 @@ async fn invite_form(
         error,
     };
     let cookie = set_cookie(headers, LOGIN_CSRF_COOKIE, &csrf, Duration::from_secs(3600));
-    Ok((status, [(header::SET_COOKIE, cookie)], Html(page.render()?)).into_response())
+    Ok((
+        status,
+        [(header::SET_COOKIE, cookie)],
+        Html(page.render_page()?),
+    )
+        .into_response())
 }
 
 async fn invite_page(

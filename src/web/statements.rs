@@ -5,10 +5,11 @@ use axum::extract::State;
 use schemars::JsonSchema;
 use serde::Serialize;
 
+use super::auth::TokenCaller;
+use super::error::ApiError;
 use super::extract::{Json, Path};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
-use crate::app::tokens::Caller;
 use crate::app::{challenge, signing, statements, submissions};
 use crate::core::credentials::Scope;
 use crate::core::statement::{Envelope, PublishedKey, PublishedKeys};
@@ -74,16 +75,16 @@ pub fn routes() -> Vec<ApiRoute> {
 async fn get_statement(
     State(state): State<AppState>,
     Path(id): Path<String>,
-    caller: Caller,
-) -> Result<Json<Envelope>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<Json<Envelope>, ApiError> {
     let row = submissions::readable(&state.hub, &caller, &id).await?;
     if let Some(why) = challenge::whole_figures_withheld(&state.hub, &caller, &row).await? {
-        return Err(AppError::Conflict(why));
+        return Err(ApiError(AppError::Conflict(why)));
     }
     Ok(Json(statements::newest_or_make(&state.hub, &row).await?))
 }
 
-async fn list_keys(State(state): State<AppState>) -> Result<Json<PublishedKeys>, AppError> {
+async fn list_keys(State(state): State<AppState>) -> Result<Json<PublishedKeys>, ApiError> {
     Ok(Json(signing::public_keys(&state.hub).await?))
 }
 
@@ -98,8 +99,8 @@ struct RotatedView {
 
 async fn rotate_key(
     State(state): State<AppState>,
-    caller: Caller,
-) -> Result<Json<RotatedView>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<Json<RotatedView>, ApiError> {
     let rotated = signing::rotate(&state.hub, &caller.actor()).await?;
     Ok(Json(RotatedView {
         key: rotated.key,

@@ -14,14 +14,16 @@ use serde::Deserialize;
 use serde_json::json;
 
 use super::agreement::fixed;
+use super::auth::TokenCaller;
+use super::error::ApiError;
 use super::error::PageError;
+use super::error::RenderPage;
 use super::extract::{Json, Path, Query};
 use super::i18n::Tr;
 use super::openapi::{ApiRoute, Verb};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
 use crate::app::studies::{self, StudyRowChoice, StudyView};
-use crate::app::tokens::Caller;
 use crate::app::{datasets, studies::files};
 use crate::core::annotation::Session;
 use crate::core::credentials::Scope;
@@ -193,9 +195,9 @@ fn variant_specs(variants: &[VariantBody]) -> Result<Vec<VariantSpec>, AppError>
 
 async fn create_study(
     State(state): State<AppState>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(request): Json<StudyRequest>,
-) -> Result<(StatusCode, Json<StudyView>), AppError> {
+) -> Result<(StatusCode, Json<StudyView>), ApiError> {
     let variants = variant_specs(&request.variants)?;
     let view = studies::create(
         &state.hub,
@@ -211,20 +213,20 @@ async fn create_study(
 async fn delete_study(
     State(state): State<AppState>,
     Path(name): Path<String>,
-    caller: Caller,
-) -> Result<StatusCode, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<StatusCode, ApiError> {
     studies::delete(&state.hub, &caller.actor(), &name).await?;
     Ok(StatusCode::NO_CONTENT)
 }
 
-async fn list_studies(State(state): State<AppState>) -> Result<Json<Vec<StudyView>>, AppError> {
+async fn list_studies(State(state): State<AppState>) -> Result<Json<Vec<StudyView>>, ApiError> {
     Ok(Json(studies::list(&state.hub).await?))
 }
 
 async fn get_study(
     State(state): State<AppState>,
     Path(name): Path<String>,
-) -> Result<Json<StudyView>, AppError> {
+) -> Result<Json<StudyView>, ApiError> {
     Ok(Json(studies::show(&state.hub, &name).await?))
 }
 
@@ -239,16 +241,16 @@ struct ReportQuery {
 }
 
 impl ReportQuery {
-    fn choice(&self) -> Result<StudyRowChoice, AppError> {
+    fn choice(&self) -> Result<StudyRowChoice, ApiError> {
         let model = self
             .model
             .as_deref()
             .map(str::trim)
             .filter(|m| !m.is_empty());
         match (model, self.human.unwrap_or(false)) {
-            (Some(_), true) => Err(AppError::Invalid(
+            (Some(_), true) => Err(ApiError(AppError::Invalid(
                 "query: give `model` or `human=true`, not both".to_owned(),
-            )),
+            ))),
             (None, true) => Ok(StudyRowChoice::Human),
             (Some(model), false) => Ok(StudyRowChoice::Model {
                 model: model.to_owned(),
@@ -259,9 +261,9 @@ impl ReportQuery {
                     .filter(|a| !a.is_empty())
                     .map(str::to_owned),
             }),
-            (None, false) => Err(AppError::Invalid(
+            (None, false) => Err(ApiError(AppError::Invalid(
                 "query: `model` is required (or `human=true` for the Human row)".to_owned(),
-            )),
+            ))),
         }
     }
 }
@@ -287,14 +289,14 @@ async fn study_report(
     State(state): State<AppState>,
     Path(name): Path<String>,
     Query(query): Query<ReportQuery>,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let choice = query.choice()?;
     let format = query.format.as_deref().unwrap_or("json");
     if !["json", "csv", "tex", "svg", "handedness-svg", "tar"].contains(&format) {
-        return Err(AppError::Invalid(format!(
+        return Err(ApiError(AppError::Invalid(format!(
             "query parameter `format`: {format:?} is not one of json, csv, tex, svg, \
              handedness-svg, tar"
-        )));
+        ))));
     }
     let report = studies::report(
         &state.hub,
@@ -311,10 +313,10 @@ async fn study_report(
         "handedness-svg" => match handedness_svg(&report).map_err(render)? {
             Some(svg) => typed("image/svg+xml", svg),
             None => {
-                return Err(AppError::NotFound(format!(
+                return Err(ApiError(AppError::NotFound(format!(
                     "study '{name}': no dataset has an error analysis for {}",
                     report.stamp.row
-                )));
+                ))));
             }
         },
         "tar" => {
@@ -337,7 +339,7 @@ async fn studies_page(State(state): State<AppState>, tr: Tr) -> Result<Html<Stri
         tr,
         studies: studies::list(&state.hub).await?,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 /// A cell as the page's table shows it.
@@ -520,7 +522,7 @@ async fn study_page(
         by_step_length,
         report,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 #[derive(Template)]
@@ -549,7 +551,7 @@ async fn render_admin(
             .collect(),
         notice,
     };
-    Ok(Html(page.render()?))
+    Ok(Html(page.render_page()?))
 }
 
 async fn admin_page(

@@ -9,11 +9,13 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 
+use super::auth::TokenCaller;
+use super::error::ApiError;
 use super::extract::{IdempotencyKey, Json, Path, Query, whole_number};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
 use crate::app::submissions::{self, StoredVerdict, SubmissionRow, Submitted};
-use crate::app::tokens::{self, Caller, CreatedToken, TokenListing};
+use crate::app::tokens::{self, CreatedToken, TokenListing};
 use crate::app::{challenge, datasets};
 use crate::core::credentials::{Role, Scope};
 use crate::core::dataset::AnswerVisibility;
@@ -309,13 +311,13 @@ impl From<SubmissionRow> for SubmissionView {
 async fn submit(
     State(state): State<AppState>,
     // First, so a caller without a valid token hears 401 whatever else is wrong.
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Path(dataset): Path<String>,
     Query(query): Query<SubmitQuery>,
     IdempotencyKey(key): IdempotencyKey,
     headers: HeaderMap,
     body: Body,
-) -> Result<Response, AppError> {
+) -> Result<Response, ApiError> {
     let limit = state.submission_body_limit;
     let read = read_body(body, &headers, limit);
     let submitted = submissions::submit(
@@ -346,8 +348,8 @@ async fn submit(
 async fn get_submission(
     State(state): State<AppState>,
     Path(id): Path<String>,
-    caller: Caller,
-) -> Result<Json<SubmissionView>, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<Json<SubmissionView>, ApiError> {
     let detail = submissions::read(&state.hub, &caller, &id).await?;
     let row = challenge::as_shown_to(&state.hub, &caller, detail.row).await?;
     let mut view = SubmissionView::from(row);
@@ -372,9 +374,9 @@ struct ListingChange {
 async fn update_listing(
     State(state): State<AppState>,
     Path(id): Path<String>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(change): Json<ListingChange>,
-) -> Result<Json<SubmissionView>, AppError> {
+) -> Result<Json<SubmissionView>, ApiError> {
     let row = submissions::update_listing(
         &state.hub,
         &caller.actor(),
@@ -401,9 +403,9 @@ struct AnswersView {
 async fn set_answers(
     State(state): State<AppState>,
     Path(dataset): Path<String>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(change): Json<AnswersChange>,
-) -> Result<Json<AnswersView>, AppError> {
+) -> Result<Json<AnswersView>, ApiError> {
     let dataset =
         datasets::set_answer_visibility(&state.hub, &caller.actor(), &dataset, change.answers)
             .await?;
@@ -431,9 +433,9 @@ struct TokenRequest {
 
 async fn create_token(
     State(state): State<AppState>,
-    caller: Caller,
+    TokenCaller(caller): TokenCaller,
     Json(request): Json<TokenRequest>,
-) -> Result<(StatusCode, Json<CreatedToken>), AppError> {
+) -> Result<(StatusCode, Json<CreatedToken>), ApiError> {
     let role = match request.role.as_deref() {
         None => Role::Submitter,
         Some(r) => parse_role(r)?,
@@ -450,21 +452,23 @@ async fn create_token(
     Ok((StatusCode::CREATED, Json(created)))
 }
 
-pub(super) fn parse_role(text: &str) -> Result<Role, AppError> {
-    Role::parse(text).ok_or_else(|| {
-        AppError::Invalid(format!("role must be 'submitter' or 'admin', not {text:?}"))
-    })
+pub(super) fn parse_role(text: &str) -> Result<Role, ApiError> {
+    Role::parse(text)
+        .ok_or_else(|| {
+            AppError::Invalid(format!("role must be 'submitter' or 'admin', not {text:?}"))
+        })
+        .map_err(ApiError)
 }
 
-async fn list_tokens(State(state): State<AppState>) -> Result<Json<Vec<TokenListing>>, AppError> {
+async fn list_tokens(State(state): State<AppState>) -> Result<Json<Vec<TokenListing>>, ApiError> {
     Ok(Json(tokens::list(&state.hub).await?))
 }
 
 async fn revoke_token(
     State(state): State<AppState>,
     Path(which): Path<String>,
-    caller: Caller,
-) -> Result<StatusCode, AppError> {
+    TokenCaller(caller): TokenCaller,
+) -> Result<StatusCode, ApiError> {
     tokens::revoke(&state.hub, &caller.actor(), &which).await?;
     Ok(StatusCode::NO_CONTENT)
 }

@@ -16,12 +16,12 @@ use serde::{Deserialize, Serialize};
 use tokio::sync::watch;
 
 use super::{ApiKey, CallSettings, Prices, RunProgress, RunRow, RunSpec, execute};
-use crate::app::jobs::{self, JobContext, JobId, JobKind};
-use crate::app::refusal::Refusal;
-use crate::app::{AppError, Hub, audit};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::model_run::GenerationParams;
+use crate::jobs::{self, JobContext, JobId, JobKind};
+use crate::refusal::Refusal;
 use crate::store;
+use crate::{AppError, Hub, audit};
 
 /// The environment variables a server-side run may take its API key from, with their
 /// values as read when the server started (kept in memory only).

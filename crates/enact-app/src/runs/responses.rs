@@ -7,13 +7,13 @@ use bytes::Bytes;
 use tokio::sync::mpsc;
 
 use super::RunRow;
-use crate::app::refusal::Refusal;
-use crate::app::{AppError, Hub};
 use crate::core::dataset::AnswerVisibility;
 use crate::core::release::model_output_line;
+use crate::refusal::Refusal;
 use crate::store;
 use crate::store::datasets::Dataset;
 use crate::store::runs::RunItemRow;
+use crate::{AppError, Hub};
 
 /// Who is reading a run's responses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

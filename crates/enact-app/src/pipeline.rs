@@ -1,6 +1,6 @@
 //! Making new items: ENACT's data pipeline over replays (`generate`), a variant release that
 //! keeps a baseline's items with another replay's images or other action texts, and replays simulated in the built-in
-//! household world. The work is [`crate::core`]'s and runs on a blocking thread; these use
+//! household world. The work is [`enact_core`]'s and runs on a blocking thread; these use
 //! cases are what the command line calls.
 
 use std::path::{Path, PathBuf};

@@ -1,4 +1,4 @@
-//! The episode pages' use cases, over [`crate::app::episodes`]: what a curator's editor opens
+//! The episode pages' use cases, over [`crate::episodes`]: what a curator's editor opens
 //! with (their draft, else their stored graphs), the live description of unsaved graphs,
 //! drafts, saving, frames uploaded through the browser, and the admin's comparison of two
 //! curators and resolution key frame by key frame.
@@ -8,14 +8,14 @@ use std::collections::BTreeMap;
 use bytes::Bytes;
 
 use super::refusal::Refusal;
-use crate::app::annotators::now_ms;
-use crate::app::episodes::{self, Episode, EpisodeSummary, Resolution};
-use crate::app::{AppError, Hub};
+use crate::annotators::now_ms;
 use crate::core::audit::Actor;
 use crate::core::episode::{
     self, Comparison, EpisodeGraphs, GraphProblem, KeyFrameGraph, TransitionView,
 };
+use crate::episodes::{self, Episode, EpisodeSummary, Resolution};
 use crate::store;
+use crate::{AppError, Hub};
 
 /// What a curator's episode page opens with.
 #[derive(Debug, Clone)]

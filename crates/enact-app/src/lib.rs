@@ -1,6 +1,7 @@
 //! The use cases: one function each, called alike by the web handlers and the command line.
-//! They own the transactions and the decisions; [`crate::store`] only maps rows, and
-//! [`crate::core`] holds the benchmark's logic.
+//! They own the transactions and the decisions; [`enact_store`] only maps rows, and
+//! [`enact_core`] holds the benchmark's logic. Neither may name this crate; the adapters (the
+//! hub's `web` and `cli`) call it.
 //!
 //! - [`Hub`]: the database and the in-memory caches every use case shares ([`cache`],
 //!   [`standings`]; [`watch`] keeps them current), and the quotas submissions count against.
@@ -95,11 +96,13 @@ use std::sync::Arc;
 
 use sqlx::SqlitePool;
 
-use crate::store::Pool;
-
 pub use error::AppError;
 
-use crate::store;
+/// The benchmark and the store, under the names every use case calls them by (`crate::core::…`,
+/// `crate::store::…`).
+use enact_core as core;
+use enact_store as store;
+use store::Pool;
 
 /// Submission attempts a token may make, unless the token sets its own.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

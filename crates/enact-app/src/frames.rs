@@ -221,7 +221,7 @@ impl ObjectFrames {
         let signer = self.signer.as_ref()?;
         Some(
             signer
-                .signed_url(axum::http::Method::GET, &self.key(sha256), expires_in)
+                .signed_url(http::Method::GET, &self.key(sha256), expires_in)
                 .await
                 .map_err(|e| storage_error(&self.url, &format!("signing frame {sha256}"), e)),
         )
