@@ -166,15 +166,15 @@ async fn metrics_move_by_exactly_the_requests_submission_answer_and_refused_logi
         1.0
     );
     assert!(after.value("enact_hub_db_connection_wait_seconds_count", &[]) > 0.0);
-    // The submission's verdicts were the one bulk write; its counted attempt and the
-    // annotator's answer the two interactive ones (a refused login writes nothing): each waited
-    // for its turn and held it, in its lane.
+    // The submission's verdicts were the one bulk write; its counted attempt, the annotator's
+    // login (the session stored) and answer the three interactive ones (a refused login writes
+    // nothing): each waited for its turn and held it, in its lane.
     for family in [
         "enact_hub_db_write_wait_seconds_count",
         "enact_hub_db_write_held_seconds_count",
     ] {
         assert_eq!(moved(family, &[("lane", "bulk")]), 1.0, "{family}");
-        assert_eq!(moved(family, &[("lane", "interactive")]), 2.0, "{family}");
+        assert_eq!(moved(family, &[("lane", "interactive")]), 3.0, "{family}");
     }
     assert!(after.value("enact_hub_cache_entries", &[("cache", "items")]) >= 0.0);
     server.stop().await;

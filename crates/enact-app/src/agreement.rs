@@ -2,6 +2,7 @@
 //! Krippendorff's alpha over the overlapping answers, and the dataset's agreement report.
 
 use super::{AppError, Hub, audit, datasets, error_analysis, leaderboard};
+use crate::Lane;
 use crate::core::agreement::protocol::{ProtocolError, ProtocolPlan, plan_cross_assignments};
 use crate::core::agreement::report::export::{ErrorRow, audit_file, bundle_files, error_files};
 use crate::core::agreement::report::{
@@ -60,7 +61,7 @@ pub async fn run_protocol(
     started_by: Option<i64>,
 ) -> Result<ProtocolRun, AppError> {
     let dataset = datasets::by_name(hub, dataset).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     if let Some(existing) = store::agreement::round(&mut tx, dataset.id).await? {
         return Err(ProtocolRefusal::AlreadyRan(existing).into_error(&dataset.name));
     }

@@ -11,6 +11,7 @@ use super::annotators::now_ms;
 use super::changes::Change;
 use super::refusal::{Refusal, SkipAction};
 use super::{AppError, Hub, audit, datasets, items};
+use crate::Lane;
 use crate::core::annotation::{
     AssignmentState, Draft, Outcome, QueueEntry, QueueStatus, Session, Telemetry, balanced_split,
     next_in_queue,
@@ -110,7 +111,7 @@ pub async fn assign(
         }
     };
     drop(conn);
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let added = store::annotations::assign(&mut tx, &pairs).await?;
     // More ordinary items may call for more gold items and attention checks.
     let gold = super::gold::after_assignment(&mut tx, dataset.id, chosen).await?
@@ -251,7 +252,7 @@ pub async fn open(
         (false, Some(stored)) => Some(stored.draft),
         (false, None) => {
             // Ordered with a finish made on another instance, as `save_draft` is.
-            let mut tx = hub.begin().await?;
+            let mut tx = hub.write(Lane::Interactive).await?;
             // A draft made meanwhile (another tab, another instance) is the one to open.
             let opened =
                 match store::annotations::draft(&mut tx, session.annotator, item.rowid).await? {
@@ -271,10 +272,8 @@ pub async fn open(
                         created.then_some(empty)
                     }
                 };
-            hub.publish(&mut tx, &standing_changed(session, &item))
-                .await?;
+            tx.announce(standing_changed(session, &item)).await?;
             tx.commit().await?;
-            hub.standings.forget(session.annotator, item.rowid);
             opened
         }
     };
@@ -325,15 +324,13 @@ pub async fn save_draft(
     checked(&item, draft)?;
     // A write transaction, so a save is ordered with a finish of the same item made on another
     // instance: it lands before the finish (which drops it) or sees the answer and is refused.
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     super::controls::refuse_if_paused(&mut tx, session).await?;
     let saved =
         store::annotations::save_draft(&mut tx, session.annotator, item.rowid, draft, now_ms())
             .await?;
-    hub.publish(&mut tx, &standing_changed(session, &item))
-        .await?;
+    tx.announce(standing_changed(session, &item)).await?;
     tx.commit().await?;
-    hub.standings.forget(session.annotator, item.rowid);
     if !saved {
         return Err(finished_already(item_id));
     }
@@ -389,7 +386,7 @@ async fn finish(
 ) -> Result<(), AppError> {
     let answered = matches!(outcome, Outcome::Answered(_));
     let now = now_ms();
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     super::controls::refuse_if_paused(&mut tx, session).await?;
     if let Some(draft) = save
         && !store::annotations::save_draft(&mut tx, session.annotator, item.rowid, draft, now)
@@ -428,17 +425,11 @@ async fn finish(
         detail,
     )
     .await?;
-    hub.publish(&mut tx, &standing_changed(session, item))
-        .await?;
+    tx.announce(standing_changed(session, item)).await?;
     if answered {
-        hub.publish(&mut tx, &Change::Boards).await?;
+        tx.announce(Change::Boards).await?;
     }
     tx.commit().await?;
-    hub.standings.forget(session.annotator, item.rowid);
-    if answered {
-        // The Human row counts every answer.
-        hub.boards.changed();
-    }
     Ok(())
 }
 

@@ -7,6 +7,7 @@ use super::changes::Change;
 use super::metrics::LoginFailure;
 use super::refusal::Refusal;
 use super::{AppError, Hub, audit};
+use crate::Lane;
 use crate::core::annotation::Session;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{
@@ -50,7 +51,7 @@ pub async fn create(
 ) -> Result<Invited, AppError> {
     let name = credentials::annotator_name(name).map_err(AppError::Invalid)?;
     let token = random_token();
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     match store::annotations::create_annotator(&mut tx, name, is_admin, &token_hash(&token)).await {
         Ok(_) => {}
         Err(e) if UniqueKey::ANNOTATOR_NAME.is_violated_by(&e) => {
@@ -118,7 +119,7 @@ pub async fn accept_invite(
         .await?
         .map_err(|e| AppError::internal(format!("argon2: {e}")))?;
     let invite = token_hash(invite_token);
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let invited = store::annotations::annotator_by_invite(&mut tx, &invite)
         .await?
         .ok_or_else(unknown_invite)?;
@@ -141,23 +142,24 @@ pub async fn accept_invite(
 /// A new single-use login link secret for `annotator` (the path is `/login/link/{secret}`).
 pub async fn login_link(hub: &Hub, annotator: i64) -> Result<String, AppError> {
     let token = random_token();
-    let mut conn = hub.conn().await?;
-    store::annotations::insert_login_link(&mut conn, &token_hash(&token), annotator).await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
+    store::annotations::insert_login_link(&mut tx, &token_hash(&token), annotator).await?;
+    tx.commit().await?;
     Ok(token)
 }
 
 /// Uses a login link up and returns its annotator; a link is good once.
 pub async fn follow_login_link(hub: &Hub, token: &str) -> Result<i64, AppError> {
-    let mut conn = hub.conn().await?;
-    store::annotations::take_login_link(&mut conn, &token_hash(token))
-        .await?
-        .ok_or_else(|| {
-            AppError::NotFound(
-                "this login link is unknown or has already been used: restart `serve --demo` \
-                 for a new one, or log in with a password"
-                    .to_owned(),
-            )
-        })
+    let mut tx = hub.write(Lane::Interactive).await?;
+    let annotator = store::annotations::take_login_link(&mut tx, &token_hash(token)).await?;
+    tx.commit().await?;
+    annotator.ok_or_else(|| {
+        AppError::NotFound(
+            "this login link is unknown or has already been used: restart `serve --demo` \
+             for a new one, or log in with a password"
+                .to_owned(),
+        )
+    })
 }
 
 /// The annotator whose password this is, if the name and password match.
@@ -228,15 +230,16 @@ async fn password_work<T: Send + 'static>(
 /// Starts a session for `annotator`; returns its secret token (for the cookie).
 pub async fn start_session(hub: &Hub, annotator: i64) -> Result<String, AppError> {
     let token = random_token();
-    let mut conn = hub.conn().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     store::annotations::create_session(
-        &mut conn,
+        &mut tx,
         &token_hash(&token),
         annotator,
         &random_token(),
         now_ms() + i64::try_from(SESSION_LIFETIME.as_millis()).unwrap_or(i64::MAX),
     )
     .await?;
+    tx.commit().await?;
     Ok(token)
 }
 
@@ -248,9 +251,9 @@ pub async fn session(hub: &Hub, token_hash: &str) -> Result<Option<(Session, i64
 
 /// Ends the session whose token hashes to `token_hash` (and any expired ones).
 pub async fn end_session(hub: &Hub, token_hash: &str) -> Result<(), AppError> {
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     store::annotations::delete_session(&mut tx, token_hash, now_ms()).await?;
-    hub.publish(&mut tx, &Change::SessionEnded(token_hash.to_owned()))
+    tx.announce(Change::SessionEnded(token_hash.to_owned()))
         .await?;
     tx.commit().await?;
     Ok(())
@@ -259,8 +262,9 @@ pub async fn end_session(hub: &Hub, token_hash: &str) -> Result<(), AppError> {
 /// Saves `locale` (a tag the pages serve) as the preference of the annotator whose session
 /// hashes to `token_hash`; nothing when the session is unknown or expired.
 pub async fn save_locale(hub: &Hub, token_hash: &str, locale: &str) -> Result<(), AppError> {
-    let mut conn = hub.conn().await?;
-    store::annotations::set_locale_by_session(&mut conn, token_hash, locale, now_ms()).await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
+    store::annotations::set_locale_by_session(&mut tx, token_hash, locale, now_ms()).await?;
+    tx.commit().await?;
     Ok(())
 }
 

@@ -12,6 +12,7 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::{AppError, Hub, audit, datasets};
+use crate::Lane;
 use crate::core::attention::{AttentionTally, Instruction, judge};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::gold::{self, GoldRate};
@@ -129,7 +130,7 @@ pub async fn set(
         .zip(checks)
         .map(|(row, (_, instruction))| (*row, *instruction))
         .collect();
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let removed =
         store::attention::drop_unfinished_attention_assignments(&mut tx, dataset.id).await?;
     store::attention::replace(
@@ -156,9 +157,8 @@ pub async fn set(
         ),
     )
     .await?;
-    super::gold::announce(hub, &mut tx, &removed).await?;
+    super::gold::announce(&mut tx, &removed).await?;
     tx.commit().await?;
-    super::gold::forget(hub, &removed);
     let shown = show(hub, &dataset.name)
         .await?
         .ok_or_else(|| AppError::internal("the attention checks just stored are not there"))?;
@@ -184,7 +184,7 @@ pub struct AttentionCleared {
 /// stay (and, their items no longer checks, count in the Human row again).
 pub async fn clear(hub: &Hub, actor: &Actor, dataset: &str) -> Result<AttentionCleared, AppError> {
     let dataset = datasets::by_name(hub, dataset).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let removed =
         store::attention::drop_unfinished_attention_assignments(&mut tx, dataset.id).await?;
     if !store::attention::clear(&mut tx, dataset.id).await? {
@@ -206,9 +206,8 @@ pub async fn clear(hub: &Hub, actor: &Actor, dataset: &str) -> Result<AttentionC
         ),
     )
     .await?;
-    super::gold::announce(hub, &mut tx, &removed).await?;
+    super::gold::announce(&mut tx, &removed).await?;
     tx.commit().await?;
-    super::gold::forget(hub, &removed);
     Ok(AttentionCleared {
         cleared: true,
         removed: removed.len() as u64,
@@ -218,7 +217,7 @@ pub async fn clear(hub: &Hub, actor: &Actor, dataset: &str) -> Result<AttentionC
 /// Adds the dataset's attention checks to the queues of `annotators` (every annotator holding
 /// an item of the dataset when `None`) until each has one per `rate - 1` ordinary items.
 async fn mix_in(
-    conn: &mut store::Conn,
+    conn: &mut store::Tx,
     dataset_id: i64,
     rate: GoldRate,
     annotators: Option<&[i64]>,
@@ -247,7 +246,7 @@ async fn mix_in(
 /// After items of a dataset were assigned to `annotators`: their attention checks, at the
 /// dataset's rate (nothing when it has none). Call inside the assigning transaction.
 pub(super) async fn after_assignment(
-    conn: &mut store::Conn,
+    conn: &mut store::Tx,
     dataset_id: i64,
     annotators: &[i64],
 ) -> Result<u64, AppError> {

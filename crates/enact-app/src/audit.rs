@@ -7,7 +7,7 @@ use crate::store;
 
 /// Writes the entry for `action` by `actor` on `target`.
 pub(crate) async fn record(
-    conn: &mut store::Conn,
+    conn: &mut store::Tx,
     actor: &Actor,
     action: AuditAction,
     target: impl Into<String>,

@@ -21,6 +21,7 @@ use sqlx::Connection;
 use sqlx::sqlite::SqliteConnectOptions;
 
 use super::{AppError, Hub, audit, migrate_db};
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
 use crate::store;
 
@@ -73,10 +74,12 @@ pub async fn backup(hub: &Hub, actor: &Actor, out: &Path) -> Result<Snapshot, Ap
         store::PooledConn::Sqlite(sqlite) => store::backup_into(sqlite, out).await?,
         store::PooledConn::Pg(_) => copy_into_file(hub, out).await?,
     }
+    drop(conn);
     let snapshot = inspect(out).await?;
     // Written after the snapshot, so the log says what was taken, not what was attempted.
+    let mut tx = hub.write(Lane::Interactive).await?;
     audit::record(
-        &mut conn,
+        &mut tx,
         actor,
         AuditAction::BackupCreate,
         format!("file {}", out.display()),
@@ -87,6 +90,7 @@ pub async fn backup(hub: &Hub, actor: &Actor, out: &Path) -> Result<Snapshot, Ap
         ),
     )
     .await?;
+    tx.commit().await?;
     Ok(snapshot)
 }
 

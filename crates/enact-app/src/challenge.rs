@@ -21,6 +21,7 @@ use super::changes::Change;
 use super::submissions::{self, SubmissionRow};
 use super::tokens::Caller;
 use super::{AppError, Hub, audit, datasets};
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::challenge::{
     Deadline, Entry, Part, PartVerdict, PublicShare, Stratum, StratumSplit, counted_submissions,
@@ -247,7 +248,7 @@ pub async fn split(
         .collect();
     let public = parts.iter().filter(|p| **p == Part::Public).count();
 
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     // Checked again in the write transaction: another admin may have split it meanwhile.
     if let Some(existing) = store::challenges::of_dataset(&mut tx, dataset.id).await? {
         return Err(already_split(name, &existing));
@@ -274,9 +275,8 @@ pub async fn split(
         ),
     )
     .await?;
-    hub.publish(&mut tx, &Change::Boards).await?;
+    tx.announce(Change::Boards).await?;
     tx.commit().await?;
-    hub.boards.changed();
     tracing::info!(dataset = %name, seed, public, "dataset split for a challenge");
     status(hub, name).await
 }
@@ -327,7 +327,7 @@ pub async fn configure(
         )));
     }
     let dataset = datasets::by_name(hub, name).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let challenge = store::challenges::of_dataset(&mut tx, dataset.id)
         .await?
         .ok_or_else(|| not_split(name))?;
@@ -362,9 +362,8 @@ pub async fn configure(
         said.join(", "),
     )
     .await?;
-    hub.publish(&mut tx, &Change::Boards).await?;
+    tx.announce(Change::Boards).await?;
     tx.commit().await?;
-    hub.boards.changed();
     status(hub, name).await
 }
 
@@ -372,7 +371,7 @@ pub async fn configure(
 /// on, and the final ranking, its settings and the selections are fixed.
 pub async fn reveal(hub: &Hub, actor: &Actor, name: &str) -> Result<ChallengeView, AppError> {
     let dataset = datasets::by_name(hub, name).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let challenge = store::challenges::of_dataset(&mut tx, dataset.id)
         .await?
         .ok_or_else(|| not_split(name))?;
@@ -389,9 +388,8 @@ pub async fn reveal(hub: &Hub, actor: &Actor, name: &str) -> Result<ChallengeVie
         "private part revealed by hand",
     )
     .await?;
-    hub.publish(&mut tx, &Change::Boards).await?;
+    tx.announce(Change::Boards).await?;
     tx.commit().await?;
-    hub.boards.changed();
     status(hub, name).await
 }
 
@@ -411,7 +409,7 @@ async fn reveal_if_due(
     if !due {
         return Ok(challenge);
     }
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     if store::challenges::reveal_at_deadline(&mut tx, dataset.id, &now().text()).await? {
         audit::record(
             &mut tx,
@@ -425,9 +423,8 @@ async fn reveal_if_due(
             ),
         )
         .await?;
-        hub.publish(&mut tx, &Change::Boards).await?;
+        tx.announce(Change::Boards).await?;
         tx.commit().await?;
-        hub.boards.changed();
         tracing::info!(dataset = %dataset.name, "private part revealed at its deadline");
     } else {
         tx.rollback().await?;
@@ -538,7 +535,7 @@ pub async fn set_selected(
             row.visibility.as_str()
         )));
     }
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let challenge = store::challenges::of_dataset(&mut tx, dataset.id)
         .await?
         .ok_or_else(|| not_split(name))?;
@@ -580,9 +577,8 @@ pub async fn set_selected(
             },
         )
         .await?;
-        hub.publish(&mut tx, &Change::Boards).await?;
+        tx.announce(Change::Boards).await?;
         tx.commit().await?;
-        hub.boards.changed();
     } else {
         tx.rollback().await?;
     }

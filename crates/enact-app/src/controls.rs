@@ -24,6 +24,7 @@ use serde::Serialize;
 use super::changes::Change;
 use super::refusal::Refusal;
 use super::{AppError, Hub, audit};
+use crate::Lane;
 use crate::core::annotation::{Session, handover_split};
 use crate::core::audit::{Actor, AuditAction};
 use crate::store;
@@ -81,7 +82,7 @@ async fn change_pause(
     pause: bool,
 ) -> Result<bool, AppError> {
     let account = annotator_named(hub, annotator).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let changed = if pause {
         store::controls::pause(&mut tx, account.id, &actor.to_string()).await?
     } else {
@@ -251,7 +252,7 @@ pub async fn handover(
     }
     let recipient_ids: Vec<i64> = recipients.iter().map(|a| a.id).collect();
 
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let unfinished = store::controls::unfinished(&mut tx, giver.id).await?;
     let held = store::controls::held_items(&mut tx, &recipient_ids).await?;
     let (coverage, checks): (Vec<_>, Vec<_>) = unfinished.iter().partition(|u| !u.mixed);
@@ -326,20 +327,13 @@ pub async fn handover(
     )
     .await?;
     for &item in &taken {
-        hub.publish(
-            &mut tx,
-            &Change::Standing {
-                annotator: giver.id,
-                item,
-            },
-        )
+        tx.announce(Change::Standing {
+            annotator: giver.id,
+            item,
+        })
         .await?;
     }
     tx.commit().await?;
-    // The giver's cached standings on the moved items are gone with their assignments.
-    for &item in &taken {
-        hub.standings.forget(giver.id, item);
-    }
     Ok(Handover {
         from: from.to_owned(),
         to,

@@ -9,6 +9,7 @@ use tokio::sync::mpsc;
 
 use super::refusal::Refusal;
 use super::{AppError, Hub, audit};
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::dataset::AnswerVisibility;
 use crate::core::release::{ArchiveWriter, QA_FILE, release_line};
@@ -70,7 +71,7 @@ pub async fn set_answer_visibility(
     answers: AnswerVisibility,
 ) -> Result<Dataset, AppError> {
     let dataset = by_name(hub, name).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     store::submissions::set_answer_visibility(&mut tx, dataset.id, answers).await?;
     audit::record(
         &mut tx,
@@ -253,7 +254,7 @@ pub async fn subset(
         "subset of {}: {} items stratified by {fields}, seed {}",
         from.name, rule.size, rule.seed
     );
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     if store::datasets::by_name(&mut tx, into).await?.is_some() {
         return Err(AppError::Conflict(format!(
             "a dataset named '{into}' exists already"

@@ -6,6 +6,7 @@ use anyhow::Context;
 
 use super::import::{BATCH_LINES, ImportOptions, ImportReport, import_release};
 use super::{AppError, Hub, annotators, datasets, submissions};
+use crate::Lane;
 use crate::core::annotation::balanced_sample;
 use crate::core::audit::Actor;
 use crate::core::credentials::{random_token, token_hash};
@@ -133,8 +134,8 @@ fn heuristic_replies(jsonl: &std::path::Path) -> anyhow::Result<String> {
 /// annotates with one click. Their answers make the Human row.
 pub async fn annotator_link(hub: &Hub) -> Result<String, AppError> {
     let dataset = datasets::by_name(hub, DEMO_DATASET).await?;
-    let mut conn = hub.conn().await?;
-    let existing = store::annotations::annotators(&mut conn)
+    let mut tx = hub.write(Lane::Interactive).await?;
+    let existing = store::annotations::annotators(&mut tx)
         .await?
         .into_iter()
         .find(|a| a.name == DEMO_ANNOTATOR)
@@ -144,13 +145,11 @@ pub async fn annotator_link(hub: &Hub) -> Result<String, AppError> {
         None => {
             // An invite nobody holds: the account is reached through login links only.
             let hash = token_hash(&random_token());
-            store::annotations::create_annotator(&mut conn, DEMO_ANNOTATOR, true, &hash).await?
+            store::annotations::create_annotator(&mut tx, DEMO_ANNOTATOR, true, &hash).await?
         }
     };
-    let items = store::annotations::dataset_items(&mut conn, dataset.id).await?;
-    drop(conn);
+    let items = store::annotations::dataset_items(&mut tx, dataset.id).await?;
     let sample = balanced_sample(&items, SAMPLE_PER_KIND);
-    let mut tx = hub.begin().await?;
     let pairs: Vec<(i64, i64)> = sample.iter().map(|&item| (annotator, item)).collect();
     store::annotations::assign(&mut tx, &pairs).await?;
     tx.commit().await?;

@@ -8,6 +8,7 @@ use std::collections::BTreeMap;
 use bytes::Bytes;
 
 use super::refusal::Refusal;
+use crate::Lane;
 use crate::annotators::now_ms;
 use crate::core::audit::Actor;
 use crate::core::episode::{
@@ -97,9 +98,10 @@ pub async fn save_draft(
     graphs: &EpisodeGraphs,
 ) -> Result<(), AppError> {
     let json = serde_json::to_string(graphs)?;
-    let mut conn = hub.conn().await?;
-    let id = episode_id(&mut conn, name).await?;
-    store::episode_drafts::save(&mut conn, id, curator, &json, now_ms()).await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
+    let id = episode_id(&mut tx, name).await?;
+    store::episode_drafts::save(&mut tx, id, curator, &json, now_ms()).await?;
+    tx.commit().await?;
     Ok(())
 }
 
@@ -114,9 +116,10 @@ pub async fn save(
 ) -> Result<Vec<TransitionView>, AppError> {
     episodes::set_graphs(hub, actor, name, curator, graphs).await?;
     // After the graphs are stored: if this fails the draft stays, equal to what was saved.
-    let mut conn = hub.conn().await?;
-    let id = episode_id(&mut conn, name).await?;
-    store::episode_drafts::remove(&mut conn, id, curator).await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
+    let id = episode_id(&mut tx, name).await?;
+    store::episode_drafts::remove(&mut tx, id, curator).await?;
+    tx.commit().await?;
     Ok(episode::describe(graphs))
 }
 

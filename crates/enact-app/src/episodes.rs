@@ -12,6 +12,7 @@ use sha2::{Digest, Sha256};
 
 use super::refusal::Refusal;
 use super::{AppError, Hub, audit};
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::episode::{self, Comparison, EpisodeGraphs, GraphProblem};
 use crate::store::{self, db::UniqueKey};
@@ -169,7 +170,7 @@ fn prepare_frame(path: &Path) -> Result<PreparedFrame, String> {
 /// Stores a PNG as a frame (once per content), in the object store when there is one.
 async fn store_frame(
     hub: &Hub,
-    tx: &mut store::Conn,
+    tx: &mut store::Tx,
     png: Vec<u8>,
     (width, height): (u32, u32),
 ) -> Result<i64, AppError> {
@@ -231,7 +232,7 @@ pub async fn import(
         }
         return Err(e);
     }
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     if !store::episodes::mark_complete(&mut tx, episode).await? {
         return Err(taken_over(name));
     }
@@ -284,7 +285,7 @@ fn taken_over(name: &str) -> AppError {
 /// import is alive (it renews its claim with every batch), and is removed, with the frames only
 /// it used, once its claim has lapsed: that import was killed or stalled.
 async fn claim_name(hub: &Hub, actor: &Actor, name: &str, scene: &str) -> Result<i64, AppError> {
-    let mut tx = hub.begin_bulk().await?;
+    let mut tx = hub.write(Lane::Bulk).await?;
     let now = super::annotators::now_ms();
     let left = match store::episodes::incomplete(&mut tx, name).await? {
         Some(claim) => match claim.alive_until_ms {
@@ -342,7 +343,7 @@ async fn write_frames(
                     .map_err(AppError::Invalid)?,
             );
         }
-        let mut tx = hub.begin_bulk().await?;
+        let mut tx = hub.write(Lane::Bulk).await?;
         if !store::episodes::renew_claim(&mut tx, episode, claim_until()).await? {
             return Err(taken_over(name));
         }
@@ -362,7 +363,7 @@ async fn write_frames(
 
 /// Deletes an incomplete episode and the frames only it used, a batch per transaction.
 async fn remove_incomplete(hub: &Hub, episode: i64) -> Result<(), AppError> {
-    let mut tx = hub.begin_bulk().await?;
+    let mut tx = hub.write(Lane::Bulk).await?;
     store::episodes::delete_incomplete(&mut tx, episode).await?;
     tx.commit().await?;
     Ok(super::import::delete_unused_frames(hub).await?)
@@ -491,7 +492,7 @@ pub async fn set_graphs(
     if curator.trim().is_empty() {
         return Err(AppError::Invalid("a curator needs a name".into()));
     }
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let row = row(&mut tx, name).await?;
     let frame_count = usize::try_from(row.frame_count).unwrap_or_default();
     episode::validate(graphs, frame_count).map_err(|p| refusal(name, &p))?;
@@ -529,7 +530,7 @@ pub async fn resolve(
     name: &str,
     resolution: Resolution,
 ) -> Result<(), AppError> {
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let row = row(&mut tx, name).await?;
     let (graphs, from) = match resolution {
         Resolution::Curator(curator) => {

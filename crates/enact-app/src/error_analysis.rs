@@ -13,6 +13,7 @@ use super::scoring::{self, ScoreFileError, ScoringStep};
 use super::submissions::{self, DatasetTargets};
 use super::tokens::Caller;
 use super::{AppError, Hub, datasets, leaderboard};
+use crate::Lane;
 use crate::core::annotation::human_error_analysis;
 use crate::core::dataset::AnswerVisibility;
 use crate::core::error_analysis::{
@@ -136,8 +137,10 @@ pub(crate) async fn submission_analysis(
         .await?
         .map_err(|e| AppError::internal(format!("submission {}: {e}", row.id)))?;
     let json = serde_json::to_string(&analysis).map_err(AppError::internal)?;
-    let mut conn = hub.conn().await?;
-    store::submissions::set_error_analysis(&mut conn, row.id, &json).await?;
+    // Kept for the next reader; in the bulk lane, as it is work the request did not ask to store.
+    let mut tx = hub.write(Lane::Bulk).await?;
+    store::submissions::set_error_analysis(&mut tx, row.id, &json).await?;
+    tx.commit().await?;
     Ok(analysis)
 }
 

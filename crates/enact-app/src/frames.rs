@@ -17,6 +17,7 @@ use sha2::{Digest, Sha256};
 
 use super::refusal::Refusal;
 use super::{AppError, Hub};
+use crate::Lane;
 use crate::store;
 
 /// What `--frames` names when the bytes stay in the database.
@@ -437,7 +438,7 @@ pub async fn migrate(
             )
             .await?;
             let hashes: Vec<&str> = batch.iter().map(|(sha, _)| sha.as_str()).collect();
-            let mut tx = hub.begin().await?;
+            let mut tx = hub.write(Lane::Bulk).await?;
             store::frames::drop_bytes(&mut tx, &hashes).await?;
             tx.commit().await?;
             report.moved += batch.len() as u64;
@@ -459,7 +460,7 @@ pub async fn migrate(
             for (_, sha256) in &batch {
                 read.push((sha256.as_str(), source.get_checked(sha256).await?));
             }
-            let mut tx = hub.begin().await?;
+            let mut tx = hub.write(Lane::Bulk).await?;
             for (sha256, png) in &read {
                 store::frames::restore_bytes(&mut tx, sha256, png).await?;
             }

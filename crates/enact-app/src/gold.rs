@@ -18,6 +18,7 @@ use crate::core::audit::{Actor, AuditAction};
 use crate::core::gold::{self, GoldChoice, GoldRate};
 use crate::store;
 use crate::store::gold::Exclusion;
+use crate::{Lane, Write};
 
 /// A dataset's gold set as shown to admins.
 #[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
@@ -132,7 +133,7 @@ pub async fn set(
         GoldChoice::Share { share, seed } => (Some(*share), Some(*seed)),
         GoldChoice::List(_) => (None, None),
     };
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let removed = store::gold::drop_unfinished_gold_assignments(&mut tx, dataset.id).await?;
     store::gold::replace(
         &mut tx,
@@ -165,9 +166,8 @@ pub async fn set(
         ),
     )
     .await?;
-    announce(hub, &mut tx, &removed).await?;
+    announce(&mut tx, &removed).await?;
     tx.commit().await?;
-    forget(hub, &removed);
     let shown = show(hub, &dataset.name)
         .await?
         .ok_or_else(|| AppError::internal("the gold set just stored is not there"))?;
@@ -194,7 +194,7 @@ pub struct GoldCleared {
 /// gold set is left as it is.
 pub async fn clear(hub: &Hub, actor: &Actor, dataset: &str) -> Result<GoldCleared, AppError> {
     let dataset = datasets::by_name(hub, dataset).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let removed = store::gold::drop_unfinished_gold_assignments(&mut tx, dataset.id).await?;
     if !store::gold::clear(&mut tx, dataset.id).await? {
         // Without a gold set no assignment is the gold mix's to remove.
@@ -216,43 +216,28 @@ pub async fn clear(hub: &Hub, actor: &Actor, dataset: &str) -> Result<GoldCleare
         ),
     )
     .await?;
-    announce(hub, &mut tx, &removed).await?;
+    announce(&mut tx, &removed).await?;
     tx.commit().await?;
-    forget(hub, &removed);
     Ok(GoldCleared {
         cleared: true,
         removed: removed.len() as u64,
     })
 }
 
-/// Tells other instances that the Human row and these standings changed, on commit (gold
-/// items or attention checks taken out of queues).
-pub(super) async fn announce(
-    hub: &Hub,
-    tx: &mut store::Tx,
-    removed: &[(i64, i64)],
-) -> Result<(), AppError> {
+/// Announces that the Human row and these standings changed (gold items or attention checks
+/// taken out of queues).
+pub(super) async fn announce(tx: &mut Write, removed: &[(i64, i64)]) -> Result<(), AppError> {
     for &(annotator, item) in removed {
-        hub.publish(tx, &Change::Standing { annotator, item })
-            .await?;
+        tx.announce(Change::Standing { annotator, item }).await?;
     }
-    hub.publish(tx, &Change::Boards).await
-}
-
-/// Drops what this instance's caches hold of a changed gold set or attention set (after
-/// commit).
-pub(super) fn forget(hub: &Hub, removed: &[(i64, i64)]) {
-    for &(annotator, item) in removed {
-        hub.standings.forget(annotator, item);
-    }
-    hub.boards.changed();
+    tx.announce(Change::Boards).await
 }
 
 /// Adds the dataset's gold items to the queues of `annotators` (every annotator holding an
 /// item of the dataset when `None`) until each has one per `rate - 1` ordinary items. Returns
 /// how many were added. Call inside the transaction that changed the queues or the gold set.
 async fn mix_in(
-    conn: &mut store::Conn,
+    conn: &mut store::Tx,
     dataset_id: i64,
     rate: GoldRate,
     annotators: Option<&[i64]>,
@@ -281,7 +266,7 @@ async fn mix_in(
 /// After items of a dataset were assigned to `annotators`: their gold items, at the dataset's
 /// rate (nothing when it has no gold set). Call inside the assigning transaction.
 pub(super) async fn after_assignment(
-    conn: &mut store::Conn,
+    conn: &mut store::Tx,
     dataset_id: i64,
     annotators: &[i64],
 ) -> Result<u64, AppError> {
@@ -334,7 +319,7 @@ async fn change_exclusion(
             })
         })?;
     drop(conn);
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let changed = if exclude {
         store::gold::exclude(&mut tx, dataset.id, account.id, &actor.to_string()).await?
     } else {
@@ -364,9 +349,8 @@ async fn change_exclusion(
         detail,
     )
     .await?;
-    hub.publish(&mut tx, &Change::Boards).await?;
+    tx.announce(Change::Boards).await?;
     tx.commit().await?;
-    hub.boards.changed();
     Ok(true)
 }
 

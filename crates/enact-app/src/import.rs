@@ -29,6 +29,7 @@ use sha2::{Digest, Sha256};
 
 use super::frames::{self, FrameStore};
 use super::heavy::HeavyPool;
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction, AuditRecord};
 use crate::core::credentials::random_token;
 use crate::core::dataset::{FieldProblem, QaItem, parse_release_line};
@@ -781,7 +782,7 @@ pub async fn import_release(
             };
             let frames = read_new_frames(hub, frame_store, &location.root, &to_write).await?;
             let began = Instant::now();
-            let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+            let mut tx = hub.begin_in(Lane::Bulk).await?;
             // Timed from when the lock is held.
             let held = Instant::now();
             write_items(&mut tx, staged.staging, &to_write, &frames, &mut report).await?;
@@ -951,7 +952,7 @@ async fn start_staged(
     let source = location.root.display().to_string();
     let mut discarded = false;
     loop {
-        let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+        let mut tx = hub.begin_in(Lane::Bulk).await?;
         let target = store::datasets::by_name(&mut tx, &options.dataset)
             .await?
             .map(|d| d.id);
@@ -1057,7 +1058,7 @@ async fn publish(
     real_scene: Option<&str>,
 ) -> Result<f64, ImportError> {
     let dataset = &report.dataset;
-    let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+    let mut tx = hub.begin_in(Lane::Bulk).await?;
     let held = Instant::now();
     match store::staged::for_dataset(&mut tx, dataset).await? {
         Some(current) if current.id == staged.id && current.run_token == run_token => {}
@@ -1124,7 +1125,7 @@ async fn publish(
 
 /// The audit log's entry for what an import did to `dataset`.
 async fn log_import(
-    tx: &mut store::Conn,
+    tx: &mut store::Tx,
     actor: &Actor,
     dataset: &str,
     detail: String,
@@ -1160,7 +1161,7 @@ pub async fn sweep_replaced_verdicts(hub: &super::Hub) -> Result<Swept, sqlx::Er
     };
     for sweep in pending {
         loop {
-            let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+            let mut tx = hub.begin_in(Lane::Bulk).await?;
             let held = Instant::now();
             let (deleted, more) = store::staged::sweep_submission(&mut tx, &sweep).await?;
             tx.commit().await?;
@@ -1206,7 +1207,7 @@ pub async fn delete_retired_datasets(hub: &super::Hub) -> Result<RetiredDeleted,
         let (items, longest_ms) = delete_items_in_batches(hub, retired.dataset).await?;
         done.items += items;
         done.longest_ms = done.longest_ms.max(longest_ms);
-        let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+        let mut tx = hub.begin_in(Lane::Bulk).await?;
         let held = Instant::now();
         done.repointed += store::staged::delete_retired(&mut tx, &retired).await?;
         tx.commit().await?;
@@ -1232,7 +1233,7 @@ async fn delete_items_in_batches(
 ) -> Result<(u64, f64), sqlx::Error> {
     let (mut items, mut longest_ms) = (0, 0.0_f64);
     loop {
-        let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+        let mut tx = hub.begin_in(Lane::Bulk).await?;
         let held = Instant::now();
         let deleted = store::staged::delete_items(&mut tx, dataset, DELETE_BATCH).await?;
         tx.commit().await?;
@@ -1252,11 +1253,11 @@ async fn discard(
     // Its rows go in many short transactions: first, in one, it stops being resumable, or a
     // run killed half-way through the deletes would leave a staged import that a later run of
     // the same file takes over and publishes with part of its rows gone.
-    let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+    let mut tx = hub.begin_in(Lane::Bulk).await?;
     store::staged::forget(&mut tx, staged.id).await?;
     tx.commit().await?;
     delete_items_in_batches(hub, staged.staging).await?;
-    let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+    let mut tx = hub.begin_in(Lane::Bulk).await?;
     store::staged::remove(&mut tx, staged).await?;
     tx.commit().await?;
     delete_unused_frames(hub).await
@@ -1266,7 +1267,7 @@ async fn discard(
 /// an incomplete episode removed), a few hundred per transaction.
 pub(super) async fn delete_unused_frames(hub: &super::Hub) -> Result<(), sqlx::Error> {
     loop {
-        let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+        let mut tx = hub.begin_in(Lane::Bulk).await?;
         let deleted = store::staged::delete_unused_frames(&mut tx, DELETE_BATCH).await?;
         tx.commit().await?;
         if deleted == 0 {
@@ -1311,7 +1312,7 @@ pub async fn abandon(
     };
     discard(hub, &staged).await?;
     let summary = StagedSummary::from(&staged);
-    let mut tx = hub.begin_in(store::gate::Lane::Bulk).await?;
+    let mut tx = hub.begin_in(Lane::Bulk).await?;
     let detail = format!(
         "abandoned the unfinished import of {} records (file sha256 {})",
         summary.rows_done, summary.qa_file_sha256
@@ -1426,7 +1427,7 @@ async fn read_new_frames(
 /// stored meanwhile is found by its hash, one it did not read (held in an object store) gets
 /// a row without bytes.
 async fn write_items(
-    tx: &mut store::Conn,
+    tx: &mut store::Tx,
     staging: i64,
     rows: &[(&ValidRow, String, bool)],
     frames: &HashMap<String, Vec<u8>>,

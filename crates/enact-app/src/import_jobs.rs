@@ -17,6 +17,7 @@ use super::import::{
 };
 use super::jobs::{self, JobContext, JobId, JobKind, JobState};
 use super::{AppError, Hub};
+use crate::Lane;
 use crate::core::audit::Actor;
 use crate::store;
 
@@ -153,7 +154,7 @@ pub async fn request(hub: &Hub, actor: &Actor, request: &ImportRequest) -> Resul
         actor_kind: actor.kind().to_owned(),
         actor: actor.name().to_owned(),
     };
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     for job in store::jobs::unfinished(&mut tx, JobKind::Import).await? {
         let other: Option<ImportPayload> = serde_json::from_str(&job.payload).ok();
         if other.is_some_and(|o| o.dataset == payload.dataset) {

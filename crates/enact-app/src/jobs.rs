@@ -29,7 +29,7 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use tokio::sync::watch;
 use tokio::task::JoinSet;
 
-use super::{AppError, Hub, audit};
+use super::{AppError, Hub, Lane, audit};
 use crate::core::audit::{Actor, AuditAction};
 use crate::store;
 pub use crate::store::jobs::{JobKind, JobRow, JobState};
@@ -60,7 +60,7 @@ fn millis(d: Duration) -> i64 {
 /// the transaction of the change that asks for the job, so both commit or neither does. The
 /// payload is stored as it is: never put a secret in it.
 pub async fn enqueue(
-    conn: &mut store::Conn,
+    conn: &mut store::Tx,
     kind: JobKind,
     payload: &serde_json::Value,
     actor: &Actor,
@@ -189,7 +189,7 @@ pub async fn control(
     id: JobId,
     change: JobControl,
 ) -> Result<JobRow, AppError> {
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let job = store::jobs::get(&mut tx, id.0)
         .await?
         .ok_or_else(|| AppError::NotFound(format!("{id} does not exist")))?;
@@ -250,10 +250,13 @@ impl JobContext {
         }
     }
 
-    /// Stores a small JSON value describing the job's progress, for pages and the API.
+    /// Stores a small JSON value describing the job's progress, for pages and the API (in the
+    /// bulk lane: annotators' writes go first). Never call it while holding a
+    /// [`crate::Write`]: the gate lets one writer in at a time.
     pub async fn progress(&self, hub: &Hub, progress: serde_json::Value) -> Result<(), AppError> {
-        let mut conn = hub.conn().await?;
-        store::jobs::set_progress(&mut conn, self.id.0, &progress.to_string()).await?;
+        let mut tx = hub.write(Lane::Bulk).await?;
+        store::jobs::set_progress(&mut tx, self.id.0, &progress.to_string()).await?;
+        tx.commit().await?;
         Ok(())
     }
 }
@@ -436,7 +439,7 @@ async fn claim(
     working: &[i64],
 ) -> Option<JobRow> {
     let claimed = async {
-        let mut tx = hub.begin().await?;
+        let mut tx = hub.write(Lane::Bulk).await?;
         let now = now_ms();
         let until = now + millis(settings.lease);
         let job = store::jobs::claim(&mut tx, kinds, owner, now, until, working).await?;
@@ -551,7 +554,7 @@ async fn renew_lease(
     owner: &str,
     until: i64,
 ) -> Result<Option<JobState>, AppError> {
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Bulk).await?;
     let state = store::jobs::renew(&mut tx, id.0, owner, until).await?;
     tx.commit().await?;
     Ok(state)
@@ -601,7 +604,7 @@ async fn finish(
     error: Option<&str>,
 ) {
     let released = async {
-        let mut tx = hub.begin().await?;
+        let mut tx = hub.write(Lane::Bulk).await?;
         let held = store::jobs::release(&mut tx, id.0, owner, state, run_after_ms, error).await?;
         tx.commit().await?;
         Ok::<_, AppError>(held)

@@ -240,6 +240,11 @@ impl BoardCache {
         }
     }
 
+    /// Changes seen so far ([`BoardCache::changed`]).
+    pub fn change_count(&self) -> u64 {
+        *self.changes()
+    }
+
     /// Boards built so far (each build's version is the count at its end).
     pub fn builds(&self) -> u64 {
         self.builds.load(Ordering::SeqCst)

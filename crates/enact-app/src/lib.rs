@@ -90,6 +90,7 @@ pub mod submissions;
 pub mod tokens;
 pub mod version;
 pub mod watch;
+mod write;
 
 use std::path::Path;
 use std::sync::Arc;
@@ -97,6 +98,7 @@ use std::sync::Arc;
 use sqlx::SqlitePool;
 
 pub use error::AppError;
+pub use write::{Lane, Write};
 
 /// The benchmark and the store, under the names every use case calls them by (`crate::core::…`,
 /// `crate::store::…`).
@@ -475,11 +477,17 @@ impl Hub {
         self.changes.subscribe()
     }
 
+    /// Drops from this process's caches what its own committed `change` made stale (the
+    /// adapters' caches, such as the web's sessions, see to their own changes).
+    fn apply_committed(&self, change: changes::Change) {
+        watch::forget(&self.caches(), &change);
+    }
+
     /// Announces `change` to the other processes on the database (server instances, and
     /// servers beside a command-line process), when `conn`'s transaction commits.
     async fn publish(
         &self,
-        conn: &mut store::Conn,
+        conn: &mut store::Tx,
         change: &changes::Change,
     ) -> Result<(), AppError> {
         Ok(store::announce(conn, changes::CHANNEL, &self.origin, &change.payload()).await?)
@@ -490,19 +498,6 @@ impl Hub {
         let conn = self.pool.acquire().await?;
         self.metrics.connection_waited(asked.elapsed());
         Ok(conn)
-    }
-
-    /// A write transaction, serialised with every other writer of the database
-    /// ([`Pool::begin`]), for a request someone waits on: it goes before every bulk write
-    /// this process has waiting ([`store::gate`]).
-    async fn begin(&self) -> Result<store::Tx, AppError> {
-        Ok(self.begin_in(store::gate::Lane::Interactive).await?)
-    }
-
-    /// A write transaction for many rows at once (a submission's verdicts, rescoring, an
-    /// import's batches), which lets interactive writers go first.
-    async fn begin_bulk(&self) -> Result<store::Tx, AppError> {
-        Ok(self.begin_in(store::gate::Lane::Bulk).await?)
     }
 
     /// A write transaction in `lane`; a wait longer than the database's busy timeout fails

@@ -4,6 +4,7 @@
 use std::time::Instant;
 
 use super::{AppError, Hub};
+use crate::Lane;
 use crate::store::copy::{self, TABLES};
 
 /// Rows copied, table by table.
@@ -24,7 +25,7 @@ pub async fn migrate_db(
     progress: impl Fn(&str, u64),
 ) -> Result<MigrateDbReport, AppError> {
     let started = Instant::now();
-    let mut target = to.begin().await?;
+    let mut target = to.write(Lane::Bulk).await?;
     for table in TABLES.iter().filter(|t| t.name != "content_generation") {
         let rows = table.count(&mut target).await?;
         if rows > 0 {

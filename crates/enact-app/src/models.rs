@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::changes::Change;
 use super::{AppError, Hub, audit, datasets};
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
 use crate::store;
 use crate::store::model_metadata::StoredModelMetadata;
@@ -188,7 +189,7 @@ pub async fn set(
         updated_by: editor.actor.to_string(),
         updated_at: String::new(),
     };
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     store::model_metadata::put(&mut tx, dataset.id, &stored).await?;
     let shown = |v: &Option<String>| v.as_deref().unwrap_or("-").to_owned();
     audit::record(
@@ -206,9 +207,8 @@ pub async fn set(
         ),
     )
     .await?;
-    hub.publish(&mut tx, &Change::Boards).await?;
+    tx.announce(Change::Boards).await?;
     tx.commit().await?;
-    hub.boards.changed();
     of_dataset(hub, &dataset.name)
         .await?
         .remove(model)

@@ -7,6 +7,7 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::{AppError, Hub, audit, datasets, explore, leaderboard};
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::dataset::AnswerVisibility;
 use crate::core::red_flags::{self, AboveHuman, Leak, TruthCopy};
@@ -85,7 +86,7 @@ pub async fn leak_at_import(hub: &Hub, actor: &Actor, name: &str) -> Result<Vec<
             })
             .collect::<Vec<_>>()
             .join("; ");
-        let mut tx = hub.begin().await?;
+        let mut tx = hub.write(Lane::Interactive).await?;
         audit::record(
             &mut tx,
             actor,

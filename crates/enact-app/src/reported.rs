@@ -12,6 +12,7 @@ use serde::Serialize;
 
 use super::changes::Change;
 use super::{AppError, Hub, audit, datasets};
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::paper::{self, Category, CellKey, Metric, PaperError, PaperTable, ReportedModel};
 use crate::store;
@@ -360,7 +361,7 @@ async fn import(
     }
     let dataset = datasets::by_name(hub, dataset).await?;
     let added_by = actor.to_string();
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let mut replaced = 0;
     for model in &models {
         if store::reported::delete_by_key(&mut tx, dataset.id, &model.model, &model.source).await? {
@@ -380,9 +381,8 @@ async fn import(
         ),
     )
     .await?;
-    hub.publish(&mut tx, &Change::Boards).await?;
+    tx.announce(Change::Boards).await?;
     tx.commit().await?;
-    hub.boards.changed();
     Ok(ReportedImport {
         dataset: dataset.name,
         stored: models.len(),
@@ -400,7 +400,7 @@ pub async fn add(
 ) -> Result<ReportedResult, AppError> {
     check(reported).map_err(AppError::Invalid)?;
     let dataset = datasets::by_name(hub, dataset).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let id = match store::reported::insert(&mut tx, dataset.id, reported, &actor.to_string()).await
     {
         Ok(id) => id,
@@ -421,9 +421,8 @@ pub async fn add(
         format!("from {}", reported.source),
     )
     .await?;
-    hub.publish(&mut tx, &Change::Boards).await?;
+    tx.announce(Change::Boards).await?;
     tx.commit().await?;
-    hub.boards.changed();
     list(hub, &dataset.name)
         .await?
         .into_iter()
@@ -440,7 +439,7 @@ pub async fn remove(hub: &Hub, actor: &Actor, dataset: &str, id: i64) -> Result<
         )));
     };
     let dataset = datasets::by_name(hub, dataset).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     if !store::reported::delete(&mut tx, dataset.id, id).await? {
         tx.rollback().await?;
         return Err(AppError::NotFound(format!(
@@ -457,9 +456,8 @@ pub async fn remove(hub: &Hub, actor: &Actor, dataset: &str, id: i64) -> Result<
         format!("from {}", row.reported.source),
     )
     .await?;
-    hub.publish(&mut tx, &Change::Boards).await?;
+    tx.announce(Change::Boards).await?;
     tx.commit().await?;
-    hub.boards.changed();
     Ok(())
 }
 

@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 use super::changes::Change;
 use super::jobs::{self, JobContext, JobId, JobKind};
 use super::{AppError, Hub, audit, datasets, statements, submissions};
+use crate::Lane;
 use crate::core::annotation::human_verdict;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::metric::METRIC_VERSION;
@@ -177,7 +178,7 @@ pub async fn request(hub: &Hub, actor: &Actor, dataset: Option<&str>) -> Result<
         datasets::by_name(hub, name).await?;
     }
     let payload = RescorePayload::new(dataset, actor).to_json();
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let id = jobs::enqueue(&mut tx, JobKind::Rescore, &payload, actor).await?;
     tx.commit().await?;
     Ok(id)
@@ -275,7 +276,7 @@ where
             break;
         }
     }
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Bulk).await?;
     if summary.submissions + summary.human_answers > 0 {
         // Running servers drop what they keep in memory (boards above all) when the content
         // generation moves: a rescore run from the command line reaches them as an import does.
@@ -401,7 +402,7 @@ async fn rescore_one_submission(hub: &Hub, id: i64) -> Result<Unit, AppError> {
         };
         let new_scores = serde_json::to_string(&scored.scores)?;
         let verdicts = statements::scored_verdicts(&targets.targets, &scored.items);
-        let mut tx = hub.begin_bulk().await?;
+        let mut tx = hub.write(Lane::Bulk).await?;
         if store::content_generation(&mut tx).await? != generation {
             // An import changed the items meanwhile: score against what it left.
             tx.rollback().await?;
@@ -422,9 +423,8 @@ async fn rescore_one_submission(hub: &Hub, id: i64) -> Result<Unit, AppError> {
             return Ok(Unit::Current);
         }
         statements::record(hub, &mut tx, id, verdicts).await?;
-        hub.publish(&mut tx, &Change::Boards).await?;
+        tx.announce(Change::Boards).await?;
         tx.commit().await?;
-        hub.boards.changed();
         return Ok(Unit::Rescored {
             changed: old_scores.as_deref() != Some(new_scores.as_str()),
         });
@@ -477,7 +477,7 @@ where
             .iter()
             .map(|a| (a, human_verdict(&a.answer)))
             .collect();
-        let mut tx = hub.begin_bulk().await?;
+        let mut tx = hub.write(Lane::Bulk).await?;
         if store::content_generation(&mut tx).await? != generation {
             tx.rollback().await?;
             attempts += 1;
@@ -518,9 +518,8 @@ where
                 )),
             }
         }
-        hub.publish(&mut tx, &Change::Boards).await?;
+        tx.announce(Change::Boards).await?;
         tx.commit().await?;
-        hub.boards.changed();
         summary.human_answers += rescored;
         summary.human_answers_changed += changed;
         attempts = 0;
@@ -540,7 +539,7 @@ where
 /// finished it. An answer the verifier cannot judge (the item's signature table does not cover
 /// it) keeps no verdict: the Human row judges it again when read and says what is wrong.
 pub(crate) async fn judge_answer(
-    conn: &mut store::Conn,
+    conn: &mut store::Tx,
     annotator: i64,
     item: i64,
 ) -> Result<(), AppError> {
@@ -565,7 +564,7 @@ pub(crate) async fn judge_answer(
 /// that changed them, so the Human row never reads a verdict of old signatures. Returns how
 /// many verdicts were stored; answers that cannot be judged keep none (see [`judge_answer`]).
 pub(crate) async fn rejudge_dataset(
-    conn: &mut store::Conn,
+    conn: &mut store::Tx,
     dataset_id: i64,
 ) -> Result<usize, sqlx::Error> {
     store::annotations::forget_verdicts(conn, dataset_id).await?;

@@ -27,6 +27,7 @@ use base64::Engine as _;
 use base64::engine::general_purpose::STANDARD;
 
 use super::{AppError, Hub, audit};
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::statement::{ALGORITHM, KEY_BYTES, PublishedKey, PublishedKeys, StatementKey};
 use crate::store;
@@ -248,7 +249,7 @@ fn replace_key_file(path: &Path, key: &StatementKey) -> Result<(), AppError> {
 /// it), made when there is none; a key not yet listed is listed (audited as `key.generate`).
 pub(crate) async fn signing_key(
     hub: &Hub,
-    conn: &mut store::Conn,
+    conn: &mut store::Tx,
 ) -> Result<Arc<StatementKey>, AppError> {
     let signer = &hub.signer;
     if let Some(key) = signer.cached() {
@@ -293,11 +294,7 @@ pub(crate) async fn signing_key(
 }
 
 /// Lists `key`'s public half, audited as `key.generate` when it is new.
-async fn list_key(
-    conn: &mut store::Conn,
-    key: &StatementKey,
-    detail: &str,
-) -> Result<(), AppError> {
+async fn list_key(conn: &mut store::Tx, key: &StatementKey, detail: &str) -> Result<(), AppError> {
     let keyid = key.keyid();
     let public = STANDARD.encode(key.public_key());
     if store::statements::insert_key(conn, &keyid, ALGORITHM, &public).await? {
@@ -319,7 +316,7 @@ async fn list_key(
 /// this at start, so a misplaced or retired key file stops it there rather than at the first
 /// submission).
 pub async fn prepare(hub: &Hub) -> Result<PublishedKey, AppError> {
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let key = signing_key(hub, &mut tx).await?;
     let row = store::statements::key(&mut tx, &key.keyid())
         .await?
@@ -374,7 +371,7 @@ pub async fn rotate(hub: &Hub, actor: &Actor) -> Result<Rotated, AppError> {
     let key = StatementKey::from_secret(&rand::random());
     let keyid = key.keyid();
     let source = hub.signer.source.clone();
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     if let KeySource::File(path) = &source {
         replace_key_file(path, &key)?;
     }

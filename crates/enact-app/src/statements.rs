@@ -13,6 +13,7 @@ use std::sync::Mutex;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use super::{AppError, Hub, signing};
+use crate::Lane;
 use crate::core::scoring::ScoringTarget;
 use crate::core::statement::{
     DatasetDigest, DatasetFacts, Envelope, HubIdentity, PublishedKeys, STATEMENT_FORMAT,
@@ -114,7 +115,7 @@ fn now() -> String {
 /// transaction, so the scores and their statement commit together.
 pub(crate) async fn record(
     hub: &Hub,
-    conn: &mut store::Conn,
+    conn: &mut store::Tx,
     id: i64,
     verdicts: VerdictFacts,
 ) -> Result<Envelope, AppError> {
@@ -171,7 +172,7 @@ pub async fn newest_or_make(hub: &Hub, row: &SubmissionRow) -> Result<Envelope, 
     if let Some(stored) = newest {
         return parse_stored(&stored.envelope, row.id);
     }
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     // Another request may have made it meanwhile.
     if let Some(stored) = store::statements::newest_statement(&mut tx, row.id).await? {
         tx.rollback().await?;

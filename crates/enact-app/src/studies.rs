@@ -10,6 +10,7 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::{AppError, Hub, agreement, audit, datasets, error_analysis};
+use crate::Lane;
 use crate::core::annotation::{human_entries, mean_by_item};
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::bundle::BundleFile;
@@ -146,7 +147,7 @@ pub async fn create(
             )));
         }
     }
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     match store::studies::insert(&mut tx, name, base.id, actor.name(), &resolved).await {
         Ok(_) => {}
         Err(e) if UniqueKey::STUDY_NAME.is_violated_by(&e) => {
@@ -219,7 +220,7 @@ pub async fn show(hub: &Hub, name: &str) -> Result<StudyView, AppError> {
 /// Deletes a study (the datasets and submissions stay). Audited.
 pub async fn delete(hub: &Hub, actor: &Actor, name: &str) -> Result<(), AppError> {
     let row = row_named(hub, name).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     if !store::studies::delete(&mut tx, &row.name).await? {
         return Err(AppError::NotFound(format!("no study named '{}'", row.name)));
     }

@@ -11,6 +11,7 @@ use super::changes::Change;
 use super::refusal::Refusal;
 use super::tokens::Caller;
 use super::{AppError, Hub, audit, datasets, statements};
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{NewToken, Role, Scope};
 use crate::core::dataset::AnswerVisibility;
@@ -153,7 +154,7 @@ async fn take_attempt(hub: &Hub, caller: &Caller) -> Result<Option<i64>, AppErro
     // In a write transaction, serialised with every other on either database: the count and
     // the insert hold across every server instance, so two requests cannot both take the
     // last attempt.
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let made = store::accounts::attempts_made(&mut tx, caller.token_id).await?;
     let quota = attempt_quota(made, daily, total);
     let attempt = if quota == AttemptQuota::Granted {
@@ -300,7 +301,7 @@ where
 /// (the caller is already being told to retry).
 async fn give_back_attempt(hub: &Hub, attempt: i64) {
     let given_back = async {
-        let mut tx = hub.begin().await?;
+        let mut tx = hub.write(Lane::Interactive).await?;
         store::accounts::forget_attempt(&mut tx, attempt).await?;
         tx.commit().await?;
         Ok::<(), AppError>(())
@@ -337,7 +338,7 @@ where
         let targets = dataset_targets(hub, dataset.id).await?;
         let scored = score_body(hub, targets.clone(), &dataset.name, body.clone()).await?;
         let verdicts = statements::scored_verdicts(&targets.targets, &scored.items);
-        let mut tx = hub.begin_bulk().await?;
+        let mut tx = hub.write(Lane::Bulk).await?;
         if store::content_generation(&mut tx).await? == generation {
             break (dataset, tx, targets, scored, verdicts);
         }
@@ -396,9 +397,8 @@ where
         format!("model {}", metadata.model),
     )
     .await?;
-    hub.publish(&mut tx, &Change::Boards).await?;
+    tx.announce(Change::Boards).await?;
     tx.commit().await?;
-    hub.boards.changed();
     hub.metrics.submission_scored();
     tracing::info!(
         submission = id,
@@ -495,7 +495,7 @@ pub async fn update_listing(
             })
         })
         .transpose()?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     if !store::submissions::update_listing(&mut tx, numeric, baseline, visibility).await? {
         return Err(not_found());
     }
@@ -518,9 +518,8 @@ pub async fn update_listing(
         changes.join(", "),
     )
     .await?;
-    hub.publish(&mut tx, &Change::Boards).await?;
+    tx.announce(Change::Boards).await?;
     tx.commit().await?;
-    hub.boards.changed();
     Ok(row)
 }
 
@@ -561,7 +560,7 @@ pub async fn file_baseline(
     )
     .await?;
     let verdicts = statements::scored_verdicts(&targets.targets, &scored.items);
-    let mut tx = hub.begin_bulk().await?;
+    let mut tx = hub.write(Lane::Bulk).await?;
     if store::content_generation(&mut tx).await? != generation {
         tx.rollback().await?;
         return Err(AppError::Unavailable(format!(
@@ -601,9 +600,8 @@ pub async fn file_baseline(
         format!("account {account_name}, model {}", metadata.model),
     )
     .await?;
-    hub.publish(&mut tx, &Change::Boards).await?;
+    tx.announce(Change::Boards).await?;
     tx.commit().await?;
-    hub.boards.changed();
     Ok(true)
 }
 

@@ -7,6 +7,7 @@ use serde::Serialize;
 use super::audit;
 use super::metrics::LoginFailure;
 use super::{AppError, Hub};
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{self, NewToken, Role, Scope};
 use crate::store;
@@ -94,7 +95,7 @@ pub struct CreatedToken {
 /// The account named `name` with `role`, created if missing, inside `tx`. An existing account
 /// keeps its role: asking for another is a conflict.
 pub(super) async fn ensure_account(
-    conn: &mut store::Conn,
+    conn: &mut store::Tx,
     name: &str,
     role: Role,
 ) -> Result<i64, AppError> {
@@ -126,7 +127,7 @@ pub async fn issue(
         }
     }
     let token = NewToken::generate();
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let account = ensure_account(&mut tx, name, role).await?;
     let id =
         store::accounts::insert_token(&mut tx, account, role, &token, daily_quota, total_quota)
@@ -164,7 +165,7 @@ pub async fn list(hub: &Hub) -> Result<Vec<TokenListing>, AppError> {
 
 /// Revokes the live token with this id or prefix; it stops working at once.
 pub async fn revoke(hub: &Hub, actor: &Actor, which: &str) -> Result<(), AppError> {
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     if store::accounts::revoke_token(&mut tx, which).await? {
         audit::record(
             &mut tx,
@@ -198,7 +199,7 @@ pub enum AdminToken {
 /// Makes sure an admin can reach the API: the operator's chosen token when given (stored
 /// hashed on first sight), otherwise a generated one when no live admin token exists.
 pub async fn ensure_admin_token(hub: &Hub, operator: Option<&str>) -> Result<AdminToken, AppError> {
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let (token, generated) = match operator {
         Some(text) => {
             let token = NewToken::from_operator(text)

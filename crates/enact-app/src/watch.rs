@@ -131,10 +131,17 @@ pub async fn watch_generation(pool: Pool, caches: Caches) {
     }
 }
 
-/// Drops what `change` makes stale from the caches, and passes it on to the caches outside the
-/// app layer (the web's sessions).
+/// Drops what another process's `change` makes stale from the caches, and passes it on to the
+/// caches outside the app layer (the web's sessions).
 fn apply(caches: &Caches, changes: &tokio::sync::broadcast::Sender<Change>, change: Change) {
-    match &change {
+    forget(caches, &change);
+    let _ = changes.send(change);
+}
+
+/// Drops what `change` makes stale from the app layer's caches: for another process's change
+/// ([`apply`]), and for this process's own once its write commits ([`crate::Write::commit`]).
+pub(crate) fn forget(caches: &Caches, change: &Change) {
+    match change {
         Change::Standing { annotator, item } => caches.standings.forget(*annotator, *item),
         Change::Boards => caches.boards.changed(),
         Change::Everything => {
@@ -144,7 +151,6 @@ fn apply(caches: &Caches, changes: &tokio::sync::broadcast::Sender<Change>, chan
         }
         Change::SessionEnded(_) => {}
     }
-    let _ = changes.send(change);
 }
 
 /// How many announcements one read of the change feed takes at most.

@@ -40,6 +40,7 @@ use super::refusal::Refusal;
 use super::submissions::{self, SubmissionRow, Submitted};
 use super::tokens::{self, Caller};
 use super::{AppError, Hub, datasets, frames, items};
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::credentials::{NewToken, Role};
 pub use crate::core::model_run::{GenerationParams, ItemOutcome, Prices, RunFailure, Usage};
@@ -316,7 +317,7 @@ async fn find_or_create(
 /// The run `spec` names: found (its identity must match) or created.
 pub async fn open(hub: &Hub, actor: &Actor, spec: &RunSpec) -> Result<RunRow, AppError> {
     let id = identity(hub, spec).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let run = find_or_create(&mut tx, actor, spec, &id).await?;
     tx.commit().await?;
     Ok(run)
@@ -549,7 +550,7 @@ impl Ledger for StoreLedger {
     }
 
     async fn record(&self, item: &Pending, row: &RunItemRow) -> Result<(), AppError> {
-        let mut tx = self.hub.begin().await?;
+        let mut tx = self.hub.write(Lane::Bulk).await?;
         store::runs::record_item(&mut tx, self.run, item.key, row).await?;
         tx.commit().await?;
         Ok(())
@@ -570,7 +571,7 @@ pub async fn execute(
     check_settings(spec, settings)?;
     let run = {
         let id = identity(hub, spec).await?;
-        let mut tx = hub.begin().await?;
+        let mut tx = hub.write(Lane::Bulk).await?;
         let run = find_or_create(&mut tx, actor, spec, &id).await?;
         // A server's run was audited when it was started (`server::start`); one started at
         // the command line is audited each time it is started or resumed.
@@ -830,7 +831,7 @@ async fn submit(
     let row = match submitted {
         Submitted::Created(row) | Submitted::Repeated(row) => row,
     };
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Bulk).await?;
     store::runs::set_submission(&mut tx, run.id, row.id, &stamp).await?;
     tx.commit().await?;
     Ok(row)

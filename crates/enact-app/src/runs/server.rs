@@ -16,6 +16,7 @@ use serde::{Deserialize, Serialize};
 use tokio::sync::watch;
 
 use super::{ApiKey, CallSettings, Prices, RunProgress, RunRow, RunSpec, execute};
+use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
 use crate::core::model_run::GenerationParams;
 use crate::jobs::{self, JobContext, JobId, JobKind};
@@ -206,7 +207,7 @@ pub async fn start(
         return Err(AppError::Invalid("submit_as is empty".to_owned()));
     }
     let identity = super::identity(hub, spec).await?;
-    let mut tx = hub.begin().await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let run = super::find_or_create(&mut tx, actor, spec, &identity).await?;
     if let Some(job) = unfinished_job(&mut tx, &run).await? {
         return Err(AppError::Conflict(format!(
