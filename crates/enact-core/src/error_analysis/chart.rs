@@ -402,6 +402,15 @@ mod tests {
         assert!(label_width("结构性错误") >= 60.0);
     }
 
+    /// A row is as tall as its bars or as its label's lines, whichever is taller: a label of
+    /// three lines needs three lines' height, not one more line's.
+    #[test]
+    fn a_row_is_as_tall_as_its_bars_or_its_label_lines() {
+        assert_eq!(row_height(BAR_HEIGHT, 1), BAR_HEIGHT);
+        assert_eq!(row_height(BAR_HEIGHT, 3), 3.0 * LINE_HEIGHT);
+        assert_eq!(row_height(60.0, 2), 60.0);
+    }
+
     /// Figures with four errors: three omissions (two of them spatial) and one hallucination,
     /// and a left hand whose precision is 0.8 ± 0.1.
     fn figures() -> ErrorFigures {

@@ -744,6 +744,34 @@ mod tests {
         }
     }
 
+    /// The interval is resampled when replicates are asked for, and the estimate stands alone
+    /// (no interval, nothing drawn) when none are.
+    #[test]
+    fn the_agreement_interval_is_resampled_only_when_replicates_are_asked_for() {
+        let with = |replicates| ReportInputs {
+            bootstrap: BootstrapConfig {
+                replicates,
+                ..BootstrapConfig::default()
+            },
+            ..inputs()
+        };
+        let alpha = |replicates| {
+            build_report(&with(replicates))
+                .unwrap()
+                .agreement
+                .unwrap()
+                .alpha
+        };
+        let resampled = alpha(50);
+        assert_eq!(resampled.replicates, 50);
+        assert!(resampled.replicate_mean.is_some(), "{resampled:?}");
+        let alone = alpha(0);
+        assert_eq!(alone.replicates, 0);
+        assert_eq!((alone.ci_low, alone.ci_high), (None, None));
+        assert_eq!(alone.replicate_mean, None);
+        assert_eq!(alone.estimate, resampled.estimate);
+    }
+
     #[test]
     fn only_the_answer_encoding_is_held_to_the_nominal_level() {
         let with = |encoding, level| ReportInputs {
