@@ -71,22 +71,16 @@ async fn writes_wait_out_the_lock_then_answer_503_with_retry_after() {
             .as_str()
             .is_some_and(|e| e.contains("database is busy"))
     );
-    // The login form is a page: the error page says the same. (On PostgreSQL a session is
-    // written without the write lock, which serialises only the use cases' checked writes,
-    // so a login does not wait there.)
-    if on_sqlite() {
-        assert!(
-            login_waited >= waited_out,
-            "login refused after {login_waited:?}"
-        );
-        assert_eq!(login.status(), StatusCode::SERVICE_UNAVAILABLE);
-        assert_eq!(login.headers()["retry-after"], "1");
-        let page = login.text().await.expect("page");
-        assert!(page.contains("the database is busy"), "{page}");
-    } else {
-        assert_eq!(login.status(), StatusCode::SEE_OTHER);
-        bob = Browser::new(&server);
-    }
+    // The login form is a page: the error page says the same. The session is a write like any
+    // other (in the interactive lane), so on PostgreSQL too it waits for the write lock.
+    assert!(
+        login_waited >= waited_out,
+        "login refused after {login_waited:?}"
+    );
+    assert_eq!(login.status(), StatusCode::SERVICE_UNAVAILABLE);
+    assert_eq!(login.headers()["retry-after"], "1");
+    let page = login.text().await.expect("page");
+    assert!(page.contains("the database is busy"), "{page}");
     held.rollback().await.expect("released");
     assert_eq!(
         count(&server.pool, "SELECT count(*) FROM submissions").await,
