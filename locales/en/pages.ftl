@@ -45,6 +45,7 @@ refusal-no-run = no model run { $run }
 refusal-no-frame = no frame with hash '{ $frame }'
 refusal-no-answer-yet = item '{ $item }' has no answer from you yet
 refusal-not-logged-in = you are not logged in, or your session has expired: log in again
+refusal-login-link-used = this login link is unknown or has already been used: a link logs in once; ask an admin for a new one, or log in with a password
 refusal-admin-only = the admin pages are for admins; '{ $annotator }' is an annotator
 refusal-stale-form = this page's form has expired: reload the page and try again
 refusal-not-assigned = item '{ $item }' of dataset '{ $dataset }' is not assigned to you

@@ -43,6 +43,7 @@ refusal-no-run = 没有模型运行 { $run }
 refusal-no-frame = 没有哈希为“{ $frame }”的帧
 refusal-no-answer-yet = 您尚未作答条目“{ $item }”
 refusal-not-logged-in = 您尚未登录，或会话已过期：请重新登录
+refusal-login-link-used = 此登录链接无效或已被使用：每个链接只能登录一次；请向管理员索取新链接，或用密码登录
 refusal-admin-only = 管理页面仅供管理员使用；“{ $annotator }”是标注员
 refusal-stale-form = 此页面的表单已过期：请刷新页面后重试
 refusal-not-assigned = 数据集“{ $dataset }”的条目“{ $item }”未分配给您

@@ -560,6 +560,7 @@ pub fn refusal_key(refusal: &Refusal) -> &'static str {
         Refusal::ReasonMissing { .. } => msg("refusal-reason-missing"),
         Refusal::ReasonTooLong { .. } => msg("refusal-reason-too-long"),
         Refusal::PasswordsDiffer => msg("refusal-passwords-differ"),
+        Refusal::LoginLinkUsed => msg("refusal-login-link-used"),
         Refusal::PasswordTooShort { .. } => msg("refusal-password-too-short"),
         Refusal::EpisodeHasNoGraphs { .. } => msg("refusal-episode-has-no-graphs"),
     }

@@ -52,6 +52,11 @@ async fn the_demo_link_logs_in_once_to_a_balanced_queue() {
         again.get(&format!("/login/link/{link}")).await.status(),
         StatusCode::NOT_FOUND
     );
+    // The refusal is a typed one: in the page's language, naming no command a visitor can't run.
+    let (status, zh) = crate::i18n::page(&server, &format!("/login/link/{link}"), "zh-CN").await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
+    assert!(zh.contains("此登录链接无效或已被使用"), "{zh}");
+    assert!(!zh.contains("serve --demo"), "{zh}");
     let assigned = || async { count(&server.pool, "SELECT count(*) FROM assignments").await };
     let before = assigned().await;
     let second = enact_hub::app::demo::annotator_link(&hub).await.unwrap();

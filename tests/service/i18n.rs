@@ -173,7 +173,11 @@ fn the_check_sees_a_missing_key() {
     }
 }
 
-async fn page(server: &TestServer, path: &str, accept_language: &str) -> (StatusCode, String) {
+pub(crate) async fn page(
+    server: &TestServer,
+    path: &str,
+    accept_language: &str,
+) -> (StatusCode, String) {
     let r = reqwest::Client::new()
         .get(server.url(path))
         .header("accept-language", accept_language)

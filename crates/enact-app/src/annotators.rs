@@ -153,13 +153,7 @@ pub async fn follow_login_link(hub: &Hub, token: &str) -> Result<i64, AppError> 
     let mut tx = hub.write(Lane::Interactive).await?;
     let annotator = store::annotations::take_login_link(&mut tx, &token_hash(token)).await?;
     tx.commit().await?;
-    annotator.ok_or_else(|| {
-        AppError::NotFound(
-            "this login link is unknown or has already been used: restart `serve --demo` \
-             for a new one, or log in with a password"
-                .to_owned(),
-        )
-    })
+    annotator.ok_or_else(|| AppError::from(Refusal::LoginLinkUsed))
 }
 
 /// The annotator whose password this is, if the name and password match.

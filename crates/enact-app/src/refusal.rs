@@ -74,6 +74,8 @@ pub enum Refusal {
     NoFrame { frame: String },
     /// The annotator has not finished this item yet, so there is no answer of theirs to show.
     NoAnswerYet { item: String },
+    /// A login link that is unknown or was used already (a link is good once).
+    LoginLinkUsed,
     /// A request that needs a login session came without a live one.
     NotLoggedIn,
     /// An annotator asked for an admin page.
@@ -113,6 +115,7 @@ impl Refusal {
             | Refusal::NoFrame { .. }
             | Refusal::NoAnswerYet { .. } => RefusalKind::NotFound,
             Refusal::NotLoggedIn => RefusalKind::Unauthenticated,
+            Refusal::LoginLinkUsed => RefusalKind::NotFound,
             Refusal::AdminOnly { .. } | Refusal::StaleForm | Refusal::NotAssigned { .. } => {
                 RefusalKind::NotPermitted
             }
@@ -138,6 +141,7 @@ impl Refusal {
             Refusal::NoFrame { .. } => "no_frame",
             Refusal::NoAnswerYet { .. } => "no_answer_yet",
             Refusal::NotLoggedIn => "not_logged_in",
+            Refusal::LoginLinkUsed => "login_link_used",
             Refusal::AdminOnly { .. } => "admin_only",
             Refusal::StaleForm => "stale_form",
             Refusal::NotAssigned { .. } => "not_assigned",
@@ -173,7 +177,10 @@ impl Refusal {
             Refusal::NoSubmission { submission } => vec![("submission", text(submission))],
             Refusal::NoRun { run } => vec![("run", text(run))],
             Refusal::NoFrame { frame } => vec![("frame", text(frame))],
-            Refusal::NotLoggedIn | Refusal::StaleForm | Refusal::PasswordsDiffer => Vec::new(),
+            Refusal::NotLoggedIn
+            | Refusal::LoginLinkUsed
+            | Refusal::StaleForm
+            | Refusal::PasswordsDiffer => Vec::new(),
             Refusal::QueuePaused { since } => vec![("since", text(since))],
             Refusal::SlotsEmpty { item, slots } => vec![
                 ("item", text(item)),
@@ -212,6 +219,7 @@ impl Refusal {
             Refusal::NoFrame { frame: s("ab12") },
             Refusal::NoAnswerYet { item: s("a1") },
             Refusal::NotLoggedIn,
+            Refusal::LoginLinkUsed,
             Refusal::AdminOnly {
                 annotator: s("ann"),
             },
@@ -271,6 +279,11 @@ impl fmt::Display for Refusal {
             Refusal::NotLoggedIn => write!(
                 f,
                 "not logged in, or the session has expired: log in at /login"
+            ),
+            Refusal::LoginLinkUsed => write!(
+                f,
+                "this login link is unknown or has already been used: a link logs in once; ask \
+                 an admin for a new one, or log in with a password"
             ),
             Refusal::AdminOnly { annotator } => write!(
                 f,
