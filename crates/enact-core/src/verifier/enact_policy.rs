@@ -767,6 +767,25 @@ mod tests {
         );
     }
 
+    /// A `type` that is truthy but not a string (a number) fails ENACT's `.lower()` on that line
+    /// alone: its evaluator skips the line as an evaluation error with Python's message.
+    #[test]
+    fn a_truthy_type_that_is_not_a_string_skips_its_line_with_python_s_error() {
+        let number_type = vec![
+            line("a", "forward_world_modeling_3_steps", "[2, 1]", r#""[2, 1]""#),
+            r#"{"id": "b", "type": 5, "task_name": "kitchen", "key_frame_ids": ["10", "20", "30"], "gt_answer": [1, 2], "answer": "[1, 2]"}"#.to_owned(),
+        ];
+        let evaluation = run(&number_type).expect("runs");
+        assert_eq!(evaluation.evaluated.len(), 1);
+        assert_eq!(evaluation.skipped.len(), 1);
+        let skipped = &evaluation.skipped[0];
+        assert_eq!(skipped.line, 2);
+        assert_eq!(
+            skipped.reason.to_string(),
+            "evaluation_error: 'int' object has no attribute 'lower'"
+        );
+    }
+
     #[test]
     fn crashes_are_errors_naming_the_line() {
         let missing_type = vec![

@@ -291,6 +291,15 @@ mod tests {
         PyInt::parse_ascii(text).expect("test literal")
     }
 
+    /// Only an optionally signed, non-empty run of ASCII digits is an integer.
+    #[test]
+    fn parse_ascii_takes_digits_and_nothing_else() {
+        assert_eq!(PyInt::parse_ascii("-42"), Some(PyInt::Small(-42)));
+        for text in ["", "-", "1a", "a1", "-x", "1.5", " 1"] {
+            assert_eq!(PyInt::parse_ascii(text), None, "{text:?}");
+        }
+    }
+
     #[test]
     fn only_integral_finite_floats_are_integers() {
         assert_eq!(PyInt::from_integral_f64(-3.0), Some(PyInt::Small(-3)));
