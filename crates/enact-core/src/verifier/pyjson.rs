@@ -782,6 +782,15 @@ mod tests {
         );
     }
 
+    /// An exponent's sign is part of the number, as in `json.loads` (Python 3.11: `100.0`,
+    /// `0.02`, `[100.0, 0.5]`).
+    #[test]
+    fn signed_exponents_are_read_whole() {
+        assert_eq!(parse("1e+2").to_json(false), "100.0");
+        assert_eq!(parse("2E-2").to_json(false), "0.02");
+        assert_eq!(parse("[1e+2, 5e-1]").to_json(false), "[100.0, 0.5]");
+    }
+
     #[test]
     fn duplicate_keys_keep_first_position_and_last_value() {
         let value = parse(r#"{"a": 1, "b": 2, "a": 3}"#);
@@ -803,6 +812,15 @@ mod tests {
             "[\"\\x\"]",
             "Infinite",
             "[Infinit]",
+            "fals",
+            "[fx]",
+            "nul",
+            "tru",
+            // As long as the word they start: only the word itself is a value.
+            "fxxxx",
+            "[fxxxx]",
+            "[nxxx]",
+            "[txxx]",
         ] {
             assert!(
                 matches!(parse_python_json(bad), Err(PyJsonError::Decode { .. })),

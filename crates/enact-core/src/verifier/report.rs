@@ -257,6 +257,11 @@ mod tests {
         assert_eq!(mean, 0.30555555555555564);
         assert_ne!(naive, mean);
         assert_eq!(numpy_mean(&[1.0, 0.5]), 0.75);
+        // Eight values already take numpy's eight accumulators, not the plain loop: 1e16 keeps
+        // the ones its neighbours add in pairs (Python: ((r0+r1)+(r2+r3))+((r4+r5)+(r6+r7)) is
+        // 1.0000000000000006e16 where the running sum stays 1e16).
+        let eight = [1e16, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0];
+        assert_eq!(numpy_mean(&eight), 1.0000000000000006e16 / 8.0);
         // Long inputs split in halves rounded down to a multiple of eight.
         let long: Vec<f64> = (0..1000).map(|k| (k % 7) as f64 / 7.0).collect();
         assert!((numpy_mean(&long) - long.iter().sum::<f64>() / 1000.0).abs() < 1e-12);
