@@ -929,6 +929,13 @@ mod tests {
             "{agreement_csv}"
         );
         assert!(agreement_csv.contains("\na1,a2,"), "{agreement_csv}");
+        // The comparisons: each row's Welch figures, here the chosen pair over both items they
+        // scored (m7: 0.5 and 0.0; m4: 1.0 and 0.5).
+        let comparisons_csv = String::from_utf8(files[4].bytes.clone()).unwrap();
+        assert!(
+            comparisons_csv.contains(",all,all,2,0.2500,0.7500,-0.5000,"),
+            "{comparisons_csv}"
+        );
         let tex = String::from_utf8(files[6].bytes.clone()).unwrap();
         assert!(tex.contains("\\toprule") && tex.contains("Human Performance"));
         // Only the Human row is bold: a model's row is printed as it is.
