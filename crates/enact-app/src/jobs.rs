@@ -439,7 +439,7 @@ async fn claim(
     working: &[i64],
 ) -> Option<JobRow> {
     let claimed = async {
-        let mut tx = hub.write(Lane::Bulk).await?;
+        let mut tx = hub.write(Lane::Interactive).await?;
         let now = now_ms();
         let until = now + millis(settings.lease);
         let job = store::jobs::claim(&mut tx, kinds, owner, now, until, working).await?;
@@ -554,7 +554,7 @@ async fn renew_lease(
     owner: &str,
     until: i64,
 ) -> Result<Option<JobState>, AppError> {
-    let mut tx = hub.write(Lane::Bulk).await?;
+    let mut tx = hub.write(Lane::Interactive).await?;
     let state = store::jobs::renew(&mut tx, id.0, owner, until).await?;
     tx.commit().await?;
     Ok(state)
@@ -604,7 +604,7 @@ async fn finish(
     error: Option<&str>,
 ) {
     let released = async {
-        let mut tx = hub.write(Lane::Bulk).await?;
+        let mut tx = hub.write(Lane::Interactive).await?;
         let held = store::jobs::release(&mut tx, id.0, owner, state, run_after_ms, error).await?;
         tx.commit().await?;
         Ok::<_, AppError>(held)
