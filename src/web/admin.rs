@@ -9,8 +9,7 @@ use axum::response::Html;
 use axum::routing::{get, post};
 use serde::Deserialize;
 
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{PageError, RenderPage};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
 use crate::app::annotation::{self, Assignment};

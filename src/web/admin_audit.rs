@@ -9,8 +9,7 @@ use axum::routing::get;
 use serde::Deserialize;
 
 use super::AppState;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{PageError, RenderPage};
 use super::extract::Query;
 use super::session::Admin;
 use crate::app::audit;

@@ -9,9 +9,7 @@ use axum::routing::{get, post};
 use serde::Deserialize;
 
 use super::admin::render_admin;
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Json, Path};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};

@@ -13,9 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use super::AppState;
 use super::api::frame_url;
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Json, Path};
 use super::i18n::{Tr, msg};
 use super::session::{LoggedIn, Protected};

@@ -12,8 +12,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::auth::TokenCaller;
-use super::error::ApiError;
-use super::error::PageError;
+use super::error::{ApiError, PageError};
 use super::extract::{Json, Path, required_whole_number};
 use super::openapi::{ApiRoute, Verb};
 use super::quality::{PageQuery, render};

@@ -14,9 +14,7 @@ use schemars::JsonSchema;
 use serde::Deserialize;
 
 use super::auth::TokenCaller;
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Json, MOST_WHOLE_NUMBER, Path, Query};
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};

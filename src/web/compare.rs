@@ -11,9 +11,7 @@ use axum::routing::get;
 use serde::Deserialize;
 use serde_json::json;
 
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Path, Query};
 use super::i18n::Tr;
 use super::openapi::{ApiRoute, Verb};

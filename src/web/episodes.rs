@@ -15,9 +15,7 @@ use axum::routing::{get, post};
 use serde::{Deserialize, Serialize};
 
 use super::api::frame_url;
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Json, Path};
 use super::session::{Admin, LoggedIn, Protected};
 use super::{AppError, AppState};

@@ -13,9 +13,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use super::auth::TokenCaller;
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Json, Path, Query};
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};

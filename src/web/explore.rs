@@ -14,9 +14,7 @@ use serde::Deserialize;
 use serde_json::json;
 
 use super::annotate::direction_key;
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Path, Query};
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};

@@ -16,9 +16,7 @@ use axum::routing::get;
 use serde::Serialize;
 
 use super::api::matches_etag;
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::Path;
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};

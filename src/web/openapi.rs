@@ -21,8 +21,7 @@ use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde_json::{Map, Value, json};
 
 use super::auth::{ScopeGuard, require_scope};
-use super::error::PageError;
-use super::error::{ApiError, RenderPage};
+use super::error::{ApiError, PageError, RenderPage};
 use super::{AppError, AppState};
 use crate::app::refusal::Refusal;
 use crate::core::credentials::Scope;

@@ -12,9 +12,7 @@ use axum::response::{Html, IntoResponse, Response};
 use axum::routing::get;
 use serde::Deserialize;
 
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Path, Query};
 use super::i18n::Tr;
 use super::{AppError, AppState};

@@ -14,9 +14,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use super::auth::TokenCaller;
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Json, MOST_WHOLE_NUMBER, Path, Query, required_whole_number};
 use super::openapi::{ApiRoute, Verb};
 use super::session::{Admin, Protected};

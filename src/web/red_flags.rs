@@ -9,9 +9,7 @@ use axum::routing::get;
 use serde::Deserialize;
 use serde_json::json;
 
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Path, Query};
 use super::openapi::{ApiRoute, Verb};
 use super::session::Admin;

@@ -14,9 +14,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::auth::TokenCaller;
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Json, Path};
 use super::openapi::{ApiRoute, Verb};
 use super::session::{Admin, Protected};

@@ -28,9 +28,7 @@ use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
 use super::cookies::cookie;
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::i18n::{Locale, Tr, locale_cookie};
 use super::{AppError, AppState};
 use crate::app::annotators::{self, SESSION_LIFETIME, now_ms};

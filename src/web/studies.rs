@@ -15,9 +15,7 @@ use serde_json::json;
 
 use super::agreement::fixed;
 use super::auth::TokenCaller;
-use super::error::ApiError;
-use super::error::PageError;
-use super::error::RenderPage;
+use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Json, Path, Query};
 use super::i18n::Tr;
 use super::openapi::{ApiRoute, Verb};
