@@ -334,18 +334,39 @@ pub async fn spawn_app_with_release() -> (TestServer, Vec<Value>) {
 pub async fn spawn_app_with_release_as(datasets: &[&str]) -> (TestServer, Vec<Value>) {
     let records = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
     let shared = records.clone();
-    let datasets: Vec<String> = datasets.iter().map(|d| (*d).to_owned()).collect();
     let server = spawn_app_with(|pool, dir| async move {
-        let root = dir.join("release");
-        let written = write_release(&root, &[3, 4]);
-        for dataset in &datasets {
-            import(&pool, &root, &options(dataset)).await;
-        }
-        *shared.lock().expect("lock") = written;
+        *shared.lock().expect("lock") = import_small_release(&pool, &dir, datasets).await;
     })
     .await;
     let records = records.lock().expect("lock").clone();
     (server, records)
+}
+
+/// [`spawn_app_with_release`], the server's hub opened as `enact-hub serve` opens it: on
+/// SQLite with the write gate's own connection, which polls for the write lock, and the
+/// write-ahead log checkpointed beside it. (Other tests' servers write on the test's pool.)
+pub async fn spawn_serving_app_with_release() -> (TestServer, Vec<Value>) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (pool, db) = fresh_db_located(&dir).await;
+    let records = import_small_release(&pool, dir.path(), &["mini"]).await;
+    let hub = Hub::open_serving(&db, &enact_hub::app::cache::CacheLimits::default())
+        .await
+        .expect("open the database as a server does")
+        .with_import_dir(Some(dir.path().to_path_buf()));
+    let mut server = serve_hub(hub, pool, dir, &WebConfig::default()).await;
+    server.db = db;
+    (server, records)
+}
+
+/// Writes the small generated release (L = 3 and 4) into `dir` and imports it once under
+/// each of `datasets`; its records.
+async fn import_small_release(pool: &Pool, dir: &Path, datasets: &[&str]) -> Vec<Value> {
+    let root = dir.join("release");
+    let written = write_release(&root, &[3, 4]);
+    for dataset in datasets {
+        import(pool, &root, &options(dataset)).await;
+    }
+    written
 }
 
 impl TestServer {

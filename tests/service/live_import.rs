@@ -56,7 +56,7 @@ async fn cli_import(mut args: Vec<String>) -> Value {
 #[tokio::test(flavor = "multi_thread", worker_threads = 4)]
 #[ignore = "runs alone, after the suite: cargo test --test service -- --ignored live_import"]
 async fn answers_and_submissions_flow_while_a_2000_item_dataset_is_imported_and_replaced() {
-    let (server, records) = spawn_app_with_release().await;
+    let (server, records) = spawn_serving_app_with_release().await;
     let server = Arc::new(server);
     let (_, token) = api_token(
         &server.pool,

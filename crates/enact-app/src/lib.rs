@@ -159,8 +159,9 @@ pub fn job_handlers() -> jobs::JobHandlers {
 #[derive(Clone)]
 pub struct Hub {
     pool: Pool,
-    /// Where write transactions begin ([`Hub::begin_in`]): the pool itself, or for a server on
-    /// SQLite a connection of its own ([`store::open_serving_pools`]).
+    /// Where write transactions begin ([`Hub::begin_in`]): the pool itself, or on SQLite a
+    /// connection of its own that polls for the write lock ([`store::open_serving_pools`],
+    /// [`store::open_command_pools`]).
     writer: Pool,
     /// Whether [`Hub::watch_content`] also checkpoints the write-ahead log, which the writer's
     /// own connection then leaves to it.
@@ -313,7 +314,7 @@ impl Hub {
     }
 
     async fn open_with(location: &Path, page_cache_kib: u64) -> anyhow::Result<Hub> {
-        let pool = match store::Location::of(location) {
+        let (pool, writer) = match store::Location::of(location) {
             store::Location::Postgres(url) => {
                 let pool = store::db::open_postgres(&url, store::MAX_CONNECTIONS)
                     .await
@@ -323,16 +324,19 @@ impl Hub {
                             store::Location::redacted(&url)
                         )
                     })?;
-                Pool::Pg(pool)
+                (Pool::Pg(pool.clone()), Pool::Pg(pool))
             }
             store::Location::Sqlite(path) => {
-                let pool = store::open_with_page_cache(&path, page_cache_kib)
+                let (pool, writer) = store::open_command_pools(&path, page_cache_kib)
                     .await
                     .map_err(|e| anyhow::anyhow!("cannot open database {}: {e}", path.display()))?;
-                Pool::Sqlite(pool)
+                (Pool::Sqlite(pool), Pool::Sqlite(writer))
             }
         };
-        Ok(Hub::new(pool, Quotas::default()))
+        Ok(Hub {
+            writer,
+            ..Hub::new(pool, Quotas::default())
+        })
     }
 
     /// The hub writing new frames to `store` and reading there the frames the database does

@@ -183,7 +183,18 @@ impl Pool {
     /// assignment) hold across every server instance exactly as they do in one SQLite process.
     pub async fn begin(&self) -> Result<Tx, sqlx::Error> {
         match self {
-            Pool::Sqlite(p) => Ok(Tx::sqlite(p.begin_with("BEGIN IMMEDIATE").await?)),
+            Pool::Sqlite(p) => {
+                let asked = std::time::Instant::now();
+                loop {
+                    match p.begin_with("BEGIN IMMEDIATE").await {
+                        Ok(tx) => return Ok(Tx::sqlite(tx)),
+                        // A gate's connection gives up after `WRITE_POLL` and asks again;
+                        // any other waited the whole `WRITE_WAIT` in SQLite already.
+                        Err(e) if is_busy(&e) && asked.elapsed() < crate::WRITE_WAIT => {}
+                        Err(e) => return Err(e),
+                    }
+                }
+            }
             Pool::Pg(p) => {
                 let mut tx = p.begin().await?;
                 // The timeout first (left to right), for this transaction only.

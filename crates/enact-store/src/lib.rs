@@ -91,9 +91,21 @@ pub async fn open_with_page_cache(
     path: &Path,
     page_cache_kib: u64,
 ) -> Result<SqlitePool, sqlx::Error> {
-    let pool = sqlite_pool(path, page_cache_kib, MAX_CONNECTIONS, true).await?;
+    let pool = sqlite_pool(path, page_cache_kib, MAX_CONNECTIONS, Checkpoints::OnCommit).await?;
     migrations::SQLITE.migrator().await?.run(&pool).await?;
     Ok(pool)
+}
+
+/// A command's pools on the SQLite file at `path` (migrated): [`MAX_CONNECTIONS`] for reads
+/// and one for the write gate's transactions, which takes the write lock as a server's does
+/// ([`WRITE_POLL`]) and copies the write-ahead log into the database when a commit fills it.
+pub async fn open_command_pools(
+    path: &Path,
+    page_cache_kib: u64,
+) -> Result<(SqlitePool, SqlitePool), sqlx::Error> {
+    let pool = open_with_page_cache(path, page_cache_kib).await?;
+    let writer = sqlite_pool(path, page_cache_kib, 1, Checkpoints::Writer).await?;
+    Ok((pool, writer))
 }
 
 /// A server's pools on the SQLite file at `path` (migrated): [`MAX_CONNECTIONS`] for reads
@@ -107,9 +119,9 @@ pub async fn open_serving_pools(
     path: &Path,
     page_cache_kib: u64,
 ) -> Result<(SqlitePool, SqlitePool), sqlx::Error> {
-    let pool = sqlite_pool(path, page_cache_kib, MAX_CONNECTIONS, true).await?;
+    let pool = sqlite_pool(path, page_cache_kib, MAX_CONNECTIONS, Checkpoints::OnCommit).await?;
     migrations::SQLITE.migrator().await?.run(&pool).await?;
-    let writer = sqlite_pool(path, page_cache_kib, 1, false).await?;
+    let writer = sqlite_pool(path, page_cache_kib, 1, Checkpoints::Beside).await?;
     Ok((pool, writer))
 }
 
@@ -137,13 +149,38 @@ pub async fn checkpoint_log(pool: SqlitePool) {
     }
 }
 
-/// `connections` to the file at `path`; `autocheckpoint`: whether a commit that fills the
-/// write-ahead log copies it into the database (SQLite's default).
+/// How long a write gate's connection lets SQLite wait for the write lock before
+/// [`db::Pool::begin`] asks again.
+///
+/// SQLite hands its lock out by polling: a connection that finds it taken sleeps 1, 2, 5, 10 …
+/// then 100 ms between tries. Against another process's stream of transactions (a
+/// command-line import's batches, a few milliseconds apart) such a sleeper wakes inside the
+/// next batch again and again: a server's writes waited 130, 230 … 630 ms, in steps of 100,
+/// for batches of about 100 ms. At this bound SQLite tries at 0, 1, 3 and 5 ms and gives up,
+/// and the pool begins again at once, so a writer waits about one transaction of the other
+/// process, up to [`WRITE_WAIT`] in all.
+pub const WRITE_POLL: Duration = Duration::from_millis(5);
+
+/// What one of a pool's connections does about the write-ahead log and the write lock.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Checkpoints {
+    /// Readers and writes outside the gate: a commit that fills the log copies it into the
+    /// database (SQLite's default), and a write lock is waited for up to [`WRITE_WAIT`].
+    OnCommit,
+    /// A command's gate connection: checkpoints as `OnCommit` does, takes the lock by
+    /// [`WRITE_POLL`].
+    Writer,
+    /// A server's gate connection: checkpoints nothing ([`checkpoint_log`] does it beside),
+    /// takes the lock by [`WRITE_POLL`].
+    Beside,
+}
+
+/// `connections` to the file at `path`, checkpointing and waiting as `checkpoints` says.
 async fn sqlite_pool(
     path: &Path,
     page_cache_kib: u64,
     connections: u32,
-    autocheckpoint: bool,
+    checkpoints: Checkpoints,
 ) -> Result<SqlitePool, sqlx::Error> {
     // A negative cache_size is in KiB.
     let cache_size = format!("-{}", page_cache_kib.max(1));
@@ -155,17 +192,20 @@ async fn sqlite_pool(
         // last transactions, never corrupt the file.
         .synchronous(SqliteSynchronous::Normal)
         .foreign_keys(true)
-        .busy_timeout(WRITE_WAIT)
+        .busy_timeout(match checkpoints {
+            Checkpoints::OnCommit => WRITE_WAIT,
+            Checkpoints::Writer | Checkpoints::Beside => WRITE_POLL,
+        })
         .pragma("cache_size", cache_size)
         .pragma("temp_store", "memory")
         // One import is one transaction, so the write-ahead log grows to the size of its new
         // frames. SQLite reuses the log file from the start after a checkpoint but keeps its
         // size; this limit makes it cut the file back once the log is reset.
         .pragma("journal_size_limit", JOURNAL_SIZE_LIMIT_BYTES.to_string());
-    let options = if autocheckpoint {
-        options
-    } else {
+    let options = if checkpoints == Checkpoints::Beside {
         options.pragma("wal_autocheckpoint", "0")
+    } else {
+        options
     };
     SqlitePoolOptions::new()
         .max_connections(connections)
@@ -478,6 +518,46 @@ mod tests {
             .fetch_one(pool)
             .await
             .unwrap()
+    }
+
+    async fn busy_timeout(pool: &SqlitePool) -> i64 {
+        sqlx::query_scalar("PRAGMA busy_timeout")
+            .fetch_one(pool)
+            .await
+            .unwrap()
+    }
+
+    /// A gate's connection lets SQLite wait only [`WRITE_POLL`] for the write lock, then
+    /// [`db::Pool::begin`] asks again: a lock held twenty times as long is waited out, not
+    /// answered as busy. Other connections wait in SQLite for the whole [`WRITE_WAIT`].
+    #[tokio::test]
+    async fn a_gate_connection_asks_for_the_write_lock_again_until_it_is_free() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("hub.db");
+        let (pool, writer) = open_serving_pools(&path, 1024).await.unwrap();
+        let (command_pool, command_writer) = open_command_pools(&path, 1024).await.unwrap();
+        let poll = i64::try_from(WRITE_POLL.as_millis()).unwrap();
+        let wait = i64::try_from(WRITE_WAIT.as_millis()).unwrap();
+        assert_eq!(busy_timeout(&writer).await, poll);
+        assert_eq!(busy_timeout(&command_writer).await, poll);
+        assert_eq!(busy_timeout(&pool).await, wait);
+        assert_eq!(busy_timeout(&command_pool).await, wait);
+        // A command's writer checkpoints as it commits; it has nothing beside it to do so.
+        assert_eq!(autocheckpoint(&command_writer).await, 1000);
+
+        for gate in [writer, command_writer] {
+            let holder = pool.begin_with("BEGIN IMMEDIATE").await.unwrap();
+            let released = tokio::spawn(async move {
+                tokio::time::sleep(WRITE_POLL * 20).await;
+                holder.commit().await.unwrap();
+            });
+            let tx = db::Pool::Sqlite(gate.clone())
+                .begin()
+                .await
+                .expect("the write lock, once the holder committed");
+            tx.rollback().await.unwrap();
+            released.await.unwrap();
+        }
     }
 
     /// The gate's connection leaves the write-ahead log to [`checkpoint_log`], which copies it
