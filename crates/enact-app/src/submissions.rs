@@ -276,16 +276,15 @@ where
         }
     }
     let attempt = take_attempt(hub, caller).await?;
-    let stored = store_submission(
-        hub,
-        caller,
-        &dataset,
+    let arrived = Arrived {
         metadata,
         provenance,
         idempotency_key,
-        body,
-    )
-    .await;
+    };
+    let stored = match body.await {
+        Ok(body) => store_submission(hub, caller, &dataset, arrived, body).await,
+        Err(e) => Err(e),
+    };
     // The server was too busy to take it on (a full scoring queue, a write lock held too
     // long), or a twin request with the same key stored it first: neither is the caller's
     // attempt to pay for (a repeat sent after the first one ended costs none).
@@ -311,20 +310,27 @@ async fn give_back_attempt(hub: &Hub, attempt: i64) {
     }
 }
 
-/// Reads, scores and stores a submission whose attempt is counted ([`submit`]).
-async fn store_submission<B>(
+/// What a submission came with besides its body ([`submit`]).
+struct Arrived<'a> {
+    metadata: SubmissionMetadata,
+    provenance: Provenance,
+    idempotency_key: Option<&'a str>,
+}
+
+/// Scores and stores a submission whose attempt is counted ([`submit`]).
+async fn store_submission(
     hub: &Hub,
     caller: &Caller,
     dataset: &Dataset,
-    metadata: SubmissionMetadata,
-    provenance: Provenance,
-    idempotency_key: Option<&str>,
-    body: B,
-) -> Result<Submitted, AppError>
-where
-    B: Future<Output = Result<Vec<u8>, AppError>>,
-{
-    let body = Arc::new(body.await?);
+    arrived: Arrived<'_>,
+    body: Vec<u8>,
+) -> Result<Submitted, AppError> {
+    let Arrived {
+        metadata,
+        provenance,
+        idempotency_key,
+    } = arrived;
+    let body = Arc::new(body);
     let sha256 = body_sha256(&body);
     let mut attempt = 1;
     let (dataset, mut tx, targets, scored, verdicts) = loop {
