@@ -9,43 +9,10 @@ use super::metrics::LoginFailure;
 use super::{AppError, Hub};
 use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
+pub use crate::core::credentials::Caller;
 use crate::core::credentials::{self, NewToken, Role, Scope};
 use crate::store;
 pub use crate::store::accounts::TokenListing;
-
-/// A token that authenticated a request.
-#[derive(Debug, Clone)]
-pub struct Caller {
-    pub token_id: i64,
-    pub account_id: i64,
-    pub account_name: String,
-    pub scopes: Vec<Scope>,
-    pub daily_quota: Option<i64>,
-    pub total_quota: Option<i64>,
-}
-
-impl Caller {
-    /// Who this caller is in the audit log.
-    pub fn actor(&self) -> Actor {
-        Actor::Account(self.account_name.clone())
-    }
-
-    pub fn has(&self, scope: Scope) -> bool {
-        self.scopes.contains(&scope)
-    }
-
-    /// Refuses a caller without `scope`.
-    pub fn require(&self, scope: Scope) -> Result<(), AppError> {
-        if self.has(scope) {
-            Ok(())
-        } else {
-            Err(AppError::NotPermitted(format!(
-                "this token lacks the `{}` scope",
-                scope.as_str()
-            )))
-        }
-    }
-}
 
 /// The caller `presented` stands for, if it may do what needs `scope`: refused as
 /// unauthorized when the token is unknown or revoked, as forbidden when it lacks the scope.
@@ -56,7 +23,12 @@ pub async fn authorize(hub: &Hub, presented: &str, scope: Scope) -> Result<Calle
             hub.metrics.login_failed(LoginFailure::Token);
         }
     })?;
-    caller.require(scope)?;
+    if !caller.has(scope) {
+        return Err(AppError::NotPermitted(format!(
+            "this token lacks the `{}` scope",
+            scope.as_str()
+        )));
+    }
     Ok(caller)
 }
 

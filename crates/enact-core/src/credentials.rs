@@ -106,6 +106,28 @@ pub fn scopes_from_text(text: &str) -> Vec<Scope> {
         .collect()
 }
 
+/// A token that authenticated a request, with its account: who a use case acts for.
+#[derive(Debug, Clone)]
+pub struct Caller {
+    pub token_id: i64,
+    pub account_id: i64,
+    pub account_name: String,
+    pub scopes: Vec<Scope>,
+    pub daily_quota: Option<i64>,
+    pub total_quota: Option<i64>,
+}
+
+impl Caller {
+    /// Who this caller is in the audit log.
+    pub fn actor(&self) -> crate::audit::Actor {
+        crate::audit::Actor::Account(self.account_name.clone())
+    }
+
+    pub fn has(&self, scope: Scope) -> bool {
+        self.scopes.contains(&scope)
+    }
+}
+
 /// A freshly generated token. The secret exists only in this value; print it once.
 pub struct NewToken {
     pub token: String,

@@ -9,7 +9,7 @@ use super::items::json_column;
 use enact_core::model_run::{ItemOutcome, RunFailure};
 use enact_core::release::ReleaseItem;
 
-use enact_core::credentials::{Scope, scopes_from_text};
+use enact_core::credentials::{Caller, scopes_from_text};
 
 /// A stored model run.
 #[derive(Debug, Clone)]
@@ -438,19 +438,8 @@ pub async fn set_submission(
     })
 }
 
-/// A token and its account, as a use case's caller is made of them.
-#[derive(Debug, Clone)]
-pub struct TokenCaller {
-    pub token_id: i64,
-    pub account_id: i64,
-    pub account_name: String,
-    pub scopes: Vec<Scope>,
-    pub daily_quota: Option<i64>,
-    pub total_quota: Option<i64>,
-}
-
 /// The token with id `token`, with its account, revoked or not.
-pub async fn token_caller(conn: &mut Conn, token: i64) -> Result<Option<TokenCaller>, sqlx::Error> {
+pub async fn token_caller(conn: &mut Conn, token: i64) -> Result<Option<Caller>, sqlx::Error> {
     on!(conn, |c| {
         let row = sqlx::query(
             "SELECT t.id, t.account, a.name, t.scopes, t.daily_quota, t.total_quota \
@@ -461,7 +450,7 @@ pub async fn token_caller(conn: &mut Conn, token: i64) -> Result<Option<TokenCal
         .await?;
         row.map(|row| {
             let scopes: String = row.try_get("scopes")?;
-            Ok(TokenCaller {
+            Ok(Caller {
                 token_id: row.try_get("id")?,
                 account_id: row.try_get("account")?,
                 account_name: row.try_get("name")?,

@@ -21,7 +21,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use bytes::Bytes;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use tokio::task::JoinSet;
 
@@ -37,7 +37,7 @@ pub use server::{
 };
 
 use super::refusal::Refusal;
-use super::submissions::{self, SubmissionRow, Submitted};
+use super::submissions::{self, Submitted};
 use super::tokens::{self, Caller};
 use super::{AppError, Hub, datasets, frames, items};
 use crate::Lane;
@@ -198,17 +198,9 @@ async fn runs_token(tx: &mut store::Tx) -> Result<i64, AppError> {
 
 async fn run_caller(hub: &Hub, token: i64) -> Result<Caller, AppError> {
     let mut conn = hub.conn().await?;
-    let t = store::runs::token_caller(&mut conn, token)
+    store::runs::token_caller(&mut conn, token)
         .await?
-        .ok_or_else(|| AppError::internal(format!("the token {token} of a model run vanished")))?;
-    Ok(Caller {
-        token_id: t.token_id,
-        account_id: t.account_id,
-        account_name: t.account_name,
-        scopes: t.scopes,
-        daily_quota: t.daily_quota,
-        total_quota: t.total_quota,
-    })
+        .ok_or_else(|| AppError::internal(format!("the token {token} of a model run vanished")))
 }
 
 /// A run's identity as `spec` gives it, checked.
@@ -367,13 +359,8 @@ struct Pending {
 /// Where a run finds its items and keeps its replies: the hub's own database, or (for a
 /// run against a remote hub) the hub's API and a cache file. The rest of a run is the same.
 trait Ledger: Send + Sync + 'static {
-    /// The chat-completions request for `item`.
-    fn body(
-        &self,
-        item: &Pending,
-        model: &str,
-        params: &GenerationParams,
-    ) -> impl Future<Output = Result<Bytes, AppError>> + Send;
+    /// The question of `item` and its images, each with its label.
+    fn item(&self, item: &Pending) -> impl Future<Output = Result<Asked, AppError>> + Send;
 
     /// Keeps `row` durably (committed or fsynced) before the item counts as done.
     fn record(
@@ -381,6 +368,91 @@ trait Ledger: Send + Sync + 'static {
         item: &Pending,
         row: &RunItemRow,
     ) -> impl Future<Output = Result<(), AppError>> + Send;
+
+    /// Every reply kept for the run's items, in the items' order.
+    fn rows(&self) -> impl Future<Output = Result<Vec<RunItemRow>, AppError>> + Send;
+
+    /// What the run's submission is stamped with.
+    fn head(&self) -> &RunHead;
+
+    /// What names the run in its submission's idempotency key ([`submission_key`]).
+    fn run_key(&self) -> String;
+
+    /// Submits `body`, the run's answers, `stamped`, under the idempotency key `key`; the
+    /// submission's id.
+    fn send(
+        &self,
+        stamped: Stamped,
+        key: &str,
+        body: String,
+    ) -> impl Future<Output = Result<i64, AppError>> + Send;
+}
+
+/// An item as a model is asked it: its question, and its images' labels and PNG bytes.
+type Asked = (String, Vec<(String, Bytes)>);
+
+/// What a run's tail ([`ask_and_report`]) is told besides its ledger.
+struct Tail<'a> {
+    dataset: String,
+    model: &'a str,
+    run: String,
+    /// The run's row, for a run kept in this hub's database.
+    run_id: Option<i64>,
+    params: &'a GenerationParams,
+    spec: &'a RunSpec,
+    settings: &'a CallSettings,
+}
+
+/// The end every run shares, kept here or against another hub: asks the items `todo` holds,
+/// reads back every reply the ledger keeps and reports them; when the run was not stopped and
+/// `spec.submit_as` names a model, submits the answers first.
+async fn ask_and_report<L: Ledger>(
+    ledger: Arc<L>,
+    asker: Arc<asker::Asker>,
+    tail: Tail<'_>,
+    todo: Vec<Pending>,
+    mut state: RunProgress,
+    progress: ProgressFn<'_>,
+    stop: StopFn<'_>,
+) -> Result<RunReport, AppError> {
+    let stopped = ask_pending(
+        ledger.clone(),
+        asker,
+        tail.model,
+        tail.params,
+        todo,
+        &mut state,
+        tail.spec.prices,
+        tail.settings.concurrency,
+        progress,
+        stop,
+    )
+    .await?;
+    let rows = ledger.rows().await?;
+    let mut report = RunReport {
+        run: tail.run,
+        run_id: tail.run_id,
+        dataset: tail.dataset,
+        progress: state,
+        failures: failures(&rows),
+        submission: None,
+        stopped,
+    };
+    if !stopped && let Some(model) = &tail.spec.submit_as {
+        let body = answers_jsonl(&rows)?;
+        let stamped = stamped(
+            ledger.head(),
+            tail.spec,
+            tail.settings,
+            &rows,
+            &report,
+            model,
+        )?;
+        let key = submission_key(&ledger.run_key(), &body);
+        report.submission = Some(ledger.send(stamped, &key, body).await?);
+    }
+    progress(&report.progress);
+    Ok(report)
 }
 
 /// The replies of a run's items that are stored already, counted.
@@ -467,7 +539,8 @@ async fn ask_pending<L: Ledger>(
             let (ledger, asker) = (ledger.clone(), asker.clone());
             let (model, params) = (model.to_owned(), params.clone());
             tasks.spawn(async move {
-                let body = ledger.body(&item, &model, &params).await?;
+                let (question, pngs) = ledger.item(&item).await?;
+                let body = request_body(pngs, question, &model, &params).await?;
                 let asked = asker.ask(body).await;
                 let (outcome, error) = match asked.outcome {
                     Ok(_) => (ItemOutcome::Answered, asked.last_error),
@@ -530,30 +603,61 @@ async fn ask_pending<L: Ledger>(
 /// A run kept in the hub's own database: items and frames from the store, one row per reply.
 struct StoreLedger {
     hub: Hub,
-    dataset: String,
-    run: i64,
+    run: RunRow,
+    head: RunHead,
 }
 
 impl Ledger for StoreLedger {
-    async fn body(
-        &self,
-        item: &Pending,
-        model: &str,
-        params: &GenerationParams,
-    ) -> Result<Bytes, AppError> {
-        let stored = items::get(&self.hub, &self.dataset, &item.item_id).await?;
+    async fn item(&self, item: &Pending) -> Result<Asked, AppError> {
+        let stored = items::get(&self.hub, &self.run.dataset, &item.item_id).await?;
         let mut pngs = Vec::with_capacity(stored.images.len());
         for image in &stored.images {
             pngs.push((image.label(), frames::png(&self.hub, &image.sha256).await?));
         }
-        request_body(pngs, stored.question.clone(), model, params).await
+        Ok((stored.question.clone(), pngs))
     }
 
     async fn record(&self, item: &Pending, row: &RunItemRow) -> Result<(), AppError> {
         let mut tx = self.hub.write(Lane::Bulk).await?;
-        store::runs::record_item(&mut tx, self.run, item.key, row).await?;
+        store::runs::record_item(&mut tx, self.run.id, item.key, row).await?;
         tx.commit().await?;
         Ok(())
+    }
+
+    async fn rows(&self) -> Result<Vec<RunItemRow>, AppError> {
+        let mut conn = self.hub.conn().await?;
+        Ok(store::runs::items(&mut conn, self.run.id).await?)
+    }
+
+    fn head(&self) -> &RunHead {
+        &self.head
+    }
+
+    fn run_key(&self) -> String {
+        self.run.id.to_string()
+    }
+
+    /// Submits through the submission use case, as the run's token (quotas, scoring, audit),
+    /// and links the submission to the run.
+    async fn send(&self, stamped: Stamped, key: &str, body: String) -> Result<i64, AppError> {
+        let Stamped { stamp, metadata } = stamped;
+        let caller = run_caller(&self.hub, self.run.token).await?;
+        let bytes = body.into_bytes();
+        let submitted = submissions::submit(
+            &self.hub,
+            &caller,
+            &self.run.dataset,
+            metadata,
+            Provenance::Run,
+            Some(key),
+            async move { Ok(bytes) },
+        )
+        .await?;
+        let (Submitted::Created(row) | Submitted::Repeated(row)) = submitted;
+        let mut tx = self.hub.write(Lane::Bulk).await?;
+        store::runs::set_submission(&mut tx, self.run.id, row.id, &stamp).await?;
+        tx.commit().await?;
+        Ok(row.id)
     }
 }
 
@@ -621,43 +725,21 @@ pub async fn execute(
         spec.retry_failed,
     );
     drop(states);
-    let ledger = Arc::new(StoreLedger {
-        hub: hub.clone(),
+    let tail = Tail {
         dataset: run.dataset.clone(),
-        run: run.id,
-    });
-    let stopped = ask_pending(
-        ledger,
-        asker,
-        &run.model,
-        &params,
-        todo,
-        &mut state,
-        spec.prices,
-        settings.concurrency,
-        progress,
-        stop,
-    )
-    .await?;
-
-    let mut conn = hub.conn().await?;
-    let rows = store::runs::items(&mut conn, run.id).await?;
-    drop(conn);
-    let mut report = RunReport {
+        model: &run.model,
         run: run.name.clone(),
         run_id: Some(run.id),
-        dataset: run.dataset.clone(),
-        progress: state,
-        failures: failures(&rows),
-        submission: None,
-        stopped,
+        params: &params,
+        spec,
+        settings,
     };
-    if !stopped && let Some(model) = &spec.submit_as {
-        let row = submit(hub, &run, spec, settings, &rows, &report, model).await?;
-        report.submission = Some(row.id);
-    }
-    progress(&report.progress);
-    Ok(report)
+    let ledger = Arc::new(StoreLedger {
+        hub: hub.clone(),
+        head: RunHead::of_row(&run),
+        run: run.clone(),
+    });
+    ask_and_report(ledger, asker, tail, todo, state, progress, stop).await
 }
 
 /// What every run checks before it starts.
@@ -731,18 +813,34 @@ struct Stamped {
     metadata: SubmissionMetadata,
 }
 
-/// The parts of a run that its stamp names.
-struct StampOf<'a> {
-    run: &'a str,
-    endpoint: &'a str,
-    model: &'a str,
-    params: &'a str,
-    prompt_version: &'a str,
-    prompt_hash: &'a str,
+/// The parts of a run that its stamp names: a run's row holds them, a remote run's cache
+/// file keeps them in its header.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct RunHead {
+    run: String,
+    endpoint: String,
+    model: String,
+    /// The generation parameters as JSON.
+    params: String,
+    prompt_version: String,
+    prompt_hash: String,
+}
+
+impl RunHead {
+    fn of_row(run: &RunRow) -> RunHead {
+        RunHead {
+            run: run.name.clone(),
+            endpoint: run.endpoint.clone(),
+            model: run.model.clone(),
+            params: run.params.clone(),
+            prompt_version: run.prompt_version.clone(),
+            prompt_hash: run.prompt_hash.clone(),
+        }
+    }
 }
 
 fn stamped(
-    of: &StampOf<'_>,
+    of: &RunHead,
     spec: &RunSpec,
     settings: &CallSettings,
     rows: &[RunItemRow],
@@ -750,18 +848,18 @@ fn stamped(
     submit_as: &str,
 ) -> Result<Stamped, AppError> {
     let usage = tally(rows, spec.prices).usage;
-    let host = endpoint_host(of.endpoint);
+    let host = endpoint_host(&of.endpoint);
     let stamp = RunStamp {
-        run: of.run.to_owned(),
+        run: of.run.clone(),
         endpoint_host: host.clone(),
-        model: of.model.to_owned(),
-        params: serde_json::from_str(of.params)?,
+        model: of.model.clone(),
+        params: serde_json::from_str(&of.params)?,
         limit: spec.limit,
         concurrency: settings.concurrency,
         max_retries: settings.max_retries,
         timeout_s: settings.timeout.as_secs_f64(),
-        prompt_version: of.prompt_version.to_owned(),
-        prompt_hash: of.prompt_hash.to_owned(),
+        prompt_version: of.prompt_version.clone(),
+        prompt_hash: of.prompt_hash.clone(),
         hub_version: crate::core::version::BUILD.to_owned(),
         usage,
         prices: spec.prices,
@@ -777,7 +875,7 @@ fn stamped(
         prompt_version: format!(
             "{} ({})",
             of.prompt_version,
-            of.prompt_hash.get(..12).unwrap_or(of.prompt_hash)
+            of.prompt_hash.get(..12).unwrap_or(&of.prompt_hash)
         ),
         notes: stamp.clone(),
     };
@@ -792,47 +890,4 @@ fn submission_key(run: &str, body: &str) -> String {
         "model-run-{run}-{}",
         &hex::encode(Sha256::digest(body.as_bytes()))[..16]
     )
-}
-
-/// Submits the run's answers (failed items left out, so they count as unanswered) and links
-/// the submission to the run. The same answers submitted again find the first submission.
-async fn submit(
-    hub: &Hub,
-    run: &RunRow,
-    spec: &RunSpec,
-    settings: &CallSettings,
-    rows: &[RunItemRow],
-    report: &RunReport,
-    model: &str,
-) -> Result<SubmissionRow, AppError> {
-    let body = answers_jsonl(rows)?;
-    let of = StampOf {
-        run: &run.name,
-        endpoint: &run.endpoint,
-        model: &run.model,
-        params: &run.params,
-        prompt_version: &run.prompt_version,
-        prompt_hash: &run.prompt_hash,
-    };
-    let Stamped { stamp, metadata } = stamped(&of, spec, settings, rows, report, model)?;
-    let caller = run_caller(hub, run.token).await?;
-    let key = submission_key(&run.id.to_string(), &body);
-    let bytes = body.into_bytes();
-    let submitted = submissions::submit(
-        hub,
-        &caller,
-        &run.dataset,
-        metadata,
-        Provenance::Run,
-        Some(&key),
-        async move { Ok(bytes) },
-    )
-    .await?;
-    let row = match submitted {
-        Submitted::Created(row) | Submitted::Repeated(row) => row,
-    };
-    let mut tx = hub.write(Lane::Bulk).await?;
-    store::runs::set_submission(&mut tx, run.id, row.id, &stamp).await?;
-    tx.commit().await?;
-    Ok(row)
 }

@@ -21,10 +21,9 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use super::{
-    AppError, CallSettings, GenerationParams, ItemOutcome, Ledger, Named, Pending, ProgressFn,
-    RunFailure, RunItemRow, RunReport, RunSpec, StampOf, Stamped, StopFn, answers_jsonl,
-    ask_pending, asker, check_settings, failures, named, pending, request_body, stamped,
-    submission_key, tally,
+    AppError, Asked, CallSettings, ItemOutcome, Ledger, Named, Pending, ProgressFn, RunFailure,
+    RunHead, RunItemRow, RunReport, RunSpec, Stamped, StopFn, Tail, ask_and_report, asker,
+    check_settings, named, pending, tally,
 };
 use crate::core::model_run::{PROMPT_VERSION, backoff, prompt_template_hash, retry_after};
 
@@ -55,14 +54,11 @@ impl RemoteHub {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 struct CacheHeader {
     enact_hub_run_cache: u32,
-    run: String,
     hub: String,
     dataset: String,
-    endpoint: String,
-    model: String,
-    params: String,
-    prompt_version: String,
-    prompt_hash: String,
+    /// The run's name, endpoint, model, parameters and prompt, beside the fields above.
+    #[serde(flatten)]
+    head: RunHead,
 }
 
 /// The cache format's version, in its header.
@@ -475,20 +471,16 @@ async fn hub_error(what: &str, reply: reqwest::Response) -> AppError {
 /// A remote run's ledger: items and frames over the API, replies in the cache file.
 struct RemoteLedger {
     hub: Arc<HubClient>,
-    dataset: String,
+    header: CacheHeader,
+    /// The run's items, in order.
+    ids: Vec<String>,
     cache: Arc<Mutex<std::fs::File>>,
     cache_path: PathBuf,
 }
 
 impl Ledger for RemoteLedger {
-    async fn body(
-        &self,
-        item: &Pending,
-        model: &str,
-        params: &GenerationParams,
-    ) -> Result<Bytes, AppError> {
-        let (question, pngs) = self.hub.item(&self.dataset, &item.item_id).await?;
-        request_body(pngs, question, model, params).await
+    async fn item(&self, item: &Pending) -> Result<Asked, AppError> {
+        self.hub.item(&self.header.dataset, &item.item_id).await
     }
 
     async fn record(&self, _item: &Pending, row: &RunItemRow) -> Result<(), AppError> {
@@ -503,6 +495,28 @@ impl Ledger for RemoteLedger {
                     self.cache_path.display()
                 ))
             })
+    }
+
+    async fn rows(&self) -> Result<Vec<RunItemRow>, AppError> {
+        Ok(match read_cache(&self.cache_path)? {
+            Some((_, mut rows)) => self.ids.iter().filter_map(|id| rows.remove(id)).collect(),
+            None => Vec::new(),
+        })
+    }
+
+    fn head(&self) -> &RunHead {
+        &self.header.head
+    }
+
+    /// A hash of the hub and the run's name: a remote run has no row id here.
+    fn run_key(&self) -> String {
+        let run = format!("{}\n{}", self.header.hub, self.header.head.run);
+        hex::encode(Sha256::digest(run))[..16].to_owned()
+    }
+
+    async fn send(&self, stamped: Stamped, key: &str, body: String) -> Result<i64, AppError> {
+        let dataset = &self.header.dataset;
+        self.hub.submit(dataset, &stamped, key, body).await
     }
 }
 
@@ -535,14 +549,16 @@ pub async fn execute_remote(
     } = named(&spec.dataset, spec)?;
     let header = CacheHeader {
         enact_hub_run_cache: CACHE_VERSION,
-        run: name.clone(),
         hub: client.base.clone(),
         dataset: spec.dataset.clone(),
-        endpoint,
-        model: spec.model.clone(),
-        params,
-        prompt_version: PROMPT_VERSION.to_owned(),
-        prompt_hash: prompt_template_hash(),
+        head: RunHead {
+            run: name.clone(),
+            endpoint,
+            model: spec.model.clone(),
+            params,
+            prompt_version: PROMPT_VERSION.to_owned(),
+            prompt_hash: prompt_template_hash(),
+        },
     };
     let cache_path = cache.map_or_else(|| default_cache(&name), Path::to_path_buf);
     let ids = client.item_ids(&spec.dataset).await?;
@@ -554,10 +570,10 @@ pub async fn execute_remote(
                     "the cache {} holds run '{}' of '{}' with {} on {} ({}), not this run: give \
                      another --cache (or --run) to start a new run",
                     cache_path.display(),
-                    found.run,
+                    found.head.run,
                     found.dataset,
-                    found.model,
-                    found.endpoint,
+                    found.head.model,
+                    found.head.endpoint,
                     found.hub
                 )));
             }
@@ -608,58 +624,25 @@ pub async fn execute_remote(
     );
     drop(stored);
     let asker = Arc::new(
-        asker::Asker::new(&header.endpoint, settings.clone()).map_err(AppError::internal)?,
+        asker::Asker::new(&header.head.endpoint, settings.clone()).map_err(AppError::internal)?,
     );
-    let ledger = Arc::new(RemoteLedger {
-        hub: client.clone(),
+    let tail = Tail {
         dataset: spec.dataset.clone(),
-        cache: file,
-        cache_path: cache_path.clone(),
-    });
-    let stopped = ask_pending(
-        ledger,
-        asker,
-        &spec.model,
-        &spec.params,
-        todo,
-        &mut state,
-        spec.prices,
-        settings.concurrency,
-        progress,
-        stop,
-    )
-    .await?;
-
-    let rows = match read_cache(&cache_path)? {
-        Some((_, mut rows)) => ids.iter().filter_map(|id| rows.remove(id)).collect(),
-        None => Vec::new(),
-    };
-    let mut report = RunReport {
-        run: name.clone(),
+        model: &spec.model,
+        run: name,
         run_id: None,
-        dataset: spec.dataset.clone(),
-        progress: state,
-        failures: failures(&rows),
-        submission: None,
-        stopped,
+        params: &spec.params,
+        spec,
+        settings,
     };
-    if !stopped && let Some(model) = &spec.submit_as {
-        let body = answers_jsonl(&rows)?;
-        let of = StampOf {
-            run: &name,
-            endpoint: &header.endpoint,
-            model: &header.model,
-            params: &header.params,
-            prompt_version: &header.prompt_version,
-            prompt_hash: &header.prompt_hash,
-        };
-        let stamped = stamped(&of, spec, settings, &rows, &report, model)?;
-        let run_key = &hex::encode(Sha256::digest(format!("{}\n{name}", header.hub)))[..16];
-        let key = submission_key(run_key, &body);
-        report.submission = Some(client.submit(&spec.dataset, &stamped, &key, body).await?);
-    }
-    progress(&report.progress);
-    Ok(report)
+    let ledger = Arc::new(RemoteLedger {
+        hub: client,
+        header,
+        ids: ids.to_vec(),
+        cache: file,
+        cache_path,
+    });
+    ask_and_report(ledger, asker, tail, todo, state, progress, stop).await
 }
 
 #[cfg(test)]
@@ -688,14 +671,16 @@ mod tests {
     fn header() -> CacheHeader {
         CacheHeader {
             enact_hub_run_cache: CACHE_VERSION,
-            run: "r".into(),
             hub: "http://hub".into(),
             dataset: "d".into(),
-            endpoint: "http://m/v1".into(),
-            model: "m".into(),
-            params: "{}".into(),
-            prompt_version: PROMPT_VERSION.into(),
-            prompt_hash: prompt_template_hash(),
+            head: RunHead {
+                run: "r".into(),
+                endpoint: "http://m/v1".into(),
+                model: "m".into(),
+                params: "{}".into(),
+                prompt_version: PROMPT_VERSION.into(),
+                prompt_hash: prompt_template_hash(),
+            },
         }
     }
 
@@ -703,6 +688,26 @@ mod tests {
         let mut line = serde_json::to_vec(value).unwrap();
         line.push(b'\n');
         line
+    }
+
+    /// The header stays one flat JSON object, as caches written before the run's head was a
+    /// struct of its own hold it.
+    #[test]
+    fn a_cache_header_is_one_flat_object_as_before() {
+        let flat = serde_json::json!({
+            "enact_hub_run_cache": CACHE_VERSION,
+            "run": "r",
+            "hub": "http://hub",
+            "dataset": "d",
+            "endpoint": "http://m/v1",
+            "model": "m",
+            "params": "{}",
+            "prompt_version": PROMPT_VERSION,
+            "prompt_hash": prompt_template_hash(),
+        });
+        let read: CacheHeader = serde_json::from_value(flat.clone()).unwrap();
+        assert_eq!(read, header());
+        assert_eq!(serde_json::to_value(header()).unwrap(), flat);
     }
 
     #[test]
