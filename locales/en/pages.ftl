@@ -60,6 +60,7 @@ refusal-reason-too-long = the reason is over { $limit } characters
 refusal-passwords-differ = the two passwords differ
 refusal-password-too-short = the password has { $chars } characters; use at least { $least }
 refusal-episode-has-no-graphs = episode '{ $episode }' has no scene graphs yet: a curator must set them before it can be exported
+refusal-run-price = { $field } must be a price of 0 or more (US dollars per million tokens), not { $price }
 
 ## Logging in
 login-title = Log in

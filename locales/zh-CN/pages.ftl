@@ -58,6 +58,7 @@ refusal-reason-too-long = 原因超过 { $limit } 个字符
 refusal-passwords-differ = 两次输入的密码不一致
 refusal-password-too-short = 密码只有 { $chars } 个字符；至少需要 { $least } 个
 refusal-episode-has-no-graphs = 片段“{ $episode }”还没有场景图：须由整理者设置后才能导出
+refusal-run-price = { $field } 须为 0 或以上的价格（美元/百万词元），而不是 { $price }
 
 ## 登录
 login-title = 登录

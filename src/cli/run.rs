@@ -12,6 +12,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::{DEFAULT_DB, open, operator, refused};
+use crate::app::refusal::Refusal;
 use crate::app::runs::{
     self, ApiKey, CallSettings, GenerationParams, Prices, RemoteHub, RunProgress, RunReport,
     RunSpec,
@@ -110,9 +111,6 @@ pub async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         },
         None => None,
     };
-    if args.price_input < 0.0 || args.price_output < 0.0 {
-        anyhow::bail!("prices must not be negative");
-    }
     let settings = CallSettings {
         concurrency: args.concurrency,
         max_retries: args.max_retries,
@@ -217,6 +215,12 @@ pub async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
                 reports.push(report);
             }
             Err(AppError::Internal(e)) => return Err(e),
+            // The run's own check (`RunSpec::check`) names the API's field; here, the flag.
+            Err(AppError::Refused(Refusal::RunPrice { field, price })) => {
+                let flag = field.replace('_', "-");
+                eprintln!("error: --{flag} must be a price of 0 or more, not {price}");
+                return Ok(ExitCode::FAILURE);
+            }
             Err(e) => {
                 eprintln!("error: {e}");
                 return Ok(ExitCode::FAILURE);

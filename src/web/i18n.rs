@@ -563,6 +563,7 @@ pub fn refusal_key(refusal: &Refusal) -> &'static str {
         Refusal::LoginLinkUsed => msg("refusal-login-link-used"),
         Refusal::PasswordTooShort { .. } => msg("refusal-password-too-short"),
         Refusal::EpisodeHasNoGraphs { .. } => msg("refusal-episode-has-no-graphs"),
+        Refusal::RunPrice { .. } => msg("refusal-run-price"),
     }
 }
 

@@ -312,16 +312,6 @@ async fn start_run(
 impl RunRequest {
     /// The run asked for and how to call its endpoint; shared with the admin page's form.
     pub(super) fn into_run(self) -> Result<(RunSpec, RunCalls), ApiError> {
-        for (field, price) in [
-            ("price_input", self.price_input),
-            ("price_output", self.price_output),
-        ] {
-            if !(price.is_finite() && price >= 0.0) {
-                return Err(ApiError(AppError::Invalid(format!(
-                    "{field} must be a price of 0 or more, not {price}"
-                ))));
-            }
-        }
         let max_tokens = counted("max_tokens", self.max_tokens, 0, MOST_U32)?;
         let limit = counted("limit", self.limit, 1, MOST_WHOLE)?;
         let concurrency = counted("concurrency", self.concurrency, 1, MOST_CONCURRENCY)?;

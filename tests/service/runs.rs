@@ -441,6 +441,26 @@ async fn a_limited_run_submits_the_rest_as_unanswered_and_a_stop_leaves_it_resum
     assert_eq!(stored.scores.coverage.missing, records.len() - 4);
 }
 
+/// A price below 0 is refused by the run's own check, which the API and the admin form share;
+/// the command line names its flag, and nothing is asked or stored.
+#[tokio::test]
+async fn a_negative_price_is_refused_naming_the_flag() {
+    let (_dir, pool, _records, db) = run_fixture_located(5).await;
+    let out = enact_hub()
+        .args(["run", "mini", "--endpoint", "http://127.0.0.1:9/v1"])
+        .args(["--model", "m", "--price-output=-0.5", "--db"])
+        .arg(&db)
+        .output()
+        .expect("run enact-hub run");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("--price-output must be a price of 0 or more, not -0.5"),
+        "{stderr}"
+    );
+    assert_eq!(count(&pool, "SELECT count(*) FROM model_runs").await, 0);
+}
+
 /// `enact-hub run` killed with SIGKILL part-way, then run again: no item with a stored reply
 /// is asked again, every item ends up answered, and the submission scores what the stand-in
 /// answered. The key is in no output and no file.

@@ -320,6 +320,9 @@ async fn a_run_started_over_the_api_finishes_and_its_errors_name_the_field() {
         replies.push(reply.text);
     }
     assert!(runs::list(&hub).await.expect("runs").is_empty());
+    let priced: Value = serde_json::from_str(&replies[4]).expect("JSON");
+    assert_eq!(priced["code"], "run_price", "{priced}");
+    assert_eq!(priced["details"]["field"], "price_input", "{priced}");
 
     let started = server
         .call(Method::POST, "/api/v1/admin/runs")

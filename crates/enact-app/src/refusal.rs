@@ -100,6 +100,9 @@ pub enum Refusal {
     PasswordTooShort { chars: u64, least: u64 },
     /// An export of an episode whose scene graphs no curator has set.
     EpisodeHasNoGraphs { episode: String },
+    /// A model run's price (`field`: `price_input` or `price_output`, in US dollars per
+    /// million tokens) below 0 or not a number.
+    RunPrice { field: String, price: String },
 }
 
 impl Refusal {
@@ -125,7 +128,8 @@ impl Refusal {
             | Refusal::ReasonTooLong { .. }
             | Refusal::PasswordsDiffer
             | Refusal::PasswordTooShort { .. }
-            | Refusal::EpisodeHasNoGraphs { .. } => RefusalKind::Invalid,
+            | Refusal::EpisodeHasNoGraphs { .. }
+            | Refusal::RunPrice { .. } => RefusalKind::Invalid,
         }
     }
 
@@ -153,6 +157,7 @@ impl Refusal {
             Refusal::PasswordsDiffer => "passwords_differ",
             Refusal::PasswordTooShort { .. } => "password_too_short",
             Refusal::EpisodeHasNoGraphs { .. } => "episode_has_no_graphs",
+            Refusal::RunPrice { .. } => "run_price",
         }
     }
 
@@ -195,6 +200,9 @@ impl Refusal {
                 ("chars", Detail::Number(*chars)),
                 ("least", Detail::Number(*least)),
             ],
+            Refusal::RunPrice { field, price } => {
+                vec![("field", text(field)), ("price", text(price))]
+            }
         }
     }
 
@@ -248,6 +256,10 @@ impl Refusal {
             },
             Refusal::EpisodeHasNoGraphs {
                 episode: s("kitchen"),
+            },
+            Refusal::RunPrice {
+                field: s("price_input"),
+                price: s("-1"),
             },
         ]
     }
@@ -336,6 +348,10 @@ impl fmt::Display for Refusal {
                 f,
                 "episode '{episode}' has no scene graphs yet: a curator must set them before \
                  it can be exported"
+            ),
+            Refusal::RunPrice { field, price } => write!(
+                f,
+                "{field} must be a price of 0 or more (US dollars per million tokens), not {price}"
             ),
         }
     }

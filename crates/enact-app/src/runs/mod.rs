@@ -744,15 +744,41 @@ pub async fn execute(
 
 /// What every run checks before it starts.
 fn check_settings(spec: &RunSpec, settings: &CallSettings) -> Result<(), AppError> {
+    spec.check()?;
     if settings.concurrency == 0 {
         return Err(AppError::Invalid(
             "concurrency must be at least 1".to_owned(),
         ));
     }
-    if spec.limit == Some(0) {
-        return Err(AppError::Invalid("limit must be at least 1".to_owned()));
-    }
     Ok(())
+}
+
+impl RunSpec {
+    /// Refuses a run no one can start, the same way wherever it was asked for (the API, the
+    /// admin page's form, the command line): a limit of 0, an empty model to submit as, a
+    /// price below 0 or not a number.
+    pub fn check(&self) -> Result<(), AppError> {
+        if self.limit == Some(0) {
+            return Err(AppError::Invalid("limit must be at least 1".to_owned()));
+        }
+        if let Some(model) = &self.submit_as
+            && model.trim().is_empty()
+        {
+            return Err(AppError::Invalid("submit_as is empty".to_owned()));
+        }
+        for (field, price) in [
+            ("price_input", self.prices.input_usd_per_mtok),
+            ("price_output", self.prices.output_usd_per_mtok),
+        ] {
+            if !(price.is_finite() && price >= 0.0) {
+                return Err(AppError::from(Refusal::RunPrice {
+                    field: field.to_owned(),
+                    price: price.to_string(),
+                }));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The request body for one item from its images' labels and PNG bytes (dropped as soon as

@@ -198,14 +198,7 @@ pub async fn start(
     calls: &RunCalls,
 ) -> Result<(RunRow, JobId), AppError> {
     calls.check(hub)?;
-    if spec.limit == Some(0) {
-        return Err(AppError::Invalid("limit must be at least 1".to_owned()));
-    }
-    if let Some(model) = &spec.submit_as
-        && model.trim().is_empty()
-    {
-        return Err(AppError::Invalid("submit_as is empty".to_owned()));
-    }
+    spec.check()?;
     let identity = super::identity(hub, spec).await?;
     let mut tx = hub.write(Lane::Interactive).await?;
     let run = super::find_or_create(&mut tx, actor, spec, &identity).await?;
