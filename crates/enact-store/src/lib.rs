@@ -91,7 +91,7 @@ pub async fn open_with_page_cache(
     path: &Path,
     page_cache_kib: u64,
 ) -> Result<SqlitePool, sqlx::Error> {
-    let pool = sqlite_pool(path, page_cache_kib, MAX_CONNECTIONS, Checkpoints::OnCommit).await?;
+    let pool = sqlite_pool(path, page_cache_kib, MAX_CONNECTIONS, PoolRole::Shared).await?;
     migrations::SQLITE.migrator().await?.run(&pool).await?;
     Ok(pool)
 }
@@ -104,7 +104,7 @@ pub async fn open_command_pools(
     page_cache_kib: u64,
 ) -> Result<(SqlitePool, SqlitePool), sqlx::Error> {
     let pool = open_with_page_cache(path, page_cache_kib).await?;
-    let writer = sqlite_pool(path, page_cache_kib, 1, Checkpoints::Writer).await?;
+    let writer = sqlite_pool(path, page_cache_kib, 1, PoolRole::CommandGate).await?;
     Ok((pool, writer))
 }
 
@@ -119,9 +119,9 @@ pub async fn open_serving_pools(
     path: &Path,
     page_cache_kib: u64,
 ) -> Result<(SqlitePool, SqlitePool), sqlx::Error> {
-    let pool = sqlite_pool(path, page_cache_kib, MAX_CONNECTIONS, Checkpoints::OnCommit).await?;
+    let pool = sqlite_pool(path, page_cache_kib, MAX_CONNECTIONS, PoolRole::Shared).await?;
     migrations::SQLITE.migrator().await?.run(&pool).await?;
-    let writer = sqlite_pool(path, page_cache_kib, 1, Checkpoints::Beside).await?;
+    let writer = sqlite_pool(path, page_cache_kib, 1, PoolRole::ServerGate).await?;
     Ok((pool, writer))
 }
 
@@ -161,26 +161,27 @@ pub async fn checkpoint_log(pool: SqlitePool) {
 /// process, up to [`WRITE_WAIT`] in all.
 pub const WRITE_POLL: Duration = Duration::from_millis(5);
 
-/// What one of a pool's connections does about the write-ahead log and the write lock.
+/// What a pool's connections are for, which decides how they wait for the write lock and
+/// whether their commits copy the write-ahead log into the database.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Checkpoints {
-    /// Readers and writes outside the gate: a commit that fills the log copies it into the
-    /// database (SQLite's default), and a write lock is waited for up to [`WRITE_WAIT`].
-    OnCommit,
-    /// A command's gate connection: checkpoints as `OnCommit` does, takes the lock by
-    /// [`WRITE_POLL`].
-    Writer,
-    /// A server's gate connection: checkpoints nothing ([`checkpoint_log`] does it beside),
-    /// takes the lock by [`WRITE_POLL`].
-    Beside,
+enum PoolRole {
+    /// Readers and writes outside the gate: a write lock is waited for in SQLite, up to
+    /// [`WRITE_WAIT`]; a commit that fills the log copies it (SQLite's default).
+    Shared,
+    /// A command's write gate connection: the lock is asked for by [`WRITE_POLL`]; commits
+    /// copy the log as `Shared` ones do.
+    CommandGate,
+    /// A server's write gate connection: the lock is asked for by [`WRITE_POLL`]; commits copy
+    /// nothing ([`checkpoint_log`] does it beside).
+    ServerGate,
 }
 
-/// `connections` to the file at `path`, checkpointing and waiting as `checkpoints` says.
+/// `connections` to the file at `path`, for `role`.
 async fn sqlite_pool(
     path: &Path,
     page_cache_kib: u64,
     connections: u32,
-    checkpoints: Checkpoints,
+    role: PoolRole,
 ) -> Result<SqlitePool, sqlx::Error> {
     // A negative cache_size is in KiB.
     let cache_size = format!("-{}", page_cache_kib.max(1));
@@ -192,9 +193,9 @@ async fn sqlite_pool(
         // last transactions, never corrupt the file.
         .synchronous(SqliteSynchronous::Normal)
         .foreign_keys(true)
-        .busy_timeout(match checkpoints {
-            Checkpoints::OnCommit => WRITE_WAIT,
-            Checkpoints::Writer | Checkpoints::Beside => WRITE_POLL,
+        .busy_timeout(match role {
+            PoolRole::Shared => WRITE_WAIT,
+            PoolRole::CommandGate | PoolRole::ServerGate => WRITE_POLL,
         })
         .pragma("cache_size", cache_size)
         .pragma("temp_store", "memory")
@@ -202,7 +203,7 @@ async fn sqlite_pool(
         // frames. SQLite reuses the log file from the start after a checkpoint but keeps its
         // size; this limit makes it cut the file back once the log is reset.
         .pragma("journal_size_limit", JOURNAL_SIZE_LIMIT_BYTES.to_string());
-    let options = if checkpoints == Checkpoints::Beside {
+    let options = if role == PoolRole::ServerGate {
         options.pragma("wal_autocheckpoint", "0")
     } else {
         options
