@@ -716,6 +716,16 @@ fn first_negative_value(data: &ReliabilityData) -> Option<AlphaUndefined> {
 mod tests {
     use super::*;
 
+    /// A level prints as the name it is parsed from (the agreement export's header names it).
+    #[test]
+    fn a_level_prints_as_its_name_and_parses_back() {
+        for level in MeasurementLevel::ALL {
+            assert_eq!(level.to_string(), level.name());
+            assert_eq!(level.to_string().parse::<MeasurementLevel>(), Ok(level));
+        }
+        assert_eq!(MeasurementLevel::Ordinal.to_string(), "ordinal");
+    }
+
     fn rows(rows: &[&[Option<f64>]]) -> ReliabilityData {
         ReliabilityData::from_coder_rows(rows.iter().map(|row| row.to_vec()).collect()).unwrap()
     }
