@@ -231,6 +231,23 @@ mod tests {
         assert!(lines.iter().all(|l| l.len() == header.len()));
     }
 
+    /// The table export writes each figure as Rust prints the number, and nothing for one
+    /// that cannot be computed.
+    #[test]
+    fn the_table_writes_figures_in_their_columns() {
+        let mut a = analyse([]);
+        a.overall.handedness.left.precision = Some(0.5);
+        a.overall.accepted_incomplete.data_level = Some(0.25);
+        let (header, lines) = super::table(&[("m", &a)]);
+        let cell = |name: &str| {
+            let at = header.iter().position(|h| h == name).expect(name);
+            lines[0][at].clone()
+        };
+        assert_eq!(cell("left_precision"), "0.5");
+        assert_eq!(cell("data_level_incomplete"), "0.25");
+        assert_eq!(cell("pair_level_incomplete"), "");
+    }
+
     #[test]
     fn the_text_table_gives_the_hands_figures_with_their_standard_errors() {
         let mut a = analyse([]);
