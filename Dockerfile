@@ -2,12 +2,13 @@
 # Multi-stage build: compile in the Rust image, run from a slim Debian as a non-root user.
 FROM rust:1.95-bookworm AS build
 WORKDIR /src
-COPY Cargo.toml Cargo.lock askama.toml ./
+COPY Cargo.toml Cargo.lock ./
 COPY crates ./crates
 COPY src ./src
 COPY migrations ./migrations
 COPY templates ./templates
 COPY static ./static
+COPY locales ./locales
 COPY benches ./benches
 # The `dist` profile: what is published, with whole-program (fat LTO) optimisation.
 RUN cargo build --profile dist --locked --bin enact-hub

@@ -1,13 +1,15 @@
 //! enact-hub: a self-hosted evaluation service for the ENACT benchmark.
 //!
-//! Four layers, each allowed to use only the ones below it. The three lowest are crates of their
-//! own, so Cargo keeps them from naming anything above them; within this crate a test,
-//! `tests/layers.rs`, reads every `crate::` path and fails when the web reaches past the use
-//! cases into the store, or on a cycle:
+//! Five layers, each allowed to use only the ones below it. The four lowest are crates of their
+//! own, so Cargo keeps them from naming anything above them (and the web, which does not depend
+//! on the store, from reaching past the use cases into it); within this crate a test,
+//! `tests/layers.rs`, reads every `crate::` path and fails when the command line reaches into the
+//! store, or on a cycle:
 //!
 //! | where         | what lives there                                                     |
 //! |---------------|----------------------------------------------------------------------|
-//! | `src/cli/`, `src/web/` | adapters: parse arguments or requests, call one [`app`] use case, render text, JSON or HTML; neither names the store |
+//! | `src/cli/` ([`cli`]) | the command line: parse arguments, call one [`app`] use case (or serve [`web`]), print text or JSON; never names the store |
+//! | `crates/enact-web/` ([`web`]) | the HTTP adapter: parse requests, call one [`app`] use case, render JSON or HTML |
 //! | `crates/enact-app/` ([`app`]) | use cases: import, submit, tokens, annotators, assignment, drafts and answers, the agreement protocol and report, error analyses, leaderboards, the demo; and `Hub`, the service they share |
 //! | `crates/enact-store/` ([`store`]) | SQLite or PostgreSQL: connection setup, migrations, the write gate, rows in and rows out, no decisions |
 //! | `crates/enact-core/` ([`core`]) | the benchmark, pure: dataset, scene graphs, verifier, error analysis, pipeline, agreement statistics, world; no database, HTTP, async or command line |
@@ -16,7 +18,6 @@
 //! what the service does with it. `src/main.rs` only calls [`cli::main`].
 
 pub mod cli;
-pub mod web;
 
 /// The benchmark (the `enact-core` crate), named `core` here as every layer above it calls it.
 pub use enact_core as core;
@@ -28,3 +29,7 @@ pub use enact_store as store;
 /// The use cases and the service they share (the `enact-app` crate), named `app` here as the
 /// adapters call it.
 pub use enact_app as app;
+
+/// The HTTP service: the API, the pages and the server (the `enact-web` crate), named `web`
+/// here as the command line calls it.
+pub use enact_web as web;

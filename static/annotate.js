@@ -25,7 +25,7 @@
 
   const nameOf = (label) => cardByLabel.get(label).dataset.name;
   // The page's messages in its language, from the same catalogue as the page (see
-  // SCRIPT_MESSAGES in src/web/i18n.rs); `{name}` marks where a value goes.
+  // SCRIPT_MESSAGES in crates/enact-web/src/i18n.rs); `{name}` marks where a value goes.
   const messages = JSON.parse(root.dataset.messages || "{}");
   const m = (key, values) =>
     (messages[key] || key).replace(/\{(\w+)\}/g, (whole, name) =>

@@ -30,7 +30,7 @@
   }
   // The page is in English, as the admin pages are: its script's messages come from the
   // page's own <template id="messages">, not from the translated pages' catalogue
-  // (SCRIPT_MESSAGES in src/web/i18n.rs), so each is written once, in the template.
+  // (SCRIPT_MESSAGES in crates/enact-web/src/i18n.rs), so each is written once, in the template.
   const say = (key, values) =>
     (messages[key] || key).replace(/\{(\w+)\}/g, (whole, name) =>
       values && name in values ? String(values[name]) : whole);

@@ -646,9 +646,9 @@ const PAGES: &[(&str, &str, Page)] = &[
 
 /// The literal paths of every `.route(` in the web adapter's source.
 fn routes_in_source() -> std::collections::BTreeSet<String> {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/web");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/enact-web/src");
     let mut found = std::collections::BTreeSet::new();
-    for entry in std::fs::read_dir(dir).expect("src/web") {
+    for entry in std::fs::read_dir(dir).expect("crates/enact-web/src") {
         let text = std::fs::read_to_string(entry.expect("entry").path()).expect("source");
         for (i, _) in text.match_indices(".route(") {
             let rest = text[i + 7..].trim_start();
@@ -868,7 +868,12 @@ fn sources_under(dir: &std::path::Path, out: &mut Vec<(std::path::PathBuf, Strin
 fn scopes_and_roles_are_checked_only_where_the_route_tables_say() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut sources = Vec::new();
-    for dir in ["src", "crates/enact-app/src", "crates/enact-store/src"] {
+    for dir in [
+        "src",
+        "crates/enact-web/src",
+        "crates/enact-app/src",
+        "crates/enact-store/src",
+    ] {
         sources_under(&root.join(dir), &mut sources);
     }
     let mut by_hand = Vec::new();

@@ -49,7 +49,7 @@ fn used_keys() -> Vec<(String, String)> {
     let mut used = Vec::new();
     let sources = files(&root().join("templates"), &[".html", ".svg"])
         .into_iter()
-        .chain(files(&root().join("src/web"), &[".rs"]));
+        .chain(files(&root().join("crates/enact-web/src"), &[".rs"]));
     for path in sources {
         let text = std::fs::read_to_string(&path).expect("read source");
         for c in lookup.captures_iter(&text) {
@@ -61,7 +61,7 @@ fn used_keys() -> Vec<(String, String)> {
         for c in script.captures_iter(&text) {
             assert!(
                 SCRIPT_MESSAGES.iter().any(|(k, _)| *k == &c[1]),
-                "{}: the script uses message '{}', which SCRIPT_MESSAGES (src/web/i18n.rs) \
+                "{}: the script uses message '{}', which SCRIPT_MESSAGES (crates/enact-web/src/i18n.rs) \
                  does not hand it",
                 path.display(),
                 &c[1]

@@ -76,8 +76,8 @@ impl Locale {
     /// The pseudo-locale has none of its own: its messages are made from English ones.
     pub fn catalogue_source(self) -> &'static str {
         match self {
-            Locale::English | Locale::PseudoRtl => include_str!("../../locales/en/pages.ftl"),
-            Locale::SimplifiedChinese => include_str!("../../locales/zh-CN/pages.ftl"),
+            Locale::English | Locale::PseudoRtl => include_str!("../../../locales/en/pages.ftl"),
+            Locale::SimplifiedChinese => include_str!("../../../locales/zh-CN/pages.ftl"),
         }
     }
 

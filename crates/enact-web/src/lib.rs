@@ -16,6 +16,10 @@
 //! `extract` holds the extractors whose rejections are the JSON error body; `i18n` the pages'
 //! languages (message catalogues, the request's locale), `locale_switch` the switch.
 
+/// The benchmark and the use cases, named as the handlers call them.
+use enact_app as app;
+use enact_core as core;
+
 mod admin;
 mod admin_audit;
 mod admin_tokens;

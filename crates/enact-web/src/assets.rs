@@ -7,12 +7,12 @@ use axum::routing::get;
 
 use super::AppState;
 
-const APP_CSS: &str = include_str!("../../static/app.css");
-const ANNOTATE_JS: &str = include_str!("../../static/annotate.js");
-const RUN_PROGRESS_JS: &str = include_str!("../../static/run_progress.js");
-const EPISODE_JS: &str = include_str!("../../static/episode.js");
-const EPISODE_CSS: &str = include_str!("../../static/episode.css");
-const FAVICON_SVG: &str = include_str!("../../static/favicon.svg");
+const APP_CSS: &str = include_str!("../../../static/app.css");
+const ANNOTATE_JS: &str = include_str!("../../../static/annotate.js");
+const RUN_PROGRESS_JS: &str = include_str!("../../../static/run_progress.js");
+const EPISODE_JS: &str = include_str!("../../../static/episode.js");
+const EPISODE_CSS: &str = include_str!("../../../static/episode.css");
+const FAVICON_SVG: &str = include_str!("../../../static/favicon.svg");
 
 pub fn router() -> Router<AppState> {
     Router::new()
