@@ -94,7 +94,9 @@ as_pg() {
   fi
 }
 as_pg "'$PG_BIN/initdb' -D '$PGDATA' -A trust -U postgres" >"$TOOLS/initdb.log" 2>&1 || { cat "$TOOLS/initdb.log" >&2; exit 1; }
-as_pg "'$PG_BIN/pg_ctl' -D '$PGDATA' -l '$PGDATA/server.log' -w -o \"-p $PG_PORT -k /tmp -c listen_addresses=127.0.0.1 -c fsync=off -c max_connections=400\" start" >/dev/null
+# max_wal_size: each test's CREATE DATABASE copies its template through the WAL, which grew to
+# the default 1 GB of a disk CI shares with the build.
+as_pg "'$PG_BIN/pg_ctl' -D '$PGDATA' -l '$PGDATA/server.log' -w -o \"-p $PG_PORT -k /tmp -c listen_addresses=127.0.0.1 -c fsync=off -c max_connections=400 -c max_wal_size=128MB -c min_wal_size=32MB\" start" >/dev/null
 cleanup() {
   kill "$MOTO_PID" 2>/dev/null || true
   as_pg "'$PG_BIN/pg_ctl' -D '$PGDATA' -m immediate stop" >/dev/null 2>&1 || true
@@ -111,6 +113,18 @@ postgres_failed() {
   exit 1
 }
 echo "== PostgreSQL $("$PG_BIN/postgres" --version | awk '{print $3}') on 127.0.0.1:$PG_PORT"
+# Every test makes a database of its own (about 10 MB each, some 300 a pass) and leaves it: they
+# are dropped after each pass, and the cluster removed after the last, so that the disk the
+# PostgreSQL passes take is free again for the wheel and `cargo install` that follow.
+drop_test_databases() {
+  local psql=("$PG_BIN/psql" -h 127.0.0.1 -p "$PG_PORT" -U postgres -d postgres -X -q)
+  "${psql[@]}" -At -c "SELECT format('DROP DATABASE %I WITH (FORCE);', datname) FROM pg_database WHERE datname LIKE 'enact_test_%'" |
+    "${psql[@]}" -v ON_ERROR_STOP=1 >/dev/null
+}
+# What the disk holds now: a run that fills it fails wherever it happens to be.
+disk() {
+  echo "   disk: $(df -h --output=avail "$TOOLS" | tail -n 1 | tr -d ' ') free; $(du -sh "${CARGO_TARGET_DIR:-target}" 2>/dev/null | cut -f1) in the target dir"
+}
 
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
@@ -161,14 +175,21 @@ cargo test --locked --test service -- --ignored "$LIVE"
 
 # One suite at a time: run beside the SQLite one, the PostgreSQL suite took 3.4 times as long
 # (636 s against 186 s) and slowed the SQLite tests as much, on CI's two cores.
+disk
 echo "== the service suite again, on PostgreSQL"
 ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test service || postgres_failed
+disk
+drop_test_databases
 ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test service -- --ignored "$LIVE" ||
   postgres_failed
+drop_test_databases
 echo "== the server-side jobs' kill trials again, on PostgreSQL"
 ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test crash -- \
   a_model_run_killed_at_random a_rescore_killed_at_random an_import_job_killed_at_random ||
   postgres_failed
+as_pg "'$PG_BIN/pg_ctl' -D '$PGDATA' -m fast -w stop" >/dev/null
+rm -rf "$PGDATA"
+disk
 
 echo "== the Python package, the wheel and cargo install (scripts/test-python.sh)"
 ./scripts/test-python.sh
