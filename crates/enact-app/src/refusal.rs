@@ -43,12 +43,15 @@ impl SkipAction {
 pub enum Detail {
     Text(String),
     Number(u64),
+    /// A moment, as the store keeps it (ISO 8601 in UTC: `2026-11-29T12:00:00Z`), which each
+    /// edge writes as its readers do.
+    Time(String),
 }
 
 impl From<&Detail> for serde_json::Value {
     fn from(d: &Detail) -> Self {
         match d {
-            Detail::Text(t) => serde_json::Value::from(t.as_str()),
+            Detail::Text(t) | Detail::Time(t) => serde_json::Value::from(t.as_str()),
             Detail::Number(n) => serde_json::Value::from(*n),
         }
     }
@@ -186,7 +189,7 @@ impl Refusal {
             | Refusal::LoginLinkUsed
             | Refusal::StaleForm
             | Refusal::PasswordsDiffer => Vec::new(),
-            Refusal::QueuePaused { since } => vec![("since", text(since))],
+            Refusal::QueuePaused { since } => vec![("since", Detail::Time(since.clone()))],
             Refusal::SlotsEmpty { item, slots } => vec![
                 ("item", text(item)),
                 ("slots", Detail::Text(slot_list(slots))),
@@ -238,7 +241,7 @@ impl Refusal {
             },
             Refusal::ItemFinished { item: s("a1") },
             Refusal::QueuePaused {
-                since: s("2026-11-29 12:00:00"),
+                since: s("2026-11-29T12:00:00Z"),
             },
             Refusal::SlotsEmpty {
                 item: s("a1"),

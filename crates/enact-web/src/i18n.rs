@@ -466,6 +466,7 @@ impl Tr {
                 let value = match detail {
                     Detail::Text(t) => FluentValue::from(t),
                     Detail::Number(n) => number(n),
+                    Detail::Time(t) => FluentValue::from(self.date_time(&t)),
                 };
                 (name, value)
             }),
@@ -504,6 +505,24 @@ impl Tr {
             (_, None) => timestamp.to_owned(),
             (Locale::English | Locale::PseudoRtl, Some(_)) => day.to_owned(),
             (Locale::SimplifiedChinese, Some((y, m, d))) => format!("{y}年{m}月{d}日"),
+        }
+    }
+
+    /// A moment kept as ISO 8601 in UTC ("2026-11-26T10:05:00Z"), to the minute, as the locale
+    /// writes it: "2026-11-26 10:05 UTC" in English, "2026年11月26日 10:05 UTC" in Chinese.
+    /// Anything that is not such a timestamp is shown as it is.
+    pub fn date_time(&self, timestamp: &str) -> String {
+        let day = self.date(timestamp);
+        let clock = timestamp
+            .get(10..16)
+            .and_then(|t| t.strip_prefix(['T', ' ']))
+            .filter(|hm| {
+                let b = hm.as_bytes();
+                b.len() == 5 && b[2] == b':' && [0, 1, 3, 4].iter().all(|&i| b[i].is_ascii_digit())
+            });
+        match clock {
+            Some(hm) if day != timestamp => format!("{day} {hm} UTC"),
+            _ => timestamp.to_owned(),
         }
     }
 
@@ -728,6 +747,26 @@ mod tests {
         assert_eq!(zh.date("2026-11-06T10:00:00Z"), "2026年11月6日");
         assert_eq!(zh.date("2026-13-06"), "2026-13-06");
         assert_eq!(zh.date("yesterday"), "yesterday");
+        assert_eq!(en.date_time("2026-11-06T10:05:00Z"), "2026-11-06 10:05 UTC");
+        assert_eq!(
+            zh.date_time("2026-11-06T10:05:00Z"),
+            "2026年11月6日 10:05 UTC"
+        );
+        assert_eq!(zh.date_time("2026-11-06"), "2026-11-06");
+        assert_eq!(zh.date_time("2026-11-06T1x:05:00Z"), "2026-11-06T1x:05:00Z");
+    }
+
+    /// A paused queue's refusal names when it was paused as the page's language writes a
+    /// moment, not as the database keeps it.
+    #[test]
+    fn a_refusal_writes_its_moment_in_the_pages_language() {
+        let paused = Refusal::QueuePaused {
+            since: "2026-11-29T12:00:00Z".to_owned(),
+        };
+        let zh = Tr::new(Locale::SimplifiedChinese).refusal(&paused);
+        assert!(zh.contains("自 2026年11月29日 12:00 UTC 起"), "{zh}");
+        let en = Tr::new(Locale::English).refusal(&paused);
+        assert!(en.contains("(since 2026-11-29 12:00 UTC)"), "{en}");
     }
 
     #[test]
