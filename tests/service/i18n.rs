@@ -133,6 +133,7 @@ fn every_refusal_is_worded_in_every_locale_and_no_message_names_a_flag() {
                 let shown = match detail {
                     Detail::Text(t) => t,
                     Detail::Number(n) => enact_hub::web::i18n::decimal(n as f64, 0),
+                    Detail::Time(t) => tr.date_time(&t),
                 };
                 // The plural form's count is the sentence's grammar, not always shown.
                 if name != "count" && name != "action" && !text.contains(&shown) {
