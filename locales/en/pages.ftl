@@ -51,6 +51,10 @@ refusal-stale-form = this page's form has expired: reload the page and try again
 refusal-not-assigned = item '{ $item }' of dataset '{ $dataset }' is not assigned to you
 refusal-item-finished = item '{ $item }' is already finished; its answer can no longer change
 refusal-queue-paused = your queue is paused by an admin (since { $since }): you cannot open, save, answer or skip items until it is resumed; your drafts are kept
+refusal-draft-slot-count = the draft of item '{ $item }' has { $given } slots in { $field }; the item has { $expected }
+refusal-draft-label-out-of-range = the draft of item '{ $item }' puts card { $label } in slot { $slot } of { $field }; the item's cards are 1 to { $labels }
+refusal-draft-placed-twice = the draft of item '{ $item }' places card { $label } twice ({ $field }, again in slot { $slot })
+refusal-draft-history-too-long = the draft of item '{ $item }' keeps { $entries } undo steps; at most { $most } are kept
 refusal-slots-empty = item '{ $item }': fill every slot before submitting (empty: { $slots })
 refusal-reason-missing = { $action ->
         [flag] to flag item '{ $item }', say why in the reason field

@@ -49,6 +49,10 @@ refusal-stale-form = 此页面的表单已过期：请刷新页面后重试
 refusal-not-assigned = 数据集“{ $dataset }”的条目“{ $item }”未分配给您
 refusal-item-finished = 条目“{ $item }”已完成，其答案不能再更改
 refusal-queue-paused = 管理员已暂停您的队列（自 { $since } 起）：在队列恢复之前，您不能打开、保存、作答或跳过条目；您的草稿会保留
+refusal-draft-slot-count = 条目“{ $item }”的草稿在 { $field } 中有 { $given } 个槽位；该条目有 { $expected } 个
+refusal-draft-label-out-of-range = 条目“{ $item }”的草稿在 { $field } 的第 { $slot } 个槽位放了卡片 { $label }；该条目的卡片为 1 到 { $labels }
+refusal-draft-placed-twice = 条目“{ $item }”的草稿把卡片 { $label } 放了两次（{ $field }，第 { $slot } 个槽位再次出现）
+refusal-draft-history-too-long = 条目“{ $item }”的草稿有 { $entries } 步撤销记录；最多保留 { $most } 步
 refusal-slots-empty = 条目“{ $item }”：提交前请填满所有槽位（空槽位：{ $slots }）
 refusal-reason-missing = { $action ->
         [flag] 要报告条目“{ $item }”的问题，请在原因栏中说明原因

@@ -777,6 +777,13 @@ async fn drafts_resume_submissions_are_checked_and_scored_for_the_human_row() {
         body["error"],
         format!("draft of item '{fwd3}': slots[1]: label 1 is placed twice")
     );
+    // The reason is typed: a code of its own, and where (the slot as a person counts it).
+    assert_eq!(body["code"], "draft_placed_twice", "{body}");
+    assert_eq!(
+        body["details"],
+        json!({"item": fwd3, "field": "slots", "slot": 2, "label": 1}),
+        "{body}"
+    );
     let r = alice
         .post_json(
             &format!("/annotate/mini/{fwd3}/submit"),

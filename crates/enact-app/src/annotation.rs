@@ -307,9 +307,13 @@ fn finished_already(item_id: &str) -> AppError {
 }
 
 fn checked(item: &StoredItem, draft: &Draft) -> Result<(), AppError> {
-    draft
-        .check(item.summary.step_length)
-        .map_err(|e| AppError::Invalid(format!("draft of item '{}': {e}", item.summary.item_id)))
+    draft.check(item.summary.step_length).map_err(|problem| {
+        Refusal::DraftInvalid {
+            item: item.summary.item_id.clone(),
+            problem,
+        }
+        .into()
+    })
 }
 
 /// Saves the annotator's draft of an unfinished item.

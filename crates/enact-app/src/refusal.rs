@@ -12,6 +12,8 @@
 
 use std::fmt;
 
+use crate::core::annotation::DraftProblem;
+
 /// What kind of refusal it is: the web answers each kind with one status code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RefusalKind {
@@ -93,6 +95,8 @@ pub enum Refusal {
     QueuePaused { since: String },
     /// An answer with empty slots (1-based).
     SlotsEmpty { item: String, slots: Vec<usize> },
+    /// A draft or answer whose slots do not fit the item; each problem has its own code.
+    DraftInvalid { item: String, problem: DraftProblem },
     /// A skip or flag without a reason.
     ReasonMissing { item: String, action: SkipAction },
     /// A skip or flag reason over `limit` characters.
@@ -127,6 +131,7 @@ impl Refusal {
             }
             Refusal::ItemFinished { .. } | Refusal::QueuePaused { .. } => RefusalKind::Conflict,
             Refusal::SlotsEmpty { .. }
+            | Refusal::DraftInvalid { .. }
             | Refusal::ReasonMissing { .. }
             | Refusal::ReasonTooLong { .. }
             | Refusal::PasswordsDiffer
@@ -155,6 +160,12 @@ impl Refusal {
             Refusal::ItemFinished { .. } => "item_finished",
             Refusal::QueuePaused { .. } => "queue_paused",
             Refusal::SlotsEmpty { .. } => "slots_empty",
+            Refusal::DraftInvalid { problem, .. } => match problem {
+                DraftProblem::SlotCount { .. } => "draft_slot_count",
+                DraftProblem::LabelOutOfRange { .. } => "draft_label_out_of_range",
+                DraftProblem::PlacedTwice { .. } => "draft_placed_twice",
+                DraftProblem::HistoryTooLong { .. } => "draft_history_too_long",
+            },
             Refusal::ReasonMissing { .. } => "reason_missing",
             Refusal::ReasonTooLong { .. } => "reason_too_long",
             Refusal::PasswordsDiffer => "passwords_differ",
@@ -197,6 +208,42 @@ impl Refusal {
             ],
             Refusal::ReasonMissing { item, action } => {
                 vec![("item", text(item)), ("action", text(action.as_str()))]
+            }
+            Refusal::DraftInvalid { item, problem } => {
+                let n = |v: usize| Detail::Number(v as u64);
+                let mut details = vec![("item", text(item))];
+                // A slot as a person counts it, from 1, as `slots_empty` names them.
+                details.extend(match problem {
+                    DraftProblem::SlotCount {
+                        field,
+                        given,
+                        expected,
+                    } => vec![
+                        ("field", text(field)),
+                        ("given", n(*given)),
+                        ("expected", n(*expected)),
+                    ],
+                    DraftProblem::LabelOutOfRange {
+                        field,
+                        slot,
+                        label,
+                        labels,
+                    } => vec![
+                        ("field", text(field)),
+                        ("slot", n(slot + 1)),
+                        ("label", n(usize::from(*label))),
+                        ("labels", n(*labels)),
+                    ],
+                    DraftProblem::PlacedTwice { field, slot, label } => vec![
+                        ("field", text(field)),
+                        ("slot", n(slot + 1)),
+                        ("label", n(usize::from(*label))),
+                    ],
+                    DraftProblem::HistoryTooLong { entries, most } => {
+                        vec![("entries", n(*entries)), ("most", n(*most))]
+                    }
+                });
+                details
             }
             Refusal::ReasonTooLong { limit } => vec![("limit", Detail::Number(*limit))],
             Refusal::PasswordTooShort { chars, least } => vec![
@@ -250,6 +297,38 @@ impl Refusal {
             Refusal::ReasonMissing {
                 item: s("a1"),
                 action: SkipAction::Flag,
+            },
+            Refusal::DraftInvalid {
+                item: s("a1"),
+                problem: DraftProblem::SlotCount {
+                    field: s("slots"),
+                    given: 2,
+                    expected: 3,
+                },
+            },
+            Refusal::DraftInvalid {
+                item: s("a1"),
+                problem: DraftProblem::LabelOutOfRange {
+                    field: s("history[4]"),
+                    slot: 1,
+                    label: 7,
+                    labels: 3,
+                },
+            },
+            Refusal::DraftInvalid {
+                item: s("a1"),
+                problem: DraftProblem::PlacedTwice {
+                    field: s("slots"),
+                    slot: 2,
+                    label: 1,
+                },
+            },
+            Refusal::DraftInvalid {
+                item: s("a1"),
+                problem: DraftProblem::HistoryTooLong {
+                    entries: 250,
+                    most: 200,
+                },
             },
             Refusal::ReasonTooLong { limit: 2000 },
             Refusal::PasswordsDiffer,
@@ -322,6 +401,9 @@ impl fmt::Display for Refusal {
                 "your queue is paused by an admin (since {since}): you cannot open, save, \
                  answer or skip items until it is resumed; your drafts are kept"
             ),
+            Refusal::DraftInvalid { item, problem } => {
+                write!(f, "draft of item '{item}': {problem}")
+            }
             Refusal::SlotsEmpty { item, slots } => {
                 let (noun, verb) = if slots.len() == 1 {
                     ("slot", "is")

@@ -145,14 +145,14 @@ impl Draft {
     }
 
     /// Checks a draft sent by the page against the item: L-1 slots, labels in 1..L-1, none twice.
-    pub fn check(&self, step_length: StepLength) -> Result<(), String> {
+    pub fn check(&self, step_length: StepLength) -> Result<(), DraftProblem> {
         let n = step_length.actions();
         check_slots("slots", &self.slots, n)?;
         if self.history.len() > MAX_HISTORY {
-            return Err(format!(
-                "history: {} entries; at most {MAX_HISTORY}",
-                self.history.len()
-            ));
+            return Err(DraftProblem::HistoryTooLong {
+                entries: self.history.len(),
+                most: MAX_HISTORY,
+            });
         }
         for (i, h) in self.history.iter().enumerate() {
             check_slots(&format!("history[{i}]"), h, n)?;
@@ -171,22 +171,83 @@ impl Draft {
     }
 }
 
-fn check_slots(field: &str, slots: &[Option<u8>], n: usize) -> Result<(), String> {
+/// What is wrong with a draft the page sent, and where: `field` is `slots` (what is placed now)
+/// or `history[i]` (an undo step); `slot` counts from 0, as the field's index does.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum DraftProblem {
+    /// The field has `given` slots; the item has `expected` (its transitions).
+    SlotCount {
+        field: String,
+        given: usize,
+        expected: usize,
+    },
+    /// A slot holds a label the item has no card for (its cards are 1..=`labels`).
+    LabelOutOfRange {
+        field: String,
+        slot: usize,
+        label: u8,
+        labels: usize,
+    },
+    /// A label is placed a second time, in `slot`.
+    PlacedTwice {
+        field: String,
+        slot: usize,
+        label: u8,
+    },
+    /// More undo steps than are kept.
+    HistoryTooLong { entries: usize, most: usize },
+}
+
+impl std::fmt::Display for DraftProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            DraftProblem::SlotCount {
+                field,
+                given,
+                expected,
+            } => write!(f, "{field}: {given} slots given, this item has {expected}"),
+            DraftProblem::LabelOutOfRange {
+                field,
+                slot,
+                label,
+                labels,
+            } => write!(f, "{field}[{slot}]: label {label} is not in 1..{labels}"),
+            DraftProblem::PlacedTwice { field, slot, label } => {
+                write!(f, "{field}[{slot}]: label {label} is placed twice")
+            }
+            DraftProblem::HistoryTooLong { entries, most } => {
+                write!(f, "history: {entries} entries; at most {most}")
+            }
+        }
+    }
+}
+
+fn check_slots(field: &str, slots: &[Option<u8>], n: usize) -> Result<(), DraftProblem> {
     if slots.len() != n {
-        return Err(format!(
-            "{field}: {} slots given, this item has {n}",
-            slots.len()
-        ));
+        return Err(DraftProblem::SlotCount {
+            field: field.to_owned(),
+            given: slots.len(),
+            expected: n,
+        });
     }
     let mut seen = vec![false; n + 1];
     for (i, label) in slots.iter().enumerate() {
         let Some(label) = label else { continue };
         let index = usize::from(*label);
         if index == 0 || index > n {
-            return Err(format!("{field}[{i}]: label {label} is not in 1..{n}"));
+            return Err(DraftProblem::LabelOutOfRange {
+                field: field.to_owned(),
+                slot: i,
+                label: *label,
+                labels: n,
+            });
         }
         if seen[index] {
-            return Err(format!("{field}[{i}]: label {label} is placed twice"));
+            return Err(DraftProblem::PlacedTwice {
+                field: field.to_owned(),
+                slot: i,
+                label: *label,
+            });
         }
         seen[index] = true;
     }
@@ -667,18 +728,37 @@ mod tests {
         assert!(d.answer().is_none());
         d.slots = vec![Some(2), None, Some(2)];
         assert_eq!(
-            d.check(l(4)).expect_err("repeat"),
+            d.check(l(4)).expect_err("repeat").to_string(),
             "slots[2]: label 2 is placed twice"
         );
         d.slots = vec![Some(4), None, None];
         assert_eq!(
-            d.check(l(4)).expect_err("range"),
+            d.check(l(4)).expect_err("range").to_string(),
             "slots[0]: label 4 is not in 1..3"
         );
         d.slots = vec![None, None];
         assert_eq!(
-            d.check(l(4)).expect_err("length"),
+            d.check(l(4)).expect_err("length").to_string(),
             "slots: 2 slots given, this item has 3"
+        );
+        d.slots = vec![None; 3];
+        d.history = vec![vec![None, Some(0), None]];
+        assert_eq!(
+            d.check(l(4)).expect_err("history"),
+            DraftProblem::LabelOutOfRange {
+                field: "history[0]".to_owned(),
+                slot: 1,
+                label: 0,
+                labels: 3
+            }
+        );
+        d.history = vec![vec![None; 3]; MAX_HISTORY + 1];
+        assert_eq!(
+            d.check(l(4)).expect_err("long").to_string(),
+            format!(
+                "history: {} entries; at most {MAX_HISTORY}",
+                MAX_HISTORY + 1
+            )
         );
         d.slots = vec![Some(3), Some(1), Some(2)];
         assert_eq!(d.answer().expect("full").labels(), &[3, 1, 2]);

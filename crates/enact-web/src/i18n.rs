@@ -25,6 +25,7 @@ use fluent_bundle::{FluentArgs, FluentResource, FluentValue};
 use super::AppState;
 use super::cookies::cookie;
 use crate::app::refusal::{Detail, Refusal};
+use crate::core::annotation::DraftProblem;
 
 /// The cookie holding the locale a browser chose with the switch.
 pub const LOCALE_COOKIE: &str = "enact_lang";
@@ -576,6 +577,12 @@ pub fn refusal_key(refusal: &Refusal) -> &'static str {
         Refusal::ItemFinished { .. } => msg("refusal-item-finished"),
         Refusal::QueuePaused { .. } => msg("refusal-queue-paused"),
         Refusal::SlotsEmpty { .. } => msg("refusal-slots-empty"),
+        Refusal::DraftInvalid { problem, .. } => match problem {
+            DraftProblem::SlotCount { .. } => msg("refusal-draft-slot-count"),
+            DraftProblem::LabelOutOfRange { .. } => msg("refusal-draft-label-out-of-range"),
+            DraftProblem::PlacedTwice { .. } => msg("refusal-draft-placed-twice"),
+            DraftProblem::HistoryTooLong { .. } => msg("refusal-draft-history-too-long"),
+        },
         Refusal::ReasonMissing { .. } => msg("refusal-reason-missing"),
         Refusal::ReasonTooLong { .. } => msg("refusal-reason-too-long"),
         Refusal::PasswordsDiffer => msg("refusal-passwords-differ"),
@@ -619,6 +626,22 @@ pub const SCRIPT_MESSAGES: &[(&str, &[&str])] = &[
     (msg("refusal-item-finished"), &["item"]),
     (msg("refusal-queue-paused"), &["since"]),
     (msg("refusal-slots-empty"), &["item", "slots"]),
+    (
+        msg("refusal-draft-slot-count"),
+        &["item", "field", "given", "expected"],
+    ),
+    (
+        msg("refusal-draft-label-out-of-range"),
+        &["item", "field", "slot", "label", "labels"],
+    ),
+    (
+        msg("refusal-draft-placed-twice"),
+        &["item", "field", "slot", "label"],
+    ),
+    (
+        msg("refusal-draft-history-too-long"),
+        &["item", "entries", "most"],
+    ),
     (msg("refusal-not-assigned"), &["dataset", "item"]),
     (msg("refusal-no-item"), &["dataset", "item"]),
     (msg("refusal-no-dataset"), &["dataset"]),
