@@ -41,37 +41,50 @@ if ! command -v python3 >/dev/null 2>&1 || ! python3 -c 'import requests' >/dev/
 fi
 
 # The frame tests run against a real S3-compatible server: moto (PyPI) in server mode on
-# loopback, for this run only.
+# loopback, for this run only. Installing it takes a minute of a fresh clone's run, so it is
+# installed beside the build and waited for after it (start_moto).
 TOOLS="${CARGO_TARGET_DIR:-target}/test-tools"
 MOTO_VENV="$TOOLS/moto-venv"
+MOTO_INSTALL_LOG="$TOOLS/moto-install.log"
+MOTO_INSTALL_PID=""
+MOTO_PID=""
 if [ ! -x "$MOTO_VENV/bin/moto_server" ]; then
-  echo "== installing moto[server] 5.2.5 (PyPI) into $MOTO_VENV"
+  echo "== installing moto[server] 5.2.5 (PyPI) into $MOTO_VENV, beside the build"
   mkdir -p "$TOOLS"
   if ! python3 -m venv "$MOTO_VENV" >/dev/null 2>&1; then
     apt-get update && apt-get install -y python3-venv
     python3 -m venv "$MOTO_VENV"
   fi
-  "$MOTO_VENV/bin/pip" install --quiet --disable-pip-version-check 'moto[server]==5.2.5'
+  "$MOTO_VENV/bin/pip" install --quiet --disable-pip-version-check 'moto[server]==5.2.5' \
+    >"$MOTO_INSTALL_LOG" 2>&1 &
+  MOTO_INSTALL_PID=$!
 fi
-MOTO_LOG="$TOOLS/moto.log"
-"$MOTO_VENV/bin/moto_server" -H 127.0.0.1 -p 0 >"$MOTO_LOG" 2>&1 &
-MOTO_PID=$!
-trap 'kill "$MOTO_PID" 2>/dev/null || true' EXIT
-MOTO_URL=""
-for _ in $(seq 1 300); do
-  MOTO_URL=$(grep -o 'http://127\.0\.0\.1:[0-9]*' "$MOTO_LOG" | head -n 1 || true)
-  [ -n "$MOTO_URL" ] && break
-  sleep 0.1
-done
-if [ -z "$MOTO_URL" ]; then
-  echo "error: moto did not start:" >&2
-  cat "$MOTO_LOG" >&2
-  exit 1
-fi
-echo "== S3 (moto) on $MOTO_URL"
-export AWS_ENDPOINT="$MOTO_URL" AWS_ALLOW_HTTP=true AWS_REGION=us-east-1
-export AWS_ACCESS_KEY_ID=enact-hub-test AWS_SECRET_ACCESS_KEY=enact-hub-test
-export ENACT_HUB_REQUIRE_S3=1
+trap 'kill $MOTO_INSTALL_PID 2>/dev/null || true' EXIT
+start_moto() {
+  if [ -n "$MOTO_INSTALL_PID" ] && ! wait "$MOTO_INSTALL_PID"; then
+    echo "error: installing moto[server] failed:" >&2
+    cat "$MOTO_INSTALL_LOG" >&2
+    exit 1
+  fi
+  MOTO_INSTALL_PID=""
+  local log="$TOOLS/moto.log" url=""
+  "$MOTO_VENV/bin/moto_server" -H 127.0.0.1 -p 0 >"$log" 2>&1 &
+  MOTO_PID=$!
+  for _ in $(seq 1 300); do
+    url=$(grep -o 'http://127\.0\.0\.1:[0-9]*' "$log" | head -n 1 || true)
+    [ -n "$url" ] && break
+    sleep 0.1
+  done
+  if [ -z "$url" ]; then
+    echo "error: moto did not start:" >&2
+    cat "$log" >&2
+    exit 1
+  fi
+  echo "== S3 (moto) on $url"
+  export AWS_ENDPOINT="$url" AWS_ALLOW_HTTP=true AWS_REGION=us-east-1
+  export AWS_ACCESS_KEY_ID=enact-hub-test AWS_SECRET_ACCESS_KEY=enact-hub-test
+  export ENACT_HUB_REQUIRE_S3=1
+}
 
 # The service suite runs a second time against PostgreSQL: Debian's server, a throwaway cluster
 # on loopback for this run only.
@@ -98,7 +111,7 @@ as_pg "'$PG_BIN/initdb' -D '$PGDATA' -A trust -U postgres" >"$TOOLS/initdb.log" 
 # the default 1 GB of a disk CI shares with the build.
 as_pg "'$PG_BIN/pg_ctl' -D '$PGDATA' -l '$PGDATA/server.log' -w -o \"-p $PG_PORT -k /tmp -c listen_addresses=127.0.0.1 -c fsync=off -c max_connections=400 -c max_wal_size=128MB -c min_wal_size=32MB\" start" >/dev/null
 cleanup() {
-  kill "$MOTO_PID" 2>/dev/null || true
+  kill $MOTO_INSTALL_PID $MOTO_PID 2>/dev/null || true
   as_pg "'$PG_BIN/pg_ctl' -D '$PGDATA' -m immediate stop" >/dev/null 2>&1 || true
 }
 trap cleanup EXIT
@@ -167,26 +180,46 @@ LIVE=live_import::
 PG_URL="postgres://postgres@127.0.0.1:$PG_PORT"
 echo "== cargo test --workspace --all-targets: the build, linted by clippy -D warnings"
 cargo test --workspace --all-targets --locked --no-run
+start_moto
 
-echo "== cargo test --workspace --all-targets, on SQLite"
-cargo test --workspace --all-targets --locked
+# Two test binaries at a time, each with four test threads: most of the suite waits (on its
+# servers, Chromium, the processes the kill trials kill) as much as it computes, and one binary
+# after another left a third of CI's two cores idle (497 s for this pass; about 330 s so).
+# The longest binaries are started first.
+export RUST_TEST_THREADS=4
+echo "== cargo test --workspace --all-targets, on SQLite (scripts/test-binaries.py, two binaries at a time)"
+./scripts/test-binaries.py --first service --first crash --first pipeline --first demo \
+  --first pipeline_parity --first paper_experiments --first scene_graph_parity --first world \
+  -- --workspace --all-targets --locked
 echo "== $LIVE alone"
 cargo test --locked --test service -- --ignored "$LIVE"
 
-# One suite at a time: run beside the SQLite one, the PostgreSQL suite took 3.4 times as long
-# (636 s against 186 s) and slowed the SQLite tests as much, on CI's two cores.
+# One service suite at a time: run beside the SQLite one, the PostgreSQL suite took 3.4 times
+# as long (636 s against 186 s) and slowed the SQLite tests as much, on CI's two cores. The
+# server-side jobs' kill trials, which mostly wait for the processes they kill, run beside it.
+# The Chromium tests (browser::, episode_browser::) run on SQLite only: they check what the
+# pages do in a browser, and every read and write behind those pages is in the rest of the
+# suite, which runs on both backends.
 disk
-echo "== the service suite again, on PostgreSQL"
-ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test service || postgres_failed
+echo "== the service suite again, on PostgreSQL, beside the server-side jobs' kill trials"
+CRASH_LOG="$TOOLS/crash-postgres.log"
+ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test crash -- \
+  a_model_run_killed_at_random a_rescore_killed_at_random an_import_job_killed_at_random \
+  >"$CRASH_LOG" 2>&1 &
+CRASH_PID=$!
+ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test service -- --skip browser:: ||
+  postgres_failed
+echo "== the server-side jobs' kill trials, on PostgreSQL"
+if ! wait "$CRASH_PID"; then
+  cat "$CRASH_LOG"
+  postgres_failed
+fi
+cat "$CRASH_LOG"
 disk
 drop_test_databases
 ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test service -- --ignored "$LIVE" ||
   postgres_failed
 drop_test_databases
-echo "== the server-side jobs' kill trials again, on PostgreSQL"
-ENACT_HUB_TEST_POSTGRES="$PG_URL" cargo test --locked --test crash -- \
-  a_model_run_killed_at_random a_rescore_killed_at_random an_import_job_killed_at_random ||
-  postgres_failed
 as_pg "'$PG_BIN/pg_ctl' -D '$PGDATA' -m fast -w stop" >/dev/null
 rm -rf "$PGDATA"
 disk
