@@ -25,12 +25,13 @@ from concurrent.futures import ThreadPoolExecutor
 
 
 def test_executables(cargo_args):
-    out = subprocess.run(
-        ["cargo", "test", *cargo_args, "--no-run", "--message-format=json"],
-        check=True,
-        stdout=subprocess.PIPE,
-        text=True,
-    ).stdout
+    command = ["cargo", "test", *cargo_args, "--no-run"]
+    command.append("--message-format=json-render-diagnostics")
+    build = subprocess.run(command, stdout=subprocess.PIPE, text=True)
+    if build.returncode != 0:
+        # json-render-diagnostics: the compiler's messages went to stderr as cargo prints them.
+        sys.exit(f"error: the test build failed (exit {build.returncode}): {' '.join(command)}")
+    out = build.stdout
     found = []
     for line in out.splitlines():
         if not line.startswith("{"):
