@@ -767,6 +767,9 @@ mod tests {
             (-0.0, "-0.0"),
             (-2.5, "-2.5"),
             (0.1, "0.1"),
+            (f64::INFINITY, "inf"),
+            (f64::NEG_INFINITY, "-inf"),
+            (f64::NAN, "nan"),
         ];
         for (value, expected) in cases {
             assert_eq!(py_float_repr(value), expected, "repr of {value:e}");
@@ -903,6 +906,9 @@ mod tests {
         assert!(!parse("[NaN]").py_eq(&parse("[NaN]")));
         assert!(parse("{\"a\": 1, \"b\": 2}").py_eq(&parse("{\"b\": 2, \"a\": 1}")));
         assert!(!parse("\"1\"").py_eq(&parse("1")));
+        // `None == None` is true; None equals no number, not even 0.
+        assert!(parse("[null, 1]").py_eq(&parse("[null, 1.0]")));
+        assert!(!parse("null").py_eq(&parse("0")));
         assert!(parse("100000000000000000000").py_eq(&parse("1e20")));
         assert!(!parse("99999999999999999999").py_eq(&parse("1e20")));
         for falsy in ["null", "false", "0", "0.0", "\"\"", "[]", "{}"] {
