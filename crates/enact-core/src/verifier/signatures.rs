@@ -497,14 +497,38 @@ mod tests {
     }
 
     #[test]
+    fn each_pair_that_raised_keeps_its_own_message() {
+        let table = ItemSignatures::build(
+            &frames(&["a", "b"]),
+            VisibleCoverage::AllPairs,
+            |f, t, _| match (f, t) {
+                ("a", "b") => Err("KeyError: 'b'".to_owned()),
+                ("b", "a") => Err("AssertionError: no parent".to_owned()),
+                _ => Ok(BTreeSet::new()),
+            },
+        );
+        for view in [View::Visible, View::Full] {
+            assert_eq!(table.signature_set(view, 0, 1), Some(Err("KeyError: 'b'")));
+            assert_eq!(
+                table.signature_set(view, 1, 0),
+                Some(Err("AssertionError: no parent"))
+            );
+        }
+        // A message raised again is kept once.
+        assert_eq!(table.errors.len(), 2);
+    }
+
+    #[test]
     fn wide_sets_use_several_words() {
         let many: BTreeSet<String> = (0..150).map(|k| format!("sig{k:03}")).collect();
         let some: BTreeSet<String> = many.iter().step_by(7).cloned().collect();
+        // The first visible pair's set is empty, so that the sets compared below are not the
+        // table's first: a subset test must find each set at its own id times the words.
         let table = ItemSignatures::build(
-            &frames(&["x", "y"]),
+            &frames(&["x", "y", "z"]),
             VisibleCoverage::Chronological,
             |f, t, view| {
-                Ok(match (f == t, view) {
+                Ok(match (f == t || (f, t) == ("x", "y"), view) {
                     (true, _) => BTreeSet::new(),
                     (false, View::Visible) => some.clone(),
                     (false, View::Full) => many.clone(),
@@ -512,8 +536,8 @@ mod tests {
             },
         );
         let (PairLookup::Set(v), PairLookup::Set(full)) = (
-            table.lookup(View::Visible, 0, 1),
-            table.lookup(View::Full, 0, 1),
+            table.lookup(View::Visible, 1, 2),
+            table.lookup(View::Full, 1, 2),
         ) else {
             panic!("sets expected");
         };
@@ -521,7 +545,7 @@ mod tests {
         assert!(!table.is_subset(full, v));
         assert_eq!(
             table
-                .signature_set(View::Visible, 0, 1)
+                .signature_set(View::Visible, 1, 2)
                 .and_then(Result::ok)
                 .map(|s| s.len()),
             Some(some.len())
