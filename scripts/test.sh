@@ -180,7 +180,7 @@ start_moto
 
 # Two test binaries at a time, each with four test threads: most of the suite waits (on its
 # servers, Chromium, the processes the kill trials kill) as much as it computes, and one binary
-# after another left a third of CI's two cores idle (497 s for this pass; about 330 s so).
+# after another left a third of CI's two cores idle (this pass took 497 s so, 333 s two at a time).
 # The longest binaries are started first.
 export RUST_TEST_THREADS=4
 echo "== cargo test --workspace --all-targets, on SQLite (scripts/test-binaries.py, two binaries at a time)"
