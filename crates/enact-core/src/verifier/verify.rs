@@ -818,19 +818,13 @@ mod tests {
         // Small labels run on machine integers; near i64's ends `label - 1` and the index
         // arithmetic would overflow there, so such labels take the Python-value path.
         assert!(answer("[2, 3, 1]").small_labels().is_some());
-        let t = table(&["a", "b", "c", "d"]);
-        let gt: Vec<PyValue> = [2, 3, 1].map(|l| PyValue::Int(PyInt::Small(l))).to_vec();
         for extreme in [i64::MIN, i64::MIN / 2, i64::MAX / 2, i64::MAX] {
             let text = format!("[2, 3, {extreme}]");
-            let parsed = answer(&text);
-            assert!(parsed.small_labels().is_none(), "{text}");
+            assert!(answer(&text).small_labels().is_none(), "{text}");
+            // A label no frame has: neither exact nor semantic, and no overflow on the way.
             for direction in [Direction::Forward, Direction::Inverse] {
-                let shape = KeyFrameShape::Sequence(4);
-                assert_eq!(
-                    verify(direction, &perm(&[2, 3, 1]), &parsed, Some(&t)),
-                    run(direction, shape, &gt, true, parsed.labels(), Some(&t)),
-                    "{direction} {text}"
-                );
+                let v = score(direction, &[2, 3, 1], &text);
+                assert!(!v.exact_match && !v.semantic_match, "{direction} {text}");
             }
         }
     }
