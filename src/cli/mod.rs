@@ -274,9 +274,12 @@ async fn open(db: &Path) -> anyhow::Result<Hub> {
 async fn open_signing(db: &Path, key_file: Option<PathBuf>) -> anyhow::Result<Hub> {
     let from_env = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
     let key_file = key_file.or_else(|| from_env("ENACT_HUB_SIGNING_KEY").map(PathBuf::from));
-    Ok(Hub::open(&resolve(db))
-        .await?
-        .with_signing(key_file, from_env("ENACT_HUB_PUBLIC_URL")))
+    let hub = Hub::open(&resolve(db)).await?;
+    Ok(app::signing::with_signing(
+        hub,
+        key_file,
+        from_env("ENACT_HUB_PUBLIC_URL"),
+    ))
 }
 
 /// Prints a use case's refusal as the command's error and fails.

@@ -159,19 +159,21 @@ pub(super) async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     let hub = Hub::open_serving(&db, &limits)
         .await?
         .with_heavy_limits(heavy)
-        .with_quotas(Quotas {
+        .with_kept(Quotas {
             daily: args.daily_quota,
             total: args.total_quota,
         })
         .with_frame_store(frame_store, args.frame_redirect.map(Duration::from_secs))
-        .with_endpoint_keys(app::runs::EndpointKeys::from_env(
+        .with_kept(app::runs::EndpointKeys::from_env(
             args.endpoint_keys.clone(),
         )?)
-        .with_import_dir(args.import_dir.clone())
-        .with_signing(
-            args.signing_key.clone(),
-            args.public_url.clone().filter(|u| !u.trim().is_empty()),
-        );
+        .with_kept(app::import_jobs::ImportDir(args.import_dir.clone()));
+    let hub = app::signing::with_signing(
+        hub,
+        args.signing_key.clone(),
+        args.public_url.clone().filter(|u| !u.trim().is_empty()),
+    );
+    app::make_caches(&hub);
     prepare_signing_key(&hub).await?;
     if args.demo {
         app::demo::load(&hub).await?;

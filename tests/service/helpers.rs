@@ -293,7 +293,9 @@ where
     let (pool, db) = fresh_db_located(&dir).await;
     setup(pool.clone(), dir.path().to_path_buf()).await;
     // The test's folder is also the folder import jobs may read releases from.
-    let hub = Hub::from(pool.clone()).with_import_dir(Some(dir.path().to_path_buf()));
+    let hub = Hub::from(pool.clone()).with_kept(enact_hub::app::import_jobs::ImportDir(Some(
+        dir.path().to_path_buf(),
+    )));
     let mut server = serve_hub(hub, pool, dir, &config).await;
     server.db = db;
     server
@@ -352,7 +354,9 @@ pub async fn spawn_serving_app_with_release() -> (TestServer, Vec<Value>) {
     let hub = Hub::open_serving(&db, &enact_hub::app::cache::CacheLimits::default())
         .await
         .expect("open the database as a server does")
-        .with_import_dir(Some(dir.path().to_path_buf()));
+        .with_kept(enact_hub::app::import_jobs::ImportDir(Some(
+            dir.path().to_path_buf(),
+        )));
     let mut server = serve_hub(hub, pool, dir, &WebConfig::default()).await;
     server.db = db;
     (server, records)

@@ -47,7 +47,8 @@ async fn an_admin_imports_a_release_from_the_import_folder_as_a_job() {
     let outside = dir.path().join("elsewhere");
     write_balanced_release(&outside, &[3], 10);
     let (pool, _) = fresh_db_located(&dir).await;
-    let hub = Hub::from(pool.clone()).with_import_dir(Some(folder.clone()));
+    let hub = Hub::from(pool.clone())
+        .with_kept(enact_hub::app::import_jobs::ImportDir(Some(folder.clone())));
     let server_dir = tempfile::tempdir().expect("tempdir");
     let server = serve_hub(hub.clone(), pool.clone(), server_dir, &WebConfig::default()).await;
     let (_, submitter) = api_token(&pool, "team", Role::Submitter, None, None).await;
@@ -193,7 +194,8 @@ async fn an_import_job_resumes_after_the_committed_batches() {
     let root = folder.join("release");
     write_balanced_release(&root, &[3, 5], 40);
     let (pool, _) = fresh_db_located(&dir).await;
-    let hub = Hub::from(pool.clone()).with_import_dir(Some(folder.clone()));
+    let hub = Hub::from(pool.clone())
+        .with_kept(enact_hub::app::import_jobs::ImportDir(Some(folder.clone())));
 
     // The first run stops (as a paused job does) after three batches of 8 lines.
     let batches = Arc::new(std::sync::atomic::AtomicUsize::new(0));

@@ -438,12 +438,12 @@ async fn readers_that_miss_together_share_one_build_and_a_change_starts_another(
     };
     // Sixteen readers on an empty cache: one build, one board for all.
     let boards = read_together(16).await;
-    assert_eq!(hub.board_builds(), 1);
+    assert_eq!(enact_hub::app::leaderboard::board_builds(&hub), 1);
     assert!(boards.iter().all(|b| std::sync::Arc::ptr_eq(b, &boards[0])));
     assert_eq!(boards[0].rows.len(), 1);
     // Kept: later readers build nothing.
     read_together(4).await;
-    assert_eq!(hub.board_builds(), 1);
+    assert_eq!(enact_hub::app::leaderboard::board_builds(&hub), 1);
     assert!(!boards[0].rows[0].baseline);
     // A change (the submission marked a baseline) starts one new build, which the next
     // readers share, and which shows what changed.
@@ -451,7 +451,7 @@ async fn readers_that_miss_together_share_one_build_and_a_change_starts_another(
         .await
         .expect("listing");
     let boards = read_together(16).await;
-    assert_eq!(hub.board_builds(), 2);
+    assert_eq!(enact_hub::app::leaderboard::board_builds(&hub), 2);
     assert!(boards.iter().all(|b| std::sync::Arc::ptr_eq(b, &boards[0])));
     assert!(boards[0].rows[0].baseline);
     // A dataset that does not exist is refused to every reader, and nothing is kept.

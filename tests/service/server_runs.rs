@@ -32,7 +32,7 @@ pub fn fast() -> JobSettings {
 pub fn keyed(hub: Hub) -> Hub {
     let keys = EndpointKeys::from_pairs([(KEY_VARIABLE.to_owned(), SECRET_KEY.to_owned())])
         .expect("an allowlist");
-    hub.with_endpoint_keys(keys)
+    hub.with_kept(keys)
 }
 
 fn calls(concurrency: usize) -> RunCalls {

@@ -208,10 +208,11 @@ async fn assigned(
     item_id: &str,
 ) -> Result<(Arc<StoredItem>, AssignmentState), AppError> {
     let item = super::items::get(hub, dataset, item_id).await?;
-    if let Some(known) = hub.standings.get(session.annotator, item.rowid) {
+    let standings = hub.kept::<super::standings::StandingCache>();
+    if let Some(known) = standings.get(session.annotator, item.rowid) {
         return Ok((item, known));
     }
-    let ticket = hub.standings.ticket();
+    let ticket = standings.ticket();
     let mut conn = hub.conn().await?;
     let read = store::annotations::assignment_state(&mut conn, session.annotator, item.rowid)
         .await?
@@ -221,8 +222,7 @@ async fn assigned(
                 item: item_id.to_owned(),
             })
         })?;
-    hub.standings
-        .remember(ticket, session.annotator, item.rowid, read.clone());
+    standings.remember(ticket, session.annotator, item.rowid, read.clone());
     Ok((item, read))
 }
 
@@ -374,7 +374,7 @@ pub async fn answer(
         Outcome::Answered(answer),
     )
     .await?;
-    hub.metrics.annotator_answered();
+    hub.metrics().annotator_answered();
     Ok(())
 }
 

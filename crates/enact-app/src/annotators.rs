@@ -180,7 +180,7 @@ pub async fn check_password(
     })
     .await?;
     if found.is_none() {
-        hub.metrics.login_failed(LoginFailure::Password);
+        hub.metrics().login_failed(LoginFailure::Password);
     }
     Ok(found)
 }

@@ -145,7 +145,7 @@ async fn stream_frames(
     }
     let mut written: HashSet<String> = HashSet::new();
     for batch in rows.chunks(ITEMS_PER_BATCH) {
-        let images = match hub.pool.acquire().await {
+        let images = match hub.pool().acquire().await {
             Ok(mut conn) => store::items::release_images(&mut conn, batch).await,
             Err(e) => Err(e),
         };

@@ -129,7 +129,7 @@ async fn schema(hub: &Hub) -> Result<Finding, AppError> {
 
 async fn imports(hub: &Hub, actor: &Actor, remove_stale: bool) -> Result<Vec<Finding>, AppError> {
     let unfinished = {
-        let mut conn = hub.pool.acquire().await?;
+        let mut conn = hub.pool().acquire().await?;
         store::staged::all(&mut conn).await?
     };
     let stale: Vec<String> = super::import::stale(hub, STALE_IMPORT_HOURS)
@@ -189,7 +189,7 @@ async fn imports(hub: &Hub, actor: &Actor, remove_stale: bool) -> Result<Vec<Fin
 }
 
 async fn jobs(hub: &Hub) -> Result<Vec<Finding>, AppError> {
-    let mut conn = hub.pool.acquire().await?;
+    let mut conn = hub.pool().acquire().await?;
     let running = store::jobs::running(&mut conn).await?;
     let failed = store::jobs::failed(&mut conn, 20).await?;
     drop(conn);
@@ -243,7 +243,7 @@ async fn jobs(hub: &Hub) -> Result<Vec<Finding>, AppError> {
 }
 
 async fn write_ahead_log(hub: &Hub) -> Result<Option<Finding>, AppError> {
-    let Some(files) = store::sqlite_files(&hub.pool).await? else {
+    let Some(files) = store::sqlite_files(hub.pool()).await? else {
         return Ok(None);
     };
     let size = |path: &std::path::Path| std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
@@ -273,7 +273,7 @@ async fn write_ahead_log(hub: &Hub) -> Result<Option<Finding>, AppError> {
 }
 
 async fn integrity(hub: &Hub) -> Result<Finding, AppError> {
-    Ok(match store::quick_check(&hub.pool).await? {
+    Ok(match store::quick_check(hub.pool()).await? {
         None => Finding::new(
             "integrity",
             Level::Notice,

@@ -178,7 +178,7 @@ async fn store_frame(
     if let Some(id) = store::frames::id_by_hash(&mut *tx, &sha256).await? {
         return Ok(id);
     }
-    let held_here = match hub.frame_store.objects() {
+    let held_here = match hub.frame_store().objects() {
         Some(objects) => {
             objects.put(&sha256, Bytes::from(png)).await?;
             Vec::new()

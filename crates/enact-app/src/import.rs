@@ -738,7 +738,7 @@ pub async fn import_release(
     // What the file is checked against: the dataset as it is now (the cut-over refuses if it
     // changed meanwhile).
     let stored_hashes = match staged.target {
-        Some(id) => store::items::content_hashes(&mut hub.pool.acquire().await?, id).await?,
+        Some(id) => store::items::content_hashes(&mut hub.pool().acquire().await?, id).await?,
         None => HashMap::new(),
     };
     let mut invalid: Vec<SkippedLine> = std::mem::take(&mut report.skipped);
@@ -1156,7 +1156,7 @@ pub struct Swept {
 pub async fn sweep_replaced_verdicts(hub: &super::Hub) -> Result<Swept, sqlx::Error> {
     let mut swept = Swept::default();
     let pending = {
-        let mut conn = hub.pool.acquire().await?;
+        let mut conn = hub.pool().acquire().await?;
         store::staged::verdict_sweeps(&mut conn).await?
     };
     for sweep in pending {
@@ -1197,7 +1197,7 @@ pub struct RetiredDeleted {
 pub async fn delete_retired_datasets(hub: &super::Hub) -> Result<RetiredDeleted, sqlx::Error> {
     let mut done = RetiredDeleted::default();
     let pending = {
-        let mut conn = hub.pool.acquire().await?;
+        let mut conn = hub.pool().acquire().await?;
         store::staged::retired(&mut conn).await?
     };
     if pending.is_empty() {
@@ -1306,7 +1306,7 @@ pub async fn abandon(
     actor: &Actor,
     dataset: &str,
 ) -> Result<Option<StagedSummary>, ImportError> {
-    let staged = store::staged::for_dataset(&mut hub.pool.acquire().await?, dataset).await?;
+    let staged = store::staged::for_dataset(&mut hub.pool().acquire().await?, dataset).await?;
     let Some(staged) = staged else {
         return Ok(None);
     };
@@ -1324,7 +1324,7 @@ pub async fn abandon(
 
 /// Staged imports no batch was written to for `hours` hours (killed and never resumed).
 pub async fn stale(hub: &super::Hub, hours: u32) -> Result<Vec<StagedSummary>, ImportError> {
-    let mut conn = hub.pool.acquire().await?;
+    let mut conn = hub.pool().acquire().await?;
     let staged = store::staged::idle_for_hours(&mut conn, i64::from(hours)).await?;
     Ok(staged.iter().map(StagedSummary::from).collect())
 }
@@ -1382,7 +1382,7 @@ async fn read_new_frames(
     root: &Path,
     rows: &[(&ValidRow, String, bool)],
 ) -> Result<HashMap<String, Vec<u8>>, ImportError> {
-    let mut conn = hub.pool.acquire().await?;
+    let mut conn = hub.pool().acquire().await?;
     let mut missing = Vec::new();
     let mut seen = HashSet::new();
     for (row, _, _) in rows {
@@ -1478,7 +1478,7 @@ async fn signature_refreshes<'r>(
     rows: &'r [ValidRow],
     stored_hashes: &HashMap<String, String>,
 ) -> Result<Vec<(&'r str, &'r ItemSemantics)>, ImportError> {
-    let mut conn = hub.pool.acquire().await?;
+    let mut conn = hub.pool().acquire().await?;
     let mut wanted = Vec::new();
     for row in rows {
         let Some(semantics) = &row.semantics else {

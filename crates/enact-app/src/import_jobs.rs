@@ -124,9 +124,24 @@ fn release_under(root: &Path, path: &str) -> Result<(PathBuf, ReleaseLocation), 
     Ok((resolved, location))
 }
 
+/// The folder import jobs read releases from (`serve --import-dir`); none: refused.
+#[derive(Debug, Clone, Default)]
+pub struct ImportDir(pub Option<PathBuf>);
+
+impl crate::Kept for ImportDir {
+    fn make(_hub: &Hub) -> Self {
+        ImportDir(None)
+    }
+}
+
+/// The folder import jobs on `hub` read releases from, when this instance has one.
+pub fn folder(hub: &Hub) -> Option<PathBuf> {
+    hub.kept::<ImportDir>().0.clone()
+}
+
 /// The import folder of this instance, or the refusal an admin reads.
-fn import_dir(hub: &Hub) -> Result<&Path, AppError> {
-    hub.import_dir().ok_or_else(|| {
+fn import_dir(hub: &Hub) -> Result<PathBuf, AppError> {
+    folder(hub).ok_or_else(|| {
         AppError::NotPermitted(
             "this server imports releases from its own disk only when its operator names an \
              import folder (ENACT_HUB_IMPORT_DIR); otherwise import on the server itself"
@@ -139,7 +154,7 @@ fn import_dir(hub: &Hub) -> Result<&Path, AppError> {
 /// location is checked now (its `QA/enact_ordering.jsonl` found); its lines are checked by the
 /// job. Refused while another import job into the same dataset is unfinished.
 pub async fn request(hub: &Hub, actor: &Actor, request: &ImportRequest) -> Result<JobId, AppError> {
-    let (path, _) = release_under(import_dir(hub)?, &request.path)?;
+    let (path, _) = release_under(&import_dir(hub)?, &request.path)?;
     let dataset = request
         .dataset
         .as_deref()
@@ -187,7 +202,7 @@ pub async fn work(hub: &Hub, job: &Arc<JobContext>) -> Result<(), AppError> {
             payload.actor_kind
         ))
     })?;
-    let (path, location) = release_under(import_dir(hub)?, &payload.path)?;
+    let (path, location) = release_under(&import_dir(hub)?, &payload.path)?;
     let latest: Arc<Mutex<Option<ImportProgress>>> = Arc::default();
     let noted = Arc::clone(&latest);
     let stopping = Arc::clone(job);

@@ -32,7 +32,7 @@ fn no_item(dataset: &str, item: &str) -> AppError {
 /// The item a URL names (ground truth included: callers choose what to show), or a 404 that
 /// names the dataset or the item.
 pub async fn get(hub: &Hub, dataset: &str, item_id: &str) -> Result<Arc<StoredItem>, AppError> {
-    if let Some(found) = hub.items.stored(dataset, item_id) {
+    if let Some(found) = hub.items().stored(dataset, item_id) {
         return Ok(found);
     }
     // No stored id holds a NUL (PostgreSQL cannot even be asked about one).
@@ -45,7 +45,7 @@ pub async fn get(hub: &Hub, dataset: &str, item_id: &str) -> Result<Arc<StoredIt
         .await?
         .ok_or_else(|| no_item(dataset, item_id))?;
     let found = Arc::new(item);
-    hub.items.insert_stored(dataset, item_id, found.clone());
+    hub.items().insert_stored(dataset, item_id, found.clone());
     Ok(found)
 }
 

@@ -15,6 +15,7 @@ use bytes::Bytes;
 
 use super::cache::{BoundedCache, CacheLimits, CacheStats};
 use super::challenge::ChallengeBoard;
+use super::changes::Change;
 use super::models::{self, ModelMetadata};
 use super::reported::{self, ReportedResult};
 use super::{AppError, Hub, datasets};
@@ -203,6 +204,29 @@ impl Default for BoardCache {
     }
 }
 
+/// Every board is dropped when something boards show changes, or stored items do.
+impl crate::Kept for BoardCache {
+    fn make(hub: &Hub) -> Self {
+        BoardCache::new(hub.cache_limits().board_datasets)
+    }
+
+    fn forget_stale(&self, change: &Change) {
+        match change {
+            Change::Boards | Change::Everything => self.changed(),
+            Change::Standing { .. } | Change::SessionEnded(_) => {}
+        }
+    }
+
+    fn stats(&self) -> Vec<CacheStats> {
+        vec![BoardCache::stats(self)]
+    }
+}
+
+/// How many leaderboards `hub` has built (each cache miss that read the store).
+pub fn board_builds(hub: &Hub) -> u64 {
+    hub.kept::<BoardCache>().builds()
+}
+
 impl BoardCache {
     /// At most `datasets` boards.
     pub fn new(datasets: u64) -> BoardCache {
@@ -292,7 +316,7 @@ pub async fn warm(hub: &Hub) -> Result<usize, AppError> {
 /// The board of the dataset named `name`, from memory when nothing changed since it was built.
 /// Readers that miss at once share one build (see [`BoardCache`]).
 pub async fn board(hub: &Hub, name: &str) -> Result<Arc<Board>, AppError> {
-    let cache = &hub.boards;
+    let cache = &hub.kept::<BoardCache>();
     // A board kept from before its challenge's deadline is built again (and the reveal made).
     if let Some(board) = cache.get(name).filter(|b| !b.reveal_due()) {
         return Ok(board);
@@ -328,7 +352,7 @@ impl Drop for Landing<'_> {
 
 /// Reads and ranks the board of `name`; keeps it when no change came since `ticket`.
 async fn build(hub: &Hub, name: &str, ticket: u64) -> Result<Arc<Board>, AppError> {
-    let cache = &hub.boards;
+    let cache = &hub.kept::<BoardCache>();
     // Kept by a build that landed between this reader's miss and its flight.
     if let Some(board) = cache.get(name).filter(|b| !b.reveal_due()) {
         return Ok(board);

@@ -36,7 +36,7 @@ pub async fn migrate_db(
             )));
         }
     }
-    let mut source = from.pool.begin_snapshot().await?;
+    let mut source = from.pool().begin_snapshot().await?;
     copy::clear_generation(&mut target).await?;
     let mut tables = Vec::with_capacity(TABLES.len());
     for table in TABLES {

@@ -74,6 +74,14 @@ pub struct Signer {
     current: Mutex<Option<Arc<StatementKey>>>,
 }
 
+/// A hub signs with the key beside its SQLite database (or, on PostgreSQL, one of this
+/// process's own) unless it was given a key file ([`with_signing`]).
+impl crate::Kept for Signer {
+    fn make(hub: &Hub) -> Self {
+        Signer::new(KeySource::beside(hub.pool()), None)
+    }
+}
+
 impl Signer {
     pub fn new(source: KeySource, public_url: Option<String>) -> Signer {
         Signer {
@@ -251,7 +259,7 @@ pub(crate) async fn signing_key(
     hub: &Hub,
     conn: &mut store::Tx,
 ) -> Result<Arc<StatementKey>, AppError> {
-    let signer = &hub.signer;
+    let signer = &hub.kept::<Signer>();
     if let Some(key) = signer.cached() {
         match store::statements::key(conn, &key.keyid()).await? {
             Some(row) if row.retired_at.is_none() => return Ok(key),
@@ -326,8 +334,19 @@ pub async fn prepare(hub: &Hub) -> Result<PublishedKey, AppError> {
 }
 
 /// Where this process's key lives.
-pub fn source(hub: &Hub) -> &KeySource {
-    hub.signer.source()
+pub fn source(hub: &Hub) -> KeySource {
+    hub.kept::<Signer>().source().clone()
+}
+
+/// The hub signing its statements with the key in `key_file` (made there on first need)
+/// instead of the one beside a SQLite database (`--signing-key`, `ENACT_HUB_SIGNING_KEY`),
+/// naming itself by `public_url` in them (`--public-url`, `ENACT_HUB_PUBLIC_URL`).
+pub fn with_signing(hub: Hub, key_file: Option<PathBuf>, public_url: Option<String>) -> Hub {
+    let source = match key_file {
+        Some(path) => KeySource::File(path),
+        None => KeySource::beside(hub.pool()),
+    };
+    hub.with_kept(Signer::new(source, public_url))
 }
 
 fn published(row: store::statements::KeyRow) -> PublishedKey {
@@ -370,7 +389,7 @@ pub struct Rotated {
 pub async fn rotate(hub: &Hub, actor: &Actor) -> Result<Rotated, AppError> {
     let key = StatementKey::from_secret(&rand::random());
     let keyid = key.keyid();
-    let source = hub.signer.source.clone();
+    let source = hub.kept::<Signer>().source.clone();
     let mut tx = hub.write(Lane::Interactive).await?;
     if let KeySource::File(path) = &source {
         replace_key_file(path, &key)?;
@@ -404,7 +423,7 @@ pub async fn rotate(hub: &Hub, actor: &Actor) -> Result<Rotated, AppError> {
         .await?
         .ok_or_else(|| AppError::internal("a signing key just listed is not listed"))?;
     tx.commit().await?;
-    hub.signer.remember(Arc::new(key));
+    hub.kept::<Signer>().remember(Arc::new(key));
     tracing::info!(keyid = %keyid, retired = ?retired, "statement signing key rotated");
     Ok(Rotated {
         key: published(row),
@@ -416,7 +435,7 @@ pub async fn rotate(hub: &Hub, actor: &Actor) -> Result<Rotated, AppError> {
 /// [`rotate`] from the command line: refused without a key file, since a key of this process
 /// only would be lost when the command ends and never sign anything.
 pub async fn rotate_key_file(hub: &Hub, actor: &Actor) -> Result<Rotated, AppError> {
-    if hub.signer.source == KeySource::Process {
+    if hub.kept::<Signer>().source == KeySource::Process {
         return Err(AppError::Invalid(
             "this database keeps no key file beside it (PostgreSQL): give --signing-key FILE \
              (or ENACT_HUB_SIGNING_KEY), the file the servers sign with"

@@ -10,6 +10,7 @@
 use std::sync::Mutex;
 
 use super::cache::{BoundedCache, CacheLimits, CacheStats};
+use super::changes::Change;
 use crate::core::annotation::AssignmentState;
 
 pub struct StandingCache {
@@ -29,6 +30,26 @@ impl Default for StandingCache {
 /// Taken before reading the store; [`StandingCache::remember`] refuses a stale one.
 #[derive(Debug, Clone, Copy)]
 pub struct ReadTicket(u64);
+
+/// The item page's standings, dropped as drafts and answers are written here or announced
+/// from elsewhere, and all of them when stored items change.
+impl crate::Kept for StandingCache {
+    fn make(hub: &crate::Hub) -> Self {
+        StandingCache::new(hub.cache_limits().standing_entries)
+    }
+
+    fn forget_stale(&self, change: &Change) {
+        match change {
+            Change::Standing { annotator, item } => self.forget(*annotator, *item),
+            Change::Everything => self.clear(),
+            Change::Boards | Change::SessionEnded(_) => {}
+        }
+    }
+
+    fn stats(&self) -> Vec<CacheStats> {
+        vec![StandingCache::stats(self)]
+    }
+}
 
 impl StandingCache {
     /// At most `max_entries` standings.

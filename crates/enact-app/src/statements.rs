@@ -32,6 +32,12 @@ pub struct ItemDigests {
     by_dataset: Mutex<HashMap<i64, (i64, DatasetDigest)>>,
 }
 
+impl crate::Kept for ItemDigests {
+    fn make(_hub: &Hub) -> Self {
+        ItemDigests::default()
+    }
+}
+
 impl ItemDigests {
     fn get(&self, dataset: i64, generation: i64) -> Option<DatasetDigest> {
         let map = self.by_dataset.lock().unwrap_or_else(|p| p.into_inner());
@@ -87,12 +93,13 @@ async fn dataset_digest(
     dataset: i64,
 ) -> Result<DatasetDigest, AppError> {
     let generation = store::content_generation(conn).await?;
-    if let Some(digest) = hub.item_digests.get(dataset, generation) {
+    if let Some(digest) = hub.kept::<ItemDigests>().get(dataset, generation) {
         return Ok(digest);
     }
     let hashes = store::items::content_hashes(conn, dataset).await?;
     let digest = items_sha256(hashes.iter().map(|(id, hash)| (id.as_str(), hash.as_str())));
-    hub.item_digests.put(dataset, generation, digest.clone());
+    hub.kept::<ItemDigests>()
+        .put(dataset, generation, digest.clone());
     Ok(digest)
 }
 
@@ -128,7 +135,10 @@ pub(crate) async fn record(
         statement: STATEMENT_FORMAT.to_owned(),
         hub: HubIdentity {
             name: "enact-hub".to_owned(),
-            url: hub.signer.public_url().map(str::to_owned),
+            url: hub
+                .kept::<signing::Signer>()
+                .public_url()
+                .map(str::to_owned),
             version: BUILD.to_owned(),
         },
         submission: SubmissionFacts {

@@ -48,6 +48,18 @@ impl Default for TargetCache {
     }
 }
 
+impl crate::Kept for TargetCache {
+    fn make(hub: &Hub) -> Self {
+        TargetCache::new(hub.cache_limits().target_datasets)
+    }
+
+    // Keyed by the content generation: a change to stored items is a new key.
+
+    fn stats(&self) -> Vec<super::cache::CacheStats> {
+        vec![TargetCache::stats(self)]
+    }
+}
+
 impl TargetCache {
     /// At most `datasets` datasets' targets.
     pub fn new(datasets: u64) -> TargetCache {
@@ -73,7 +85,7 @@ impl TargetCache {
 pub async fn dataset_targets(hub: &Hub, dataset: i64) -> Result<Arc<DatasetTargets>, AppError> {
     let mut conn = hub.conn().await?;
     let generation = store::content_generation(&mut conn).await?;
-    if let Some(t) = hub.targets.get(dataset, generation) {
+    if let Some(t) = hub.kept::<TargetCache>().get(dataset, generation) {
         return Ok(t);
     }
     let rows = store::items::scoring_items(&mut conn, dataset).await?;
@@ -87,13 +99,39 @@ pub async fn dataset_targets(hub: &Hub, dataset: i64) -> Result<Arc<DatasetTarge
         .await?
         .map_err(AppError::internal)?;
     let targets = Arc::new(targets);
-    hub.targets.put(dataset, generation, targets.clone());
+    hub.kept::<TargetCache>()
+        .put(dataset, generation, targets.clone());
     Ok(targets)
 }
 
 /// Times a submission is scored while imports keep changing its dataset under it before it is
 /// refused as unavailable (to be sent again).
 const SCORING_ATTEMPTS: usize = 3;
+
+/// Submission attempts a token may make, unless the token sets its own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Quotas {
+    /// Per UTC day.
+    pub daily: i64,
+    /// In total.
+    pub total: i64,
+}
+
+impl Default for Quotas {
+    fn default() -> Self {
+        Quotas {
+            daily: 20,
+            total: 1000,
+        }
+    }
+}
+
+/// The server's quotas (`serve --daily-quota`, `--total-quota`), set before serving.
+impl crate::Kept for Quotas {
+    fn make(_hub: &Hub) -> Self {
+        Quotas::default()
+    }
+}
 
 /// Seconds until the next UTC midnight, when daily quotas reset.
 fn seconds_until_utc_midnight() -> u64 {
@@ -149,8 +187,9 @@ async fn take_attempt(hub: &Hub, caller: &Caller) -> Result<Option<i64>, AppErro
     if caller.has(Scope::Admin) {
         return Ok(None);
     }
-    let daily = caller.daily_quota.unwrap_or(hub.quotas.daily);
-    let total = caller.total_quota.unwrap_or(hub.quotas.total);
+    let quotas = *hub.kept::<Quotas>();
+    let daily = caller.daily_quota.unwrap_or(quotas.daily);
+    let total = caller.total_quota.unwrap_or(quotas.total);
     // In a write transaction, serialised with every other on either database: the count and
     // the insert hold across every server instance, so two requests cannot both take the
     // last attempt.
@@ -405,7 +444,7 @@ async fn store_submission(
     .await?;
     tx.announce(Change::Boards).await?;
     tx.commit().await?;
-    hub.metrics.submission_scored();
+    hub.metrics().submission_scored();
     tracing::info!(
         submission = id,
         dataset = %dataset.name,

@@ -20,7 +20,7 @@ pub use crate::store::accounts::TokenListing;
 pub async fn authorize(hub: &Hub, presented: &str, scope: Scope) -> Result<Caller, AppError> {
     let caller = authenticate(hub, presented).await.inspect_err(|e| {
         if matches!(e, AppError::Unauthenticated(_)) {
-            hub.metrics.login_failed(LoginFailure::Token);
+            hub.metrics().login_failed(LoginFailure::Token);
         }
     })?;
     if !caller.has(scope) {

@@ -28,7 +28,7 @@ pub struct BuildReport {
 
 /// The version, commit and the database's schema version.
 pub async fn describe(hub: &Hub) -> Result<BuildReport, AppError> {
-    let (backend, applied) = store::schema_version(&hub.pool).await?;
+    let (backend, applied) = store::schema_version(hub.pool()).await?;
     let expected = if backend == "postgres" {
         POSTGRES_SCHEMA
     } else {

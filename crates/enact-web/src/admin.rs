@@ -155,7 +155,7 @@ pub(super) async fn render_admin(
     let imports = crate::app::import_jobs::recent(&state.hub, 10).await?;
     let page = AdminPage {
         metric_version: crate::core::metric::METRIC_VERSION,
-        import_dir: state.hub.import_dir().map(|d| d.display().to_string()),
+        import_dir: crate::app::import_jobs::folder(&state.hub).map(|d| d.display().to_string()),
         imports,
         name: session.name,
         csrf: session.csrf_token,

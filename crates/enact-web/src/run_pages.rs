@@ -218,7 +218,7 @@ async fn render_list(
         datasets,
         key_variables: state
             .hub
-            .endpoint_keys()
+            .kept::<crate::app::runs::EndpointKeys>()
             .names()
             .map(str::to_owned)
             .collect(),

@@ -29,6 +29,14 @@ use crate::{AppError, Hub, audit};
 #[derive(Debug, Clone, Default)]
 pub struct EndpointKeys(Arc<BTreeMap<String, ApiKey>>);
 
+/// A hub's model runs take no key from its environment unless its operator names the
+/// variables (`serve --endpoint-key`).
+impl crate::Kept for EndpointKeys {
+    fn make(_hub: &crate::Hub) -> Self {
+        EndpointKeys::default()
+    }
+}
+
 impl EndpointKeys {
     /// The allowlist of `names`, each an environment variable's name, read from this
     /// process's environment now: a name that is not set (or empty) is refused.
@@ -137,14 +145,14 @@ impl RunCalls {
             )));
         }
         if let Some(variable) = &self.key_variable {
-            hub.endpoint_keys().key(variable)?;
+            hub.kept::<EndpointKeys>().key(variable)?;
         }
         Ok(())
     }
 
     fn settings(&self, hub: &Hub) -> Result<CallSettings, AppError> {
         let api_key = match &self.key_variable {
-            Some(variable) => Some(hub.endpoint_keys().key(variable)?),
+            Some(variable) => Some(hub.kept::<EndpointKeys>().key(variable)?),
             None => None,
         };
         Ok(CallSettings {

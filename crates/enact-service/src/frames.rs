@@ -313,7 +313,7 @@ pub async fn redirect_origin(hub: &Hub) -> Option<String> {
 }
 
 /// The bytes of a frame whose row says they are in the object store.
-pub(super) async fn object_bytes(hub: &Hub, sha256: &str) -> Result<Bytes, AppError> {
+pub async fn object_bytes(hub: &Hub, sha256: &str) -> Result<Bytes, AppError> {
     let Some(objects) = hub.frame_store.objects() else {
         return Err(AppError::Unavailable(format!(
             "frame {sha256} is held in object storage, and this process has none configured \
@@ -476,10 +476,10 @@ pub async fn migrate(
 }
 
 /// Frames written to the store at once (object stores answer each write after a round trip).
-pub(super) const PUTS_IN_FLIGHT: usize = 16;
+pub const PUTS_IN_FLIGHT: usize = 16;
 
 /// Writes frames to `target`, [`PUTS_IN_FLIGHT`] at a time.
-pub(super) async fn put_all(
+pub async fn put_all(
     target: &Arc<ObjectFrames>,
     frames: impl Iterator<Item = (String, Bytes)>,
 ) -> Result<(), AppError> {

@@ -6,7 +6,7 @@ use crate::core::audit::{Actor, AuditAction, AuditEntry, AuditFilter, AuditRecor
 use crate::store;
 
 /// Writes the entry for `action` by `actor` on `target`.
-pub(crate) async fn record(
+pub async fn record(
     conn: &mut store::Tx,
     actor: &Actor,
     action: AuditAction,

@@ -286,15 +286,15 @@ impl Metrics {
             .observe(took.as_secs_f64());
     }
 
-    pub(super) fn submission_scored(&self) {
+    pub fn submission_scored(&self) {
         self.submissions_scored.inc();
     }
 
-    pub(super) fn annotator_answered(&self) {
+    pub fn annotator_answered(&self) {
         self.annotator_answers.inc();
     }
 
-    pub(super) fn login_failed(&self, how: LoginFailure) {
+    pub fn login_failed(&self, how: LoginFailure) {
         let kind = match how {
             LoginFailure::Password => "password",
             LoginFailure::Token => "token",

@@ -46,7 +46,7 @@ impl std::fmt::Display for JobId {
 }
 
 /// Milliseconds since the epoch on this instance's clock.
-pub(crate) fn now_ms() -> i64 {
+pub fn now_ms() -> i64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| i64::try_from(d.as_millis()).unwrap_or(i64::MAX))

@@ -15,11 +15,9 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use super::cache::{CacheLimits, CacheStats, FrameCache, ItemCache};
+use super::cache::{CacheStats, FrameCache, ItemCache};
 use super::changes::{CHANNEL, Change};
-use super::leaderboard::BoardCache;
-use super::standings::StandingCache;
-use super::submissions::TargetCache;
+use super::kept::KeptValues;
 use crate::store;
 use crate::store::Pool;
 
@@ -29,35 +27,31 @@ pub const POLL_INTERVAL: Duration = Duration::from_millis(500);
 /// How often cache statistics are logged (when a cache was used since the last time).
 const STATS_INTERVAL: Duration = Duration::from_secs(60);
 
-/// Every cache of a hub, built to its limits.
+/// Every cache of a hub: its own, and those the use cases keep on it.
 #[derive(Clone)]
 pub struct Caches {
-    pub items: Arc<ItemCache>,
-    pub standings: Arc<StandingCache>,
-    pub targets: Arc<TargetCache>,
-    pub boards: Arc<BoardCache>,
-    pub frames: Arc<FrameCache>,
+    pub(crate) items: Arc<ItemCache>,
+    pub(crate) frames: Arc<FrameCache>,
+    pub(crate) kept: Arc<KeptValues>,
 }
 
 impl Caches {
-    pub fn new(limits: &CacheLimits) -> Caches {
-        Caches {
-            items: Arc::new(ItemCache::new(limits.item_bytes)),
-            standings: Arc::new(StandingCache::new(limits.standing_entries)),
-            targets: Arc::new(TargetCache::new(limits.target_datasets)),
-            boards: Arc::new(BoardCache::new(limits.board_datasets)),
-            frames: Arc::new(FrameCache::new(limits.frame_bytes)),
-        }
-    }
-
     /// Every cache's figures.
     pub fn stats(&self) -> Vec<CacheStats> {
         let mut all = self.items.stats().to_vec();
-        all.push(self.standings.stats());
-        all.push(self.targets.stats());
-        all.push(self.boards.stats());
+        all.extend(self.kept.stats());
         all.push(self.frames.stats());
         all
+    }
+
+    /// Drops what `change` made stale: for another process's change ([`apply`]), and for
+    /// this process's own once its write commits ([`crate::Write::commit`]). Frames are
+    /// addressed by their content and never go stale.
+    pub(crate) fn forget(&self, change: &Change) {
+        if *change == Change::Everything {
+            self.items.clear();
+        }
+        self.kept.forget_stale(change);
     }
 }
 
@@ -86,12 +80,6 @@ fn log_stats(stats: &[CacheStats], last_lookups: u64) -> u64 {
 /// Clears the item-dependent caches whenever the store's content generation changes, and logs
 /// cache statistics once a minute. Runs until the pool closes.
 pub async fn watch_generation(pool: Pool, caches: Caches) {
-    let Caches {
-        items: cache,
-        standings,
-        boards,
-        ..
-    } = &caches;
     let mut seen = None;
     let mut ticker = tokio::time::interval(POLL_INTERVAL);
     ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
@@ -114,18 +102,14 @@ pub async fn watch_generation(pool: Pool, caches: Caches) {
             Ok(generation) => {
                 if seen.is_some_and(|s| s != generation) {
                     tracing::info!(generation, "stored items changed: item cache cleared");
-                    cache.clear();
-                    standings.clear();
-                    boards.changed();
+                    caches.forget(&Change::Everything);
                 }
                 seen = Some(generation);
             }
             Err(e) => {
                 // Serving stale items is worse than serving none: drop the cache.
                 tracing::warn!(error = %e, "cannot read the content generation");
-                cache.clear();
-                standings.clear();
-                boards.changed();
+                caches.forget(&Change::Everything);
             }
         }
     }
@@ -134,23 +118,8 @@ pub async fn watch_generation(pool: Pool, caches: Caches) {
 /// Drops what another process's `change` makes stale from the caches, and passes it on to the
 /// caches outside the app layer (the web's sessions).
 fn apply(caches: &Caches, changes: &tokio::sync::broadcast::Sender<Change>, change: Change) {
-    forget(caches, &change);
+    caches.forget(&change);
     let _ = changes.send(change);
-}
-
-/// Drops what `change` makes stale from the app layer's caches: for another process's change
-/// ([`apply`]), and for this process's own once its write commits ([`crate::Write::commit`]).
-pub(crate) fn forget(caches: &Caches, change: &Change) {
-    match change {
-        Change::Standing { annotator, item } => caches.standings.forget(*annotator, *item),
-        Change::Boards => caches.boards.changed(),
-        Change::Everything => {
-            caches.items.clear();
-            caches.standings.clear();
-            caches.boards.changed();
-        }
-        Change::SessionEnded(_) => {}
-    }
 }
 
 /// How many announcements one read of the change feed takes at most.
