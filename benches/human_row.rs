@@ -6,7 +6,7 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use enact_hub::app::{Hub, demo, leaderboard, rescore};
+use enact_hub::app::{Hub, Lane, demo, leaderboard, rescore};
 use enact_hub::core::annotation::{Outcome, Telemetry};
 use enact_hub::core::audit::Actor;
 use enact_hub::core::verifier::Permutation;
@@ -19,7 +19,6 @@ const ANSWERS: usize = 10_000;
 
 struct Setup {
     _dir: tempfile::TempDir,
-    pool: sqlx::SqlitePool,
     hub: Hub,
     dataset: store::datasets::Dataset,
 }
@@ -42,14 +41,15 @@ async fn setup() -> Setup {
         .await
         .expect("items");
     let mut rng = ChaCha8Rng::seed_from_u64(10_000);
-    let mut tx = sqlx::Acquire::begin(&mut *conn).await.expect("transaction");
+    drop(conn);
+    let mut tx = hub.write(Lane::Bulk).await.expect("transaction");
     let mut answered = 0;
     for annotator in 0.. {
         if answered == ANSWERS {
             break;
         }
         let id = store::annotations::create_annotator(
-            &mut *tx,
+            &mut tx,
             &format!("bench-{annotator}"),
             false,
             &format!("invite-{annotator}"),
@@ -61,7 +61,7 @@ async fn setup() -> Setup {
             labels.shuffle(&mut rng);
             let answer = Permutation::new(labels).expect("a permutation");
             store::annotations::finish(
-                &mut *tx,
+                &mut tx,
                 id,
                 item.item,
                 &Outcome::Answered(answer),
@@ -73,13 +73,11 @@ async fn setup() -> Setup {
         }
     }
     tx.commit().await.expect("commit");
-    drop(conn);
     rescore::rescore(&hub, &Actor::Server, Some(demo::DEMO_DATASET), &|_| {})
         .await
         .expect("verdicts stored");
     Setup {
         _dir: dir,
-        pool,
         hub,
         dataset,
     }
@@ -107,10 +105,11 @@ fn rebuild(c: &mut Criterion) {
         })
     });
     runtime.block_on(async {
-        let mut conn = setup.pool.acquire().await.expect("connection");
-        store::annotations::forget_verdicts(&mut *conn, setup.dataset.id)
+        let mut tx = setup.hub.write(Lane::Bulk).await.expect("transaction");
+        store::annotations::forget_verdicts(&mut tx, setup.dataset.id)
             .await
             .expect("forget");
+        tx.commit().await.expect("commit");
     });
     let judged = runtime
         .block_on(leaderboard::rows(&setup.hub, &setup.dataset))

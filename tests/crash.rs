@@ -173,6 +173,19 @@ async fn open(db: &Path) -> SqlitePool {
     store::open(db).await.expect("open the database")
 }
 
+/// A write transaction for the trial's own setup rows, in a write gate of its own (the store's
+/// write functions take nothing else).
+async fn write_tx(pool: &SqlitePool) -> store::Tx {
+    let turn = store::gate::WriteGate::default()
+        .enter(store::gate::Lane::Bulk)
+        .await;
+    store::Pool::Sqlite(pool.clone())
+        .begin()
+        .await
+        .expect("a write transaction")
+        .holding(turn)
+}
+
 /// A release of `per_cell` items per direction × L in 3, 5, 8.
 fn release(dir: &Path, per_cell: u32) -> Vec<Value> {
     write_balanced_release(dir, &[3, 5, 8], per_cell)
@@ -687,15 +700,17 @@ async fn annotation_saves_and_answers_acknowledged_before_a_kill_survive_it() {
     // The annotator, their queue and a login link, set up before the first start.
     let link = {
         let pool = open(&db).await;
-        let mut conn = pool.acquire().await.expect("conn");
+        let mut tx = write_tx(&pool).await;
         let annotator = store::annotations::create_annotator(
-            &mut conn,
+            &mut tx,
             "ann",
             false,
             &token_hash(&random_token()),
         )
         .await
         .expect("insert");
+        tx.commit().await.expect("commit");
+        let mut conn = pool.acquire().await.expect("conn");
         sqlx::query("UPDATE annotators SET password_hash = ?, invite_hash = NULL WHERE id = ?")
             .bind(hash_password("a long enough password").expect("hash"))
             .bind(annotator)
@@ -713,11 +728,13 @@ async fn annotation_saves_and_answers_acknowledged_before_a_kill_survive_it() {
             .into_iter()
             .collect::<Option<Vec<i64>>>()
             .expect("known");
+        drop(conn);
         let pairs: Vec<(i64, i64)> = rows.into_iter().map(|r| (annotator, r)).collect();
-        store::annotations::assign(&mut conn, &pairs)
+        let mut tx = write_tx(&pool).await;
+        store::annotations::assign(&mut tx, &pairs)
             .await
             .expect("assign");
-        drop(conn);
+        tx.commit().await.expect("commit");
         let link = enact_hub::app::annotators::login_link(&Hub::from(pool.clone()), annotator)
             .await
             .expect("link");

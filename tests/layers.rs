@@ -592,3 +592,118 @@ fn core_calls_are_found_in_every_form() {
         ]
     );
 }
+
+/// SQL that changes rows or the schema, or announces a change: what makes a store function a
+/// write.
+const WRITE_WORDS: &[&str] = &[
+    "INSERT INTO",
+    "INSERT OR ",
+    "DELETE FROM",
+    "REPLACE INTO",
+    " SET ",
+    "CREATE TABLE",
+    "CREATE TEMP",
+    "DROP TABLE",
+    "ALTER TABLE",
+    "pg_notify",
+];
+
+/// Each function in `text` (its name, signature and body), found by `fn` and brace matching.
+fn functions(text: &str) -> Vec<(String, &str, &str)> {
+    let mut found = Vec::new();
+    let mut from = 0;
+    while let Some(at) = text[from..].find("fn ").map(|i| from + i) {
+        from = at + 3;
+        let before = text[..at].chars().next_back();
+        if before.is_some_and(|c| c.is_alphanumeric() || c == '_') {
+            continue;
+        }
+        let name: String = text[from..]
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        let (Some(open), semicolon) = (text[from..].find('{'), text[from..].find(';')) else {
+            break;
+        };
+        if semicolon.is_some_and(|s| s < open) {
+            continue;
+        }
+        let body_start = from + open;
+        let mut depth = 0usize;
+        let mut end = text.len();
+        for (i, c) in text[body_start..].char_indices() {
+            match c {
+                '{' => depth += 1,
+                '}' => {
+                    depth -= 1;
+                    if depth == 0 {
+                        end = body_start + i + 1;
+                        break;
+                    }
+                }
+                _ => {}
+            }
+        }
+        found.push((name, &text[at..body_start], &text[body_start..end]));
+        from = end;
+    }
+    found
+}
+
+/// Store functions whose SQL writes but which take a plain connection: each such function
+/// must take `&mut WriteConn`, which only a transaction holding a turn of the write gate is,
+/// so that no caller can write outside the gate.
+fn writes_outside_the_gate(text: &str) -> Vec<String> {
+    functions(text)
+        .into_iter()
+        .filter(|(_, signature, body)| {
+            signature.contains("&mut Conn") && WRITE_WORDS.iter().any(|w| body.contains(w))
+        })
+        .map(|(name, _, _)| name)
+        .collect()
+}
+
+#[test]
+fn every_store_function_that_writes_takes_a_gated_transaction() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/enact-store/src");
+    let mut files = Vec::new();
+    source_files(&dir, &mut files);
+    let mut found = Vec::new();
+    for file in files {
+        // The connection layer, the gate and the migrations write outside any one function's
+        // transaction by design.
+        let name = file.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        if matches!(name, "db.rs" | "gate.rs" | "migrations.rs") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&file).expect("readable source");
+        for function in writes_outside_the_gate(&text) {
+            found.push(format!("{}: {function}", file.display()));
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "store functions write through a plain connection (take `&mut WriteConn`):\n{}",
+        found.join("\n")
+    );
+}
+
+#[test]
+fn a_write_through_a_plain_connection_is_found() {
+    let text = r#"
+        pub async fn list(conn: &mut Conn) -> Result<Vec<i64>, sqlx::Error> {
+            on!(conn, |c| sqlx::query_scalar("SELECT id FROM items").fetch_all(c).await)
+        }
+        pub async fn forget(conn: &mut Conn, id: i64) -> Result<(), sqlx::Error> {
+            if id < 0 { return Ok(()); }
+            on!(conn, |c| sqlx::query("DELETE FROM items WHERE id = $1").bind(id).execute(c).await)
+        }
+        pub async fn rename(conn: &mut WriteConn, id: i64) -> Result<(), sqlx::Error> {
+            on!(conn, |c| sqlx::query("UPDATE items SET name = 'x'").execute(c).await)
+        }
+        pub async fn touch(conn: &mut Conn) -> Result<(), sqlx::Error> {
+            on!(conn, |c| sqlx::query("UPDATE items SET seen = 1").execute(c).await)
+        }
+    "#;
+    assert_eq!(writes_outside_the_gate(text), ["forget", "touch"]);
+}

@@ -47,6 +47,8 @@ async fn stored_answers(
         .into_iter()
         .collect::<Option<Vec<i64>>>()
         .expect("ids");
+    drop(conn);
+    let mut conn = write_tx(&pool).await;
     for (a, row) in answers.iter().enumerate() {
         let annotator = store::annotations::create_annotator(
             &mut conn,
@@ -64,7 +66,7 @@ async fn stored_answers(
                 .expect("finish");
         }
     }
-    drop(conn);
+    conn.commit().await.expect("commit");
     pool.close().await;
     (db, ids)
 }

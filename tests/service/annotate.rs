@@ -195,11 +195,11 @@ pub async fn annotator(server: &TestServer, name: &str, admin: bool) -> i64 {
 
 /// [`annotator`] in the database `pool`.
 pub async fn annotator_on(pool: &Pool, name: &str, admin: bool) -> i64 {
-    let mut conn = pool.acquire().await.expect("conn");
-    let id =
-        store::annotations::create_annotator(&mut conn, name, admin, &token_hash(&new_token()))
-            .await
-            .expect("insert");
+    let mut tx = write_tx(pool).await;
+    let id = store::annotations::create_annotator(&mut tx, name, admin, &token_hash(&new_token()))
+        .await
+        .expect("insert");
+    tx.commit().await.expect("commit");
     let hash = hash_password(PASSWORD).expect("hash");
     db!(
         pool,
@@ -236,10 +236,13 @@ pub async fn assign_on(pool: &Pool, dataset: &str, annotator: i64, item_ids: &[&
         .into_iter()
         .collect::<Option<Vec<i64>>>()
         .expect("known ids");
+    drop(conn);
     let pairs: Vec<(i64, i64)> = rows.into_iter().map(|r| (annotator, r)).collect();
-    store::annotations::assign(&mut conn, &pairs)
+    let mut tx = write_tx(pool).await;
+    store::annotations::assign(&mut tx, &pairs)
         .await
         .expect("assign");
+    tx.commit().await.expect("commit");
 }
 
 async fn logged_in(server: &TestServer, name: &str) -> (Browser, String) {
@@ -278,10 +281,11 @@ async fn invite_sets_a_password_once_and_logs_in() {
     let (server, _) = spawn_app_with_release().await;
     let token = new_token();
     {
-        let mut conn = server.pool.acquire().await.expect("conn");
-        store::annotations::create_annotator(&mut conn, "ada", false, &token_hash(&token))
+        let mut tx = write_tx(&server.pool).await;
+        store::annotations::create_annotator(&mut tx, "ada", false, &token_hash(&token))
             .await
             .expect("insert");
+        tx.commit().await.expect("commit");
     }
     let mut browser = Browser::new(&server);
     let path = format!("/invite/{token}");

@@ -162,7 +162,7 @@ async fn a_draft_never_outlives_the_answer_that_finished_its_item() {
     assert!(!opened.finished);
     let rowid = opened.item.rowid;
     // Another server (or a request this hub's memory has not seen) finishes it meanwhile.
-    let mut conn = server.pool.acquire().await.expect("conn");
+    let mut conn = write_tx(&server.pool).await;
     let answer = enact_hub::core::verifier::Permutation::new(vec![2, 1]).expect("answer");
     assert!(
         enact_hub::store::annotations::finish(
@@ -175,6 +175,7 @@ async fn a_draft_never_outlives_the_answer_that_finished_its_item() {
         .await
         .expect("finish")
     );
+    conn.commit().await.expect("commit");
     // The late save is refused by the store itself, and leaves no draft.
     let mut draft = Draft::empty(opened.item.summary.step_length);
     draft.slots = vec![Some(1), None];

@@ -313,15 +313,16 @@ async fn every_api_route_answers_every_caller_as_the_matrix_says() {
                         // A run's stamp is shown once it has submitted: filed as the
                         // owner's published submission.
                         if route.path.ends_with("/stamp") {
-                            let mut conn = server.pool.acquire().await.expect("conn");
+                            let mut tx = write_tx(&server.pool).await;
                             enact_hub::store::runs::set_submission(
-                                &mut conn,
+                                &mut tx,
                                 run,
                                 submission,
                                 r#"{"model": "m", "endpoint_host": "127.0.0.1:9"}"#,
                             )
                             .await
                             .expect("the run linked to a submission");
+                            tx.commit().await.expect("commit");
                         }
                         run.to_string()
                     }

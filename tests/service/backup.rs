@@ -216,7 +216,7 @@ async fn a_snapshot_read_lets_writers_commit_and_sees_none_of_their_writes() {
     );
 }
 
-async fn audit_rows(tx: &mut enact_hub::store::Tx) -> i64 {
+async fn audit_rows(tx: &mut enact_hub::store::PlainTx) -> i64 {
     enact_hub::store::on_db!(tx, |c| sqlx::query_scalar::<_, i64>(
         "SELECT count(*) FROM audit_log"
     )

@@ -119,10 +119,12 @@ async fn annotator_completes_a_forward_and_an_inverse_item_in_chromium() {
     let (forward, inverse, wide) = (id(0), id(3), [id(4), id(5)]);
     let token = new_token();
     let annotator = {
-        let mut conn = server.pool.acquire().await.expect("conn");
-        store::annotations::create_annotator(&mut conn, "eve", false, &token_hash(&token))
+        let mut tx = write_tx(&server.pool).await;
+        let id = store::annotations::create_annotator(&mut tx, "eve", false, &token_hash(&token))
             .await
-            .expect("insert")
+            .expect("insert");
+        tx.commit().await.expect("commit");
+        id
     };
     assign(
         &server,
@@ -378,10 +380,12 @@ async fn a_gold_item_renders_in_chromium_exactly_like_any_other_item_apart_from_
         .expect("gold set");
     let token = new_token();
     let annotator = {
-        let mut conn = server.pool.acquire().await.expect("conn");
-        store::annotations::create_annotator(&mut conn, "gus", false, &token_hash(&token))
+        let mut tx = write_tx(&server.pool).await;
+        let id = store::annotations::create_annotator(&mut tx, "gus", false, &token_hash(&token))
             .await
-            .expect("insert")
+            .expect("insert");
+        tx.commit().await.expect("commit");
+        id
     };
     let ordinary = [id(1), id(3)];
     enact_hub::app::annotation::assign(
@@ -438,10 +442,12 @@ async fn an_annotator_reading_chinese_finishes_both_directions_by_keyboard() {
     let (forward, inverse) = (id(0), id(1));
     let token = new_token();
     let annotator = {
-        let mut conn = server.pool.acquire().await.expect("conn");
-        store::annotations::create_annotator(&mut conn, "li", false, &token_hash(&token))
+        let mut tx = write_tx(&server.pool).await;
+        let id = store::annotations::create_annotator(&mut tx, "li", false, &token_hash(&token))
             .await
-            .expect("insert")
+            .expect("insert");
+        tx.commit().await.expect("commit");
+        id
     };
     assign(&server, annotator, &[&forward, &inverse]).await;
     let params = json!({
@@ -510,10 +516,13 @@ impl PublicWorld {
         for name in ["ana", "bo"] {
             let token = new_token();
             let annotator = {
-                let mut conn = server.pool.acquire().await.expect("conn");
-                store::annotations::create_annotator(&mut conn, name, false, &token_hash(&token))
-                    .await
-                    .expect("insert")
+                let mut tx = write_tx(&server.pool).await;
+                let id =
+                    store::annotations::create_annotator(&mut tx, name, false, &token_hash(&token))
+                        .await
+                        .expect("insert");
+                tx.commit().await.expect("commit");
+                id
             };
             assign(&server, annotator, &[&id(0), &id(1)]).await;
             invites.push(format!("/invite/{token}"));

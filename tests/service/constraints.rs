@@ -64,7 +64,8 @@ async fn a_reused_idempotency_key_is_recognised_by_its_constraint() {
         scored_by: enact_hub::core::version::BUILD,
         provenance: Provenance::Submitted,
     };
-    let e = store::submissions::insert(&mut conn, &again)
+    drop(conn);
+    let e = store::submissions::insert(&mut write_tx(&server.pool).await, &again)
         .await
         .expect_err("the key is taken");
     assert_named(&e, ViolationKind::Unique, "submissions_idempotency_key");
@@ -78,21 +79,24 @@ async fn a_reused_idempotency_key_is_recognised_by_its_constraint() {
         idempotency_key: Some("k-2"),
         ..again
     };
-    store::submissions::insert(&mut conn, &other)
+    let mut tx = write_tx(&server.pool).await;
+    store::submissions::insert(&mut tx, &other)
         .await
         .expect("a new key is stored");
+    tx.commit().await.expect("commit");
 }
 
 #[tokio::test]
 async fn a_taken_name_is_recognised_by_its_constraint() {
     let dir = tempfile::tempdir().expect("tempdir");
     let pool = fresh_db(&dir).await;
-    let mut conn = pool.acquire().await.expect("conn");
     let hash = || token_hash(&random_token());
-    store::annotations::create_annotator(&mut conn, "ada", false, &hash())
+    let mut tx = write_tx(&pool).await;
+    store::annotations::create_annotator(&mut tx, "ada", false, &hash())
         .await
         .expect("a new name");
-    let e = store::annotations::create_annotator(&mut conn, "ada", true, &hash())
+    tx.commit().await.expect("commit");
+    let e = store::annotations::create_annotator(&mut write_tx(&pool).await, "ada", true, &hash())
         .await
         .expect_err("the name is taken");
     assert_named(&e, ViolationKind::Unique, "annotators_name_key");
@@ -100,7 +104,6 @@ async fn a_taken_name_is_recognised_by_its_constraint() {
     if !on_sqlite() {
         assert!(!UniqueKey::STUDY_NAME.is_violated_by(&e));
     }
-    drop(conn);
 
     // The use case turns it into the refusal both adapters show.
     let hub = Hub::from(pool);
@@ -115,8 +118,7 @@ async fn a_taken_name_is_recognised_by_its_constraint() {
 async fn a_missing_referenced_row_is_recognised_as_a_foreign_key_violation() {
     let dir = tempfile::tempdir().expect("tempdir");
     let pool = fresh_db(&dir).await;
-    let mut conn = pool.acquire().await.expect("conn");
-    let e = store::annotations::assign(&mut conn, &[(4242, 4243)])
+    let e = store::annotations::assign(&mut write_tx(&pool).await, &[(4242, 4243)])
         .await
         .expect_err("neither the annotator nor the item exists");
     let found = violation(&e).expect("a constraint violation");
@@ -342,11 +344,12 @@ async fn a_second_protocol_round_is_recognised_by_the_round_key() {
         assignments: Vec::new(),
         shortfalls: Vec::new(),
     };
-    let mut conn = pool.acquire().await.expect("conn");
-    store::agreement::insert_round(&mut conn, dataset, &plan, None)
+    let mut tx = write_tx(&pool).await;
+    store::agreement::insert_round(&mut tx, dataset, &plan, None)
         .await
         .expect("the first round");
-    let e = store::agreement::insert_round(&mut conn, dataset, &plan, None)
+    tx.commit().await.expect("commit");
+    let e = store::agreement::insert_round(&mut write_tx(&pool).await, dataset, &plan, None)
         .await
         .expect_err("one round per dataset");
     assert_named(&e, ViolationKind::Unique, "agreement_rounds_pkey");

@@ -57,10 +57,11 @@ async fn a_curator_draws_an_episode_in_chromium_and_its_items_verify() {
     let server = spawn_app_with(|_, _| async {}).await;
     let token = new_token();
     {
-        let mut conn = server.pool.acquire().await.expect("conn");
-        store::annotations::create_annotator(&mut conn, "curator", true, &token_hash(&token))
+        let mut tx = write_tx(&server.pool).await;
+        store::annotations::create_annotator(&mut tx, "curator", true, &token_hash(&token))
             .await
             .expect("insert");
+        tx.commit().await.expect("commit");
     }
     let frames = write_frames(&server.dir().join("frames"));
     let found = run_node(

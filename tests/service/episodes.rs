@@ -361,7 +361,7 @@ async fn an_incomplete_episode_is_hidden_and_the_next_import_of_its_name_replace
     // What a killed import leaves: the episode row and a first batch of frames, never marked
     // complete, with its claim on the name still running for a minute.
     let now = enact_hub::app::annotators::now_ms();
-    let mut tx = pool.begin().await.unwrap();
+    let mut tx = crate::helpers::write_tx(&pool).await;
     let left =
         enact_hub::store::episodes::insert(&mut tx, "kitchen_real", "", "killed", now + 60_000)
             .await

@@ -580,16 +580,30 @@ pub async fn count(pool: &Pool, sql: &str) -> i64 {
     db!(pool, fetch_one, sqlx::query_scalar::<_, i64>(sql)).unwrap_or_else(|e| panic!("{sql}: {e}"))
 }
 
+/// A write transaction for a test's own rows. The store's write functions take only a
+/// transaction holding a turn of a write gate; a test writing beside a server takes one of its
+/// own gate (the database's lock still serialises it with the server's writers).
+pub async fn write_tx(pool: &Pool) -> store::Tx {
+    let turn = store::gate::WriteGate::default()
+        .enter(store::gate::Lane::Bulk)
+        .await;
+    pool.begin()
+        .await
+        .expect("a write transaction")
+        .holding(turn)
+}
+
 /// Makes dataset `mini`'s ground truth and per-item verdicts public, or hides them again.
 pub async fn set_mini_answers(pool: &Pool, answers: enact_hub::core::dataset::AnswerVisibility) {
-    let mut conn = pool.acquire().await.expect("conn");
-    let dataset = store::datasets::by_name(&mut conn, "mini")
+    let mut tx = write_tx(pool).await;
+    let dataset = store::datasets::by_name(&mut tx, "mini")
         .await
         .expect("query")
         .expect("mini");
-    store::submissions::set_answer_visibility(&mut conn, dataset.id, answers)
+    store::submissions::set_answer_visibility(&mut tx, dataset.id, answers)
         .await
         .expect("set answers");
+    tx.commit().await.expect("commit");
 }
 
 /// The lines of a second version of a release: every question with another last line.

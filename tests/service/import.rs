@@ -632,7 +632,7 @@ async fn verdicts_left_to_sweep_are_not_counted_and_a_restarted_sweep_supersedes
     );
 
     // A sweeper of an older generation stops at its next step, writing nothing.
-    let mut conn = pool.acquire().await.expect("conn");
+    let mut conn = write_tx(&pool).await;
     let pending = store::staged::verdict_sweeps(&mut conn)
         .await
         .expect("sweeps");
@@ -647,7 +647,7 @@ async fn verdicts_left_to_sweep_are_not_counted_and_a_restarted_sweep_supersedes
             .expect("step"),
         (0, false)
     );
-    drop(conn);
+    conn.commit().await.expect("commit");
     assert_eq!(count(&pool, orphans).await, 2);
 
     let swept = sweep_replaced_verdicts(&hub).await.expect("sweep");
@@ -745,14 +745,15 @@ async fn dataset_row(pool: &Pool, name: &str) -> i64 {
 
 /// Assigns `items` (row ids) to a new annotator named `name`.
 async fn assign_to_new_annotator(pool: &Pool, name: &str, items: &[i64]) {
-    let mut conn = pool.acquire().await.expect("conn");
-    let annotator = store::annotations::create_annotator(&mut conn, name, false, name)
+    let mut tx = write_tx(pool).await;
+    let annotator = store::annotations::create_annotator(&mut tx, name, false, name)
         .await
         .expect("annotator");
     let pairs: Vec<(i64, i64)> = items.iter().map(|&item| (annotator, item)).collect();
-    store::annotations::assign(&mut conn, &pairs)
+    store::annotations::assign(&mut tx, &pairs)
         .await
         .expect("assign");
+    tx.commit().await.expect("commit");
 }
 
 #[tokio::test]

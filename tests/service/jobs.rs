@@ -28,7 +28,7 @@ fn fast() -> JobSettings {
 }
 
 async fn enqueue(pool: &Pool, payload: serde_json::Value) -> JobId {
-    let mut tx = pool.begin().await.expect("a transaction");
+    let mut tx = crate::helpers::write_tx(pool).await;
     let id = jobs::enqueue(&mut tx, JobKind::Rescore, &payload, &tester())
         .await
         .expect("enqueued");

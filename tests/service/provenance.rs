@@ -126,11 +126,11 @@ async fn a_run_s_row_is_run_with_its_stamp_and_an_upload_s_is_submitted() {
     );
 
     // Off the leaderboard, its stamp is an admin's to read.
-    let mut conn = pool.acquire().await.expect("conn");
+    let mut conn = write_tx(&pool).await;
     store::submissions::update_listing(&mut conn, submission, None, Some(Visibility::Hidden))
         .await
         .expect("hide");
-    drop(conn);
+    conn.commit().await.expect("commit");
     server.call(Method::GET, &stamp_path).expect(404).await;
     server
         .call(Method::GET, &stamp_path)

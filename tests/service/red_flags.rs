@@ -26,14 +26,15 @@ fn models(list: &Value) -> Vec<&str> {
 }
 
 async fn set_answers(pool: &enact_hub::store::Pool, dataset: &str, answers: AnswerVisibility) {
-    let mut conn = pool.acquire().await.expect("conn");
-    let d = store::datasets::by_name(&mut conn, dataset)
+    let mut tx = write_tx(pool).await;
+    let d = store::datasets::by_name(&mut tx, dataset)
         .await
         .expect("query")
         .expect("dataset");
-    store::submissions::set_answer_visibility(&mut conn, d.id, answers)
+    store::submissions::set_answer_visibility(&mut tx, d.id, answers)
         .await
         .expect("set answers");
+    tx.commit().await.expect("commit");
 }
 
 #[tokio::test]

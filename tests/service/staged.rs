@@ -387,7 +387,7 @@ async fn a_discard_cut_short_is_never_resumed() {
     changed_version(&root, &records);
     run_interrupted(&pool, &root, interrupted_after(batched("main", 8), 2)).await;
 
-    let mut conn = pool.acquire().await.expect("conn");
+    let mut conn = crate::helpers::write_tx(&pool).await;
     let staged = enact_hub::store::staged::for_dataset(&mut conn, "main")
         .await
         .expect("read")
@@ -399,7 +399,7 @@ async fn a_discard_cut_short_is_never_resumed() {
         .await
         .expect("delete some");
     assert_eq!(deleted, 3);
-    drop(conn);
+    conn.commit().await.expect("commit");
 
     let report = import(&pool, &root, &batched("main", 8)).await;
     assert!(report.discarded_staged, "{}", report.summary_line());

@@ -212,14 +212,14 @@ async fn tokens_missing_unknown_or_revoked_get_401() {
     assert_eq!(status, 401);
     let (status, _, _) = post_as(&server, &token, body.clone()).await;
     assert_eq!(status, 201);
-    let mut conn = server.pool.acquire().await.expect("conn");
+    let mut conn = write_tx(&server.pool).await;
     let prefix = enact_hub::core::credentials::lookup_prefix(&token);
     assert!(
         store::accounts::revoke_token(&mut conn, &prefix)
             .await
             .expect("revoke")
     );
-    drop(conn);
+    conn.commit().await.expect("commit");
     let (status, _, error) = post_as(&server, &token, body).await;
     assert_eq!(status, 401);
     assert!(error["error"].as_str().expect("msg").contains("revoked"));
@@ -664,7 +664,7 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
     assert_eq!(heuristic["coverage"], 1.0, "{heuristic}");
     assert_eq!(heuristic["parse_failure_rate"], 0.0, "{heuristic}");
     let heuristic_id = heuristic["submission"].as_i64().expect("id");
-    let mut conn = server.pool.acquire().await.expect("conn");
+    let mut conn = write_tx(&server.pool).await;
     let demo = store::datasets::by_name(&mut conn, "demo")
         .await
         .expect("q")
@@ -679,7 +679,7 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
         .find(|i| i.direction == Direction::Inverse)
         .expect("an inverse item")
         .item_id;
-    drop(conn);
+    conn.commit().await.expect("commit");
     let (status, item) = server
         .get_json(&format!("/api/v1/datasets/demo/items/{first}/answers"))
         .await;
@@ -709,15 +709,15 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
     assert_eq!(board["rows"].as_array().expect("rows").len(), 2, "{board}");
     // Nor after an admin has hidden one: the hidden row is not filed again.
     let baseline_id = chance["submission"].as_i64().expect("submission id");
-    let mut conn = server.pool.acquire().await.expect("conn");
+    let mut conn = write_tx(&server.pool).await;
     store::submissions::update_listing(&mut conn, baseline_id, None, Some(Visibility::Hidden))
         .await
         .expect("hide");
-    drop(conn);
+    conn.commit().await.expect("commit");
     enact_hub::app::demo::load(&server.pool.clone().into())
         .await
         .expect("demo a third time");
-    let mut conn = server.pool.acquire().await.expect("conn");
+    let mut conn = write_tx(&server.pool).await;
     assert_eq!(
         store::submissions::counts(&mut conn)
             .await
@@ -728,7 +728,7 @@ async fn the_demo_leaderboard_shows_table_and_chart() {
     store::submissions::update_listing(&mut conn, baseline_id, None, Some(Visibility::Published))
         .await
         .expect("publish again");
-    drop(conn);
+    conn.commit().await.expect("commit");
 
     let token = make_token(&server.pool, "alice", Role::Submitter, None).await;
     let mut conn = server.pool.acquire().await.expect("conn");

@@ -76,6 +76,9 @@ impl Connection for Write {
     }
 }
 
+/// The store's write functions take a unit of work as they take its transaction.
+impl store::Writes for Write {}
+
 impl Deref for Write {
     type Target = store::Tx;
 

@@ -1,6 +1,6 @@
 //! Accounts and API tokens (hashed), and the submission attempts quotas count.
 
-use super::db::{Conn, Dialect, Fields, on};
+use super::db::{Conn, Dialect, Fields, WriteConn, on};
 use schemars::JsonSchema;
 use serde::Serialize;
 
@@ -36,7 +36,11 @@ pub async fn account_by_name(
 }
 
 #[tracing::instrument(skip_all)]
-pub async fn insert_account(conn: &mut Conn, name: &str, role: Role) -> Result<i64, sqlx::Error> {
+pub async fn insert_account(
+    conn: &mut WriteConn,
+    name: &str,
+    role: Role,
+) -> Result<i64, sqlx::Error> {
     on!(conn, |c| {
         sqlx::query_scalar("INSERT INTO accounts (name, role) VALUES ($1, $2) RETURNING id")
             .bind(name)
@@ -48,7 +52,7 @@ pub async fn insert_account(conn: &mut Conn, name: &str, role: Role) -> Result<i
 
 #[tracing::instrument(skip_all)]
 pub async fn insert_token(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     account: i64,
     role: Role,
     token: &NewToken,
@@ -146,7 +150,7 @@ pub async fn list_tokens(conn: &mut Conn) -> Result<Vec<TokenListing>, sqlx::Err
 
 /// Revokes the token with this id or prefix. Returns whether a live token was revoked.
 #[tracing::instrument(skip_all)]
-pub async fn revoke_token(conn: &mut Conn, which: &str) -> Result<bool, sqlx::Error> {
+pub async fn revoke_token(conn: &mut WriteConn, which: &str) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
         let id: Option<i64> = which.parse().ok();
         let done = sqlx::query(&format!(
@@ -211,7 +215,7 @@ pub async fn attempts_made(conn: &mut Conn, token: i64) -> Result<AttemptsMade, 
 
 /// Records one submission attempt by `token`; returns its id.
 #[tracing::instrument(skip_all)]
-pub async fn record_attempt(conn: &mut Conn, token: i64) -> Result<i64, sqlx::Error> {
+pub async fn record_attempt(conn: &mut WriteConn, token: i64) -> Result<i64, sqlx::Error> {
     on!(conn, |c| {
         sqlx::query_scalar("INSERT INTO submission_attempts (token) VALUES ($1) RETURNING id")
             .bind(token)
@@ -221,7 +225,7 @@ pub async fn record_attempt(conn: &mut Conn, token: i64) -> Result<i64, sqlx::Er
 }
 
 /// Forgets the attempt `id` (one the server could not take on).
-pub async fn forget_attempt(conn: &mut Conn, id: i64) -> Result<(), sqlx::Error> {
+pub async fn forget_attempt(conn: &mut WriteConn, id: i64) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         sqlx::query("DELETE FROM submission_attempts WHERE id = $1")
             .bind(id)

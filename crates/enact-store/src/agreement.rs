@@ -6,7 +6,7 @@ use std::collections::HashSet;
 
 use sqlx::QueryBuilder;
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 
 use super::annotations::human_answer_from_row;
 use super::kind_from_row;
@@ -160,7 +160,7 @@ const ROWS_PER_STATEMENT: usize = 1000;
 /// [`UniqueKey::AGREEMENT_ROUND`](super::db::UniqueKey::AGREEMENT_ROUND); whether that may
 /// happen is the caller's to decide.
 pub async fn insert_round(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset_id: i64,
     plan: &ProtocolPlan,
     started_by: Option<i64>,

@@ -1,7 +1,7 @@
 //! Annotators, their sessions, assignments, drafts and finished annotations; and the human
 //! performance report built from the answers.
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 
 use super::{corrupt, kind_from_row};
 
@@ -39,7 +39,7 @@ const ANNOTATOR_COLUMNS: &str = "id, name, is_admin, password_hash, created_at";
 /// A name in use refuses the insert with a violation of
 /// [`UniqueKey::ANNOTATOR_NAME`](super::db::UniqueKey::ANNOTATOR_NAME).
 pub async fn create_annotator(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     name: &str,
     is_admin: bool,
     invite_hash: &str,
@@ -58,7 +58,7 @@ pub async fn create_annotator(
 
 /// Replaces an annotator's invite (the old link stops working).
 pub async fn renew_invite(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     annotator: i64,
     invite_hash: &str,
 ) -> Result<bool, sqlx::Error> {
@@ -100,7 +100,7 @@ pub async fn annotator_by_invite(
 
 /// Sets the password and consumes the invite, if the invite is still valid.
 pub async fn accept_invite(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     invite_hash: &str,
     password_hash: &str,
 ) -> Result<Option<i64>, sqlx::Error> {
@@ -134,7 +134,7 @@ pub async fn credentials(
 }
 
 pub async fn create_session(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     token_hash: &str,
     annotator: i64,
     csrf_token: &str,
@@ -186,7 +186,7 @@ pub async fn session(
 
 /// Ends a session, and any expired ones while at it.
 pub async fn delete_session(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     token_hash: &str,
     now_ms: i64,
 ) -> Result<(), sqlx::Error> {
@@ -203,7 +203,7 @@ pub async fn delete_session(
 /// Saves the locale of the annotator whose unexpired session hashes to `token_hash`; false
 /// when there is no such session.
 pub async fn set_locale_by_session(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     token_hash: &str,
     locale: &str,
     now_ms: i64,
@@ -305,7 +305,7 @@ pub async fn item_rowids(
 
 /// Appends `(annotator, item)` pairs to the annotators' queues; pairs already assigned are
 /// left as they are. Returns how many were new. Call inside a transaction.
-pub async fn assign(conn: &mut Conn, pairs: &[(i64, i64)]) -> Result<u64, sqlx::Error> {
+pub async fn assign(conn: &mut WriteConn, pairs: &[(i64, i64)]) -> Result<u64, sqlx::Error> {
     on!(conn, |c| {
         let mut added = 0;
         for &(annotator, item) in pairs {
@@ -417,7 +417,7 @@ pub async fn assignment_state(
 /// finished or already has a draft: the check and the write are one statement, so a draft
 /// can never outlive the answer that finished its item. Returns whether it was created.
 pub async fn create_draft(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     annotator: i64,
     item: i64,
     empty: &Draft,
@@ -473,7 +473,7 @@ fn stored_draft(r: &impl Fields) -> Result<StoredDraft, sqlx::Error> {
 /// `Ok(false)` when the item is finished: the check and the write are one statement, so a
 /// draft can never outlive the answer that finished its item.
 pub async fn save_draft(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     annotator: i64,
     item: i64,
     draft: &Draft,
@@ -505,7 +505,7 @@ pub async fn save_draft(
 
 /// Records a finished item and drops its draft. `Ok(false)` if it was already finished.
 pub async fn finish(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     annotator: i64,
     item: i64,
     outcome: &Outcome,
@@ -716,7 +716,7 @@ pub async fn progress_by_annotator(
 
 /// Stores a single-use login link for `annotator`.
 pub async fn insert_login_link(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     hash: &str,
     annotator: i64,
 ) -> Result<(), sqlx::Error> {
@@ -731,7 +731,7 @@ pub async fn insert_login_link(
 }
 
 /// Uses a login link up: the annotator it was for, if it existed.
-pub async fn take_login_link(conn: &mut Conn, hash: &str) -> Result<Option<i64>, sqlx::Error> {
+pub async fn take_login_link(conn: &mut WriteConn, hash: &str) -> Result<Option<i64>, sqlx::Error> {
     on!(conn, |c| {
         sqlx::query_scalar("DELETE FROM login_links WHERE hash = $1 RETURNING annotator")
             .bind(hash)
@@ -927,7 +927,7 @@ pub async fn answers_below_version(
 /// Stores the verdict of a submitted answer, computed with metric `version`. Returns whether
 /// the answer exists.
 pub async fn set_verdict(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     annotator: i64,
     item: i64,
     verdict: &HumanVerdict,
@@ -954,7 +954,7 @@ pub async fn set_verdict(
 
 /// Forgets the stored verdicts of every answer on a dataset (its items' signatures changed):
 /// they read as never computed until judged again.
-pub async fn forget_verdicts(conn: &mut Conn, dataset_id: i64) -> Result<u64, sqlx::Error> {
+pub async fn forget_verdicts(conn: &mut WriteConn, dataset_id: i64) -> Result<u64, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query(
             "UPDATE annotations SET exact_match = NULL, semantic_match = NULL, \

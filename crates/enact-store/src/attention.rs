@@ -1,7 +1,7 @@
 //! Attention checks' rows: a dataset's attention set and items, and the attention mix's
 //! assignments (mirroring [`super::gold`]).
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 use super::gold::GoldStanding;
 use super::{corrupt, kind_from_row};
 use enact_core::annotation::OutcomeKind;
@@ -26,7 +26,7 @@ fn instruction(r: &impl Fields) -> Result<Instruction, sqlx::Error> {
 /// Replaces the dataset's attention set (its items go with it) by this one: `(item row id,
 /// instruction)` pairs. Call inside a transaction.
 pub async fn replace(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset_id: i64,
     rate: i64,
     set_by: &str,
@@ -58,7 +58,7 @@ pub async fn replace(
 }
 
 /// Removes the dataset's attention set; whether there was one. Call inside a transaction.
-pub async fn clear(conn: &mut Conn, dataset_id: i64) -> Result<bool, sqlx::Error> {
+pub async fn clear(conn: &mut WriteConn, dataset_id: i64) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query("DELETE FROM attention_sets WHERE dataset = $1")
             .bind(dataset_id)
@@ -143,7 +143,7 @@ pub async fn instruction_of(
 /// items (with their drafts); finished ones stay with their answers. Returns the
 /// `(annotator, item)` pairs that went.
 pub async fn drop_unfinished_attention_assignments(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset_id: i64,
 ) -> Result<Vec<(i64, i64)>, sqlx::Error> {
     on!(conn, |c| {
@@ -215,7 +215,7 @@ pub async fn attention_standings(
 
 /// Adds attention-mix assignments `(annotator, item)` at the end of each queue; pairs already
 /// assigned stay as they are. Returns how many were new. Call inside a transaction.
-pub async fn assign_checks(conn: &mut Conn, pairs: &[(i64, i64)]) -> Result<u64, sqlx::Error> {
+pub async fn assign_checks(conn: &mut WriteConn, pairs: &[(i64, i64)]) -> Result<u64, sqlx::Error> {
     on!(conn, |c| {
         let mut added = 0;
         for &(annotator, item) in pairs {

@@ -1,11 +1,11 @@
 //! Rows of the audit log.
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 
 use enact_core::audit::{AuditEntry, AuditFilter, AuditRecord};
 
 /// Writes one entry; call inside the transaction of the action it records.
-pub async fn insert(conn: &mut Conn, record: &AuditRecord<'_>) -> Result<(), sqlx::Error> {
+pub async fn insert(conn: &mut WriteConn, record: &AuditRecord<'_>) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         sqlx::query(
             "INSERT INTO audit_log (actor_kind, actor, action, target, dataset, detail) \

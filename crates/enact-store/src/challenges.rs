@@ -4,7 +4,7 @@
 use sqlx::QueryBuilder;
 
 use super::corrupt;
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 use enact_core::challenge::Part;
 use enact_core::submission::VerdictOutcome;
 
@@ -63,7 +63,7 @@ const PARTS_PER_STATEMENT: usize = 5000;
 /// a transaction; a dataset split before refuses the insert (its primary key).
 #[tracing::instrument(skip_all)]
 pub async fn insert(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset: i64,
     seed: u64,
     public_share: f64,
@@ -97,7 +97,7 @@ pub async fn insert(
 
 /// Sets the deadline (`None`: none). Returns whether the dataset has a challenge.
 pub async fn set_reveal_at(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset: i64,
     reveal_at: Option<&str>,
 ) -> Result<bool, sqlx::Error> {
@@ -113,7 +113,7 @@ pub async fn set_reveal_at(
 
 /// Sets the selection limit (`None`: no limit). Returns whether the dataset has a challenge.
 pub async fn set_selection_limit(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset: i64,
     limit: Option<i64>,
 ) -> Result<bool, sqlx::Error> {
@@ -129,7 +129,11 @@ pub async fn set_selection_limit(
 
 /// Records the reveal at `now` (`2026-07-01T12:00:00Z`), `revealed_by` `hand`, unless it was
 /// revealed before. Returns whether this call revealed it.
-pub async fn reveal_by_hand(conn: &mut Conn, dataset: i64, now: &str) -> Result<bool, sqlx::Error> {
+pub async fn reveal_by_hand(
+    conn: &mut WriteConn,
+    dataset: i64,
+    now: &str,
+) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query(
             "UPDATE challenges SET revealed_at = $2, revealed_by = 'hand' \
@@ -147,7 +151,7 @@ pub async fn reveal_by_hand(conn: &mut Conn, dataset: i64, now: &str) -> Result<
 /// and it was not revealed before. Returns whether this call revealed it (once, whoever
 /// reads first).
 pub async fn reveal_at_deadline(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset: i64,
     now: &str,
 ) -> Result<bool, sqlx::Error> {
@@ -278,7 +282,7 @@ pub async fn selected_by_account(
 }
 
 /// Selects a submission for the final ranking. Returns whether it was not selected before.
-pub async fn select(conn: &mut Conn, submission: i64) -> Result<bool, sqlx::Error> {
+pub async fn select(conn: &mut WriteConn, submission: i64) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query(
             "INSERT INTO challenge_selections (submission) VALUES ($1) \
@@ -292,7 +296,7 @@ pub async fn select(conn: &mut Conn, submission: i64) -> Result<bool, sqlx::Erro
 }
 
 /// Takes a submission out of the final ranking. Returns whether it was selected.
-pub async fn unselect(conn: &mut Conn, submission: i64) -> Result<bool, sqlx::Error> {
+pub async fn unselect(conn: &mut WriteConn, submission: i64) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query("DELETE FROM challenge_selections WHERE submission = $1")
             .bind(submission)

@@ -2,7 +2,7 @@
 
 use std::collections::{HashMap, HashSet};
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 use super::kind_from_row;
 use enact_core::annotation::SplitItem;
 
@@ -25,7 +25,11 @@ fn pause_from_row(r: &impl Fields) -> Result<Pause, sqlx::Error> {
 }
 
 /// Pauses an annotator's queue; whether it was running. Call inside a transaction.
-pub async fn pause(conn: &mut Conn, annotator: i64, paused_by: &str) -> Result<bool, sqlx::Error> {
+pub async fn pause(
+    conn: &mut WriteConn,
+    annotator: i64,
+    paused_by: &str,
+) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query(
             "INSERT INTO annotator_pauses (annotator, paused_by) VALUES ($1, $2) \
@@ -40,7 +44,7 @@ pub async fn pause(conn: &mut Conn, annotator: i64, paused_by: &str) -> Result<b
 }
 
 /// Resumes an annotator's queue; whether it was paused. Call inside a transaction.
-pub async fn resume(conn: &mut Conn, annotator: i64) -> Result<bool, sqlx::Error> {
+pub async fn resume(conn: &mut WriteConn, annotator: i64) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query("DELETE FROM annotator_pauses WHERE annotator = $1")
             .bind(annotator)
@@ -154,7 +158,7 @@ pub struct Taken {
 /// Takes `items` out of the annotator's queue with their drafts, unless finished meanwhile
 /// (an answer stays with its assignment). Call inside a transaction.
 pub async fn take_unfinished(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     annotator: i64,
     items: &[i64],
 ) -> Result<Taken, sqlx::Error> {

@@ -5,7 +5,7 @@
 use sqlx::QueryBuilder;
 use tokio_stream::StreamExt;
 
-use super::db::{Conn, Fields, Handle, on};
+use super::db::{Conn, Fields, Handle, WriteConn, on};
 
 /// How a column is read and written.
 #[derive(Debug, Clone, Copy)]
@@ -638,7 +638,7 @@ impl Table {
 
     /// Copies every row of this table from `from` into `to` (which has none), reading them as
     /// a stream and writing them in batches. Returns the rows copied.
-    pub async fn copy(&self, from: &mut Conn, to: &mut Conn) -> Result<u64, sqlx::Error> {
+    pub async fn copy(&self, from: &mut Conn, to: &mut WriteConn) -> Result<u64, sqlx::Error> {
         let select = format!("SELECT {} FROM {}", self.column_list(), self.name);
         let mut copied = 0;
         let mut batch: Vec<Vec<Value>> = Vec::new();
@@ -676,7 +676,7 @@ impl Table {
         Ok(copied)
     }
 
-    async fn insert(&self, to: &mut Conn, rows: &[Vec<Value>]) -> Result<u64, sqlx::Error> {
+    async fn insert(&self, to: &mut WriteConn, rows: &[Vec<Value>]) -> Result<u64, sqlx::Error> {
         if rows.is_empty() {
             return Ok(0);
         }
@@ -700,7 +700,7 @@ impl Table {
 }
 
 /// Empties `content_generation`, the one table a new database is not created empty with.
-pub async fn clear_generation(to: &mut Conn) -> Result<(), sqlx::Error> {
+pub async fn clear_generation(to: &mut WriteConn) -> Result<(), sqlx::Error> {
     on!(to, |c| {
         sqlx::query("DELETE FROM content_generation")
             .execute(&mut *c)

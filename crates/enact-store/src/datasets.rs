@@ -2,7 +2,7 @@
 
 use std::collections::BTreeMap;
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 use serde::Serialize;
 
 use enact_core::dataset::{Direction, StepLength};
@@ -141,7 +141,7 @@ pub async fn counts(conn: &mut Conn, dataset_id: i64) -> Result<ItemCounts, sqlx
 
 /// Records where a dataset's items come from (`simulation` or `real`) and the scene.
 pub async fn set_origin(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset: &str,
     origin: &str,
     scene: &str,
@@ -161,7 +161,7 @@ pub async fn set_origin(
 /// dataset `source`) with their images and signature tables, in the order given; its origin and
 /// scene are the source's. Returns the new dataset's id.
 pub async fn insert_copy(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     source: &Dataset,
     name: &str,
     description: &str,

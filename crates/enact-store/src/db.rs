@@ -97,12 +97,25 @@ impl Connection for PooledConn {
     }
 }
 
-/// A write transaction; rolled back when dropped without [`Tx::commit`]. It may hold this
-/// process's turn to write ([`Tx::holding`]), given up once the transaction has ended.
+/// A connection the store's write functions take ([`WriteConn`]): only a transaction holding
+/// this process's turn in the write gate ([`Tx`]), so a write outside the gate does not
+/// compile. Reads take any [`Connection`], a write transaction included.
+pub trait Writes: Connection {}
+
+/// What store functions that write take.
+pub type WriteConn = dyn Writes + Send;
+
+/// A transaction begun outside the write gate ([`Pool::begin`], [`Pool::begin_snapshot`]):
+/// it reads; to write, it takes this process's turn ([`PlainTx::holding`]). Rolled back when
+/// dropped without [`PlainTx::commit`].
+pub struct PlainTx(EitherTx);
+
+/// A write transaction holding this process's turn in the write gate, given up once the
+/// transaction has ended; rolled back when dropped without [`Tx::commit`].
 pub struct Tx {
     // Declared first, so dropped first: the rollback is queued before the turn passes on.
     tx: EitherTx,
-    turn: Option<super::gate::WriteTurn>,
+    turn: super::gate::WriteTurn,
 }
 
 enum EitherTx {
@@ -110,54 +123,69 @@ enum EitherTx {
     Pg(Transaction<'static, Postgres>),
 }
 
-impl Connection for Tx {
+impl EitherTx {
     fn handle(&mut self) -> Handle<'_> {
-        match &mut self.tx {
+        match self {
             EitherTx::Sqlite(t) => Handle::Sqlite(t),
             EitherTx::Pg(t) => Handle::Pg(t),
         }
     }
+
+    async fn commit(self) -> Result<(), sqlx::Error> {
+        match self {
+            EitherTx::Sqlite(t) => t.commit().await,
+            EitherTx::Pg(t) => t.commit().await,
+        }
+    }
+
+    async fn rollback(self) -> Result<(), sqlx::Error> {
+        match self {
+            EitherTx::Sqlite(t) => t.rollback().await,
+            EitherTx::Pg(t) => t.rollback().await,
+        }
+    }
 }
 
-impl Tx {
-    fn sqlite(tx: Transaction<'static, Sqlite>) -> Tx {
-        Tx {
-            tx: EitherTx::Sqlite(tx),
-            turn: None,
-        }
+impl Connection for PlainTx {
+    fn handle(&mut self) -> Handle<'_> {
+        self.0.handle()
     }
+}
 
-    fn pg(tx: Transaction<'static, Postgres>) -> Tx {
-        Tx {
-            tx: EitherTx::Pg(tx),
-            turn: None,
-        }
+impl Connection for Tx {
+    fn handle(&mut self) -> Handle<'_> {
+        self.tx.handle()
     }
+}
 
-    /// The transaction, keeping `turn` until it commits or rolls back.
+impl Writes for Tx {}
+
+impl PlainTx {
+    /// The transaction as a write transaction, keeping `turn` until it commits or rolls back.
     pub fn holding(self, turn: super::gate::WriteTurn) -> Tx {
-        Tx {
-            turn: Some(turn),
-            ..self
-        }
+        Tx { tx: self.0, turn }
     }
 
     pub async fn commit(self) -> Result<(), sqlx::Error> {
+        self.0.commit().await
+    }
+
+    pub async fn rollback(self) -> Result<(), sqlx::Error> {
+        self.0.rollback().await
+    }
+}
+
+impl Tx {
+    pub async fn commit(self) -> Result<(), sqlx::Error> {
         let Tx { tx, turn } = self;
-        let done = match tx {
-            EitherTx::Sqlite(t) => t.commit().await,
-            EitherTx::Pg(t) => t.commit().await,
-        };
+        let done = tx.commit().await;
         drop(turn);
         done
     }
 
     pub async fn rollback(self) -> Result<(), sqlx::Error> {
         let Tx { tx, turn } = self;
-        let done = match tx {
-            EitherTx::Sqlite(t) => t.rollback().await,
-            EitherTx::Pg(t) => t.rollback().await,
-        };
+        let done = tx.rollback().await;
         drop(turn);
         done
     }
@@ -181,13 +209,13 @@ impl Pool {
     /// as long as SQLite's busy timeout, then failing as [`is_busy`]), so the checks
     /// the use cases make before they write (quotas, idempotency keys, run-once rules,
     /// assignment) hold across every server instance exactly as they do in one SQLite process.
-    pub async fn begin(&self) -> Result<Tx, sqlx::Error> {
+    pub async fn begin(&self) -> Result<PlainTx, sqlx::Error> {
         match self {
             Pool::Sqlite(p) => {
                 let asked = std::time::Instant::now();
                 loop {
                     match p.begin_with("BEGIN IMMEDIATE").await {
-                        Ok(tx) => return Ok(Tx::sqlite(tx)),
+                        Ok(tx) => return Ok(PlainTx(EitherTx::Sqlite(tx))),
                         // A gate's connection gives up after `WRITE_POLL` and asks again;
                         // any other waited the whole `WRITE_WAIT` in SQLite already.
                         Err(e) if is_busy(&e) && asked.elapsed() < crate::WRITE_WAIT => {}
@@ -205,7 +233,7 @@ impl Pool {
                 .bind(PG_LOCK_TIMEOUT)
                 .execute(&mut *tx)
                 .await?;
-                Ok(Tx::pg(tx))
+                Ok(PlainTx(EitherTx::Pg(tx)))
             }
         }
     }
@@ -214,13 +242,13 @@ impl Pool {
     /// lock, so writers carry on while it reads (a backup of a running server). SQLite: a
     /// deferred transaction, whose snapshot of the write-ahead log is fixed at its first read;
     /// PostgreSQL: `REPEATABLE READ READ ONLY`.
-    pub async fn begin_snapshot(&self) -> Result<Tx, sqlx::Error> {
+    pub async fn begin_snapshot(&self) -> Result<PlainTx, sqlx::Error> {
         Ok(match self {
-            Pool::Sqlite(p) => Tx::sqlite(p.begin_with("BEGIN DEFERRED").await?),
-            Pool::Pg(p) => Tx::pg(
+            Pool::Sqlite(p) => PlainTx(EitherTx::Sqlite(p.begin_with("BEGIN DEFERRED").await?)),
+            Pool::Pg(p) => PlainTx(EitherTx::Pg(
                 p.begin_with("BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY")
                     .await?,
-            ),
+            )),
         })
     }
 

@@ -1,11 +1,11 @@
 //! Curators' drafts of an episode's graphs: the editor's latest state, one row per curator.
 
-use super::db::{Conn, on};
+use super::db::{Conn, WriteConn, on};
 
 /// Writes `curator`'s draft of episode `episode_id` (the graphs file as JSON), replacing the
 /// one before.
 pub async fn save(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     episode_id: i64,
     curator: &str,
     graphs: &str,
@@ -44,7 +44,11 @@ pub async fn get(
 }
 
 /// Removes `curator`'s draft of episode `episode_id`, if any.
-pub async fn remove(conn: &mut Conn, episode_id: i64, curator: &str) -> Result<(), sqlx::Error> {
+pub async fn remove(
+    conn: &mut WriteConn,
+    episode_id: i64,
+    curator: &str,
+) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         sqlx::query("DELETE FROM episode_drafts WHERE episode = $1 AND curator = $2")
             .bind(episode_id)

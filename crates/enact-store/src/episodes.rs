@@ -1,7 +1,7 @@
 //! Rows of real-world episodes: the episode, its frames in order, and each curator's graphs
 //! file (kept as the JSON text the use case validated).
 
-use super::db::{Conn, Dialect, Fields, on};
+use super::db::{Conn, Dialect, Fields, WriteConn, on};
 
 /// A stored episode.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -39,7 +39,7 @@ pub struct CuratorGraphsRow {
 /// in use refuses the insert with a violation of
 /// [`UniqueKey::EPISODE_NAME`](super::db::UniqueKey::EPISODE_NAME).
 pub async fn insert(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     name: &str,
     scene: &str,
     created_by: &str,
@@ -62,7 +62,7 @@ pub async fn insert(
 /// Extends the claim of an incomplete episode's import to `alive_until_ms`; false when the
 /// episode is gone (another import took the name over) or complete.
 pub async fn renew_claim(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     episode: i64,
     alive_until_ms: i64,
 ) -> Result<bool, sqlx::Error> {
@@ -80,7 +80,7 @@ pub async fn renew_claim(
 
 /// Marks an episode whose frames are all written complete (pages, lists and exports show it)
 /// and ends its import's claim; false when the episode is gone or complete already.
-pub async fn mark_complete(conn: &mut Conn, episode: i64) -> Result<bool, sqlx::Error> {
+pub async fn mark_complete(conn: &mut WriteConn, episode: i64) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query(
             "UPDATE episodes SET complete = 1, import_alive_until_ms = NULL \
@@ -127,7 +127,7 @@ pub async fn incomplete(conn: &mut Conn, name: &str) -> Result<Option<ImportClai
 
 /// Deletes an incomplete episode with its frame list (not the frames themselves); a complete
 /// one is left as it is.
-pub async fn delete_incomplete(conn: &mut Conn, episode: i64) -> Result<(), sqlx::Error> {
+pub async fn delete_incomplete(conn: &mut WriteConn, episode: i64) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         sqlx::query("DELETE FROM episodes WHERE id = $1 AND complete = 0")
             .bind(episode)
@@ -139,7 +139,7 @@ pub async fn delete_incomplete(conn: &mut Conn, episode: i64) -> Result<(), sqlx
 
 /// Writes the frame at `position` of an episode (both frames already stored).
 pub async fn insert_frame(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     episode: i64,
     position: i64,
     file_name: &str,
@@ -256,7 +256,7 @@ pub async fn graphs(conn: &mut Conn, episode: i64) -> Result<Vec<CuratorGraphsRo
 
 /// Stores (or replaces) a curator's graphs of an episode.
 pub async fn set_graphs(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     episode: i64,
     curator: &str,
     graphs: &str,
@@ -279,7 +279,7 @@ pub async fn set_graphs(
 
 /// Sets the graphs an episode exports and who chose them.
 pub async fn set_resolved(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     episode: i64,
     graphs: &str,
     resolved_by: &str,

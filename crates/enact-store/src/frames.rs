@@ -1,7 +1,7 @@
 //! Key-frame images, stored once per distinct PNG content. A row's `png` holds the bytes, or
 //! is empty when they are in an object store (`app::frames`).
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 
 /// The id of the frame with this content hash, if stored.
 pub async fn id_by_hash(conn: &mut Conn, sha256: &str) -> Result<Option<i64>, sqlx::Error> {
@@ -15,7 +15,7 @@ pub async fn id_by_hash(conn: &mut Conn, sha256: &str) -> Result<Option<i64>, sq
 
 /// Stores a frame; `png` empty when its bytes were written to an object store.
 pub async fn insert(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     sha256: &str,
     width: u32,
     height: u32,
@@ -99,7 +99,7 @@ pub async fn held_elsewhere(
 }
 
 /// Drops these frames' bytes from the database (they were written to an object store).
-pub async fn drop_bytes(conn: &mut Conn, hashes: &[&str]) -> Result<(), sqlx::Error> {
+pub async fn drop_bytes(conn: &mut WriteConn, hashes: &[&str]) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         for sha256 in hashes {
             sqlx::query("UPDATE frames SET png = $1 WHERE sha256 = $2")
@@ -113,7 +113,11 @@ pub async fn drop_bytes(conn: &mut Conn, hashes: &[&str]) -> Result<(), sqlx::Er
 }
 
 /// Puts a frame's bytes back into the database.
-pub async fn restore_bytes(conn: &mut Conn, sha256: &str, png: &[u8]) -> Result<(), sqlx::Error> {
+pub async fn restore_bytes(
+    conn: &mut WriteConn,
+    sha256: &str,
+    png: &[u8],
+) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         sqlx::query("UPDATE frames SET png = $1 WHERE sha256 = $2")
             .bind(png)

@@ -1,6 +1,6 @@
 //! Gold sets and the gold mix's assignments; annotators excluded from a dataset's Human row.
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 
 /// A dataset's gold set as stored.
 #[derive(Debug, Clone, PartialEq)]
@@ -21,7 +21,7 @@ pub struct StoredGoldSet {
 /// transaction.
 #[allow(clippy::too_many_arguments)]
 pub async fn replace(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset_id: i64,
     rate: i64,
     chosen_by: &str,
@@ -60,7 +60,7 @@ pub async fn replace(
 }
 
 /// Removes the dataset's gold set; whether there was one. Call inside a transaction.
-pub async fn clear(conn: &mut Conn, dataset_id: i64) -> Result<bool, sqlx::Error> {
+pub async fn clear(conn: &mut WriteConn, dataset_id: i64) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query("DELETE FROM gold_sets WHERE dataset = $1")
             .bind(dataset_id)
@@ -129,7 +129,7 @@ pub async fn gold_count(conn: &mut Conn, dataset_id: i64) -> Result<i64, sqlx::E
 /// (with their drafts); finished ones stay with their answers. Returns the `(annotator, item)`
 /// pairs that went.
 pub async fn drop_unfinished_gold_assignments(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset_id: i64,
 ) -> Result<Vec<(i64, i64)>, sqlx::Error> {
     on!(conn, |c| {
@@ -212,7 +212,7 @@ pub async fn gold_standings(
 /// Adds gold-mix assignments `(annotator, item)` at the end of each queue (the queue's order
 /// is the mix's, computed when it is read); pairs already assigned stay as they are. Returns
 /// how many were new. Call inside a transaction.
-pub async fn assign_gold(conn: &mut Conn, pairs: &[(i64, i64)]) -> Result<u64, sqlx::Error> {
+pub async fn assign_gold(conn: &mut WriteConn, pairs: &[(i64, i64)]) -> Result<u64, sqlx::Error> {
     on!(conn, |c| {
         let mut added = 0;
         for &(annotator, item) in pairs {
@@ -235,7 +235,7 @@ pub async fn assign_gold(conn: &mut Conn, pairs: &[(i64, i64)]) -> Result<u64, s
 /// Keeps an annotator's answers on a dataset out of its Human row and agreement report;
 /// whether they were not excluded already. Call inside a transaction.
 pub async fn exclude(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset_id: i64,
     annotator: i64,
     excluded_by: &str,
@@ -256,7 +256,7 @@ pub async fn exclude(
 
 /// Counts an excluded annotator's answers on a dataset again; whether they were excluded.
 pub async fn include(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset_id: i64,
     annotator: i64,
 ) -> Result<bool, sqlx::Error> {

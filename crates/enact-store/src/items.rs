@@ -2,7 +2,7 @@
 
 use std::collections::HashMap;
 
-use super::db::{Conn, Dialect, Fields, on};
+use super::db::{Conn, Dialect, Fields, WriteConn, on};
 
 use super::{corrupt, kind_from_row};
 
@@ -226,7 +226,7 @@ pub async fn content_hashes(
 
 /// Writes one item and links its images; `frame_ids[i]` is the stored frame of `item.images[i]`.
 pub async fn insert(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset_id: i64,
     item: &QaItem,
     content_hash: &str,
@@ -295,7 +295,7 @@ pub async fn semantics_json(
 
 /// Stores (or replaces) an item's signature table.
 pub async fn set_semantics(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset_id: i64,
     item_id: &str,
     source: SignatureSource,

@@ -2,7 +2,7 @@
 //! state changes. Times of leases and retries are milliseconds since the epoch, given by the
 //! caller (the application's clock decides; the rows only record).
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 
 /// Which code works a job.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
@@ -129,7 +129,7 @@ fn job_from_row(row: &impl Fields) -> Result<JobRow, sqlx::Error> {
 
 /// Adds a queued job; call inside the transaction of the change that asks for it.
 pub async fn insert(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     kind: JobKind,
     payload: &str,
     created_by: &str,
@@ -154,7 +154,7 @@ pub async fn insert(
 /// claiming worker's own, still running: their lease ran out because its renewals were held
 /// up) are left alone, for the same reason.
 pub async fn claim(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     kinds: &[JobKind],
     owner: &str,
     now_ms: i64,
@@ -203,7 +203,7 @@ pub async fn claim(
 /// still holds it (an admin may have paused or cancelled it meanwhile: the lease then stays
 /// `owner`'s until it lets go), `None` when the lease was lost.
 pub async fn renew(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     id: i64,
     owner: &str,
     lease_until_ms: i64,
@@ -225,7 +225,7 @@ pub async fn renew(
 /// or a final state), with `error` recorded when given. A job an admin paused or cancelled
 /// meanwhile keeps that state. Returns whether `owner` still held it.
 pub async fn release(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     id: i64,
     owner: &str,
     state: JobState,
@@ -257,7 +257,7 @@ pub async fn release(
 
 /// Puts a job in state `to` (an admin's pause, resume or cancel, decided by the caller from
 /// the state it read in the same write transaction); a queued job is due at once.
-pub async fn set_state(conn: &mut Conn, id: i64, to: JobState) -> Result<(), sqlx::Error> {
+pub async fn set_state(conn: &mut WriteConn, id: i64, to: JobState) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         let sql = format!(
             "UPDATE jobs SET state = $2, run_after_ms = 0, updated_at = {now}, \
@@ -272,7 +272,11 @@ pub async fn set_state(conn: &mut Conn, id: i64, to: JobState) -> Result<(), sql
 }
 
 /// Records what the job's code reports of its progress (JSON text).
-pub async fn set_progress(conn: &mut Conn, id: i64, progress: &str) -> Result<(), sqlx::Error> {
+pub async fn set_progress(
+    conn: &mut WriteConn,
+    id: i64,
+    progress: &str,
+) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         sqlx::query("UPDATE jobs SET progress = $2 WHERE id = $1")
             .bind(id)

@@ -38,7 +38,7 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::Duration;
 
-pub use db::{Conn, Pool, PooledConn, Tx};
+pub use db::{Conn, PlainTx, Pool, PooledConn, Tx, WriteConn, Writes};
 use db::{Fields, on};
 use sqlx::SqlitePool;
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
@@ -291,7 +291,7 @@ pub fn notification_parts(text: &str) -> (Option<&str>, &str) {
 /// (its text framed by [`notification_text`]); on SQLite a row of `change_feed`, which running
 /// servers read ([`announcements_after`]).
 pub async fn announce(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     channel: &str,
     origin: &str,
     payload: &str,
@@ -372,7 +372,7 @@ pub async fn change_feed_span(conn: &mut Conn) -> Result<(i64, i64), sqlx::Error
 }
 
 /// Marks stored items as changed; call inside the transaction that changes them.
-pub async fn bump_content_generation(conn: &mut Conn) -> Result<(), sqlx::Error> {
+pub async fn bump_content_generation(conn: &mut WriteConn) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         sqlx::query("UPDATE content_generation SET value = value + 1 WHERE id = 1")
             .execute(&mut *c)

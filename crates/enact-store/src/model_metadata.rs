@@ -1,7 +1,7 @@
 //! What the hub's own leaderboard rows say about a model on a dataset: its category, family,
 //! size and link.
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 
 /// A model's metadata on a dataset as stored; every field but the model may be empty.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -17,7 +17,7 @@ pub struct StoredModelMetadata {
 
 /// Writes the model's metadata on the dataset (replacing what was there).
 pub async fn put(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset_id: i64,
     metadata: &StoredModelMetadata,
 ) -> Result<(), sqlx::Error> {

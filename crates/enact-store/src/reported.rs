@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 use enact_core::paper::{Category, CellKey, ReportedModel};
 
 /// A reported result as stored.
@@ -19,7 +19,7 @@ pub struct StoredReported {
 /// Stores `reported` on the dataset; its id. A row with the same model and source must not be
 /// there (the key `reported_results_model_source`).
 pub async fn insert(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset_id: i64,
     reported: &ReportedModel,
     added_by: &str,
@@ -48,7 +48,7 @@ pub async fn insert(
 
 /// Removes the dataset's row of `model` from `source`; whether there was one.
 pub async fn delete_by_key(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset_id: i64,
     model: &str,
     source: &str,
@@ -67,7 +67,7 @@ pub async fn delete_by_key(
 }
 
 /// Removes the dataset's row `id`; whether there was one.
-pub async fn delete(conn: &mut Conn, dataset_id: i64, id: i64) -> Result<bool, sqlx::Error> {
+pub async fn delete(conn: &mut WriteConn, dataset_id: i64, id: i64) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query("DELETE FROM reported_results WHERE dataset = $1 AND id = $2")
             .bind(dataset_id)

@@ -3,7 +3,7 @@
 use std::collections::HashMap;
 
 use super::corrupt;
-use super::db::{Conn, Dialect, Fields, on};
+use super::db::{Conn, Dialect, Fields, WriteConn, on};
 use super::items::json_column;
 
 use enact_core::model_run::{ItemOutcome, RunFailure};
@@ -72,7 +72,7 @@ pub struct NewRun<'a> {
 }
 
 /// Writes a run; `None` when its name is taken.
-pub async fn insert(conn: &mut Conn, new: &NewRun<'_>) -> Result<Option<i64>, sqlx::Error> {
+pub async fn insert(conn: &mut WriteConn, new: &NewRun<'_>) -> Result<Option<i64>, sqlx::Error> {
     on!(conn, |c| {
         let inserted = sqlx::query_scalar(
             "INSERT INTO model_runs (name, dataset, endpoint, model, params, prompt_version, \
@@ -245,7 +245,7 @@ pub struct RunItemRow {
 
 /// Writes (or, for a failed item asked again, replaces) an item's row.
 pub async fn record_item(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     run: i64,
     item_row: i64,
     row: &RunItemRow,
@@ -409,7 +409,7 @@ pub async fn answered_page(
 }
 
 /// Links a run to the job it was just started on the server with.
-pub async fn set_job(conn: &mut Conn, run: i64, job: i64) -> Result<(), sqlx::Error> {
+pub async fn set_job(conn: &mut WriteConn, run: i64, job: i64) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         sqlx::query("UPDATE model_runs SET job = $1 WHERE id = $2")
             .bind(job)
@@ -422,7 +422,7 @@ pub async fn set_job(conn: &mut Conn, run: i64, job: i64) -> Result<(), sqlx::Er
 
 /// Links a run to the submission its answers went into, with the stamp it was made with.
 pub async fn set_submission(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     run: i64,
     submission: i64,
     stamp: &str,

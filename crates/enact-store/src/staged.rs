@@ -2,7 +2,7 @@
 //! row, and the cut-over that moves it into the dataset. Maps rows only; the import use case
 //! (`app::import`) decides when each runs.
 
-use super::db::{Conn, Dialect, Fields, on};
+use super::db::{Conn, Dialect, Fields, WriteConn, on};
 use enact_core::semantics::SignatureSource;
 
 /// One import in progress.
@@ -120,7 +120,7 @@ fn staging_name(dataset: &str) -> String {
 
 /// Starts a staged import of `dataset`: its hidden dataset row and its record.
 pub async fn create(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset: &str,
     source: &str,
     target: Option<i64>,
@@ -152,7 +152,7 @@ pub async fn create(
 }
 
 /// Makes `run_token` the run that writes the staged import's batches from now on.
-pub async fn claim(conn: &mut Conn, id: i64, run_token: &str) -> Result<bool, sqlx::Error> {
+pub async fn claim(conn: &mut WriteConn, id: i64, run_token: &str) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
         let now = c.utc_now();
         let done = sqlx::query(&format!(
@@ -169,7 +169,7 @@ pub async fn claim(conn: &mut Conn, id: i64, run_token: &str) -> Result<bool, sq
 /// Makes the staged import impossible to resume or to write to (its file hash and run token
 /// emptied): the first step of discarding it, so that a run killed while its rows are deleted
 /// leaves nothing another run could take over and publish half of.
-pub async fn forget(conn: &mut Conn, id: i64) -> Result<(), sqlx::Error> {
+pub async fn forget(conn: &mut WriteConn, id: i64) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         let now = c.utc_now();
         sqlx::query(&format!(
@@ -186,7 +186,7 @@ pub async fn forget(conn: &mut Conn, id: i64) -> Result<(), sqlx::Error> {
 /// Records a committed batch, if `run_token` still owns the staged import and it had got to
 /// `lines_before`; `false` when another run took it over or it was abandoned.
 pub async fn record_batch(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     id: i64,
     run_token: &str,
     lines_before: i64,
@@ -214,7 +214,7 @@ pub async fn record_batch(
 
 /// Stages a new signature table for an item the dataset holds unchanged.
 pub async fn stage_signatures(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     staged: i64,
     item_id: &str,
     source: SignatureSource,
@@ -238,7 +238,11 @@ pub async fn stage_signatures(
 
 /// Deletes up to `limit` of the items of a staged import's hidden row or of a retired row
 /// (their images and signatures, and anything made on them, go with them); returns how many.
-pub async fn delete_items(conn: &mut Conn, staging: i64, limit: i64) -> Result<u64, sqlx::Error> {
+pub async fn delete_items(
+    conn: &mut WriteConn,
+    staging: i64,
+    limit: i64,
+) -> Result<u64, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query(
             "DELETE FROM items WHERE id IN \
@@ -256,7 +260,7 @@ pub async fn delete_items(conn: &mut Conn, staging: i64, limit: i64) -> Result<u
 /// staged import); returns how many. Every import (of a release or of an episode) inserts a
 /// frame in the transaction that links it, so between transactions an unused frame is one
 /// nothing will link.
-pub async fn delete_unused_frames(conn: &mut Conn, limit: i64) -> Result<u64, sqlx::Error> {
+pub async fn delete_unused_frames(conn: &mut WriteConn, limit: i64) -> Result<u64, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query(
             "DELETE FROM frames WHERE id IN (SELECT f.id FROM frames f WHERE NOT EXISTS \
@@ -272,7 +276,7 @@ pub async fn delete_unused_frames(conn: &mut Conn, limit: i64) -> Result<u64, sq
 }
 
 /// Removes a staged import's record and its (emptied) hidden dataset row.
-pub async fn remove(conn: &mut Conn, staged: &StagedImport) -> Result<(), sqlx::Error> {
+pub async fn remove(conn: &mut WriteConn, staged: &StagedImport) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         sqlx::query("DELETE FROM staged_imports WHERE id = $1")
             .bind(staged.id)
@@ -287,7 +291,10 @@ pub async fn remove(conn: &mut Conn, staged: &StagedImport) -> Result<(), sqlx::
 }
 
 /// Cut-over into a dataset that does not exist yet: the hidden row becomes the dataset.
-pub async fn publish_as_new(conn: &mut Conn, staged: &StagedImport) -> Result<(), sqlx::Error> {
+pub async fn publish_as_new(
+    conn: &mut WriteConn,
+    staged: &StagedImport,
+) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         sqlx::query("DELETE FROM staged_imports WHERE id = $1")
             .bind(staged.id)
@@ -376,7 +383,7 @@ fn retired_name(dataset: &str, id: i64) -> String {
 /// Either way the replaced items' verdicts are left for [`sweep_submission`], the staged
 /// signature tables are applied, and the staged import's record is removed.
 pub async fn publish_into(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     staged: &StagedImport,
     target: i64,
     source: &str,
@@ -557,7 +564,7 @@ pub async fn retired(conn: &mut Conn) -> Result<Vec<Retired>, sqlx::Error> {
 /// after its cut-over, by a write that had resolved the dataset just before, are first pointed
 /// at the dataset now holding its name, unless one of that dataset's own rows has their key;
 /// returns how many were.
-pub async fn delete_retired(conn: &mut Conn, retired: &Retired) -> Result<u64, sqlx::Error> {
+pub async fn delete_retired(conn: &mut WriteConn, retired: &Retired) -> Result<u64, sqlx::Error> {
     on!(conn, |c| {
         // Hidden rows (staged, retired) have names no dataset has.
         let successor: Option<i64> = sqlx::query_scalar("SELECT id FROM datasets WHERE name = $1")
@@ -630,7 +637,7 @@ pub async fn verdict_sweeps(conn: &mut Conn) -> Result<Vec<VerdictSweep>, sqlx::
 /// When none is left, or a newer cut-over restarted the sweep (another generation), nothing is
 /// deleted; a finished sweep's row is removed.
 pub async fn sweep_submission(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     sweep: &VerdictSweep,
 ) -> Result<(u64, bool), sqlx::Error> {
     on!(conn, |c| {

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use super::db::{Conn, Dialect, Fields, Pool, on};
+use super::db::{Conn, Dialect, Fields, Pool, WriteConn, on};
 
 /// One public key the hub signed (or signs) with.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -56,7 +56,7 @@ pub async fn key(conn: &mut Conn, keyid: &str) -> Result<Option<KeyRow>, sqlx::E
 /// Lists a public key (created now); `false` when it was listed already.
 #[tracing::instrument(skip_all)]
 pub async fn insert_key(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     keyid: &str,
     algorithm: &str,
     public_key: &str,
@@ -78,7 +78,7 @@ pub async fn insert_key(
 
 /// Retires every listed key but `keyid` (now); returns the ids retired.
 #[tracing::instrument(skip_all)]
-pub async fn retire_all_but(conn: &mut Conn, keyid: &str) -> Result<Vec<String>, sqlx::Error> {
+pub async fn retire_all_but(conn: &mut WriteConn, keyid: &str) -> Result<Vec<String>, sqlx::Error> {
     on!(conn, |c| {
         sqlx::query_scalar(&format!(
             "UPDATE signing_keys SET retired_at = {} \
@@ -105,7 +105,7 @@ pub struct StatementRow {
 /// Stores a statement about `submission`.
 #[tracing::instrument(skip_all)]
 pub async fn insert_statement(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     submission: i64,
     keyid: &str,
     envelope: &str,

@@ -1,6 +1,6 @@
 //! Rows of studies and their variants.
 
-use super::db::{Conn, Fields, on};
+use super::db::{Conn, Fields, WriteConn, on};
 
 use enact_core::study::VariantSpec;
 
@@ -19,7 +19,7 @@ pub struct StudyRow {
 /// Writes a study and its variants (`dataset id` beside each). A name in use refuses the
 /// insert with a violation of [`UniqueKey::STUDY_NAME`](super::db::UniqueKey::STUDY_NAME).
 pub async fn insert(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     name: &str,
     baseline: i64,
     created_by: &str,
@@ -121,7 +121,7 @@ pub async fn list(conn: &mut Conn) -> Result<Vec<StudyRow>, sqlx::Error> {
 }
 
 /// Deletes a study (its variants go with it); whether it existed.
-pub async fn delete(conn: &mut Conn, name: &str) -> Result<bool, sqlx::Error> {
+pub async fn delete(conn: &mut WriteConn, name: &str) -> Result<bool, sqlx::Error> {
     on!(conn, |c| {
         let done = sqlx::query("DELETE FROM studies WHERE name = $1")
             .bind(name)

@@ -2,7 +2,7 @@
 
 use sqlx::QueryBuilder;
 
-use super::db::{Conn, Dialect, Fields, on};
+use super::db::{Conn, Dialect, Fields, WriteConn, on};
 
 use super::{corrupt, kind_from_row};
 use enact_core::dataset::{AnswerVisibility, Direction, StepLength};
@@ -28,7 +28,7 @@ pub async fn answer_visibility(
 }
 
 pub async fn set_answer_visibility(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     dataset: i64,
     answers: AnswerVisibility,
 ) -> Result<(), sqlx::Error> {
@@ -183,7 +183,7 @@ pub struct NewSubmission<'a> {
 /// Idempotency-Key this token already used refuses the insert with a violation of
 /// [`UniqueKey::SUBMISSION_IDEMPOTENCY_KEY`](super::db::UniqueKey::SUBMISSION_IDEMPOTENCY_KEY).
 #[tracing::instrument(skip_all)]
-pub async fn insert(conn: &mut Conn, new: &NewSubmission<'_>) -> Result<i64, sqlx::Error> {
+pub async fn insert(conn: &mut WriteConn, new: &NewSubmission<'_>) -> Result<i64, sqlx::Error> {
     on!(conn, |c| {
         let scores = serde_json::to_string(new.scores).map_err(|e| corrupt("scores", e))?;
         sqlx::query_scalar(
@@ -217,7 +217,7 @@ const ITEM_ROWS_PER_STATEMENT: usize = 2500;
 /// Stores every item verdict; `item_rows[v.target]` is the `items` row id of verdict `v`.
 #[tracing::instrument(skip_all)]
 pub async fn insert_items(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     submission: i64,
     item_rows: &[i64],
     verdicts: &[ItemVerdict],
@@ -382,7 +382,7 @@ pub async fn verdict_cells(
 /// Admin changes to a leaderboard row. Returns whether the submission exists.
 #[tracing::instrument(skip_all)]
 pub async fn update_listing(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     id: i64,
     baseline: Option<bool>,
     visibility: Option<Visibility>,
@@ -451,7 +451,7 @@ pub async fn error_analysis(
 
 /// Keeps a submission's error analysis (JSON).
 pub async fn set_error_analysis(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     submission: i64,
     json: &str,
 ) -> Result<(), sqlx::Error> {
@@ -467,7 +467,7 @@ pub async fn set_error_analysis(
 
 /// Forgets the stored error analyses of a dataset's submissions (its items or signatures
 /// changed); they are computed again on the next request.
-pub async fn clear_error_analyses(conn: &mut Conn, dataset: i64) -> Result<(), sqlx::Error> {
+pub async fn clear_error_analyses(conn: &mut WriteConn, dataset: i64) -> Result<(), sqlx::Error> {
     on!(conn, |c| {
         sqlx::query("UPDATE submissions SET error_analysis = NULL WHERE dataset = $1")
             .bind(dataset)
@@ -501,7 +501,7 @@ pub async fn below_version(
 /// `item_rows[v.target]` is the `items` row id of verdict `v`.
 #[tracing::instrument(skip_all)]
 pub async fn replace_scores(
-    conn: &mut Conn,
+    conn: &mut WriteConn,
     submission: i64,
     scores: &SubmissionScores,
     version: u32,
