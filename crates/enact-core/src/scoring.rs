@@ -514,20 +514,27 @@ mod tests {
         )
         .expect("write");
         let ids: Vec<String> = ["0", "2", "3"].map(str::to_owned).to_vec();
-        let signatures = SceneGraphSignatures::for_predictions(
-            replayed.path(),
-            [r#"{"task_name": "t", "key_frame_ids": ["0", "2", "3"]}"#],
-        )
-        .expect("a readable scene graph");
-        assert!(signatures.has_task("t"));
-        assert!(!signatures.has_task("u"));
-        let made = signatures.item_signatures("t", &ids, VisibleCoverage::Chronological);
-        // The grasp between the first two key frames is a change the verifier can compare.
-        assert!(
-            matches!(made.signature_set(View::Full, 0, 1), Some(Ok(set)) if !set.is_empty()),
-            "{:?}",
-            made.signature_set(View::Full, 0, 1)
-        );
+        // Key frames named by strings or by numbers: ENACT looks both up as `str(id)`.
+        for line in [
+            r#"{"task_name": "t", "key_frame_ids": ["0", "2", "3"]}"#,
+            r#"{"task_name": "t", "key_frame_ids": [0, 2, 3]}"#,
+        ] {
+            let signatures = SceneGraphSignatures::for_predictions(replayed.path(), [line])
+                .expect("a readable scene graph");
+            assert!(signatures.has_task("t"));
+            assert!(!signatures.has_task("u"));
+            let made = signatures.item_signatures("t", &ids, VisibleCoverage::Chronological);
+            assert!(
+                matches!(made, Cow::Borrowed(_)),
+                "{line}: computed for the line"
+            );
+            // The grasp between the first two key frames is a change the verifier can compare.
+            assert!(
+                matches!(made.signature_set(View::Full, 0, 1), Some(Ok(set)) if !set.is_empty()),
+                "{line}: {:?}",
+                made.signature_set(View::Full, 0, 1)
+            );
+        }
     }
 
     #[test]
