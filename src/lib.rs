@@ -1,8 +1,9 @@
 //! enact-hub: a self-hosted evaluation service for the ENACT benchmark.
 //!
 //! Six layers, each allowed to use only the ones below it. The five lowest are crates of their
-//! own, so Cargo keeps them from naming anything above them (and the web, which does not depend
-//! on the store, from reaching past the use cases into it); within this crate a test,
+//! own (with the outbound clients in a crate beside the service kit), so Cargo keeps them from
+//! naming anything above them (and the web, which does not depend on the store, from reaching
+//! past the use cases into it); within this crate a test,
 //! `tests/layers.rs`, reads every `crate::` path and fails when the command line reaches into the
 //! store, or on a cycle:
 //!
@@ -11,6 +12,7 @@
 //! | `src/cli/` ([`cli`]) | the command line: parse arguments, call one [`app`] use case (or serve [`web`]), print text or JSON; never names the store |
 //! | `crates/enact-web/` ([`web`]) | the HTTP adapter: parse requests, call one [`app`] use case, render JSON or HTML |
 //! | `crates/enact-app/` ([`app`]) | use cases: import, submit, tokens, annotators, assignment, drafts and answers, the agreement protocol and report, error analyses, leaderboards, the demo |
+//! | `crates/enact-outbound/` (used by [`app`]'s runs) | the outbound clients: a model's OpenAI-compatible endpoint, another hub's API |
 //! | `crates/enact-service/` (re-exported by [`app`]) | the service every use case shares and none is named in: `Hub`, the unit of work, the change feed, the job runner, the heavy pool, metrics, the frame store, `AppError` |
 //! | `crates/enact-store/` ([`store`]) | SQLite or PostgreSQL: connection setup, migrations, the write gate, rows in and rows out, no decisions |
 //! | `crates/enact-core/` ([`core`]) | the benchmark, pure: dataset, scene graphs, verifier, error analysis, pipeline, agreement statistics, world; no database, HTTP, async or command line |

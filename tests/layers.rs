@@ -4,9 +4,10 @@
 //!
 //! Layers, bottom to top: `core` (pure benchmark logic, the `enact-core` crate), `store` (rows,
 //! the `enact-store` crate), the service kit (`Hub` and what every use case shares, the
-//! `enact-service` crate, which names no use case), `app` (use cases, the `enact-app` crate) and
-//! `web` (the HTTP service, the `enact-web` crate, which does not depend on enact-store), which
-//! Cargo keeps from naming any layer above them; then, in this crate, the command line `cli`. The hub names the four crates
+//! `enact-service` crate, which names no use case, and beside it the outbound clients,
+//! `enact-outbound`), `app` (use cases, the `enact-app` crate) and `web` (the HTTP service, the
+//! `enact-web` crate, which does not depend on enact-store), which Cargo keeps from naming any
+//! layer above them; then, in this crate, the command line `cli`. The hub names the four crates
 //! `crate::core`, `crate::store`, `crate::app` and `crate::web`. Each area of this crate may use
 //! only what is listed for it in [`ALLOWED`].
 
@@ -217,12 +218,13 @@ fn hub_src() -> PathBuf {
 
 /// The lower crates' sources: Cargo keeps those crates from naming the layers above them, but
 /// not their own modules from using each other in a cycle.
-fn crate_srcs() -> [PathBuf; 5] {
+fn crate_srcs() -> [PathBuf; 6] {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     [
         root.join("crates/enact-core/src"),
         root.join("crates/enact-store/src"),
         root.join("crates/enact-service/src"),
+        root.join("crates/enact-outbound/src"),
         root.join("crates/enact-app/src"),
         root.join("crates/enact-web/src"),
     ]

@@ -11,7 +11,6 @@
 //! use case ([`submissions::submit`]: quotas, scoring, audit) and the run is linked to the
 //! submission with a stamp of everything that made it.
 
-mod asker;
 mod remote;
 mod responses;
 mod server;
@@ -25,8 +24,11 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use tokio::task::JoinSet;
 
-pub use asker::{ApiKey, CallSettings};
-pub use remote::{RemoteHub, default_cache, execute_remote, study_datasets};
+/// The model endpoint's client, from the outbound clients' crate.
+use enact_outbound::endpoint as asker;
+pub use enact_outbound::endpoint::{ApiKey, CallSettings};
+pub use enact_outbound::hub::RemoteHub;
+pub use remote::{default_cache, execute_remote, study_datasets};
 pub use responses::{
     Audience, RESPONSES_PER_PAGE, ResponsePage, RunOutput, StampedRun, output, public_runs,
     response_page, stamp, visible_run,

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant, SystemTime};
 use bytes::Bytes;
 use tokio::sync::Notify;
 
-use crate::core::model_run::{
+use enact_core::model_run::{
     CallFailure, Completion, ConcurrencyWindow, RunFailure, Usage, answer_text, backoff,
     read_completion, retry_after,
 };
