@@ -70,12 +70,12 @@ fn recording(starts: Arc<Mutex<BTreeMap<i64, u32>>>) -> JobHandlers {
                 Some("fail") => Err(AppError::internal("told to fail")),
                 Some("wait") => {
                     let why = job.stopped().await;
-                    job.progress(&hub, json!({"stopped": format!("{why:?}")}))
+                    job.progress(&hub, &json!({"stopped": format!("{why:?}")}))
                         .await?;
                     Ok(())
                 }
                 _ => {
-                    job.progress(&hub, json!({"done": n})).await?;
+                    job.progress(&hub, &json!({"done": n})).await?;
                     Ok(())
                 }
             }

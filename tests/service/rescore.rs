@@ -5,7 +5,9 @@
 use std::sync::Mutex;
 
 use enact_hub::app::jobs::{self, JobId, JobSettings, JobState, Worker};
-use enact_hub::app::rescore::{self, RescoreJob, RescorePayload, RescoreProgress, RescoreStage};
+use enact_hub::app::rescore::{
+    self, RescoreJob, RescoreJobProgress, RescorePayload, RescoreProgress, RescoreStage,
+};
 use enact_hub::app::{self, AppError, Hub};
 use enact_hub::core::annotation::{Draft, InteractionCounts, Session};
 use enact_hub::core::audit::Actor;
@@ -438,8 +440,9 @@ impl RescoreJob for FakeJob {
         self.stop
     }
 
-    async fn progress(&self, _hub: &Hub, progress: Value) -> Result<(), AppError> {
-        self.progress.lock().expect("lock").push(progress);
+    async fn progress(&self, _hub: &Hub, progress: &RescoreJobProgress) -> Result<(), AppError> {
+        let stored = serde_json::to_value(progress).expect("serialised");
+        self.progress.lock().expect("lock").push(stored);
         Ok(())
     }
 }

@@ -50,8 +50,9 @@ struct ImportPayload {
     actor: String,
 }
 
-/// What a queued import's progress says, for pages and `GET /api/v1/admin/jobs/{id}`.
-#[derive(Debug, Clone, Serialize)]
+/// What a queued import's progress says, for pages and `GET /api/v1/admin/jobs/{id}`: written
+/// and read only as this enum.
+#[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(tag = "outcome", rename_all = "snake_case")]
 enum ImportOutcome {
     /// Still going: how far it has read.
@@ -241,7 +242,7 @@ pub async fn work(hub: &Hub, job: &Arc<JobContext>) -> Result<(), AppError> {
                             qa_bytes: p.qa_bytes,
                             rows: p.rows,
                         };
-                        if let Err(e) = job.progress(hub, serde_json::json!(outcome)).await {
+                        if let Err(e) = job.progress(hub, &outcome).await {
                             tracing::warn!(job = job.id.0, error = %e, "storing an import's progress failed");
                         }
                     }
@@ -284,7 +285,7 @@ pub async fn work(hub: &Hub, job: &Arc<JobContext>) -> Result<(), AppError> {
         },
         Err(e) => return Err(AppError::Internal(e.into())),
     };
-    job.progress(hub, serde_json::json!(outcome)).await
+    job.progress(hub, &outcome).await
 }
 
 /// An import job as the admin page lists it.
@@ -306,7 +307,7 @@ pub async fn recent(hub: &Hub, limit: u32) -> Result<Vec<ImportJobSummary>, AppE
         .into_iter()
         .map(|job| {
             let payload: Option<ImportPayload> = serde_json::from_str(&job.payload).ok();
-            let progress: Option<serde_json::Value> = job
+            let progress: Option<ImportOutcome> = job
                 .progress
                 .as_deref()
                 .and_then(|p| serde_json::from_str(p).ok());
@@ -326,40 +327,83 @@ pub async fn recent(hub: &Hub, limit: u32) -> Result<Vec<ImportJobSummary>, AppE
 }
 
 /// A sentence for an import job's state and stored progress.
-fn describe(state: JobState, progress: Option<&serde_json::Value>, error: Option<&str>) -> String {
-    let field = |name: &str| progress.and_then(|p| p.get(name));
-    let outcome = field("outcome").and_then(serde_json::Value::as_str);
-    match outcome {
-        Some("importing") => {
-            let read = field("qa_bytes_read")
-                .and_then(serde_json::Value::as_u64)
-                .unwrap_or(0);
-            let total = field("qa_bytes")
-                .and_then(serde_json::Value::as_u64)
-                .unwrap_or(0);
-            let rows = field("rows")
-                .and_then(serde_json::Value::as_u64)
-                .unwrap_or(0);
-            let share = if total == 0 {
+fn describe(state: JobState, progress: Option<&ImportOutcome>, error: Option<&str>) -> String {
+    match progress {
+        Some(ImportOutcome::Importing {
+            qa_bytes_read,
+            qa_bytes,
+            rows,
+            ..
+        }) => {
+            let share = if *qa_bytes == 0 {
                 0.0
             } else {
-                100.0 * read as f64 / total as f64
+                100.0 * *qa_bytes_read as f64 / *qa_bytes as f64
             };
             format!("{rows} lines read ({share:.0} % of the QA file)")
         }
-        Some("imported") => field("report")
-            .and_then(|r| serde_json::from_value::<super::import::ImportReport>(r.clone()).ok())
-            .map_or_else(|| "imported".to_owned(), |r| r.summary_line()),
-        Some("refused") => field("error")
-            .and_then(serde_json::Value::as_str)
-            .unwrap_or("refused")
-            .to_owned(),
-        Some("cancelled") => "cancelled; what it had staged was discarded".to_owned(),
-        _ => match (state, error) {
+        Some(ImportOutcome::Imported { report, .. }) => report.summary_line(),
+        Some(ImportOutcome::Refused { error, .. }) => error.clone(),
+        Some(ImportOutcome::Cancelled { .. }) => {
+            "cancelled; what it had staged was discarded".to_owned()
+        }
+        None => match (state, error) {
             (JobState::Queued, Some(e)) => format!("waiting to retry after: {e}"),
             (JobState::Failed, Some(e)) => format!("failed: {e}"),
             (JobState::Queued, None) => "waiting for a job worker".to_owned(),
             (state, _) => state.as_str().to_owned(),
         },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What the job stored, read back as the admin page reads it.
+    fn described(outcome: &ImportOutcome, state: JobState) -> String {
+        let stored = serde_json::to_string(outcome).expect("serialised");
+        let read: ImportOutcome = serde_json::from_str(&stored).expect("read back");
+        describe(state, Some(&read), None)
+    }
+
+    #[test]
+    fn each_stored_outcome_reads_back_as_its_sentence() {
+        let dataset = "main".to_owned();
+        let importing = ImportOutcome::Importing {
+            dataset: dataset.clone(),
+            qa_bytes_read: 250,
+            qa_bytes: 1000,
+            rows: 12,
+        };
+        assert_eq!(
+            described(&importing, JobState::Running),
+            "12 lines read (25 % of the QA file)"
+        );
+        let report = super::super::import::ImportReport {
+            dataset: dataset.clone(),
+            new_items: 3,
+            ..Default::default()
+        };
+        let imported = ImportOutcome::Imported {
+            dataset: dataset.clone(),
+            report: Box::new(report.clone()),
+        };
+        assert_eq!(described(&imported, JobState::Done), report.summary_line());
+        let refused = ImportOutcome::Refused {
+            dataset: dataset.clone(),
+            error: "line 3: not JSON".to_owned(),
+            details: vec!["line 3".to_owned()],
+        };
+        assert_eq!(described(&refused, JobState::Done), "line 3: not JSON");
+        assert_eq!(
+            described(&ImportOutcome::Cancelled { dataset }, JobState::Cancelled),
+            "cancelled; what it had staged was discarded"
+        );
+        // Nothing stored yet: the job's state says it.
+        assert_eq!(
+            describe(JobState::Queued, None, Some("busy")),
+            "waiting to retry after: busy"
+        );
     }
 }

@@ -148,8 +148,16 @@ pub trait RescoreJob: Sync {
     fn progress(
         &self,
         hub: &Hub,
-        progress: serde_json::Value,
+        progress: &RescoreJobProgress,
     ) -> impl Future<Output = Result<(), AppError>> + Send;
+}
+
+/// A rescore job's stored progress: how far it has got while it runs, then what it did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum RescoreJobProgress {
+    Running(RescoreProgress),
+    Ended(RescoreSummary),
 }
 
 impl RescoreJob for JobContext {
@@ -164,7 +172,7 @@ impl RescoreJob for JobContext {
     fn progress(
         &self,
         hub: &Hub,
-        progress: serde_json::Value,
+        progress: &RescoreJobProgress,
     ) -> impl Future<Output = Result<(), AppError>> + Send {
         JobContext::progress(self, hub, progress)
     }
@@ -225,7 +233,7 @@ pub async fn work_on(hub: &Hub, job: &impl RescoreJob) -> Result<(), AppError> {
                 _ = tick.tick() => {
                     let value = latest.lock().unwrap_or_else(|p| p.into_inner()).take();
                     if let Some(p) = value
-                        && let Err(e) = job.progress(hub, serde_json::json!(p)).await
+                        && let Err(e) = job.progress(hub, &RescoreJobProgress::Running(p)).await
                     {
                         tracing::warn!(error = %e, "storing a rescore's progress failed");
                     }
@@ -236,7 +244,7 @@ pub async fn work_on(hub: &Hub, job: &impl RescoreJob) -> Result<(), AppError> {
     };
     let (summary, ()) = tokio::join!(running, writer);
     let summary = summary?;
-    job.progress(hub, serde_json::json!(summary)).await
+    job.progress(hub, &RescoreJobProgress::Ended(summary)).await
 }
 
 async fn run<P, S>(

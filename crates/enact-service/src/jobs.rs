@@ -250,12 +250,21 @@ impl JobContext {
         }
     }
 
-    /// Stores a small JSON value describing the job's progress, for pages and the API (in the
-    /// bulk lane: annotators' writes go first). Never call it while holding a
-    /// [`crate::Write`]: the gate lets one writer in at a time.
-    pub async fn progress(&self, hub: &Hub, progress: serde_json::Value) -> Result<(), AppError> {
+    /// Stores the job's progress, for pages and the API (in the bulk lane: annotators' writes
+    /// go first): each kind's own struct, serialised here only and read back as that struct
+    /// by its kind's code. Its `done` field, when it has one, is the count the metrics show
+    /// as the job's items done. Never call it while holding a [`crate::Write`]: the gate lets
+    /// one writer in at a time.
+    pub async fn progress<P: serde::Serialize>(
+        &self,
+        hub: &Hub,
+        progress: &P,
+    ) -> Result<(), AppError> {
+        let stored = serde_json::to_string(progress).map_err(|e| {
+            AppError::internal(format!("writing job {}'s progress: {e}", self.id.0))
+        })?;
         let mut tx = hub.write(Lane::Bulk).await?;
-        store::jobs::set_progress(&mut tx, self.id.0, &progress.to_string()).await?;
+        store::jobs::set_progress(&mut tx, self.id.0, &stored).await?;
         tx.commit().await?;
         Ok(())
     }

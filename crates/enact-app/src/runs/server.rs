@@ -292,10 +292,7 @@ pub async fn work(hub: &Hub, job: &JobContext) -> Result<(), AppError> {
             let current = seen.borrow_and_update().clone();
             if let Some(p) = current
                 && let Err(e) = job
-                    .progress(
-                        hub,
-                        serde_json::json!(RunJobProgress::of(&p, RunStage::Running)),
-                    )
+                    .progress(hub, &RunJobProgress::of(&p, RunStage::Running))
                     .await
             {
                 tracing::warn!(job = job.id.0, error = %e, "storing a run's progress failed");
@@ -319,7 +316,7 @@ pub async fn work(hub: &Hub, job: &JobContext) -> Result<(), AppError> {
         .iter()
         .map(|(failure, n)| (failure.code(), *n))
         .collect();
-    job.progress(hub, serde_json::json!(last)).await
+    job.progress(hub, &last).await
 }
 
 /// Where a run's job has got.
