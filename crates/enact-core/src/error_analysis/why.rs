@@ -162,6 +162,10 @@ mod tests {
         assert_eq!(w.steps[0].implied, [sentence(GRASP)]);
         assert_eq!(w.steps[0].missed, [sentence(BURNER_ON)]);
         assert_eq!(w.rejected_steps, 2);
+        // The true order: each action's change lies within its own step's full change.
+        let exact = why(Direction::Inverse, &truth, &truth, &table()).expect("steps");
+        assert_eq!(exact.rejected_steps, 0);
+        assert!(exact.steps.iter().all(|s| s.accepted));
         let short = Permutation::new(vec![1]).expect("answer");
         assert!(why(Direction::Inverse, &truth, &short, &table()).is_err());
     }
