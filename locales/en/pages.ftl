@@ -65,6 +65,12 @@ refusal-passwords-differ = the two passwords differ
 refusal-password-too-short = the password has { $chars } characters; use at least { $least }
 refusal-episode-has-no-graphs = episode '{ $episode }' has no scene graphs yet: a curator must set them before it can be exported
 refusal-run-price = { $field } must be a price of 0 or more (US dollars per million tokens), not { $price }
+refusal-import-folder-unset = this server imports releases from its own disk only when its operator names an import folder (ENACT_HUB_IMPORT_DIR); otherwise import on the server itself
+refusal-import-path-not-relative = path: "{ $path }" must be a release's path relative to the server's import folder
+refusal-import-path-missing = path: no "{ $path }" in the server's import folder
+refusal-import-path-leaves-folder = path: "{ $path }" leaves the server's import folder
+refusal-import-path-not-a-release = path: "{ $path }" is neither a release folder (with QA/enact_ordering.jsonl) nor a .jsonl file
+refusal-import-release-leaves-folder = path: the release of "{ $path }" (its images' folder) leaves the server's import folder
 
 ## Logging in
 login-title = Log in

@@ -63,6 +63,12 @@ refusal-passwords-differ = 两次输入的密码不一致
 refusal-password-too-short = 密码只有 { $chars } 个字符；至少需要 { $least } 个
 refusal-episode-has-no-graphs = 片段“{ $episode }”还没有场景图：须由整理者设置后才能导出
 refusal-run-price = { $field } 须为 0 或以上的价格（美元/百万词元），而不是 { $price }
+refusal-import-folder-unset = 本服务器只有在运维者指定导入文件夹（ENACT_HUB_IMPORT_DIR）时才从自己的磁盘导入发布包；否则请在服务器上直接导入
+refusal-import-path-not-relative = 路径：“{ $path }”须为相对于服务器导入文件夹的发布包路径
+refusal-import-path-missing = 路径：服务器的导入文件夹中没有“{ $path }”
+refusal-import-path-leaves-folder = 路径：“{ $path }”超出了服务器的导入文件夹
+refusal-import-path-not-a-release = 路径：“{ $path }”既不是发布包文件夹（含 QA/enact_ordering.jsonl），也不是 .jsonl 文件
+refusal-import-release-leaves-folder = 路径：“{ $path }”的发布包（其图像文件夹）超出了服务器的导入文件夹
 
 ## 登录
 login-title = 登录

@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use enact_hub::app::import::{ImportObserver, ImportOptions, ImportProgress, import_release};
 use enact_hub::app::jobs::{self, JobId, JobSettings, JobState, Worker};
-use enact_hub::app::{self, Hub};
+use enact_hub::app::{self, AppError, Hub};
 use enact_hub::core::credentials::Role;
 use enact_hub::web::WebConfig;
 use serde_json::{Value, json};
@@ -71,12 +71,16 @@ async fn an_admin_imports_a_release_from_the_import_folder_as_a_job() {
         "{}",
         escape.text
     );
+    assert_eq!(escape.json()["code"], "import_path_leaves_folder");
+    assert_eq!(escape.json()["details"]["path"], "../elsewhere");
     let absolute = queue(&admin, json!({"path": outside.display().to_string()}))
         .expect(400)
         .await;
     assert!(absolute.error().contains("relative"), "{}", absolute.text);
+    assert_eq!(absolute.json()["code"], "import_path_not_relative");
     let missing = queue(&admin, json!({"path": "nope"})).expect(404).await;
     assert!(missing.error().contains("nope"), "{}", missing.text);
+    assert_eq!(missing.json()["code"], "import_path_missing");
     let stray = queue(&admin, json!({"path": "not-a-release.txt"}))
         .expect(400)
         .await;
@@ -182,6 +186,13 @@ async fn an_admin_imports_a_release_from_the_import_folder_as_a_job() {
     assert!(
         refused.to_string().contains("ENACT_HUB_IMPORT_DIR"),
         "{refused}"
+    );
+    assert!(
+        matches!(
+            refused,
+            AppError::Refused(app::refusal::Refusal::ImportFolderUnset)
+        ),
+        "{refused:?}"
     );
 }
 

@@ -16,6 +16,7 @@ use super::import::{
     ReleaseLocation, abandon, default_dataset_name, import_release,
 };
 use super::jobs::{self, JobContext, JobId, JobKind, JobState};
+use super::refusal::{ImportPathProblem, Refusal};
 use super::{AppError, Hub};
 use crate::Lane;
 use crate::core::audit::Actor;
@@ -83,19 +84,20 @@ enum ImportOutcome {
 fn under(root: &Path, path: &str) -> Result<PathBuf, AppError> {
     let root = std::fs::canonicalize(root)
         .map_err(|e| AppError::internal(format!("the import folder {}: {e}", root.display())))?;
+    let refused = |problem| {
+        AppError::Refused(Refusal::ImportPath {
+            path: path.to_owned(),
+            problem,
+        })
+    };
     let asked = Path::new(path.trim());
     if asked.as_os_str().is_empty() || asked.is_absolute() {
-        return Err(AppError::Invalid(format!(
-            "path: {path:?} must be a release's path relative to the server's import folder"
-        )));
+        return Err(refused(ImportPathProblem::NotRelative));
     }
-    let resolved = std::fs::canonicalize(root.join(asked)).map_err(|_| {
-        AppError::NotFound(format!("path: no {path:?} in the server's import folder"))
-    })?;
+    let resolved =
+        std::fs::canonicalize(root.join(asked)).map_err(|_| refused(ImportPathProblem::Missing))?;
     if !resolved.starts_with(&root) {
-        return Err(AppError::Invalid(format!(
-            "path: {path:?} leaves the server's import folder"
-        )));
+        return Err(refused(ImportPathProblem::LeavesFolder));
     }
     Ok(resolved)
 }
@@ -106,21 +108,21 @@ fn release_under(root: &Path, path: &str) -> Result<(PathBuf, ReleaseLocation), 
     let resolved = under(root, path)?;
     let location =
         ReleaseLocation::resolve(&resolved).map_err(|e| AppError::Invalid(format!("path: {e}")))?;
+    let refused = |problem| {
+        AppError::Refused(Refusal::ImportPath {
+            path: path.to_owned(),
+            problem,
+        })
+    };
     if location.qa_file.extension().and_then(|e| e.to_str()) != Some("jsonl") {
-        return Err(AppError::Invalid(format!(
-            "path: {path:?} is neither a release folder (with QA/enact_ordering.jsonl) nor a \
-             .jsonl file"
-        )));
+        return Err(refused(ImportPathProblem::NotARelease));
     }
     let inside = std::fs::canonicalize(&location.root)
         .ok()
         .zip(std::fs::canonicalize(root).ok())
         .is_some_and(|(release, root)| release.starts_with(root));
     if !inside {
-        return Err(AppError::Invalid(format!(
-            "path: the release of {path:?} (its images' folder) leaves the server's import \
-             folder"
-        )));
+        return Err(refused(ImportPathProblem::ReleaseLeavesFolder));
     }
     Ok((resolved, location))
 }
@@ -142,13 +144,7 @@ pub fn folder(hub: &Hub) -> Option<PathBuf> {
 
 /// The import folder of this instance, or the refusal an admin reads.
 fn import_dir(hub: &Hub) -> Result<PathBuf, AppError> {
-    folder(hub).ok_or_else(|| {
-        AppError::NotPermitted(
-            "this server imports releases from its own disk only when its operator names an \
-             import folder (ENACT_HUB_IMPORT_DIR); otherwise import on the server itself"
-                .into(),
-        )
-    })
+    folder(hub).ok_or(AppError::Refused(Refusal::ImportFolderUnset))
 }
 
 /// Queues an import of the release at `request.path` under the import folder. The release's

@@ -40,6 +40,22 @@ impl SkipAction {
     }
 }
 
+/// What is wrong with the path of a release an admin asks the server to import from its
+/// import folder.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImportPathProblem {
+    /// Empty or absolute: it must be relative to the import folder.
+    NotRelative,
+    /// Nothing is at that path in the import folder.
+    Missing,
+    /// It leaves the import folder (`..`, or a symbolic link out).
+    LeavesFolder,
+    /// Neither a release folder nor a `.jsonl` file.
+    NotARelease,
+    /// The release's images' folder lies outside the import folder.
+    ReleaseLeavesFolder,
+}
+
 /// A value a refusal names, for the sentence made from it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Detail {
@@ -110,6 +126,13 @@ pub enum Refusal {
     /// A model run's price (`field`: `price_input` or `price_output`, in US dollars per
     /// million tokens) below 0 or not a number.
     RunPrice { field: String, price: String },
+    /// This server imports from its own disk only when its operator names an import folder.
+    ImportFolderUnset,
+    /// The path of a release to import from the import folder does not name one inside it.
+    ImportPath {
+        path: String,
+        problem: ImportPathProblem,
+    },
 }
 
 impl Refusal {
@@ -123,12 +146,17 @@ impl Refusal {
             | Refusal::NoSubmission { .. }
             | Refusal::NoRun { .. }
             | Refusal::NoFrame { .. }
-            | Refusal::NoAnswerYet { .. } => RefusalKind::NotFound,
+            | Refusal::NoAnswerYet { .. }
+            | Refusal::ImportPath {
+                problem: ImportPathProblem::Missing,
+                ..
+            } => RefusalKind::NotFound,
             Refusal::NotLoggedIn => RefusalKind::Unauthenticated,
             Refusal::LoginLinkUsed => RefusalKind::NotFound,
-            Refusal::AdminOnly { .. } | Refusal::StaleForm | Refusal::NotAssigned { .. } => {
-                RefusalKind::NotPermitted
-            }
+            Refusal::AdminOnly { .. }
+            | Refusal::StaleForm
+            | Refusal::NotAssigned { .. }
+            | Refusal::ImportFolderUnset => RefusalKind::NotPermitted,
             Refusal::ItemFinished { .. } | Refusal::QueuePaused { .. } => RefusalKind::Conflict,
             Refusal::SlotsEmpty { .. }
             | Refusal::DraftInvalid { .. }
@@ -137,7 +165,8 @@ impl Refusal {
             | Refusal::PasswordsDiffer
             | Refusal::PasswordTooShort { .. }
             | Refusal::EpisodeHasNoGraphs { .. }
-            | Refusal::RunPrice { .. } => RefusalKind::Invalid,
+            | Refusal::RunPrice { .. }
+            | Refusal::ImportPath { .. } => RefusalKind::Invalid,
         }
     }
 
@@ -172,6 +201,14 @@ impl Refusal {
             Refusal::PasswordTooShort { .. } => "password_too_short",
             Refusal::EpisodeHasNoGraphs { .. } => "episode_has_no_graphs",
             Refusal::RunPrice { .. } => "run_price",
+            Refusal::ImportFolderUnset => "import_folder_unset",
+            Refusal::ImportPath { problem, .. } => match problem {
+                ImportPathProblem::NotRelative => "import_path_not_relative",
+                ImportPathProblem::Missing => "import_path_missing",
+                ImportPathProblem::LeavesFolder => "import_path_leaves_folder",
+                ImportPathProblem::NotARelease => "import_path_not_a_release",
+                ImportPathProblem::ReleaseLeavesFolder => "import_release_leaves_folder",
+            },
         }
     }
 
@@ -199,7 +236,9 @@ impl Refusal {
             Refusal::NotLoggedIn
             | Refusal::LoginLinkUsed
             | Refusal::StaleForm
-            | Refusal::PasswordsDiffer => Vec::new(),
+            | Refusal::PasswordsDiffer
+            | Refusal::ImportFolderUnset => Vec::new(),
+            Refusal::ImportPath { path, .. } => vec![("path", text(path))],
             Refusal::QueuePaused { since } => vec![("since", Detail::Time(since.clone()))],
             Refusal::SlotsEmpty { item, slots } => vec![
                 ("item", text(item)),
@@ -343,7 +382,23 @@ impl Refusal {
                 field: s("price_input"),
                 price: s("-1"),
             },
+            Refusal::ImportFolderUnset,
         ]
+        .into_iter()
+        .chain(
+            [
+                ImportPathProblem::NotRelative,
+                ImportPathProblem::Missing,
+                ImportPathProblem::LeavesFolder,
+                ImportPathProblem::NotARelease,
+                ImportPathProblem::ReleaseLeavesFolder,
+            ]
+            .map(|problem| Refusal::ImportPath {
+                path: s("releases/new"),
+                problem,
+            }),
+        )
+        .collect()
     }
 }
 
@@ -438,6 +493,34 @@ impl fmt::Display for Refusal {
                 f,
                 "{field} must be a price of 0 or more (US dollars per million tokens), not {price}"
             ),
+            Refusal::ImportFolderUnset => write!(
+                f,
+                "this server imports releases from its own disk only when its operator names an \
+                 import folder (ENACT_HUB_IMPORT_DIR); otherwise import on the server itself"
+            ),
+            Refusal::ImportPath { path, problem } => match problem {
+                ImportPathProblem::NotRelative => write!(
+                    f,
+                    "path: {path:?} must be a release's path relative to the server's import \
+                     folder"
+                ),
+                ImportPathProblem::Missing => {
+                    write!(f, "path: no {path:?} in the server's import folder")
+                }
+                ImportPathProblem::LeavesFolder => {
+                    write!(f, "path: {path:?} leaves the server's import folder")
+                }
+                ImportPathProblem::NotARelease => write!(
+                    f,
+                    "path: {path:?} is neither a release folder (with QA/enact_ordering.jsonl) \
+                     nor a .jsonl file"
+                ),
+                ImportPathProblem::ReleaseLeavesFolder => write!(
+                    f,
+                    "path: the release of {path:?} (its images' folder) leaves the server's \
+                     import folder"
+                ),
+            },
         }
     }
 }

@@ -24,7 +24,7 @@ use fluent_bundle::{FluentArgs, FluentResource, FluentValue};
 
 use super::AppState;
 use super::cookies::cookie;
-use crate::app::refusal::{Detail, Refusal};
+use crate::app::refusal::{Detail, ImportPathProblem, Refusal};
 use crate::core::annotation::DraftProblem;
 
 /// The cookie holding the locale a browser chose with the switch.
@@ -590,6 +590,14 @@ pub fn refusal_key(refusal: &Refusal) -> &'static str {
         Refusal::PasswordTooShort { .. } => msg("refusal-password-too-short"),
         Refusal::EpisodeHasNoGraphs { .. } => msg("refusal-episode-has-no-graphs"),
         Refusal::RunPrice { .. } => msg("refusal-run-price"),
+        Refusal::ImportFolderUnset => msg("refusal-import-folder-unset"),
+        Refusal::ImportPath { problem, .. } => match problem {
+            ImportPathProblem::NotRelative => msg("refusal-import-path-not-relative"),
+            ImportPathProblem::Missing => msg("refusal-import-path-missing"),
+            ImportPathProblem::LeavesFolder => msg("refusal-import-path-leaves-folder"),
+            ImportPathProblem::NotARelease => msg("refusal-import-path-not-a-release"),
+            ImportPathProblem::ReleaseLeavesFolder => msg("refusal-import-release-leaves-folder"),
+        },
     }
 }
 
