@@ -747,6 +747,29 @@ mod tests {
     }
 
     #[test]
+    fn enact_bracket_list_takes_a_literal_at_python_s_digit_limit_and_not_one_over_it() {
+        // Inside the brackets too, int() takes exactly 4300 digits: the list is the answer.
+        let text = |digits: usize| format!("[{}] then 5", "7".repeat(digits));
+        // The one label, rebased as ENACT rebases a list.
+        assert_eq!(
+            enact(&text(PY_INT_MAX_STR_DIGITS), 3).as_deref(),
+            Some("[1]")
+        );
+        // Over it, the digit fallback meets the same run, which int() refuses too.
+        assert_eq!(enact(&text(PY_INT_MAX_STR_DIGITS + 1), 3), None);
+    }
+
+    #[test]
+    fn enact_keeps_the_last_labels_of_a_list_longer_than_the_truth() {
+        // parsed[-gt_len:]: five labels for three actions keep the last three.
+        assert_eq!(enact("[4, 5, 1, 2, 3]", 3).as_deref(), Some("[1, 2, 3]"));
+        assert_eq!(
+            enact("[9, 8, 7, 6, 3, 1, 2]", 3).as_deref(),
+            Some("[3, 1, 2]")
+        );
+    }
+
+    #[test]
     fn strict_failure_reasons() {
         let fail = |text: &str, actions: usize| {
             parse_answer_text_strict(text, actions)

@@ -291,6 +291,16 @@ mod tests {
         PyInt::parse_ascii(text).expect("test literal")
     }
 
+    #[test]
+    fn zero_is_zero_and_not_negative_whatever_its_sign() {
+        assert!(!PyInt::Small(0).is_negative());
+        assert!(PyInt::Small(0).is_zero());
+        assert!(PyInt::Small(-1).is_negative());
+        assert!(!PyInt::Small(1).is_negative());
+        assert!(big("-0").is_zero() && !big("-0").is_negative());
+        assert!(big("-123456789012345678901234567890").is_negative());
+    }
+
     /// Only an optionally signed, non-empty run of ASCII digits is an integer.
     #[test]
     fn parse_ascii_takes_digits_and_nothing_else() {
