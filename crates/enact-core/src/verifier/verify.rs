@@ -830,6 +830,32 @@ mod tests {
     }
 
     #[test]
+    fn a_record_whose_truth_outruns_its_key_frames_needs_a_pair_a_chronological_table_lacks() {
+        // ENACT fills the shuffled order from the first len(key_frame_ids) - 1 labels only, but
+        // chains every label: [2, 3, 1, 2] over four key frames walks 0, 1, 2, 3 and back to 1.
+        // ENACT computes that visible change from the scene graphs; a table of chronological
+        // visible pairs does not hold it, and the item is refused rather than scored as if
+        // ENACT had raised.
+        let truth = parse_python_json("[2, 3, 1, 2]").expect("test JSON");
+        let view = GroundTruthView::of(&truth).expect("sized");
+        let verdict = verify_enact_record(
+            Direction::Forward,
+            KeyFrameShape::Sequence(4),
+            &view,
+            &answer("[2, 3, 1]"),
+            Some(&table(&["a", "b", "c", "d"])),
+        );
+        assert_eq!(
+            verdict,
+            Err(VerifyError::SignaturesNotCovered {
+                view: View::Visible,
+                from: 3,
+                to: 1
+            })
+        );
+    }
+
+    #[test]
     fn forward_exact_answer_short_circuits_to_int_one() {
         let v = score(Direction::Forward, &[2, 3, 1], "[2, 3, 1]");
         assert!(v.exact_match && v.semantic_match && v.task_accuracy);
