@@ -381,6 +381,7 @@ async fn studies_refuse_what_cannot_be_compared_and_are_audited() {
         async move {
             let reply = create(server, &token, body).expect(status).await;
             assert!(reply.error().contains(needle), "{}", reply.error());
+            reply.json()
         }
     };
     refusal(
@@ -410,18 +411,29 @@ async fn studies_refuse_what_cannot_be_compared_and_are_audited() {
             "{error}"
         );
     }
-    refusal(
+    let missing = refusal(
         json!({"name": "s", "baseline": BASELINE, "variants": ["Camera/30=nope"]}),
         400,
         "no dataset named 'nope'",
     )
     .await;
-    refusal(
+    assert_eq!(missing["code"], "study_variant_missing");
+    assert_eq!(missing["details"]["variant"], "Camera/30");
+    let baseline_missing = refusal(
+        json!({"name": "s", "baseline": "nope", "variants": ["Camera/30=world-fov30"]}),
+        400,
+        "baseline: no dataset named 'nope'",
+    )
+    .await;
+    assert_eq!(baseline_missing["code"], "study_baseline_missing");
+    let unaligned = refusal(
         json!({"name": "s", "baseline": BASELINE, "variants": ["Camera/30=other"]}),
         400,
         "none of dataset 'other'",
     )
     .await;
+    assert_eq!(unaligned["code"], "study_variant_unaligned");
+    assert_eq!(unaligned["details"]["baseline"], BASELINE);
     refusal(
         json!({"name": "bad name", "baseline": BASELINE, "variants": ["Camera/30=world-fov30"]}),
         400,
@@ -435,7 +447,9 @@ async fn studies_refuse_what_cannot_be_compared_and_are_audited() {
         .1;
     create(&server, &submitter, body.clone()).expect(403).await;
     create(&server, &token, body.clone()).expect(201).await;
-    refusal(body, 409, "exists already").await;
+    let exists = refusal(body, 409, "exists already").await;
+    assert_eq!(exists["code"], "study_exists");
+    assert_eq!(exists["details"]["study"], "cam");
 
     // The variant imported with its own replay's scene graphs: a 30° camera sees less, so some
     // items are judged by other signatures, and the study says so.

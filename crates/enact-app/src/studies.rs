@@ -9,6 +9,7 @@ use std::collections::HashMap;
 use schemars::JsonSchema;
 use serde::Serialize;
 
+use super::refusal::Refusal;
 use super::{AppError, Hub, agreement, audit, datasets, error_analysis};
 use crate::Lane;
 use crate::core::annotation::{human_entries, mean_by_item};
@@ -103,11 +104,10 @@ async fn alignments(
     Ok((baseline_keys, out))
 }
 
-async fn dataset_named(hub: &Hub, what: &str, name: &str) -> Result<Dataset, AppError> {
+/// The dataset named `name`, or `missing` when there is none.
+async fn dataset_named(hub: &Hub, name: &str, missing: Refusal) -> Result<Dataset, AppError> {
     match datasets::by_name(hub, name).await {
-        Err(e) if e.is_not_found() => Err(AppError::Invalid(format!(
-            "{what}: no dataset named '{name}'"
-        ))),
+        Err(e) if e.is_not_found() => Err(AppError::Refused(missing)),
         other => other,
     }
 }
@@ -124,36 +124,38 @@ pub async fn create(
     let name = study_name(name).map_err(AppError::Invalid)?;
     let baseline = baseline.trim();
     check_variants(baseline, variants).map_err(AppError::Invalid)?;
-    let base = dataset_named(hub, "baseline", baseline).await?;
+    let missing = Refusal::StudyBaselineMissing {
+        dataset: baseline.to_owned(),
+    };
+    let base = dataset_named(hub, baseline, missing).await?;
     let mut resolved = Vec::with_capacity(variants.len());
     for spec in variants {
-        let what = format!("variant {}/{}", spec.family, spec.label);
-        let dataset = dataset_named(hub, &what, &spec.dataset).await?;
+        let missing = Refusal::StudyVariantMissing {
+            variant: format!("{}/{}", spec.family, spec.label),
+            dataset: spec.dataset.clone(),
+        };
+        let dataset = dataset_named(hub, &spec.dataset, missing).await?;
         resolved.push((spec.clone(), dataset.id));
     }
     let (baseline_keys, aligned) = alignments(hub, base.id, &resolved).await?;
     for ((spec, _), (variant_keys, alignment)) in resolved.iter().zip(&aligned) {
         if alignment.aligned() == 0 {
-            return Err(AppError::Invalid(format!(
-                "variant {}/{}: none of dataset '{}''s {} items aligns with baseline '{}''s {} \
-                 (by id, or by task, type and key frames); a variant asks the baseline's \
-                 questions with other images (made from the baseline's items)",
-                spec.family,
-                spec.label,
-                spec.dataset,
-                variant_keys.len(),
-                base.name,
-                baseline_keys.len()
-            )));
+            return Err(AppError::Refused(Refusal::StudyVariantUnaligned {
+                variant: format!("{}/{}", spec.family, spec.label),
+                dataset: spec.dataset.clone(),
+                items: variant_keys.len() as u64,
+                baseline: base.name.clone(),
+                baseline_items: baseline_keys.len() as u64,
+            }));
         }
     }
     let mut tx = hub.write(Lane::Interactive).await?;
     match store::studies::insert(&mut tx, name, base.id, actor.name(), &resolved).await {
         Ok(_) => {}
         Err(e) if UniqueKey::STUDY_NAME.is_violated_by(&e) => {
-            return Err(AppError::Conflict(format!(
-                "a study named '{name}' exists already"
-            )));
+            return Err(AppError::Refused(Refusal::StudyExists {
+                study: name.to_owned(),
+            }));
         }
         Err(e) => return Err(e.into()),
     }

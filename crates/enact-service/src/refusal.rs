@@ -128,6 +128,21 @@ pub enum Refusal {
     RunPrice { field: String, price: String },
     /// This server imports from its own disk only when its operator names an import folder.
     ImportFolderUnset,
+    /// A study of this name exists already.
+    StudyExists { study: String },
+    /// No dataset has the name given as a new study's baseline.
+    StudyBaselineMissing { dataset: String },
+    /// No dataset has the name given for a new study's variant (`family/label`).
+    StudyVariantMissing { variant: String, dataset: String },
+    /// None of a variant's items aligns with the baseline's (by id, or by task, type and key
+    /// frames).
+    StudyVariantUnaligned {
+        variant: String,
+        dataset: String,
+        items: u64,
+        baseline: String,
+        baseline_items: u64,
+    },
     /// The path of a release to import from the import folder does not name one inside it.
     ImportPath {
         path: String,
@@ -157,6 +172,10 @@ impl Refusal {
             | Refusal::StaleForm
             | Refusal::NotAssigned { .. }
             | Refusal::ImportFolderUnset => RefusalKind::NotPermitted,
+            Refusal::StudyExists { .. } => RefusalKind::Conflict,
+            Refusal::StudyBaselineMissing { .. }
+            | Refusal::StudyVariantMissing { .. }
+            | Refusal::StudyVariantUnaligned { .. } => RefusalKind::Invalid,
             Refusal::ItemFinished { .. } | Refusal::QueuePaused { .. } => RefusalKind::Conflict,
             Refusal::SlotsEmpty { .. }
             | Refusal::DraftInvalid { .. }
@@ -202,6 +221,10 @@ impl Refusal {
             Refusal::EpisodeHasNoGraphs { .. } => "episode_has_no_graphs",
             Refusal::RunPrice { .. } => "run_price",
             Refusal::ImportFolderUnset => "import_folder_unset",
+            Refusal::StudyExists { .. } => "study_exists",
+            Refusal::StudyBaselineMissing { .. } => "study_baseline_missing",
+            Refusal::StudyVariantMissing { .. } => "study_variant_missing",
+            Refusal::StudyVariantUnaligned { .. } => "study_variant_unaligned",
             Refusal::ImportPath { problem, .. } => match problem {
                 ImportPathProblem::NotRelative => "import_path_not_relative",
                 ImportPathProblem::Missing => "import_path_missing",
@@ -239,6 +262,24 @@ impl Refusal {
             | Refusal::PasswordsDiffer
             | Refusal::ImportFolderUnset => Vec::new(),
             Refusal::ImportPath { path, .. } => vec![("path", text(path))],
+            Refusal::StudyExists { study } => vec![("study", text(study))],
+            Refusal::StudyBaselineMissing { dataset } => vec![("dataset", text(dataset))],
+            Refusal::StudyVariantMissing { variant, dataset } => {
+                vec![("variant", text(variant)), ("dataset", text(dataset))]
+            }
+            Refusal::StudyVariantUnaligned {
+                variant,
+                dataset,
+                items,
+                baseline,
+                baseline_items,
+            } => vec![
+                ("variant", text(variant)),
+                ("dataset", text(dataset)),
+                ("items", Detail::Number(*items)),
+                ("baseline", text(baseline)),
+                ("baseline_items", Detail::Number(*baseline_items)),
+            ],
             Refusal::QueuePaused { since } => vec![("since", Detail::Time(since.clone()))],
             Refusal::SlotsEmpty { item, slots } => vec![
                 ("item", text(item)),
@@ -383,6 +424,19 @@ impl Refusal {
                 price: s("-1"),
             },
             Refusal::ImportFolderUnset,
+            Refusal::StudyExists { study: s("camera") },
+            Refusal::StudyBaselineMissing { dataset: s("demo") },
+            Refusal::StudyVariantMissing {
+                variant: s("Camera/30"),
+                dataset: s("demo-fov30"),
+            },
+            Refusal::StudyVariantUnaligned {
+                variant: s("Camera/30"),
+                dataset: s("demo-fov30"),
+                items: 12,
+                baseline: s("demo"),
+                baseline_items: 40,
+            },
         ]
         .into_iter()
         .chain(
@@ -497,6 +551,26 @@ impl fmt::Display for Refusal {
                 f,
                 "this server imports releases from its own disk only when its operator names an \
                  import folder (ENACT_HUB_IMPORT_DIR); otherwise import on the server itself"
+            ),
+            Refusal::StudyExists { study } => write!(f, "a study named '{study}' exists already"),
+            Refusal::StudyBaselineMissing { dataset } => {
+                write!(f, "baseline: no dataset named '{dataset}'")
+            }
+            Refusal::StudyVariantMissing { variant, dataset } => {
+                write!(f, "variant {variant}: no dataset named '{dataset}'")
+            }
+            Refusal::StudyVariantUnaligned {
+                variant,
+                dataset,
+                items,
+                baseline,
+                baseline_items,
+            } => write!(
+                f,
+                "variant {variant}: none of dataset '{dataset}''s {items} items aligns with \
+                 baseline '{baseline}''s {baseline_items} (by id, or by task, type and key \
+                 frames); a variant asks the baseline's questions with other images (made from \
+                 the baseline's items)"
             ),
             Refusal::ImportPath { path, problem } => match problem {
                 ImportPathProblem::NotRelative => write!(

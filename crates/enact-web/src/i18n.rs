@@ -591,6 +591,10 @@ pub fn refusal_key(refusal: &Refusal) -> &'static str {
         Refusal::EpisodeHasNoGraphs { .. } => msg("refusal-episode-has-no-graphs"),
         Refusal::RunPrice { .. } => msg("refusal-run-price"),
         Refusal::ImportFolderUnset => msg("refusal-import-folder-unset"),
+        Refusal::StudyExists { .. } => msg("refusal-study-exists"),
+        Refusal::StudyBaselineMissing { .. } => msg("refusal-study-baseline-missing"),
+        Refusal::StudyVariantMissing { .. } => msg("refusal-study-variant-missing"),
+        Refusal::StudyVariantUnaligned { .. } => msg("refusal-study-variant-unaligned"),
         Refusal::ImportPath { problem, .. } => match problem {
             ImportPathProblem::NotRelative => msg("refusal-import-path-not-relative"),
             ImportPathProblem::Missing => msg("refusal-import-path-missing"),
