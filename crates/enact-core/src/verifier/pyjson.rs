@@ -824,6 +824,9 @@ mod tests {
             "[fxxxx]",
             "[nxxx]",
             "[txxx]",
+            "[Nxx]",
+            "[Ixxxxxxx]",
+            "[-Ixxxxxxx]",
         ] {
             assert!(
                 matches!(parse_python_json(bad), Err(PyJsonError::Decode { .. })),
