@@ -530,11 +530,27 @@ mod tests {
             |f, t, view| {
                 Ok(match (f == t || (f, t) == ("x", "y"), view) {
                     (true, _) => BTreeSet::new(),
+                    // A set only in the last word: no other set holds sig141.
+                    (false, View::Full) if (f, t) == ("x", "z") => {
+                        BTreeSet::from(["sig141".to_owned()])
+                    }
                     (false, View::Visible) => some.clone(),
                     (false, View::Full) => many.clone(),
                 })
             },
         );
+        let (PairLookup::Set(last_word), PairLookup::Set(visible)) = (
+            table.lookup(View::Full, 0, 2),
+            table.lookup(View::Visible, 1, 2),
+        ) else {
+            panic!("sets expected");
+        };
+        // Its one member is in the third word: in the full set, not in the visible one.
+        assert!(!table.is_subset(last_word, visible));
+        let PairLookup::Set(full) = table.lookup(View::Full, 1, 2) else {
+            panic!("a set expected");
+        };
+        assert!(table.is_subset(last_word, full));
         let (PairLookup::Set(v), PairLookup::Set(full)) = (
             table.lookup(View::Visible, 1, 2),
             table.lookup(View::Full, 1, 2),

@@ -818,6 +818,8 @@ mod tests {
         // Small labels run on machine integers; near i64's ends `label - 1` and the index
         // arithmetic would overflow there, so such labels take the Python-value path.
         assert!(answer("[2, 3, 1]").small_labels().is_some());
+        // Zero and negative labels are small too (both paths give the same; this one is fast).
+        assert_eq!(answer("[0, -1, 2]").small_labels(), Some(&[0, -1, 2][..]));
         for extreme in [i64::MIN, i64::MIN / 2, i64::MAX / 2, i64::MAX] {
             let text = format!("[2, 3, {extreme}]");
             assert!(answer(&text).small_labels().is_none(), "{text}");
