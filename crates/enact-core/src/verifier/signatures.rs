@@ -581,6 +581,18 @@ mod tests {
         let mut value: serde_json::Value = serde_json::from_str(&text).expect("json");
         value["full"] = serde_json::json!([0]);
         assert!(serde_json::from_value::<ItemSignatures>(value).is_err());
+        // The signature list must be sorted and hold each once: a repeat is refused first.
+        let mut repeated: serde_json::Value = serde_json::from_str(&text).expect("json");
+        let first = repeated["signatures"][0].clone();
+        repeated["signatures"]
+            .as_array_mut()
+            .expect("a list")
+            .insert(0, first);
+        let refused = serde_json::from_value::<ItemSignatures>(repeated).expect_err("a repeat");
+        assert!(
+            refused.to_string().contains("not sorted and distinct"),
+            "{refused}"
+        );
     }
 
     /// A frame index past the key frames is no pair of the table, whichever end it is.
