@@ -134,6 +134,47 @@ impl Server {
         Server { child, base }
     }
 
+    /// What a failure's message should say of the process: whether it still runs, what its
+    /// threads are doing, and whether it answers.
+    async fn report(&self) -> String {
+        let pid = self.child.id();
+        let status = std::fs::read_to_string(format!("/proc/{pid}/status"))
+            .ok()
+            .and_then(|s| {
+                s.lines()
+                    .find(|l| l.starts_with("State:"))
+                    .map(str::to_owned)
+            })
+            .unwrap_or_else(|| "State: gone".to_owned());
+        let mut threads = Vec::new();
+        if let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) {
+            for task in tasks.flatten() {
+                let path = task.path();
+                let read = |file: &str| {
+                    std::fs::read_to_string(path.join(file))
+                        .unwrap_or_default()
+                        .trim()
+                        .to_owned()
+                };
+                threads.push(format!("{} in {}", read("comm"), read("wchan")));
+            }
+        }
+        threads.sort();
+        let health = match reqwest::Client::new()
+            .get(format!("{}/healthz", self.base))
+            .timeout(Duration::from_secs(5))
+            .send()
+            .await
+        {
+            Ok(reply) => reply.status().to_string(),
+            Err(e) => format!("no answer: {e}"),
+        };
+        format!(
+            "pid {pid}: {status}; /healthz: {health}; threads: {}",
+            threads.join(", ")
+        )
+    }
+
     /// SIGKILL, and wait until the process is gone.
     fn kill(mut self) {
         self.child.kill().expect("SIGKILL");
@@ -1057,6 +1098,11 @@ struct JobSeen {
     #[allow(dead_code)]
     last_error: Option<String>,
     progress: Option<String>,
+    /// Shown (through `Debug`) when a wait fails: against `now_ms`, whether the lease ran out.
+    #[allow(dead_code)]
+    lease_until_ms: Option<i64>,
+    #[allow(dead_code)]
+    now_ms: i64,
 }
 
 impl JobSeen {
@@ -1078,11 +1124,20 @@ impl JobSeen {
 }
 
 async fn job_seen(pool: &store::Pool, job: i64) -> JobSeen {
-    let (state, lease_owner, attempts, last_error, progress) = helpers::db!(
+    type Row = (
+        String,
+        Option<String>,
+        i64,
+        Option<String>,
+        Option<String>,
+        Option<i64>,
+    );
+    let (state, lease_owner, attempts, last_error, progress, lease_until_ms) = helpers::db!(
         pool,
         fetch_one,
-        sqlx::query_as::<_, (String, Option<String>, i64, Option<String>, Option<String>)>(
-            "SELECT state, lease_owner, attempts, last_error, progress FROM jobs WHERE id = $1"
+        sqlx::query_as::<_, Row>(
+            "SELECT state, lease_owner, attempts, last_error, progress, lease_until_ms \
+             FROM jobs WHERE id = $1"
         )
         .bind(job)
     )
@@ -1093,6 +1148,8 @@ async fn job_seen(pool: &store::Pool, job: i64) -> JobSeen {
         attempts,
         last_error,
         progress,
+        lease_until_ms,
+        now_ms: enact_hub::app::jobs::now_ms(),
     }
 }
 
@@ -1173,12 +1230,14 @@ async fn kill_mid_job(
             "{label}: the job ended before this kill: {seen:?}; the trial's job is too short \
              for its kills"
         );
-        assert!(
-            Instant::now() < deadline,
-            "{label}: the restarted server (pid {pid}) did not take the job over within \
-             {JOB_DEADLINE:?}: {seen:?}\n{}",
-            servers.log_tail()
-        );
+        if Instant::now() >= deadline {
+            let report = server.report().await;
+            panic!(
+                "{label}: the restarted server (pid {pid}) did not take the job over within \
+                 {JOB_DEADLINE:?}: {seen:?}\n{report}\n{}",
+                servers.log_tail()
+            );
+        }
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
     let from = aim.gauge.read(&servers.pool).await;

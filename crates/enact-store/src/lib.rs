@@ -149,6 +149,20 @@ pub async fn checkpoint_log(pool: SqlitePool) {
     }
 }
 
+/// `options` without sqlx's idle reaper: no idle timeout and no lifetime, so the pool keeps
+/// its connections and runs no periodic sweep over them.
+///
+/// The sweep (sqlx 0.8's pool maintenance, launchbadge/sqlx#3645) can read the idle count after
+/// a race has wrapped it below zero and then loop without ever yielding: one runtime thread
+/// spins for good, and a task left in that thread's slot (a job worker's next look at the
+/// queue, seen here) never runs again. A local file's connection does not go stale, and a
+/// PostgreSQL pool is bounded by its size either way.
+pub fn without_reaper<DB: sqlx::Database>(
+    options: sqlx::pool::PoolOptions<DB>,
+) -> sqlx::pool::PoolOptions<DB> {
+    options.idle_timeout(None).max_lifetime(None)
+}
+
 /// How long a write gate's connection lets SQLite wait for the write lock before
 /// [`db::Pool::begin`] asks again.
 ///
@@ -208,7 +222,7 @@ async fn sqlite_pool(
     } else {
         options
     };
-    SqlitePoolOptions::new()
+    without_reaper(SqlitePoolOptions::new())
         .max_connections(connections)
         .min_connections(1)
         .acquire_timeout(Duration::from_secs(15))
@@ -559,6 +573,23 @@ mod tests {
             tx.rollback().await.unwrap();
             released.await.unwrap();
         }
+    }
+
+    /// No pool runs sqlx's idle reaper ([`without_reaper`]): every pool a server or a command
+    /// opens keeps its connections without a timeout or a lifetime.
+    #[tokio::test]
+    async fn no_pool_sweeps_its_idle_connections() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("hub.db");
+        let (pool, writer) = open_serving_pools(&path, 1024).await.unwrap();
+        let (command_pool, command_writer) = open_command_pools(&path, 1024).await.unwrap();
+        for pool in [pool, writer, command_pool, command_writer] {
+            assert_eq!(pool.options().get_idle_timeout(), None);
+            assert_eq!(pool.options().get_max_lifetime(), None);
+        }
+        let options = without_reaper(sqlx::postgres::PgPoolOptions::new());
+        assert_eq!(options.get_idle_timeout(), None);
+        assert_eq!(options.get_max_lifetime(), None);
     }
 
     /// The gate's connection leaves the write-ahead log to [`checkpoint_log`], which copies it
