@@ -278,9 +278,8 @@ impl Pool {
 /// Connects to the PostgreSQL database at `url` and applies its migrations.
 pub async fn open_postgres(url: &str, max_connections: u32) -> Result<PgPool, sqlx::Error> {
     let options: PgConnectOptions = url.parse()?;
-    let pool = super::without_reaper(PgPoolOptions::new())
+    let pool = super::without_maintenance(PgPoolOptions::new())
         .max_connections(max_connections)
-        .min_connections(1)
         .acquire_timeout(Duration::from_secs(15))
         .connect_with(options)
         .await?;

@@ -149,18 +149,24 @@ pub async fn checkpoint_log(pool: SqlitePool) {
     }
 }
 
-/// `options` without sqlx's idle reaper: no idle timeout and no lifetime, so the pool keeps
-/// its connections and runs no periodic sweep over them.
+/// `options` with none of sqlx's pool maintenance: no idle timeout, no lifetime and no
+/// minimum, so every connection a pool opens stays open (the first is opened as the pool is)
+/// and sqlx runs no background task over them.
 ///
-/// The sweep (sqlx 0.8's pool maintenance, launchbadge/sqlx#3645) can read the idle count after
-/// a race has wrapped it below zero and then loop without ever yielding: one runtime thread
-/// spins for good, and a task left in that thread's slot (a job worker's next look at the
-/// queue, seen here) never runs again. A local file's connection does not go stale, and a
-/// PostgreSQL pool is bounded by its size either way.
-pub fn without_reaper<DB: sqlx::Database>(
+/// The idle sweep (sqlx 0.8, launchbadge/sqlx#3645) can read the idle count after a race has
+/// wrapped it below zero and then loop without ever yielding: one runtime thread spins for
+/// good, and a task left in that thread's slot (a job worker's next look at the queue, seen
+/// here) never runs again. Without a sweep, a minimum would be kept by a task started beside
+/// the pool's first connection, which on a new SQLite file could open a second connection
+/// while the first sets up the write-ahead log. A local file's connection does not go stale,
+/// and a PostgreSQL pool is bounded by its size either way.
+pub fn without_maintenance<DB: sqlx::Database>(
     options: sqlx::pool::PoolOptions<DB>,
 ) -> sqlx::pool::PoolOptions<DB> {
-    options.idle_timeout(None).max_lifetime(None)
+    options
+        .idle_timeout(None)
+        .max_lifetime(None)
+        .min_connections(0)
 }
 
 /// How long a write gate's connection lets SQLite wait for the write lock before
@@ -222,9 +228,8 @@ async fn sqlite_pool(
     } else {
         options
     };
-    without_reaper(SqlitePoolOptions::new())
+    without_maintenance(SqlitePoolOptions::new())
         .max_connections(connections)
-        .min_connections(1)
         .acquire_timeout(Duration::from_secs(15))
         // A local file connection does not go stale; pinging it on every acquire would cost a
         // round trip to its worker thread on every request.
@@ -575,10 +580,10 @@ mod tests {
         }
     }
 
-    /// No pool runs sqlx's idle reaper ([`without_reaper`]): every pool a server or a command
-    /// opens keeps its connections without a timeout or a lifetime.
+    /// No pool runs sqlx's maintenance ([`without_maintenance`]): every pool a server or a
+    /// command opens keeps its connections without a timeout, a lifetime or a minimum.
     #[tokio::test]
-    async fn no_pool_sweeps_its_idle_connections() {
+    async fn no_pool_runs_sqlx_maintenance() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("hub.db");
         let (pool, writer) = open_serving_pools(&path, 1024).await.unwrap();
@@ -586,10 +591,14 @@ mod tests {
         for pool in [pool, writer, command_pool, command_writer] {
             assert_eq!(pool.options().get_idle_timeout(), None);
             assert_eq!(pool.options().get_max_lifetime(), None);
+            assert_eq!(pool.options().get_min_connections(), 0);
+            // The first connection, opened with the pool, stays.
+            assert!(pool.size() >= 1);
         }
-        let options = without_reaper(sqlx::postgres::PgPoolOptions::new());
+        let options = without_maintenance(sqlx::postgres::PgPoolOptions::new());
         assert_eq!(options.get_idle_timeout(), None);
         assert_eq!(options.get_max_lifetime(), None);
+        assert_eq!(options.get_min_connections(), 0);
     }
 
     /// The gate's connection leaves the write-ahead log to [`checkpoint_log`], which copies it
