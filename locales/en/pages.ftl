@@ -75,6 +75,20 @@ refusal-import-path-missing = path: no "{ $path }" in the server's import folder
 refusal-import-path-leaves-folder = path: "{ $path }" leaves the server's import folder
 refusal-import-path-not-a-release = path: "{ $path }" is neither a release folder (with QA/enact_ordering.jsonl) nor a .jsonl file
 refusal-import-release-leaves-folder = path: the release of "{ $path }" (its images' folder) leaves the server's import folder
+refusal-challenge-not-split = dataset '{ $dataset }' is not split into a public and a private part: an admin splits it first, on the Challenges page
+refusal-challenge-revealed = the private part of dataset '{ $dataset }' was revealed { $how ->
+        [deadline] at its deadline
+       *[hand] by hand
+    } at { $at }: the final ranking, its settings and its selections are fixed
+refusal-challenge-answers-public = dataset '{ $dataset }': its answers are public, so every submitter can score any part of it; only a dataset whose answers are hidden can be split (hide them first)
+refusal-challenge-too-few-items = dataset '{ $dataset }' has { $items } items: a split needs two at least
+refusal-challenge-already-split = dataset '{ $dataset }' was split at { $at } by { $by } (seed { $seed }, public share { $public_share }); a split is final
+refusal-selection-not-published = submission { $submission } is { $visibility }: only a published submission can be selected for the final ranking
+refusal-selection-limit-reached = the selection limit of dataset '{ $dataset }' is { $limit } submissions per account: account '{ $account }' has selected { $selected }; take one out first
+refusal-private-part-hidden = the private part of dataset '{ $dataset }' is not revealed yet{ $scheduled ->
+        [yes] {" "}(it will be at { $reveal_at })
+       *[no] {""}
+    }; until then its figures are for admins
 
 ## Logging in
 login-title = Log in

@@ -73,6 +73,20 @@ refusal-import-path-missing = 路径：服务器的导入文件夹中没有“{ 
 refusal-import-path-leaves-folder = 路径：“{ $path }”超出了服务器的导入文件夹
 refusal-import-path-not-a-release = 路径：“{ $path }”既不是发布包文件夹（含 QA/enact_ordering.jsonl），也不是 .jsonl 文件
 refusal-import-release-leaves-folder = 路径：“{ $path }”的发布包（其图像文件夹）超出了服务器的导入文件夹
+refusal-challenge-not-split = 数据集“{ $dataset }”尚未划分为公开部分和私有部分：须先由管理员在“挑战”页面划分
+refusal-challenge-revealed = 数据集“{ $dataset }”的私有部分已于 { $at } { $how ->
+        [deadline] 在截止时间
+       *[hand] 由管理员手动
+    }揭晓：最终排名、其设置和所选提交均已固定
+refusal-challenge-answers-public = 数据集“{ $dataset }”：其答案是公开的，任何提交者都能为其任一部分评分；只有答案隐藏的数据集才能划分（请先隐藏答案）
+refusal-challenge-too-few-items = 数据集“{ $dataset }”有 { $items } 个条目：划分至少需要两个
+refusal-challenge-already-split = 数据集“{ $dataset }”已于 { $at } 由 { $by } 划分（种子 { $seed }，公开比例 { $public_share }）；划分不可更改
+refusal-selection-not-published = 提交 { $submission } 的状态为 { $visibility }：只有已发布的提交才能被选入最终排名
+refusal-selection-limit-reached = 数据集“{ $dataset }”每个账户最多可选 { $limit } 个提交：账户“{ $account }”已选 { $selected }；请先撤下一个
+refusal-private-part-hidden = 数据集“{ $dataset }”的私有部分尚未揭晓{ $scheduled ->
+        [yes] （将于 { $reveal_at } 揭晓）
+       *[no] {""}
+    }；在此之前其数据仅供管理员查看
 
 ## 登录
 login-title = 登录

@@ -60,6 +60,13 @@ impl Browser {
         self
     }
 
+    /// Reads the pages in `language` (`zh-CN`), as the language menu's cookie chooses it.
+    pub fn in_language(mut self, language: &str) -> Browser {
+        self.cookies
+            .push(("enact_lang".to_owned(), language.to_owned()));
+        self
+    }
+
     fn request(&self, method: reqwest::Method, path: &str) -> reqwest::RequestBuilder {
         let mut request = self
             .client

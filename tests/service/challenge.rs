@@ -183,6 +183,8 @@ async fn a_split_is_the_documented_draw_kept_across_restarts_and_refused_where_i
         .expect(409)
         .await;
     assert!(reveal.error().contains("not split"), "{}", reveal.error());
+    assert_eq!(reveal.json()["code"], "challenge_not_split");
+    assert_eq!(reveal.json()["details"]["dataset"], "mini");
 
     // A dataset whose answers are public cannot be split: the field is named.
     set_mini_answers(
@@ -193,6 +195,7 @@ async fn a_split_is_the_documented_draw_kept_across_restarts_and_refused_where_i
     let public = split(&server, &admin, json!({"share": 0.5, "seed": 11})).await;
     assert_eq!(public.status, 409, "{}", public.text);
     assert!(public.error().contains("`answers`"), "{}", public.error());
+    assert_eq!(public.json()["code"], "challenge_answers_public");
     set_mini_answers(
         &server.pool,
         enact_hub::core::dataset::AnswerVisibility::Hidden,
@@ -227,6 +230,9 @@ async fn a_split_is_the_documented_draw_kept_across_restarts_and_refused_where_i
     let again = split(&server, &admin, json!({"share": 0.25, "seed": 3})).await;
     assert_eq!(again.status, 409, "{}", again.text);
     assert!(again.error().contains("final"), "{}", again.error());
+    assert_eq!(again.json()["code"], "challenge_already_split");
+    assert_eq!(again.json()["details"]["seed"], 11);
+    assert_eq!(again.json()["details"]["public_share"], "0.5");
 
     // A restart (the database opened again, nothing in memory) reads the same split.
     let reopened = enact_hub::app::Hub::open(&server.db_path())
@@ -367,6 +373,8 @@ async fn before_the_reveal_everyone_sees_the_public_part_and_each_account_s_subm
         "{}",
         refused.error()
     );
+    assert_eq!(refused.json()["code"], "private_part_hidden");
+    assert_eq!(refused.json()["details"]["dataset"], "mini");
     server
         .call(
             Method::GET,
@@ -591,6 +599,8 @@ async fn a_reveal_by_hand_ranks_over_the_private_part_and_shows_each_rank_change
         "{}",
         settings.error()
     );
+    assert_eq!(settings.json()["code"], "challenge_revealed");
+    assert_eq!(settings.json()["details"]["how"], "hand");
     server
         .call(Method::PUT, &format!("/api/v1/submissions/{top}/selection"))
         .bearer(&admin)
@@ -742,6 +752,9 @@ async fn the_selection_limit_is_kept_and_the_final_ranking_uses_the_selected_sub
     assert!(over.error().contains("selection limit"), "{}", over.error());
     assert!(over.error().contains(" is 1 "), "{}", over.error());
     assert!(over.error().contains(&good.to_string()), "{}", over.error());
+    assert_eq!(over.json()["code"], "selection_limit_reached");
+    assert_eq!(over.json()["details"]["limit"], 1);
+    assert_eq!(over.json()["details"]["selected"], good.to_string());
     // Another account's submission is answered like a missing one.
     select(good, bob.clone(), 404).await;
     // Taken out and put back, audited each time it changed.
@@ -842,10 +855,24 @@ async fn an_admin_splits_sets_and_reveals_on_the_admin_page() {
     let (status, preview) = browser.text("/leaderboard/mini?part=private").await;
     assert_eq!(status, 200);
     assert!(preview.contains("Admin preview"), "{preview}");
-    let (status, _) = crate::annotate::Browser::new(&server)
+    let (status, refused) = crate::annotate::Browser::new(&server)
         .text("/leaderboard/mini?part=private")
         .await;
     assert_eq!(status, 403);
+    assert!(
+        refused.contains("is not revealed yet (it will be at 2099-01-01"),
+        "{refused}"
+    );
+    // A reader of the pages in Chinese is told why in Chinese.
+    let (status, refused) = crate::annotate::Browser::new(&server)
+        .in_language("zh-CN")
+        .text("/leaderboard/mini?part=private")
+        .await;
+    assert_eq!(status, 403);
+    assert!(
+        refused.contains("私有部分尚未揭晓（将于 2099年1月1日"),
+        "{refused}"
+    );
 
     let reveal = browser
         .post_form(

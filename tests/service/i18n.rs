@@ -135,8 +135,11 @@ fn every_refusal_is_worded_in_every_locale_and_no_message_names_a_flag() {
                     Detail::Number(n) => enact_hub::web::i18n::decimal(n as f64, 0),
                     Detail::Time(t) => tr.date_time(&t),
                 };
-                // The plural form's count is the sentence's grammar, not always shown.
-                if name != "count" && name != "action" && !text.contains(&shown) {
+                // What a message chooses its words by (a plural's count, the action, how a
+                // part was revealed, whether a reveal is scheduled) is its grammar, not always
+                // shown.
+                let selector = ["count", "action", "how", "scheduled"].contains(&name);
+                if !selector && !text.contains(&shown) {
                     problems.push(format!(
                         "{}: {} does not show its {name} ({shown}): {text}",
                         locale.tag(),

@@ -18,6 +18,7 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::changes::Change;
+use super::refusal::Refusal;
 use super::submissions::{self, SubmissionRow};
 use super::tokens::Caller;
 use super::{AppError, Hub, audit, datasets};
@@ -126,22 +127,22 @@ fn now() -> Deadline {
 }
 
 fn not_split(dataset: &str) -> AppError {
-    AppError::Conflict(format!(
-        "dataset '{dataset}' is not split into a public and a private part: an admin splits it \
-         first (POST /api/v1/admin/datasets/{dataset}/challenge/split)"
-    ))
+    Refusal::ChallengeNotSplit {
+        dataset: dataset.to_owned(),
+    }
+    .into()
 }
 
 fn revealed(dataset: &str, challenge: &ChallengeRow) -> Option<AppError> {
     let at = challenge.revealed_at.as_deref()?;
-    let how = match challenge.revealed_by.as_deref() {
-        Some("deadline") => "at its deadline",
-        _ => "by hand",
-    };
-    Some(AppError::Conflict(format!(
-        "the private part of dataset '{dataset}' was revealed {how} at {at}: the final ranking, \
-         its settings and its selections are fixed"
-    )))
+    Some(
+        Refusal::ChallengeRevealed {
+            dataset: dataset.to_owned(),
+            at_deadline: challenge.revealed_by.as_deref() == Some("deadline"),
+            at: at.to_owned(),
+        }
+        .into(),
+    )
 }
 
 async fn challenge_of(hub: &Hub, dataset: &Dataset) -> Result<Option<ChallengeRow>, AppError> {
@@ -218,21 +219,21 @@ pub async fn split(
     let share = PublicShare::new(share).map_err(AppError::Invalid)?;
     let dataset = datasets::by_name(hub, name).await?;
     if datasets::answer_visibility(hub, &dataset).await? == AnswerVisibility::Public {
-        return Err(AppError::Conflict(format!(
-            "dataset '{name}': its answers are public (`answers`), so every submitter can score \
-             any part of it; only a dataset whose answers are hidden can be split (hide them \
-             first: PUT /api/v1/admin/datasets/{name}/answers)"
-        )));
+        return Err(Refusal::ChallengeAnswersPublic {
+            dataset: name.to_owned(),
+        }
+        .into());
     }
     if let Some(existing) = challenge_of(hub, &dataset).await? {
         return Err(already_split(name, &existing));
     }
     let targets = submissions::dataset_targets(hub, dataset.id).await?;
     if targets.targets.len() < 2 {
-        return Err(AppError::Conflict(format!(
-            "dataset '{name}' has {} items: a split needs two at least",
-            targets.targets.len()
-        )));
+        return Err(Refusal::ChallengeTooFewItems {
+            dataset: name.to_owned(),
+            items: targets.targets.len() as u64,
+        }
+        .into());
     }
     let mut order: Vec<usize> = (0..targets.targets.len()).collect();
     order.sort_by(|a, b| targets.targets[*a].id.cmp(&targets.targets[*b].id));
@@ -282,10 +283,14 @@ pub async fn split(
 }
 
 fn already_split(name: &str, existing: &ChallengeRow) -> AppError {
-    AppError::Conflict(format!(
-        "dataset '{name}' was split at {} by {} (seed {}, public share {}); a split is final",
-        existing.created_at, existing.split_by, existing.seed, existing.public_share
-    ))
+    Refusal::ChallengeAlreadySplit {
+        dataset: name.to_owned(),
+        at: existing.created_at.clone(),
+        by: existing.split_by.clone(),
+        seed: existing.seed,
+        public_share: existing.public_share.to_string(),
+    }
+    .into()
 }
 
 /// A change to a challenge's settings: each field left out stays as it is; `Some(None)`
@@ -528,12 +533,11 @@ pub async fn set_selected(
     let dataset = datasets::by_name(hub, &row.dataset).await?;
     let name = &dataset.name;
     if selected && row.visibility != Visibility::Published {
-        return Err(AppError::Conflict(format!(
-            "submission {} is {}: only a published submission can be selected for the final \
-             ranking",
-            row.id,
-            row.visibility.as_str()
-        )));
+        return Err(Refusal::SelectionNotPublished {
+            submission: row.id.to_string(),
+            visibility: row.visibility.as_str().to_owned(),
+        }
+        .into());
     }
     let mut tx = hub.write(Lane::Interactive).await?;
     let challenge = store::challenges::of_dataset(&mut tx, dataset.id)
@@ -550,13 +554,13 @@ pub async fn set_selected(
         && already.len() >= usize::try_from(limit).unwrap_or(usize::MAX)
     {
         let listed: Vec<String> = already.iter().map(i64::to_string).collect();
-        return Err(AppError::Conflict(format!(
-            "the selection limit of dataset '{name}' is {limit} submissions per account \
-             (`selection_limit`): account '{}' has selected {}; take one out first (DELETE \
-             /api/v1/submissions/{{id}}/selection)",
-            row.account,
-            listed.join(", ")
-        )));
+        return Err(Refusal::SelectionLimitReached {
+            dataset: name.clone(),
+            limit: u64::try_from(limit).unwrap_or(0),
+            account: row.account.clone(),
+            selected: listed.join(", "),
+        }
+        .into());
     }
     let changed = if selected {
         store::challenges::select(&mut tx, row.id).await?

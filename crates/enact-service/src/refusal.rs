@@ -148,6 +148,45 @@ pub enum Refusal {
         path: String,
         problem: ImportPathProblem,
     },
+    /// A challenge's request on a dataset not split into a public and a private part.
+    ChallengeNotSplit { dataset: String },
+    /// The private part was revealed (at its deadline, or by hand) at `at`: the final ranking,
+    /// its settings and its selections are fixed.
+    ChallengeRevealed {
+        dataset: String,
+        at_deadline: bool,
+        at: String,
+    },
+    /// A dataset whose answers are public cannot be split: every submitter can score any part.
+    ChallengeAnswersPublic { dataset: String },
+    /// A split needs two items at least.
+    ChallengeTooFewItems { dataset: String, items: u64 },
+    /// A split is final.
+    ChallengeAlreadySplit {
+        dataset: String,
+        at: String,
+        by: String,
+        seed: u64,
+        public_share: String,
+    },
+    /// Only a published submission can be selected for the final ranking.
+    SelectionNotPublished {
+        submission: String,
+        visibility: String,
+    },
+    /// The account has selected as many submissions as the challenge allows.
+    SelectionLimitReached {
+        dataset: String,
+        limit: u64,
+        account: String,
+        selected: String,
+    },
+    /// The private part's figures are for admins until it is revealed (at `reveal_at`, when
+    /// one is set).
+    PrivatePartHidden {
+        dataset: String,
+        reveal_at: Option<String>,
+    },
 }
 
 impl Refusal {
@@ -172,7 +211,15 @@ impl Refusal {
             | Refusal::StaleForm
             | Refusal::NotAssigned { .. }
             | Refusal::ImportFolderUnset => RefusalKind::NotPermitted,
-            Refusal::StudyExists { .. } => RefusalKind::Conflict,
+            Refusal::StudyExists { .. }
+            | Refusal::ChallengeNotSplit { .. }
+            | Refusal::ChallengeRevealed { .. }
+            | Refusal::ChallengeAnswersPublic { .. }
+            | Refusal::ChallengeTooFewItems { .. }
+            | Refusal::ChallengeAlreadySplit { .. }
+            | Refusal::SelectionNotPublished { .. }
+            | Refusal::SelectionLimitReached { .. } => RefusalKind::Conflict,
+            Refusal::PrivatePartHidden { .. } => RefusalKind::NotPermitted,
             Refusal::StudyBaselineMissing { .. }
             | Refusal::StudyVariantMissing { .. }
             | Refusal::StudyVariantUnaligned { .. } => RefusalKind::Invalid,
@@ -232,6 +279,14 @@ impl Refusal {
                 ImportPathProblem::NotARelease => "import_path_not_a_release",
                 ImportPathProblem::ReleaseLeavesFolder => "import_release_leaves_folder",
             },
+            Refusal::ChallengeNotSplit { .. } => "challenge_not_split",
+            Refusal::ChallengeRevealed { .. } => "challenge_revealed",
+            Refusal::ChallengeAnswersPublic { .. } => "challenge_answers_public",
+            Refusal::ChallengeTooFewItems { .. } => "challenge_too_few_items",
+            Refusal::ChallengeAlreadySplit { .. } => "challenge_already_split",
+            Refusal::SelectionNotPublished { .. } => "selection_not_published",
+            Refusal::SelectionLimitReached { .. } => "selection_limit_reached",
+            Refusal::PrivatePartHidden { .. } => "private_part_hidden",
         }
     }
 
@@ -263,6 +318,69 @@ impl Refusal {
             | Refusal::ImportFolderUnset => Vec::new(),
             Refusal::ImportPath { path, .. } => vec![("path", text(path))],
             Refusal::StudyExists { study } => vec![("study", text(study))],
+            Refusal::ChallengeNotSplit { dataset }
+            | Refusal::ChallengeAnswersPublic { dataset } => {
+                vec![("dataset", text(dataset))]
+            }
+            Refusal::ChallengeRevealed {
+                dataset,
+                at_deadline,
+                at,
+            } => vec![
+                ("dataset", text(dataset)),
+                ("how", text(if *at_deadline { "deadline" } else { "hand" })),
+                ("at", Detail::Time(at.clone())),
+            ],
+            Refusal::ChallengeTooFewItems { dataset, items } => {
+                vec![
+                    ("dataset", text(dataset)),
+                    ("items", Detail::Number(*items)),
+                ]
+            }
+            Refusal::ChallengeAlreadySplit {
+                dataset,
+                at,
+                by,
+                seed,
+                public_share,
+            } => vec![
+                ("dataset", text(dataset)),
+                ("at", Detail::Time(at.clone())),
+                ("by", text(by)),
+                ("seed", Detail::Number(*seed)),
+                ("public_share", text(public_share)),
+            ],
+            Refusal::SelectionNotPublished {
+                submission,
+                visibility,
+            } => vec![
+                ("submission", text(submission)),
+                ("visibility", text(visibility)),
+            ],
+            Refusal::SelectionLimitReached {
+                dataset,
+                limit,
+                account,
+                selected,
+            } => vec![
+                ("dataset", text(dataset)),
+                ("limit", Detail::Number(*limit)),
+                ("account", text(account)),
+                ("selected", text(selected)),
+            ],
+            Refusal::PrivatePartHidden { dataset, reveal_at } => {
+                let mut details = vec![
+                    ("dataset", text(dataset)),
+                    (
+                        "scheduled",
+                        text(if reveal_at.is_some() { "yes" } else { "no" }),
+                    ),
+                ];
+                if let Some(at) = reveal_at {
+                    details.push(("reveal_at", Detail::Time(at.clone())));
+                }
+                details
+            }
             Refusal::StudyBaselineMissing { dataset } => vec![("dataset", text(dataset))],
             Refusal::StudyVariantMissing { variant, dataset } => {
                 vec![("variant", text(variant)), ("dataset", text(dataset))]
@@ -425,6 +543,38 @@ impl Refusal {
             },
             Refusal::ImportFolderUnset,
             Refusal::StudyExists { study: s("camera") },
+            Refusal::ChallengeNotSplit { dataset: s("demo") },
+            Refusal::ChallengeRevealed {
+                dataset: s("demo"),
+                at_deadline: true,
+                at: s("2026-12-01T00:00:00Z"),
+            },
+            Refusal::ChallengeAnswersPublic { dataset: s("demo") },
+            Refusal::ChallengeTooFewItems {
+                dataset: s("demo"),
+                items: 1,
+            },
+            Refusal::ChallengeAlreadySplit {
+                dataset: s("demo"),
+                at: s("2026-11-29T12:00:00Z"),
+                by: s("root"),
+                seed: 7,
+                public_share: s("0.5"),
+            },
+            Refusal::SelectionNotPublished {
+                submission: s("12"),
+                visibility: s("private"),
+            },
+            Refusal::SelectionLimitReached {
+                dataset: s("demo"),
+                limit: 2,
+                account: s("lab"),
+                selected: s("3, 4"),
+            },
+            Refusal::PrivatePartHidden {
+                dataset: s("demo"),
+                reveal_at: Some(s("2026-12-01T00:00:00Z")),
+            },
             Refusal::StudyBaselineMissing { dataset: s("demo") },
             Refusal::StudyVariantMissing {
                 variant: s("Camera/30"),
@@ -595,6 +745,78 @@ impl fmt::Display for Refusal {
                      import folder"
                 ),
             },
+            Refusal::ChallengeNotSplit { dataset } => write!(
+                f,
+                "dataset '{dataset}' is not split into a public and a private part: an admin \
+                 splits it first (POST /api/v1/admin/datasets/{dataset}/challenge/split)"
+            ),
+            Refusal::ChallengeRevealed {
+                dataset,
+                at_deadline,
+                at,
+            } => {
+                let how = if *at_deadline {
+                    "at its deadline"
+                } else {
+                    "by hand"
+                };
+                write!(
+                    f,
+                    "the private part of dataset '{dataset}' was revealed {how} at {at}: the \
+                     final ranking, its settings and its selections are fixed"
+                )
+            }
+            Refusal::ChallengeAnswersPublic { dataset } => write!(
+                f,
+                "dataset '{dataset}': its answers are public (`answers`), so every submitter can \
+                 score any part of it; only a dataset whose answers are hidden can be split \
+                 (hide them first: PUT /api/v1/admin/datasets/{dataset}/answers)"
+            ),
+            Refusal::ChallengeTooFewItems { dataset, items } => write!(
+                f,
+                "dataset '{dataset}' has {items} items: a split needs two at least"
+            ),
+            Refusal::ChallengeAlreadySplit {
+                dataset,
+                at,
+                by,
+                seed,
+                public_share,
+            } => write!(
+                f,
+                "dataset '{dataset}' was split at {at} by {by} (seed {seed}, public share \
+                 {public_share}); a split is final"
+            ),
+            Refusal::SelectionNotPublished {
+                submission,
+                visibility,
+            } => write!(
+                f,
+                "submission {submission} is {visibility}: only a published submission can be \
+                 selected for the final ranking"
+            ),
+            Refusal::SelectionLimitReached {
+                dataset,
+                limit,
+                account,
+                selected,
+            } => write!(
+                f,
+                "the selection limit of dataset '{dataset}' is {limit} submissions per account \
+                 (`selection_limit`): account '{account}' has selected {selected}; take one out \
+                 first (DELETE /api/v1/submissions/{{id}}/selection)"
+            ),
+            Refusal::PrivatePartHidden { dataset, reveal_at } => {
+                let when = reveal_at
+                    .as_deref()
+                    .map(|at| format!(" (it will be at {at})"))
+                    .unwrap_or_default();
+                write!(
+                    f,
+                    "part=private: the private part of dataset '{dataset}' is not revealed \
+                     yet{when}; until then its figures are for admins"
+                )
+            }
         }
     }
 }

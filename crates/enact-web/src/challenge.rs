@@ -25,6 +25,7 @@ use crate::app::challenge::{
 };
 use crate::app::datasets;
 use crate::app::leaderboard::Board;
+use crate::app::refusal::Refusal;
 use crate::core::challenge::{Part, Standing};
 use crate::core::credentials::Scope;
 use crate::core::dataset::AnswerVisibility;
@@ -326,17 +327,13 @@ pub(super) fn board_rows(
     };
     let part = part.unwrap_or(challenge.shown.part);
     if part == Part::Private && challenge.shown.revealed_at.is_none() && !admin {
-        return Err(ApiError(AppError::NotPermitted(format!(
-            "part=private: the private part of dataset '{}' is not revealed yet{}; until then \
-             its figures are for admins",
-            board.dataset.name,
-            challenge
-                .shown
-                .reveal_at
-                .as_deref()
-                .map(|at| format!(" (it will be at {at})"))
-                .unwrap_or_default()
-        ))));
+        return Err(ApiError(
+            Refusal::PrivatePartHidden {
+                dataset: board.dataset.name.clone(),
+                reveal_at: challenge.shown.reveal_at.clone(),
+            }
+            .into(),
+        ));
     }
     let rows = challenge.rows_over(part).unwrap_or(&board.rows);
     Ok((rows, Some(challenge.showing(part))))
