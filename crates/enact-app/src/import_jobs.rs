@@ -79,17 +79,20 @@ enum ImportOutcome {
     Cancelled { dataset: String },
 }
 
+/// The refusal of `path`, the release an admin asked for, for `problem`.
+fn path_refused(path: &str, problem: ImportPathProblem) -> AppError {
+    AppError::Refused(Refusal::ImportPath {
+        path: path.to_owned(),
+        problem,
+    })
+}
+
 /// Where `path` (relative to `root`) is, refused when it leaves `root` (`..`, a symbolic link
 /// out) or is not there.
 fn under(root: &Path, path: &str) -> Result<PathBuf, AppError> {
     let root = std::fs::canonicalize(root)
         .map_err(|e| AppError::internal(format!("the import folder {}: {e}", root.display())))?;
-    let refused = |problem| {
-        AppError::Refused(Refusal::ImportPath {
-            path: path.to_owned(),
-            problem,
-        })
-    };
+    let refused = |problem| path_refused(path, problem);
     let asked = Path::new(path.trim());
     if asked.as_os_str().is_empty() || asked.is_absolute() {
         return Err(refused(ImportPathProblem::NotRelative));
@@ -108,12 +111,7 @@ fn release_under(root: &Path, path: &str) -> Result<(PathBuf, ReleaseLocation), 
     let resolved = under(root, path)?;
     let location =
         ReleaseLocation::resolve(&resolved).map_err(|e| AppError::Invalid(format!("path: {e}")))?;
-    let refused = |problem| {
-        AppError::Refused(Refusal::ImportPath {
-            path: path.to_owned(),
-            problem,
-        })
-    };
+    let refused = |problem| path_refused(path, problem);
     if location.qa_file.extension().and_then(|e| e.to_str()) != Some("jsonl") {
         return Err(refused(ImportPathProblem::NotARelease));
     }
