@@ -89,6 +89,38 @@ refusal-private-part-hidden = the private part of dataset '{ $dataset }' is not 
         [yes] {" "}(it will be at { $reveal_at })
        *[no] {""}
     }; until then its figures are for admins
+refusal-bad-value-whole-number = { $field }: "{ $value }" is not a whole number from { $least } to { $most }
+refusal-bad-value-whole-number-from = { $field }: "{ $value }" is not a whole number of { $least } or more
+refusal-bad-value-number = { $field }: "{ $value }" is not a number
+refusal-bad-value-number-between = { $field }: "{ $value }" is not a number from { $least } to { $most }
+refusal-bad-value-fraction = { $field }: "{ $value }" is not a number above 0 and below 1
+refusal-bad-value-one-of = { $field }: "{ $value }" is not one of: { $choices }
+refusal-bad-value-submission-id = { $field }: "{ $value }" is not a submission's id
+refusal-bad-value-reported-id = { $field }: "{ $value }" is not a reported result's id
+refusal-no-study = no study named '{ $study }'
+refusal-no-token = no live token with id or prefix "{ $token }"
+refusal-no-job = job { $job } does not exist
+refusal-no-reported = dataset '{ $dataset }' has no reported result { $reported }
+refusal-no-curator-graphs = curator '{ $curator }' stored no graphs of episode '{ $episode }'
+refusal-answers-hidden = the answers of dataset '{ $dataset }' are hidden, so what would show them is not shown
+refusal-invite-link-used = this invite link is unknown or has already been used: ask an admin for a new one
+refusal-no-model-submission = no submission of model '{ $model }' on dataset '{ $dataset }'
+refusal-no-published-submission = { $field }: dataset '{ $dataset }' has no published submission { $submission }
+refusal-no-published-model = { $field }: dataset '{ $dataset }' has no published row of model '{ $model }'{ $listed ->
+        [yes] {" "}(its models: { $models })
+       *[no] {""}
+    }
+refusal-no-paper-file = the paper folder of dataset '{ $dataset }' has no file '{ $file }' (it has { $files })
+refusal-no-api-route = no API route { $path }: the routes are listed at /api/docs
+refusal-fields-required = this request needs: { $fields }
+refusal-exactly-one-of = give exactly one of: { $fields }
+refusal-both-or-neither = give both of { $fields }, or neither
+refusal-not-with = { $field } cannot be given with { $other }
+refusal-token-missing = this request needs an API token
+refusal-authorization-malformed = the Authorization header must read "Bearer TOKEN"
+refusal-token-unknown = the API token is unknown or has been revoked
+refusal-scope-missing = this token lacks the "{ $scope }" scope
+refusal-not-model-owner = model '{ $model }' on dataset '{ $dataset }' was submitted by another account; only it or an admin may set its metadata
 
 ## Logging in
 login-title = Log in

@@ -87,6 +87,38 @@ refusal-private-part-hidden = 数据集“{ $dataset }”的私有部分尚未�
         [yes] （将于 { $reveal_at } 揭晓）
        *[no] {""}
     }；在此之前其数据仅供管理员查看
+refusal-bad-value-whole-number = { $field }：“{ $value }”不是 { $least } 到 { $most } 之间的整数
+refusal-bad-value-whole-number-from = { $field }：“{ $value }”不是大于或等于 { $least } 的整数
+refusal-bad-value-number = { $field }：“{ $value }”不是数字
+refusal-bad-value-number-between = { $field }：“{ $value }”不是 { $least } 到 { $most } 之间的数字
+refusal-bad-value-fraction = { $field }：“{ $value }”不是大于 0 且小于 1 的数字
+refusal-bad-value-one-of = { $field }：“{ $value }”不是以下之一：{ $choices }
+refusal-bad-value-submission-id = { $field }：“{ $value }”不是提交编号
+refusal-bad-value-reported-id = { $field }：“{ $value }”不是已报告结果的编号
+refusal-no-study = 没有名为“{ $study }”的研究
+refusal-no-token = 没有编号或前缀为“{ $token }”的有效令牌
+refusal-no-job = 任务 { $job } 不存在
+refusal-no-reported = 数据集“{ $dataset }”没有编号为 { $reported } 的已报告结果
+refusal-no-curator-graphs = 整理者“{ $curator }”没有保存片段“{ $episode }”的场景图
+refusal-answers-hidden = 数据集“{ $dataset }”的答案是隐藏的，因此不显示会透露答案的内容
+refusal-invite-link-used = 此邀请链接未知或已被使用：请向管理员索取新链接
+refusal-no-model-submission = 数据集“{ $dataset }”上没有模型“{ $model }”的提交
+refusal-no-published-submission = { $field }：数据集“{ $dataset }”没有已发布的提交 { $submission }
+refusal-no-published-model = { $field }：数据集“{ $dataset }”没有模型“{ $model }”的已发布行{ $listed ->
+        [yes] （其模型：{ $models }）
+       *[no] {""}
+    }
+refusal-no-paper-file = 数据集“{ $dataset }”的论文文件夹中没有文件“{ $file }”（现有：{ $files }）
+refusal-no-api-route = 没有 API 路由 { $path }：所有路由列于 /api/docs
+refusal-fields-required = 此请求需要：{ $fields }
+refusal-exactly-one-of = 请只给出以下其中之一：{ $fields }
+refusal-both-or-neither = { $fields } 须同时给出，或都不给
+refusal-not-with = { $field } 不能与 { $other } 同时给出
+refusal-token-missing = 此请求需要 API 令牌
+refusal-authorization-malformed = Authorization 请求头的格式须为“Bearer TOKEN”
+refusal-token-unknown = 此 API 令牌未知或已被撤销
+refusal-scope-missing = 此令牌缺少“{ $scope }”权限范围
+refusal-not-model-owner = 数据集“{ $dataset }”上的模型“{ $model }”由另一个账户提交；只有该账户或管理员可以设置其元数据
 
 ## 登录
 login-title = 登录

@@ -309,7 +309,7 @@ fn in_database<T>(result: Result<T, AppError>, db: &Path) -> anyhow::Result<T> {
 fn refusal_in(e: AppError, db: Option<&Path>) -> anyhow::Error {
     match (e, db) {
         (AppError::Internal(e), _) => e,
-        (AppError::NotFound(what), Some(db)) => anyhow::anyhow!("{what} in {}", describe_db(db)),
+        (e, Some(db)) if e.is_not_found() => anyhow::anyhow!("{e} in {}", describe_db(db)),
         (other, _) => anyhow::anyhow!("{other}"),
     }
 }
@@ -334,5 +334,14 @@ mod tests {
         assert_eq!(e.to_string(), "dataset 'x' does not exist in hub.db");
         let e = refusal_in(AppError::NotFound("no such thing".into()), None);
         assert_eq!(e.to_string(), "no such thing");
+        // A typed reason is found missing in the same way.
+        let e = refusal_in(
+            crate::app::refusal::Refusal::NoStudy {
+                study: "camera".into(),
+            }
+            .into(),
+            Some(Path::new("hub.db")),
+        );
+        assert_eq!(e.to_string(), "no study named 'camera' in hub.db");
     }
 }

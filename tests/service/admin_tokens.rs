@@ -103,7 +103,7 @@ async fn admins_create_tokens_that_work_and_revoke_them_at_once() {
         r.text()
             .await
             .expect("body")
-            .contains("daily quota: &#39;lots&#39;")
+            .contains("daily quota: &#34;lots&#34; is not a whole number of 0 or more")
     );
     server.stop().await;
 }

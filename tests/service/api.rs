@@ -116,6 +116,39 @@ async fn bad_queries_and_unknown_names_get_clear_errors() {
             .contains("step_length"),
         "{body}"
     );
+    // Each bad value names its field, what was given and what it must be, with a code per
+    // kind of value expected.
+    assert_eq!(body["code"], "bad_value_whole_number", "{body}");
+    assert_eq!(
+        body["details"],
+        serde_json::json!({"field": "step_length", "value": "12", "least": 3, "most": 10})
+    );
+    assert_eq!(
+        body["error"],
+        "step_length: \"12\" is not a whole number from 3 to 10"
+    );
+    let (status, body) = server
+        .get_json("/api/v1/datasets/mini/items?direction=sideways")
+        .await;
+    assert_eq!(status, StatusCode::BAD_REQUEST);
+    assert_eq!(body["code"], "bad_value_one_of", "{body}");
+    assert_eq!(
+        body["details"],
+        serde_json::json!({"field": "direction", "value": "sideways", "choices": "forward, inverse"})
+    );
+    let (status, body) = server
+        .get_json("/api/v1/datasets/mini/leaderboard?chart=7,x")
+        .await;
+    assert_eq!(status, StatusCode::BAD_REQUEST);
+    assert_eq!(body["code"], "bad_value_submission_id", "{body}");
+    assert_eq!(body["details"]["value"], "x", "{body}");
+    // A page says it in the reader's language.
+    let (status, page) = crate::annotate::Browser::new(&server)
+        .in_language("zh-CN")
+        .text("/datasets/mini?per_page=0")
+        .await;
+    assert_eq!(status, 400);
+    assert!(page.contains("per_page：“0”不是 1 到 "), "{page}");
     let (status, body) = server.get_json("/api/v1/datasets/nope/items").await;
     assert_eq!(status, StatusCode::NOT_FOUND);
     assert!(

@@ -265,7 +265,7 @@ async fn comparisons_that_cannot_be_made_are_refused_with_the_reason() {
             assert!(error.contains(says), "{query}: {error}");
         }
     };
-    refused("a=Beta", 400, "`a` and `b` are required").await;
+    refused("a=Beta", 400, "this request needs a and b").await;
     refused("a=Human&b=Beta", 400, "the Human row pools").await;
     refused(
         "a=Gamma&b=Beta",
@@ -281,7 +281,12 @@ async fn comparisons_that_cannot_be_made_are_refused_with_the_reason() {
     .await;
     refused(&format!("a={beta}&b=Beta"), 400, "the same row").await;
     refused("a=999&b=Beta", 404, "no published submission 999").await;
-    refused("a=Beta&b=1&resample=episodes", 400, "`resample`").await;
+    refused(
+        "a=Beta&b=1&resample=episodes",
+        400,
+        "resample: \"episodes\" is not one of: activities, items",
+    )
+    .await;
     let (got, _) = server
         .get_json("/api/v1/datasets/nope/compare?a=1&b=2")
         .await;

@@ -138,7 +138,7 @@ fn every_refusal_is_worded_in_every_locale_and_no_message_names_a_flag() {
                 // What a message chooses its words by (a plural's count, the action, how a
                 // part was revealed, whether a reveal is scheduled) is its grammar, not always
                 // shown.
-                let selector = ["count", "action", "how", "scheduled"].contains(&name);
+                let selector = ["count", "action", "how", "scheduled", "listed"].contains(&name);
                 if !selector && !text.contains(&shown) {
                     problems.push(format!(
                         "{}: {} does not show its {name} ({shown}): {text}",
@@ -219,11 +219,14 @@ async fn error_pages_are_translated_and_api_errors_stay_english_with_a_code() {
     // A typed refusal is said in the page's language.
     assert!(html.contains("没有名为“nope”的数据集"), "{html}");
     assert!(!html.contains(r#"<span lang="en">"#), "{html}");
-    // A refusal still worded by its use case is shown as it is, marked as English.
     let (status, html) = page(&server, "/studies/nope", "zh-CN").await;
     assert_eq!(status, StatusCode::NOT_FOUND);
+    assert!(html.contains("没有名为“nope”的研究"), "{html}");
+    // A refusal still worded by its use case is shown as it is, marked as English.
+    let (status, html) = page(&server, "/datasets/mini/compare?a=Human&b=1", "zh-CN").await;
+    assert_eq!(status, StatusCode::BAD_REQUEST);
     assert!(
-        html.contains(r#"<span lang="en">no study named &#39;nope&#39;</span>"#),
+        html.contains(r#"<span lang="en">`a`: the Human row pools"#),
         "{html}"
     );
     let r = reqwest::Client::new()
@@ -298,7 +301,7 @@ async fn the_switch_sets_a_cookie_and_saves_a_signed_in_annotators_choice() {
         r.text()
             .await
             .expect("body")
-            .contains("&#39;xx&#39; is not a locale")
+            .contains("locale: &#34;xx&#34; is not one of: en, zh-CN")
     );
 
     // A signed-in annotator: the choice is saved and follows her to another browser.

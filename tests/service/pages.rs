@@ -48,7 +48,7 @@ async fn browse_page_filters_items() {
         r.text()
             .await
             .expect("body")
-            .contains("step_length must be")
+            .contains("step_length: &#34;zero&#34; is not a whole number from 3 to 10")
     );
     server.stop().await;
 }

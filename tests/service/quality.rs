@@ -457,9 +457,15 @@ async fn gold_sets_refuse_bad_input_by_field_and_clearing_takes_unfinished_gold_
     let (server, records, admin) = server_with_items().await;
     let gold_path = "/api/v1/admin/datasets/mini/gold";
     for (body, says) in [
-        (json!({"rate": 1, "share": 0.2}), "`rate`"),
-        (json!({"rate": 5, "share": 1.5}), "`share`"),
-        (json!({"rate": 5}), "either `share`"),
+        (
+            json!({"rate": 1, "share": 0.2}),
+            "rate: \"1\" is not a whole number from 2 to 1000",
+        ),
+        (
+            json!({"rate": 5, "share": 1.5}),
+            "share: \"1.5\" is not a number above 0 and below 1",
+        ),
+        (json!({"rate": 5}), "give exactly one of share, items"),
         (
             json!({"rate": 5, "items": ["nope"]}),
             "not in dataset 'mini': nope",

@@ -478,12 +478,8 @@ async fn studies_refuse_what_cannot_be_compared_and_are_audited() {
     // Reports name what is missing.
     let (status, missing) = server.get_json("/api/v1/studies/cam/report").await;
     assert_eq!(status, 400);
-    assert!(
-        missing["error"]
-            .as_str()
-            .unwrap()
-            .contains("`model` is required")
-    );
+    assert_eq!(missing["code"], "exactly_one_of", "{missing}");
+    assert_eq!(missing["details"]["fields"], "model, human", "{missing}");
     let (status, nobody) = server
         .get_json("/api/v1/studies/cam/report?model=ghost")
         .await;
@@ -646,7 +642,7 @@ async fn the_human_row_is_reported_like_a_model() {
         .get_json("/api/v1/studies/camera/report?human=true&model=m")
         .await;
     assert_eq!(status, 400);
-    assert!(both["error"].as_str().unwrap().contains("not both"));
+    assert_eq!(both["error"], "give exactly one of model, human", "{both}");
     server.stop().await;
 }
 

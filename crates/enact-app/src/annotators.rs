@@ -83,10 +83,7 @@ pub async fn create(
 }
 
 fn unknown_invite() -> AppError {
-    AppError::NotFound(
-        "this invite link is unknown or has already been used: ask an admin for a new one"
-            .to_owned(),
-    )
+    Refusal::InviteLinkUsed.into()
 }
 
 /// The account an unused invite is for.

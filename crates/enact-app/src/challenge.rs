@@ -18,7 +18,7 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::changes::Change;
-use super::refusal::Refusal;
+use super::refusal::{Expected, Refusal};
 use super::submissions::{self, SubmissionRow};
 use super::tokens::Caller;
 use super::{AppError, Hub, audit, datasets};
@@ -326,10 +326,15 @@ pub async fn configure(
     if let Some(Some(limit)) = change.selection_limit
         && !(1..=MAX_SELECTION_LIMIT).contains(&limit)
     {
-        return Err(AppError::Invalid(format!(
-            "selection_limit: a whole number from 1 to {MAX_SELECTION_LIMIT} (or null for no \
-             limit), not {limit}"
-        )));
+        return Err(Refusal::bad_value(
+            "selection_limit",
+            limit.to_string(),
+            Expected::WholeNumber {
+                least: 1,
+                most: MAX_SELECTION_LIMIT.unsigned_abs(),
+            },
+        )
+        .into());
     }
     let dataset = datasets::by_name(hub, name).await?;
     let mut tx = hub.write(Lane::Interactive).await?;

@@ -14,6 +14,7 @@ use crate::store;
 use crate::store::datasets::Dataset;
 use crate::store::submissions::{StoredVerdict, SubmissionRow};
 
+use super::refusal::Refusal;
 use super::{AppError, Hub, datasets, leaderboard};
 
 /// A compared row: the submission behind it.
@@ -173,10 +174,11 @@ fn resolve<'p>(
     }
     if let Ok(id) = name.parse::<i64>() {
         return published.iter().find(|s| s.id == id).ok_or_else(|| {
-            AppError::NotFound(format!(
-                "`{field}`: dataset '{}' has no published submission {id}",
-                dataset.name
-            ))
+            AppError::from(Refusal::NoPublishedSubmission {
+                field: field.to_owned(),
+                dataset: dataset.name.clone(),
+                submission: id.to_string(),
+            })
         });
     }
     let rows: Vec<_> = board
@@ -198,15 +200,13 @@ fn resolve<'p>(
                 .collect();
             models.sort_unstable();
             models.dedup();
-            Err(AppError::NotFound(format!(
-                "`{field}`: dataset '{}' has no published row of model '{name}'{}",
-                dataset.name,
-                if models.is_empty() {
-                    String::new()
-                } else {
-                    format!(" (its models: {})", models.join(", "))
-                }
-            )))
+            Err(Refusal::NoPublishedModel {
+                field: field.to_owned(),
+                dataset: dataset.name.clone(),
+                model: name.to_owned(),
+                models: models.join(", "),
+            }
+            .into())
         }
         several => Err(AppError::Invalid(format!(
             "`{field}`: model '{name}' has rows of {} accounts on dataset '{}' (submissions {}): \

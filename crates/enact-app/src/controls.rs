@@ -225,8 +225,9 @@ pub async fn handover(
     } else {
         let mut chosen: Vec<&Annotator> = Vec::new();
         for name in to {
-            let account = by_name(name.trim())
-                .ok_or_else(|| AppError::NotFound(format!("to: no annotator named '{name}'")))?;
+            let account = by_name(name.trim()).ok_or_else(|| Refusal::NoAnnotator {
+                annotator: name.trim().to_owned(),
+            })?;
             if account.id == giver.id {
                 return Err(AppError::Invalid(format!(
                     "to: '{from}' cannot hand items over to themselves"

@@ -289,9 +289,10 @@ pub async fn resolve_by_key_frame(
     for (frame, curator) in choices {
         if !drawn.contains_key(curator.as_str()) {
             let graphs = episodes::graphs(hub, name, curator).await?.ok_or_else(|| {
-                AppError::NotFound(format!(
-                    "curator '{curator}' stored no graphs of episode '{name}'"
-                ))
+                Refusal::NoCuratorGraphs {
+                    episode: name.to_owned(),
+                    curator: curator.clone(),
+                }
             })?;
             drawn.insert(curator, by_frame(graphs));
         }

@@ -538,10 +538,9 @@ pub async fn resolve(
                 .await?
                 .into_iter()
                 .find(|g| g.curator == curator)
-                .ok_or_else(|| {
-                    AppError::NotFound(format!(
-                        "curator '{curator}' stored no graphs of episode '{name}'"
-                    ))
+                .ok_or_else(|| Refusal::NoCuratorGraphs {
+                    episode: name.to_owned(),
+                    curator: curator.clone(),
                 })?;
             (
                 parse_stored(&stored.graphs, "graphs")?,
@@ -569,10 +568,9 @@ pub async fn resolve(
 
 /// Where curators `a` and `b` differ on episode `name`.
 pub async fn compare(hub: &Hub, name: &str, a: &str, b: &str) -> Result<Comparison, AppError> {
-    let missing = |curator: &str| {
-        AppError::NotFound(format!(
-            "curator '{curator}' stored no graphs of episode '{name}'"
-        ))
+    let missing = |curator: &str| Refusal::NoCuratorGraphs {
+        episode: name.to_owned(),
+        curator: curator.to_owned(),
     };
     let ga = graphs(hub, name, a).await?.ok_or_else(|| missing(a))?;
     let gb = graphs(hub, name, b).await?.ok_or_else(|| missing(b))?;

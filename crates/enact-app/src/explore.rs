@@ -23,6 +23,7 @@ use crate::core::submission::AnswerVerdict;
 use crate::store;
 
 use super::leaderboard::Board;
+use super::refusal::Refusal;
 use super::{AppError, Hub, datasets, leaderboard};
 
 /// One view of a dataset's grid, ready to be cut into pages.
@@ -140,10 +141,10 @@ pub async fn view(
     let board = leaderboard::board(hub, dataset).await?;
     if !admin && datasets::answer_visibility(hub, &board.dataset).await? != AnswerVisibility::Public
     {
-        return Err(AppError::NotFound(format!(
-            "the explorer of dataset '{}' is not shown: its answers are hidden",
-            board.dataset.name
-        )));
+        return Err(Refusal::AnswersHidden {
+            dataset: board.dataset.name.clone(),
+        }
+        .into());
     }
     let grid = grid(hub, &board).await?;
     let view = grid.parse_view(text).map_err(AppError::Invalid)?;

@@ -15,6 +15,7 @@ use crate::core::submission::{AnswerVerdict, VerdictOutcome};
 use crate::core::verifier::{ItemSignatures, Permutation};
 use crate::store;
 
+use super::refusal::Refusal;
 use super::{AppError, Hub, datasets, items, leaderboard};
 
 /// The item the answers are about.
@@ -103,10 +104,10 @@ pub async fn of(
 ) -> Result<ItemAnswers, AppError> {
     let stored = datasets::by_name(hub, dataset).await?;
     if !admin && datasets::answer_visibility(hub, &stored).await? != AnswerVisibility::Public {
-        return Err(AppError::NotFound(format!(
-            "the answers to the items of dataset '{}' are not shown: its answers are hidden",
-            stored.name
-        )));
+        return Err(Refusal::AnswersHidden {
+            dataset: stored.name,
+        }
+        .into());
     }
     let item = items::get(hub, &stored.name, item_id).await?;
     let truth = Permutation::new(item.gt_answer.clone())

@@ -11,6 +11,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use super::changes::Change;
+use super::refusal::Refusal;
 use super::{AppError, Hub, audit, datasets};
 use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
@@ -166,18 +167,19 @@ pub async fn set(
     let submitters = store::model_metadata::submitters(&mut conn, dataset.id, model).await?;
     drop(conn);
     if submitters.is_empty() {
-        return Err(AppError::NotFound(format!(
-            "no submission of model '{model}' on dataset '{}'",
-            dataset.name
-        )));
+        return Err(Refusal::NoModelSubmission {
+            dataset: dataset.name,
+            model: model.to_owned(),
+        }
+        .into());
     }
     let own = matches!(&editor.actor, Actor::Account(name) if submitters.contains(name));
     if !editor.admin && !own {
-        return Err(AppError::NotPermitted(format!(
-            "model '{model}' on dataset '{}' was submitted by another account; only it or an \
-             admin may set its metadata",
-            dataset.name
-        )));
+        return Err(Refusal::NotModelOwner {
+            dataset: dataset.name,
+            model: model.to_owned(),
+        }
+        .into());
     }
     let metadata = metadata.checked(editor.admin)?;
     let stored = StoredModelMetadata {

@@ -11,6 +11,7 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::changes::Change;
+use super::refusal::Refusal;
 use super::{AppError, Hub, audit, datasets};
 use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
@@ -434,18 +435,21 @@ pub async fn add(
 pub async fn remove(hub: &Hub, actor: &Actor, dataset: &str, id: i64) -> Result<(), AppError> {
     let rows = list(hub, dataset).await?;
     let Some(row) = rows.into_iter().find(|r| r.id == id) else {
-        return Err(AppError::NotFound(format!(
-            "dataset '{dataset}' has no reported result {id}"
-        )));
+        return Err(Refusal::NoReported {
+            dataset: dataset.to_owned(),
+            reported: id.to_string(),
+        }
+        .into());
     };
     let dataset = datasets::by_name(hub, dataset).await?;
     let mut tx = hub.write(Lane::Interactive).await?;
     if !store::reported::delete(&mut tx, dataset.id, id).await? {
         tx.rollback().await?;
-        return Err(AppError::NotFound(format!(
-            "dataset '{}' has no reported result {id}",
-            dataset.name
-        )));
+        return Err(Refusal::NoReported {
+            dataset: dataset.name.clone(),
+            reported: id.to_string(),
+        }
+        .into());
     }
     audit::record(
         &mut tx,

@@ -191,7 +191,11 @@ async fn row_named(hub: &Hub, name: &str) -> Result<StudyRow, AppError> {
     let mut conn = hub.conn().await?;
     store::studies::by_name(&mut conn, name.trim())
         .await?
-        .ok_or_else(|| AppError::NotFound(format!("no study named '{}'", name.trim())))
+        .ok_or_else(|| {
+            AppError::from(Refusal::NoStudy {
+                study: name.trim().to_owned(),
+            })
+        })
 }
 
 /// Every study, by name (alignments are computed only for one study at a time: [`show`]).
@@ -224,7 +228,7 @@ pub async fn delete(hub: &Hub, actor: &Actor, name: &str) -> Result<(), AppError
     let row = row_named(hub, name).await?;
     let mut tx = hub.write(Lane::Interactive).await?;
     if !store::studies::delete(&mut tx, &row.name).await? {
-        return Err(AppError::NotFound(format!("no study named '{}'", row.name)));
+        return Err(Refusal::NoStudy { study: row.name }.into());
     }
     audit::record(
         &mut tx,

@@ -6,6 +6,7 @@ use serde::Serialize;
 
 use super::audit;
 use super::metrics::LoginFailure;
+use super::refusal::{Expected, Refusal};
 use super::{AppError, Hub};
 use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
@@ -19,23 +20,22 @@ pub use crate::store::accounts::TokenListing;
 /// The web checks every route's scope here, once, before the route's handler runs.
 pub async fn authorize(hub: &Hub, presented: &str, scope: Scope) -> Result<Caller, AppError> {
     let caller = authenticate(hub, presented).await.inspect_err(|e| {
-        if matches!(e, AppError::Unauthenticated(_)) {
+        if matches!(e, AppError::Refused(Refusal::TokenUnknown)) {
             hub.metrics().login_failed(LoginFailure::Token);
         }
     })?;
     if !caller.has(scope) {
-        return Err(AppError::NotPermitted(format!(
-            "this token lacks the `{}` scope",
-            scope.as_str()
-        )));
+        return Err(Refusal::ScopeMissing {
+            scope: scope.as_str(),
+        }
+        .into());
     }
     Ok(caller)
 }
 
 /// The live (unrevoked) token `presented` stands for; 401 otherwise.
 async fn authenticate(hub: &Hub, presented: &str) -> Result<Caller, AppError> {
-    let refused =
-        || AppError::Unauthenticated("the API token is unknown or has been revoked".to_owned());
+    let refused = || AppError::from(Refusal::TokenUnknown);
     let mut conn = hub.conn().await?;
     let row = store::accounts::token_by_prefix(&mut conn, &credentials::lookup_prefix(presented))
         .await?
@@ -94,8 +94,9 @@ pub async fn issue(
 ) -> Result<CreatedToken, AppError> {
     let name = credentials::account_name(name).map_err(AppError::Invalid)?;
     for (field, quota) in [("daily_quota", daily_quota), ("total_quota", total_quota)] {
-        if quota.is_some_and(|q| q < 0) {
-            return Err(AppError::Invalid(format!("`{field}` must not be negative")));
+        if let Some(q) = quota.filter(|q| *q < 0) {
+            let whole = Expected::WholeNumberFrom { least: 0 };
+            return Err(Refusal::bad_value(field, q.to_string(), whole).into());
         }
     }
     let token = NewToken::generate();
@@ -151,9 +152,10 @@ pub async fn revoke(hub: &Hub, actor: &Actor, which: &str) -> Result<(), AppErro
         tx.commit().await?;
         Ok(())
     } else {
-        Err(AppError::NotFound(format!(
-            "no live token with id or prefix {which:?}"
-        )))
+        Err(Refusal::NoToken {
+            token: which.to_owned(),
+        }
+        .into())
     }
 }
 

@@ -31,6 +31,7 @@ use tokio::task::JoinSet;
 
 use super::{AppError, Hub, Lane, audit};
 use crate::core::audit::{Actor, AuditAction};
+use crate::refusal::Refusal;
 use crate::store;
 pub use crate::store::jobs::{JobKind, JobRow, JobState};
 
@@ -117,10 +118,11 @@ impl From<JobRow> for JobView {
 
 /// The job `id` as the API shows it.
 pub async fn view(hub: &Hub, id: JobId) -> Result<JobView, AppError> {
-    get(hub, id)
-        .await?
-        .map(JobView::from)
-        .ok_or_else(|| AppError::NotFound(format!("{id} does not exist")))
+    get(hub, id).await?.map(JobView::from).ok_or_else(|| {
+        AppError::from(Refusal::NoJob {
+            job: id.0.to_string(),
+        })
+    })
 }
 
 /// The newest jobs (of one kind when given), newest first.
@@ -190,9 +192,11 @@ pub async fn control(
     change: JobControl,
 ) -> Result<JobRow, AppError> {
     let mut tx = hub.write(Lane::Interactive).await?;
-    let job = store::jobs::get(&mut tx, id.0)
-        .await?
-        .ok_or_else(|| AppError::NotFound(format!("{id} does not exist")))?;
+    let job = store::jobs::get(&mut tx, id.0).await?.ok_or_else(|| {
+        AppError::from(Refusal::NoJob {
+            job: id.0.to_string(),
+        })
+    })?;
     let to = change.target(job.state).ok_or_else(|| {
         AppError::Conflict(format!(
             "{id} is {}: it cannot be {}",

@@ -75,6 +75,46 @@ impl From<&Detail> for serde_json::Value {
     }
 }
 
+/// What a field's value must be, for [`Refusal::BadValue`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Expected {
+    /// A whole number from `least` to `most`.
+    WholeNumber { least: u64, most: u64 },
+    /// A whole number of `least` or more.
+    WholeNumberFrom { least: u64 },
+    /// A number, with a fraction if need be.
+    Number,
+    /// A number from `least` to `most`, with a fraction if need be (a percentage).
+    NumberBetween { least: u64, most: u64 },
+    /// A number above 0 and below 1: a share, or a confidence level.
+    Fraction,
+    /// One of these words.
+    OneOf(Vec<&'static str>),
+    /// A submission's id.
+    SubmissionId,
+    /// A reported result's id.
+    ReportedId,
+}
+
+impl fmt::Display for Expected {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Expected::WholeNumber { least, most } => {
+                write!(f, "a whole number from {least} to {most}")
+            }
+            Expected::WholeNumberFrom { least } => write!(f, "a whole number of {least} or more"),
+            Expected::Number => write!(f, "a number"),
+            Expected::NumberBetween { least, most } => {
+                write!(f, "a number from {least} to {most}")
+            }
+            Expected::Fraction => write!(f, "a number above 0 and below 1"),
+            Expected::OneOf(words) => write!(f, "one of: {}", words.join(", ")),
+            Expected::SubmissionId => write!(f, "a submission's id"),
+            Expected::ReportedId => write!(f, "a reported result's id"),
+        }
+    }
+}
+
 /// A refusal with its reason typed. Each variant has a stable [`code`](Refusal::code), the
 /// API's promise to clients; renaming one is a breaking change.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -187,9 +227,87 @@ pub enum Refusal {
         dataset: String,
         reveal_at: Option<String>,
     },
+    /// No study has this name.
+    NoStudy { study: String },
+    /// No live API token has this id or prefix.
+    NoToken { token: String },
+    /// No background job has this id.
+    NoJob { job: String },
+    /// The dataset has no reported result (a paper's published figure) with this id.
+    NoReported { dataset: String, reported: String },
+    /// This curator stored no scene graphs for the episode.
+    NoCuratorGraphs { episode: String, curator: String },
+    /// The dataset's answers are hidden, so nothing that shows them is shown.
+    AnswersHidden { dataset: String },
+    /// An invite link that is unknown or was used already.
+    InviteLinkUsed,
+    /// No submission of this model on the dataset.
+    NoModelSubmission { dataset: String, model: String },
+    /// A row to compare (`field`) names a submission id that is not published on the dataset.
+    NoPublishedSubmission {
+        field: String,
+        dataset: String,
+        submission: String,
+    },
+    /// A row to compare (`field`) names a model with no published row on the dataset; `models`
+    /// lists those that have one.
+    NoPublishedModel {
+        field: String,
+        dataset: String,
+        model: String,
+        models: String,
+    },
+    /// The dataset's paper folder has no file of this name; `files` lists what it has.
+    NoPaperFile {
+        dataset: String,
+        file: String,
+        files: String,
+    },
+    /// No route of the API has this path.
+    NoApiRoute { path: String },
+    /// An API request without a bearer token.
+    TokenMissing,
+    /// An `Authorization` header that is not `Bearer TOKEN`.
+    AuthorizationMalformed,
+    /// A bearer token that is unknown or revoked.
+    TokenUnknown,
+    /// The token is live but lacks the scope this request needs.
+    ScopeMissing { scope: &'static str },
+    /// A model's metadata is set by the account that submitted it, or by an admin.
+    NotModelOwner { dataset: String, model: String },
+    /// A request without fields it needs.
+    FieldsRequired { fields: Vec<&'static str> },
+    /// A request must give exactly one of these fields: it gave none, or more than one.
+    ExactlyOneOf { fields: Vec<&'static str> },
+    /// Two fields that go together: a request gave one without the other.
+    BothOrNeither { fields: [&'static str; 2] },
+    /// A field that cannot be given together with `other`.
+    NotWith {
+        field: &'static str,
+        other: &'static str,
+    },
+    /// A field, form field or query parameter whose value is not what it must be.
+    BadValue {
+        field: String,
+        value: String,
+        expected: Expected,
+    },
 }
 
 impl Refusal {
+    /// `field`'s `value` is not what it must be.
+    pub fn bad_value(
+        field: impl Into<String>,
+        value: impl Into<String>,
+        expected: Expected,
+    ) -> Self {
+        Refusal::BadValue {
+            field: field.into(),
+            value: value.into(),
+            expected,
+        }
+    }
+
     /// The kind, which chooses the HTTP status.
     pub fn kind(&self) -> RefusalKind {
         match self {
@@ -201,11 +319,29 @@ impl Refusal {
             | Refusal::NoRun { .. }
             | Refusal::NoFrame { .. }
             | Refusal::NoAnswerYet { .. }
+            | Refusal::NoStudy { .. }
+            | Refusal::NoToken { .. }
+            | Refusal::NoJob { .. }
+            | Refusal::NoReported { .. }
+            | Refusal::NoCuratorGraphs { .. }
+            | Refusal::AnswersHidden { .. }
+            | Refusal::InviteLinkUsed
+            | Refusal::NoModelSubmission { .. }
+            | Refusal::NoPublishedSubmission { .. }
+            | Refusal::NoPublishedModel { .. }
+            | Refusal::NoPaperFile { .. }
+            | Refusal::NoApiRoute { .. }
             | Refusal::ImportPath {
                 problem: ImportPathProblem::Missing,
                 ..
             } => RefusalKind::NotFound,
-            Refusal::NotLoggedIn => RefusalKind::Unauthenticated,
+            Refusal::NotLoggedIn
+            | Refusal::TokenMissing
+            | Refusal::AuthorizationMalformed
+            | Refusal::TokenUnknown => RefusalKind::Unauthenticated,
+            Refusal::ScopeMissing { .. } | Refusal::NotModelOwner { .. } => {
+                RefusalKind::NotPermitted
+            }
             Refusal::LoginLinkUsed => RefusalKind::NotFound,
             Refusal::AdminOnly { .. }
             | Refusal::StaleForm
@@ -232,6 +368,11 @@ impl Refusal {
             | Refusal::PasswordTooShort { .. }
             | Refusal::EpisodeHasNoGraphs { .. }
             | Refusal::RunPrice { .. }
+            | Refusal::BadValue { .. }
+            | Refusal::FieldsRequired { .. }
+            | Refusal::ExactlyOneOf { .. }
+            | Refusal::BothOrNeither { .. }
+            | Refusal::NotWith { .. }
             | Refusal::ImportPath { .. } => RefusalKind::Invalid,
         }
     }
@@ -247,6 +388,18 @@ impl Refusal {
             Refusal::NoRun { .. } => "no_run",
             Refusal::NoFrame { .. } => "no_frame",
             Refusal::NoAnswerYet { .. } => "no_answer_yet",
+            Refusal::NoStudy { .. } => "no_study",
+            Refusal::NoToken { .. } => "no_token",
+            Refusal::NoJob { .. } => "no_job",
+            Refusal::NoReported { .. } => "no_reported",
+            Refusal::NoCuratorGraphs { .. } => "no_curator_graphs",
+            Refusal::AnswersHidden { .. } => "answers_hidden",
+            Refusal::InviteLinkUsed => "invite_link_used",
+            Refusal::NoModelSubmission { .. } => "no_model_submission",
+            Refusal::NoPublishedSubmission { .. } => "no_published_submission",
+            Refusal::NoPublishedModel { .. } => "no_published_model",
+            Refusal::NoPaperFile { .. } => "no_paper_file",
+            Refusal::NoApiRoute { .. } => "no_api_route",
             Refusal::NotLoggedIn => "not_logged_in",
             Refusal::LoginLinkUsed => "login_link_used",
             Refusal::AdminOnly { .. } => "admin_only",
@@ -287,6 +440,25 @@ impl Refusal {
             Refusal::SelectionNotPublished { .. } => "selection_not_published",
             Refusal::SelectionLimitReached { .. } => "selection_limit_reached",
             Refusal::PrivatePartHidden { .. } => "private_part_hidden",
+            Refusal::TokenMissing => "token_missing",
+            Refusal::AuthorizationMalformed => "authorization_malformed",
+            Refusal::TokenUnknown => "token_unknown",
+            Refusal::ScopeMissing { .. } => "scope_missing",
+            Refusal::NotModelOwner { .. } => "not_model_owner",
+            Refusal::FieldsRequired { .. } => "fields_required",
+            Refusal::ExactlyOneOf { .. } => "exactly_one_of",
+            Refusal::BothOrNeither { .. } => "both_or_neither",
+            Refusal::NotWith { .. } => "not_with",
+            Refusal::BadValue { expected, .. } => match expected {
+                Expected::WholeNumber { .. } => "bad_value_whole_number",
+                Expected::WholeNumberFrom { .. } => "bad_value_whole_number_from",
+                Expected::Number => "bad_value_number",
+                Expected::NumberBetween { .. } => "bad_value_number_between",
+                Expected::Fraction => "bad_value_fraction",
+                Expected::OneOf(_) => "bad_value_one_of",
+                Expected::SubmissionId => "bad_value_submission_id",
+                Expected::ReportedId => "bad_value_reported_id",
+            },
         }
     }
 
@@ -311,15 +483,72 @@ impl Refusal {
             Refusal::NoSubmission { submission } => vec![("submission", text(submission))],
             Refusal::NoRun { run } => vec![("run", text(run))],
             Refusal::NoFrame { frame } => vec![("frame", text(frame))],
-            Refusal::NotLoggedIn
+            Refusal::NoToken { token } => vec![("token", text(token))],
+            Refusal::NoJob { job } => vec![("job", text(job))],
+            Refusal::NoReported { dataset, reported } => {
+                vec![("dataset", text(dataset)), ("reported", text(reported))]
+            }
+            Refusal::NoCuratorGraphs { episode, curator } => {
+                vec![("episode", text(episode)), ("curator", text(curator))]
+            }
+            Refusal::NoModelSubmission { dataset, model }
+            | Refusal::NotModelOwner { dataset, model } => {
+                vec![("dataset", text(dataset)), ("model", text(model))]
+            }
+            Refusal::NoPublishedSubmission {
+                field,
+                dataset,
+                submission,
+            } => vec![
+                ("field", text(field)),
+                ("dataset", text(dataset)),
+                ("submission", text(submission)),
+            ],
+            Refusal::NoPublishedModel {
+                field,
+                dataset,
+                model,
+                models,
+            } => {
+                let mut details = vec![
+                    ("field", text(field)),
+                    ("dataset", text(dataset)),
+                    ("model", text(model)),
+                    ("listed", text(if models.is_empty() { "no" } else { "yes" })),
+                ];
+                if !models.is_empty() {
+                    details.push(("models", text(models)));
+                }
+                details
+            }
+            Refusal::NoPaperFile {
+                dataset,
+                file,
+                files,
+            } => vec![
+                ("dataset", text(dataset)),
+                ("file", text(file)),
+                ("files", text(files)),
+            ],
+            Refusal::NoApiRoute { path } => vec![("path", text(path))],
+            Refusal::ScopeMissing { scope } => vec![("scope", text(scope))],
+            Refusal::TokenMissing | Refusal::AuthorizationMalformed | Refusal::TokenUnknown => {
+                Vec::new()
+            }
+            Refusal::InviteLinkUsed
+            | Refusal::NotLoggedIn
             | Refusal::LoginLinkUsed
             | Refusal::StaleForm
             | Refusal::PasswordsDiffer
             | Refusal::ImportFolderUnset => Vec::new(),
             Refusal::ImportPath { path, .. } => vec![("path", text(path))],
-            Refusal::StudyExists { study } => vec![("study", text(study))],
+            Refusal::StudyExists { study } | Refusal::NoStudy { study } => {
+                vec![("study", text(study))]
+            }
             Refusal::ChallengeNotSplit { dataset }
-            | Refusal::ChallengeAnswersPublic { dataset } => {
+            | Refusal::ChallengeAnswersPublic { dataset }
+            | Refusal::AnswersHidden { dataset }
+            | Refusal::StudyBaselineMissing { dataset } => {
                 vec![("dataset", text(dataset))]
             }
             Refusal::ChallengeRevealed {
@@ -381,7 +610,6 @@ impl Refusal {
                 }
                 details
             }
-            Refusal::StudyBaselineMissing { dataset } => vec![("dataset", text(dataset))],
             Refusal::StudyVariantMissing { variant, dataset } => {
                 vec![("variant", text(variant)), ("dataset", text(dataset))]
             }
@@ -451,6 +679,36 @@ impl Refusal {
             Refusal::RunPrice { field, price } => {
                 vec![("field", text(field)), ("price", text(price))]
             }
+            Refusal::FieldsRequired { fields } | Refusal::ExactlyOneOf { fields } => {
+                vec![("fields", text(&fields.join(", ")))]
+            }
+            Refusal::BothOrNeither { fields } => vec![("fields", text(&fields.join(", ")))],
+            Refusal::NotWith { field, other } => {
+                vec![("field", text(field)), ("other", text(other))]
+            }
+            Refusal::BadValue {
+                field,
+                value,
+                expected,
+            } => {
+                let mut details = vec![("field", text(field)), ("value", text(value))];
+                match expected {
+                    Expected::WholeNumber { least, most }
+                    | Expected::NumberBetween { least, most } => {
+                        details.push(("least", Detail::Number(*least)));
+                        details.push(("most", Detail::Number(*most)));
+                    }
+                    Expected::WholeNumberFrom { least } => {
+                        details.push(("least", Detail::Number(*least)));
+                    }
+                    Expected::OneOf(words) => details.push(("choices", text(&words.join(", ")))),
+                    Expected::Number
+                    | Expected::Fraction
+                    | Expected::SubmissionId
+                    | Expected::ReportedId => {}
+                }
+                details
+            }
         }
     }
 
@@ -474,6 +732,44 @@ impl Refusal {
             Refusal::NoRun { run: s("3") },
             Refusal::NoFrame { frame: s("ab12") },
             Refusal::NoAnswerYet { item: s("a1") },
+            Refusal::NoStudy { study: s("camera") },
+            Refusal::NoToken {
+                token: s("ehub_3f2a"),
+            },
+            Refusal::NoJob { job: s("12") },
+            Refusal::NoReported {
+                dataset: s("demo"),
+                reported: s("4"),
+            },
+            Refusal::NoCuratorGraphs {
+                episode: s("kitchen"),
+                curator: s("ann"),
+            },
+            Refusal::AnswersHidden { dataset: s("demo") },
+            Refusal::InviteLinkUsed,
+            Refusal::NoModelSubmission {
+                dataset: s("demo"),
+                model: s("gpt-x"),
+            },
+            Refusal::NoPublishedSubmission {
+                field: s("a"),
+                dataset: s("demo"),
+                submission: s("9"),
+            },
+            Refusal::NoPublishedModel {
+                field: s("b"),
+                dataset: s("demo"),
+                model: s("Gamma"),
+                models: s("Alpha, Beta"),
+            },
+            Refusal::NoPaperFile {
+                dataset: s("demo"),
+                file: s("table9.tex"),
+                files: s("table1.tex, table2.tex"),
+            },
+            Refusal::NoApiRoute {
+                path: s("/api/v1/nope"),
+            },
             Refusal::NotLoggedIn,
             Refusal::LoginLinkUsed,
             Refusal::AdminOnly {
@@ -589,6 +885,47 @@ impl Refusal {
             },
         ]
         .into_iter()
+        .chain([
+            Refusal::TokenMissing,
+            Refusal::AuthorizationMalformed,
+            Refusal::TokenUnknown,
+            Refusal::ScopeMissing { scope: "submit" },
+            Refusal::NotModelOwner {
+                dataset: "demo".to_owned(),
+                model: "gpt-x".to_owned(),
+            },
+            Refusal::FieldsRequired {
+                fields: vec!["a", "b"],
+            },
+            Refusal::ExactlyOneOf {
+                fields: vec!["share", "items"],
+            },
+            Refusal::BothOrNeither { fields: ["a", "b"] },
+            Refusal::NotWith {
+                field: "seed",
+                other: "items",
+            },
+        ])
+        .chain(
+            vec![
+                Expected::WholeNumber {
+                    least: 1,
+                    most: 200,
+                },
+                Expected::WholeNumberFrom { least: 0 },
+                Expected::Number,
+                Expected::NumberBetween {
+                    least: 0,
+                    most: 100,
+                },
+                Expected::Fraction,
+                Expected::OneOf(vec!["json", "csv"]),
+                Expected::SubmissionId,
+                Expected::ReportedId,
+            ]
+            .into_iter()
+            .map(|expected| Refusal::bad_value("per_page", "x7", expected)),
+        )
         .chain(
             [
                 ImportPathProblem::NotRelative,
@@ -629,6 +966,63 @@ impl fmt::Display for Refusal {
             Refusal::NoRun { run } => write!(f, "no model run {run}"),
             Refusal::NoFrame { frame } => write!(f, "no frame with hash '{frame}'"),
             Refusal::NoAnswerYet { item } => write!(f, "item '{item}' has no answer from you yet"),
+            Refusal::NoStudy { study } => write!(f, "no study named '{study}'"),
+            Refusal::NoToken { token } => write!(f, "no live token with id or prefix {token:?}"),
+            Refusal::NoJob { job } => write!(f, "job {job} does not exist"),
+            Refusal::NoReported { dataset, reported } => {
+                write!(f, "dataset '{dataset}' has no reported result {reported}")
+            }
+            Refusal::NoCuratorGraphs { episode, curator } => write!(
+                f,
+                "curator '{curator}' stored no graphs of episode '{episode}'"
+            ),
+            Refusal::AnswersHidden { dataset } => write!(
+                f,
+                "the answers of dataset '{dataset}' are hidden, so what would show them is not \
+                 shown"
+            ),
+            Refusal::InviteLinkUsed => write!(
+                f,
+                "this invite link is unknown or has already been used: ask an admin for a new one"
+            ),
+            Refusal::NoModelSubmission { dataset, model } => {
+                write!(f, "no submission of model '{model}' on dataset '{dataset}'")
+            }
+            Refusal::NoPublishedSubmission {
+                field,
+                dataset,
+                submission,
+            } => write!(
+                f,
+                "`{field}`: dataset '{dataset}' has no published submission {submission}"
+            ),
+            Refusal::NoPublishedModel {
+                field,
+                dataset,
+                model,
+                models,
+            } => {
+                write!(
+                    f,
+                    "`{field}`: dataset '{dataset}' has no published row of model '{model}'"
+                )?;
+                if models.is_empty() {
+                    Ok(())
+                } else {
+                    write!(f, " (its models: {models})")
+                }
+            }
+            Refusal::NoPaperFile {
+                dataset,
+                file,
+                files,
+            } => write!(
+                f,
+                "the paper folder of dataset '{dataset}' has no file '{file}' (it has {files})"
+            ),
+            Refusal::NoApiRoute { path } => {
+                write!(f, "no API route {path}: the routes are listed at /api/docs")
+            }
             Refusal::NotLoggedIn => write!(
                 f,
                 "not logged in, or the session has expired: log in at /login"
@@ -816,6 +1210,37 @@ impl fmt::Display for Refusal {
                     "part=private: the private part of dataset '{dataset}' is not revealed \
                      yet{when}; until then its figures are for admins"
                 )
+            }
+            Refusal::BadValue {
+                field,
+                value,
+                expected,
+            } => write!(f, "{field}: {value:?} is not {expected}"),
+            Refusal::TokenMissing => write!(
+                f,
+                "this endpoint needs an API token: send `Authorization: Bearer TOKEN`"
+            ),
+            Refusal::AuthorizationMalformed => {
+                write!(f, "the Authorization header must read `Bearer TOKEN`")
+            }
+            Refusal::TokenUnknown => write!(f, "the API token is unknown or has been revoked"),
+            Refusal::ScopeMissing { scope } => write!(f, "this token lacks the `{scope}` scope"),
+            Refusal::NotModelOwner { dataset, model } => write!(
+                f,
+                "model '{model}' on dataset '{dataset}' was submitted by another account; only \
+                 it or an admin may set its metadata"
+            ),
+            Refusal::FieldsRequired { fields } => {
+                write!(f, "this request needs {}", fields.join(" and "))
+            }
+            Refusal::ExactlyOneOf { fields } => {
+                write!(f, "give exactly one of {}", fields.join(", "))
+            }
+            Refusal::BothOrNeither { fields: [a, b] } => {
+                write!(f, "give both {a} and {b}, or neither")
+            }
+            Refusal::NotWith { field, other } => {
+                write!(f, "{field} cannot be given with {other}")
             }
         }
     }

@@ -13,6 +13,7 @@ use super::error::{PageError, RenderPage};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
 use crate::app::annotation::{self, Assignment};
+use crate::app::refusal::{Expected, Refusal};
 use crate::app::{annotators, datasets, leaderboard};
 use crate::core::annotation::Session;
 use crate::core::dataset::StepLength;
@@ -279,7 +280,11 @@ async fn assign(
     let mut chosen = Vec::new();
     for part in &form.annotators {
         chosen.push(part.trim().parse::<i64>().map_err(|_| {
-            AppError::Invalid(format!("annotator: '{part}' is not an annotator id"))
+            Refusal::bad_value(
+                "annotator",
+                part.trim(),
+                Expected::WholeNumberFrom { least: 1 },
+            )
         })?);
     }
     let how = match form.mode.as_str() {
@@ -304,10 +309,9 @@ async fn assign(
             }
         }
         other => {
-            return Err(AppError::Invalid(format!(
-                "form field `mode` is {other:?}; expected \"split\" or \"list\""
-            ))
-            .into());
+            return Err(
+                Refusal::bad_value("mode", other, Expected::OneOf(vec!["split", "list"])).into(),
+            );
         }
     };
     let dataset = form.dataset.trim();

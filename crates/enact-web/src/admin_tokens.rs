@@ -10,10 +10,11 @@ use axum::response::{Html, IntoResponse, Response};
 use axum::routing::{get, post};
 use serde::Deserialize;
 
+use super::AppState;
 use super::error::{ApiError, PageError, RenderPage};
 use super::session::{Admin, Protected};
 use super::submissions::parse_role;
-use super::{AppError, AppState};
+use crate::app::refusal::{Expected, Refusal};
 use crate::app::tokens::{self, CreatedToken, TokenListing};
 use crate::core::annotation::Session;
 use crate::core::credentials::Role;
@@ -83,13 +84,11 @@ fn optional_quota(field: &str, text: &str) -> Result<Option<i64>, ApiError> {
         return Ok(None);
     }
     text.parse::<i64>()
+        .ok()
+        .filter(|q| *q >= 0)
         .map(Some)
-        .map_err(|_| {
-            AppError::Invalid(format!(
-                "{field}: '{text}' is not a whole number (leave it empty for the server's default)"
-            ))
-        })
-        .map_err(ApiError)
+        .ok_or_else(|| Refusal::bad_value(field, text, Expected::WholeNumberFrom { least: 0 }))
+        .map_err(ApiError::from)
 }
 
 async fn create(

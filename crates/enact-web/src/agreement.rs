@@ -14,6 +14,7 @@ use super::extract::{Json, Path};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
 use crate::app::agreement::{self, ReportSettings};
+use crate::app::refusal::{Expected, Refusal};
 use crate::core::agreement::protocol::DEFAULT_ITEMS_PER_CELL;
 use crate::core::agreement::report::heatmap::comparison_heatmap;
 use crate::core::agreement::report::{AgreementReport, AgreementSection};
@@ -52,12 +53,8 @@ fn parse_field<T: std::str::FromStr>(name: &str, text: &str, default: T) -> Resu
         return Ok(default);
     }
     text.parse()
-        .map_err(|_| {
-            AppError::Invalid(format!(
-                "form field `{name}`: '{text}' is not a whole number ≥ 0"
-            ))
-        })
-        .map_err(ApiError)
+        .map_err(|_| Refusal::bad_value(name, text, Expected::WholeNumberFrom { least: 0 }))
+        .map_err(ApiError::from)
 }
 
 async fn run_protocol(
@@ -120,18 +117,23 @@ struct ReportQuery {
     b: String,
 }
 
-fn optional<T: std::str::FromStr>(name: &str, text: &str) -> Result<Option<T>, ApiError>
-where
-    T::Err: std::fmt::Display,
-{
+/// The most bootstrap replicates a report page computes.
+const MOST_REPLICATES: usize = 20_000;
+
+/// The query parameter `name`, when given, as `expected` describes it.
+fn optional<T: std::str::FromStr>(
+    name: &str,
+    text: &str,
+    expected: Expected,
+) -> Result<Option<T>, ApiError> {
     let text = text.trim();
     if text.is_empty() {
         return Ok(None);
     }
     text.parse()
         .map(Some)
-        .map_err(|e| AppError::Invalid(format!("query parameter `{name}`: '{text}': {e}")))
-        .map_err(ApiError)
+        .map_err(|_| Refusal::bad_value(name, text, expected))
+        .map_err(ApiError::from)
 }
 
 impl ReportQuery {
@@ -143,41 +145,58 @@ impl ReportQuery {
 
     fn settings(&self) -> Result<ReportSettings, ApiError> {
         let chosen_pair = match (
-            optional::<i64>("a", &self.a)?,
-            optional::<i64>("b", &self.b)?,
+            optional::<i64>("a", &self.a, Expected::SubmissionId)?,
+            optional::<i64>("b", &self.b, Expected::SubmissionId)?,
         ) {
             (Some(a), Some(b)) => Some((a, b)),
             (None, None) => None,
             _ => {
-                return Err(ApiError(AppError::Invalid(
-                    "query parameters `a` and `b`: give both submission ids to compare, or neither"
-                        .to_owned(),
-                )));
+                return Err(Refusal::BothOrNeither { fields: ["a", "b"] }.into());
             }
         };
-        let confidence_level =
-            optional::<f64>("confidence", &self.confidence)?.unwrap_or(DEFAULT_CONFIDENCE_LEVEL);
+        let confidence_level = optional::<f64>("confidence", &self.confidence, Expected::Fraction)?
+            .unwrap_or(DEFAULT_CONFIDENCE_LEVEL);
         if !(confidence_level > 0.0 && confidence_level < 1.0) {
-            return Err(ApiError(AppError::Invalid(format!(
-                "query parameter `confidence`: {confidence_level} is not strictly between 0 and 1"
-            ))));
+            return Err(Refusal::bad_value(
+                "confidence",
+                confidence_level.to_string(),
+                Expected::Fraction,
+            )
+            .into());
         }
-        let replicates =
-            optional::<usize>("bootstrap", &self.bootstrap)?.unwrap_or(DEFAULT_REPLICATES);
         // A page request must stay bounded; the command line has no such limit.
-        if replicates > 20_000 {
-            return Err(ApiError(AppError::Invalid(format!(
-                "query parameter `bootstrap`: {replicates} replicates; at most 20000 here"
-            ))));
+        let replicates_allowed = Expected::WholeNumber {
+            least: 0,
+            most: MOST_REPLICATES as u64,
+        };
+        let replicates =
+            optional::<usize>("bootstrap", &self.bootstrap, replicates_allowed.clone())?
+                .unwrap_or(DEFAULT_REPLICATES);
+        if replicates > MOST_REPLICATES {
+            return Err(Refusal::bad_value(
+                "bootstrap",
+                replicates.to_string(),
+                replicates_allowed,
+            )
+            .into());
         }
         Ok(ReportSettings {
-            encoding: optional::<OrderingEncoding>("encoding", &self.encoding)?
-                .unwrap_or(PAPER_COMPARABLE_ENCODING),
-            level: optional::<MeasurementLevel>("level", &self.level)?,
+            encoding: optional::<OrderingEncoding>(
+                "encoding",
+                &self.encoding,
+                Expected::OneOf(OrderingEncoding::ALL.map(OrderingEncoding::name).to_vec()),
+            )?
+            .unwrap_or(PAPER_COMPARABLE_ENCODING),
+            level: optional::<MeasurementLevel>(
+                "level",
+                &self.level,
+                Expected::OneOf(MeasurementLevel::ALL.map(MeasurementLevel::name).to_vec()),
+            )?,
             bootstrap: BootstrapConfig {
                 replicates,
                 confidence_level,
-                seed: optional::<u64>("seed", &self.seed)?.unwrap_or(DEFAULT_BOOTSTRAP_SEED),
+                seed: optional::<u64>("seed", &self.seed, Expected::WholeNumberFrom { least: 0 })?
+                    .unwrap_or(DEFAULT_BOOTSTRAP_SEED),
             },
             chosen_pair,
         })

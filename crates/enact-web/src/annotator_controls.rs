@@ -20,6 +20,7 @@ use super::session::Protected;
 use super::{AppError, AppState};
 use crate::app::attention::{AttentionCleared, AttentionQueues, AttentionSet};
 use crate::app::controls::Handover;
+use crate::app::refusal::{Expected, Refusal};
 use crate::app::{attention, controls};
 use crate::core::attention::{Instruction, parse_check_list};
 use crate::core::credentials::Scope;
@@ -247,8 +248,8 @@ async fn set_attention_api(
     TokenCaller(caller): TokenCaller,
     Json(request): Json<AttentionRequest>,
 ) -> Result<axum::Json<AttentionChanged>, ApiError> {
-    let rate =
-        GoldRate::new(request.rate).map_err(|e| AppError::Invalid(format!("`rate`: {e}")))?;
+    let rate = GoldRate::new(request.rate)
+        .map_err(|_| super::quality::rate_refused(&request.rate.to_string()))?;
     let checks: Vec<(String, Instruction)> = request
         .checks
         .into_iter()
@@ -304,9 +305,11 @@ async fn pause_page(
             }
         }
         other => {
-            return Err(AppError::Invalid(format!(
-                "form field `action` is {other:?}; expected \"pause\" or \"resume\""
-            ))
+            return Err(Refusal::bad_value(
+                "action",
+                other,
+                Expected::OneOf(vec!["pause", "resume"]),
+            )
             .into());
         }
     };
@@ -372,13 +375,9 @@ async fn set_attention_page(
         .rate
         .trim()
         .parse::<i64>()
-        .map_err(|_| {
-            AppError::Invalid(format!(
-                "rate: {:?} is not a number; give N for one attention check in every N items",
-                form.rate.trim()
-            ))
-        })
-        .and_then(|r| GoldRate::new(r).map_err(|e| AppError::Invalid(format!("rate: {e}"))))?;
+        .ok()
+        .and_then(|r| GoldRate::new(r).ok())
+        .ok_or_else(|| super::quality::rate_refused(form.rate.trim()))?;
     let checks =
         parse_check_list(&form.checks).map_err(|e| AppError::Invalid(format!("checks: {e}")))?;
     let (set, queues) = attention::set(

@@ -19,6 +19,7 @@ use crate::app::datasets::{self, DatasetOverview};
 use crate::app::frames;
 use crate::app::item_answers::{self, ItemAnswers};
 use crate::app::items::{self, ItemFilter, ItemSummary, StoredItem};
+use crate::app::refusal::Expected;
 use crate::app::refusal::Refusal;
 use crate::core::dataset::{Direction, StepLength};
 
@@ -245,9 +246,11 @@ impl ItemQuery {
         let direction = match blank(&self.direction) {
             None => None,
             Some(d) => Some(Direction::parse(&d.to_ascii_lowercase()).ok_or_else(|| {
-                AppError::Invalid(format!(
-                    "direction must be 'forward' or 'inverse', not {d:?}"
-                ))
+                Refusal::bad_value(
+                    "direction",
+                    d.as_str(),
+                    Expected::OneOf(vec!["forward", "inverse"]),
+                )
             })?),
         };
         let step_length = match blank(&self.step_length) {
@@ -257,9 +260,11 @@ impl ItemQuery {
                     .ok()
                     .and_then(StepLength::new)
                     .ok_or_else(|| {
-                        AppError::Invalid(format!(
-                            "step_length must be a whole number from 3 to 10, not {s:?}"
-                        ))
+                        Refusal::bad_value(
+                            "step_length",
+                            s.as_str(),
+                            Expected::WholeNumber { least: 3, most: 10 },
+                        )
                     })?,
             ),
         };
@@ -270,8 +275,13 @@ impl ItemQuery {
                 .ok()
                 .filter(|n| (1..=max).contains(n))
                 .ok_or_else(|| {
-                    AppError::Invalid(format!(
-                        "{name} must be a whole number from 1 to {max}, not {s:?}"
+                    AppError::from(Refusal::bad_value(
+                        name,
+                        s,
+                        Expected::WholeNumber {
+                            least: 1,
+                            most: max.into(),
+                        },
                     ))
                 }),
         };
@@ -534,23 +544,24 @@ mod tests {
 
     #[test]
     fn item_query_rejects_bad_values_with_their_name() {
+        let field_of = |q: ItemQuery| match q.selection() {
+            Err(AppError::Refused(Refusal::BadValue { field, .. })) => field,
+            other => panic!("expected a bad value, got {:?}", other.err()),
+        };
         let q = ItemQuery {
             direction: Some("sideways".into()),
             ..ItemQuery::default()
         };
-        let Err(AppError::Invalid(m)) = q.selection() else {
-            panic!("expected a bad request");
-        };
-        assert!(m.contains("direction"), "{m}");
+        assert_eq!(field_of(q), "direction");
         let q = ItemQuery {
             step_length: Some("11".into()),
             ..ItemQuery::default()
         };
-        assert!(matches!(q.selection(), Err(AppError::Invalid(m)) if m.contains("step_length")));
+        assert_eq!(field_of(q), "step_length");
         let q = ItemQuery {
             per_page: Some("0".into()),
             ..ItemQuery::default()
         };
-        assert!(matches!(q.selection(), Err(AppError::Invalid(m)) if m.contains("per_page")));
+        assert_eq!(field_of(q), "per_page");
     }
 }

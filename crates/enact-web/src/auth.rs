@@ -10,6 +10,7 @@ use axum::middleware::Next;
 use axum::response::Response;
 
 use super::{ApiError, AppError, AppState};
+use crate::app::refusal::Refusal;
 use crate::app::tokens::{self, Caller};
 use crate::core::credentials::Scope;
 
@@ -37,26 +38,16 @@ pub(super) async fn require_scope(
 pub(super) fn bearer_token(headers: &HeaderMap) -> Result<&str, ApiError> {
     let header = headers
         .get(header::AUTHORIZATION)
-        .ok_or_else(|| {
-            AppError::Unauthenticated(
-                "this endpoint needs an API token: send `Authorization: Bearer TOKEN`".to_owned(),
-            )
-        })?
+        .ok_or(Refusal::TokenMissing)?
         .to_str()
-        .map_err(|_| {
-            AppError::Unauthenticated("the Authorization header is not text".to_owned())
-        })?;
+        .map_err(|_| Refusal::AuthorizationMalformed)?;
     header
         .strip_prefix("Bearer ")
         .or_else(|| header.strip_prefix("bearer "))
         .map(str::trim)
         .filter(|t| !t.is_empty())
-        .ok_or_else(|| {
-            AppError::Unauthenticated(
-                "the Authorization header must read `Bearer TOKEN`".to_owned(),
-            )
-        })
-        .map_err(ApiError)
+        .ok_or(Refusal::AuthorizationMalformed)
+        .map_err(ApiError::from)
 }
 
 /// The caller [`require_scope`] let through. A handler that asks for one on a route the table

@@ -13,18 +13,19 @@ use axum::routing::{get, post};
 use schemars::JsonSchema;
 use serde::Deserialize;
 
+use super::AppState;
 use super::auth::TokenCaller;
 use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Json, MOST_WHOLE_NUMBER, Path, Query};
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
 use super::session::{Admin, Protected};
-use super::{AppError, AppState};
 use crate::app::challenge::{
     self, BoardChallenge, ChallengeView, MAX_SELECTION_LIMIT, SelectionView, SettingsChange,
 };
 use crate::app::datasets;
 use crate::app::leaderboard::Board;
+use crate::app::refusal::Expected;
 use crate::app::refusal::Refusal;
 use crate::core::challenge::{Part, Standing};
 use crate::core::credentials::Scope;
@@ -310,8 +311,10 @@ async fn unselect_api(
 /// The leaderboard's `part` parameter.
 pub(super) fn parse_part(value: &str) -> Result<Part, ApiError> {
     Part::parse(value)
-        .ok_or_else(|| AppError::Invalid(format!("part must be public or private, not {value:?}")))
-        .map_err(ApiError)
+        .ok_or_else(|| {
+            Refusal::bad_value("part", value, Expected::OneOf(vec!["public", "private"]))
+        })
+        .map_err(ApiError::from)
 }
 
 /// The rows a leaderboard request for `part` (the default part when `None`) reads, and what
@@ -517,9 +520,10 @@ fn back_to(dataset: &str) -> Response {
 fn form_dataset(dataset: &str) -> Result<&str, ApiError> {
     let dataset = dataset.trim();
     if dataset.is_empty() {
-        return Err(ApiError(AppError::Invalid(
-            "dataset: the form names no dataset".to_owned(),
-        )));
+        return Err(Refusal::FieldsRequired {
+            fields: vec!["dataset"],
+        }
+        .into());
     }
     Ok(dataset)
 }
@@ -540,16 +544,15 @@ async fn split_form(
 ) -> Result<Response, PageError> {
     let form = request.body;
     let dataset = form_dataset(&form.dataset)?;
-    let share = form.share.trim().parse::<f64>().map_err(|_| {
-        AppError::Invalid(format!(
-            "share: {:?} is not a number above 0 and below 1",
-            form.share
-        ))
-    })?;
+    let share = form
+        .share
+        .trim()
+        .parse::<f64>()
+        .map_err(|_| Refusal::bad_value("share", form.share.trim(), Expected::Fraction))?;
     let seed = match form.seed.trim() {
         "" => 0,
         text => text.parse::<u64>().map_err(|_| {
-            AppError::Invalid(format!("seed: {text:?} is not a whole number of 0 or more"))
+            Refusal::bad_value("seed", text, Expected::WholeNumberFrom { least: 0 })
         })?,
     };
     challenge::split(&state.hub, &request.session.actor(), dataset, share, seed).await?;
@@ -579,9 +582,14 @@ async fn settings_form(
     let selection_limit = match form.selection_limit.trim() {
         "" => None,
         text => Some(text.parse::<i64>().map_err(|_| {
-            AppError::Invalid(format!(
-                "selection_limit: {text:?} is not a whole number from 1 to {MAX_SELECTION_LIMIT}"
-            ))
+            Refusal::bad_value(
+                "selection_limit",
+                text,
+                Expected::WholeNumber {
+                    least: 1,
+                    most: MAX_SELECTION_LIMIT as u64,
+                },
+            )
         })?),
     };
     let change = SettingsChange {

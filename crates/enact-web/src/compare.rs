@@ -11,14 +11,15 @@ use axum::routing::get;
 use serde::Deserialize;
 use serde_json::json;
 
+use super::AppState;
 use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Path, Query};
 use super::i18n::Tr;
 use super::openapi::{ApiRoute, Verb};
 use super::session::ReaderIsAdmin;
-use super::{AppError, AppState};
 use crate::app::compare::{self, DiscordantItem, RowComparison};
 use crate::app::leaderboard;
+use crate::app::refusal::{Expected, Refusal};
 use crate::core::dataset::Direction;
 use crate::core::leaderboard::{RowSource, one_per_model};
 use crate::core::paired::{PairedCell, PairedConfig, Resampling};
@@ -76,11 +77,13 @@ pub(super) fn resample_param(value: Option<&str>) -> Result<Resampling, ApiError
         "" => Ok(Resampling::default()),
         other => Resampling::parse(other)
             .ok_or_else(|| {
-                AppError::Invalid(format!(
-                    "query parameter `resample`: {other:?} is not `activities` or `items`"
-                ))
+                Refusal::bad_value(
+                    "resample",
+                    other,
+                    Expected::OneOf(vec!["activities", "items"]),
+                )
             })
-            .map_err(ApiError),
+            .map_err(ApiError::from),
     }
 }
 
@@ -127,10 +130,10 @@ async fn compare_api(
 ) -> Result<axum::Json<RowComparison>, ApiError> {
     let config = query.config()?;
     let Some((a, b)) = query.rows() else {
-        return Err(ApiError(AppError::Invalid(
-            "query parameters `a` and `b` are required: each a model name or a submission id"
-                .to_owned(),
-        )));
+        return Err(Refusal::FieldsRequired {
+            fields: vec!["a", "b"],
+        }
+        .into());
     };
     let comparison = compare::rows(&state.hub, &dataset, a, b, config, false).await?;
     Ok(axum::Json(comparison))

@@ -19,6 +19,7 @@ use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Json, Path};
 use super::session::{Admin, LoggedIn, Protected};
 use super::{AppError, AppState};
+use crate::app::refusal::Refusal;
 use crate::app::{episode_curation, episodes};
 use crate::core::episode::{EpisodeGraphs, GraphProblem, TransitionView};
 use crate::core::scene_graph::signature::{STATE_PHRASES, StateArity};
@@ -350,11 +351,9 @@ async fn upload(
                 );
             }
             _ if !csrf_ok => {
-                return Err(PageError(AppError::NotPermitted(
-                    "this upload lacks the page's CSRF token (it must come first): reload the \
-                     page and try again"
-                        .to_owned(),
-                )));
+                // The token must come first: the frames after it are read only for a form
+                // known to be this page's.
+                return Err(Refusal::StaleForm.into());
             }
             "name" => name = field.text().await.map_err(multipart_error)?,
             "scene" => scene = field.text().await.map_err(multipart_error)?,

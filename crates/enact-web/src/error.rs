@@ -113,9 +113,10 @@ impl IntoResponse for ApiError {
                 _ => None,
             },
         };
-        let mut response = (status_of(&error), Json(body)).into_response();
+        let status = status_of(&error);
+        let mut response = (status, Json(body)).into_response();
         match &error {
-            AppError::Unauthenticated(_) | AppError::Refused(Refusal::NotLoggedIn) => {
+            _ if status == StatusCode::UNAUTHORIZED => {
                 response.headers_mut().insert(
                     header::WWW_AUTHENTICATE,
                     HeaderValue::from_static("Bearer realm=\"enact-hub\""),

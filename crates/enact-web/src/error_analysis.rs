@@ -20,6 +20,7 @@ use super::openapi::{ApiRoute, Verb};
 use super::session::ReaderIsAdmin;
 use super::{AppError, AppState};
 use crate::app::error_analysis::{self, Analysed, ComparedRow};
+use crate::app::refusal::{Expected, Refusal};
 use crate::core::credentials::Scope;
 use crate::core::error_analysis::chart::{self, BarChart, ChartNames};
 use crate::core::error_analysis::{
@@ -126,9 +127,12 @@ impl CompareQuery {
         match self.top {
             None => Ok(DEFAULT_ROWS),
             Some(n @ 1..=50) => Ok(n),
-            Some(n) => Err(ApiError(AppError::Invalid(format!(
-                "query parameter `top`: {n} is outside 1..=50"
-            )))),
+            Some(n) => Err(Refusal::bad_value(
+                "top",
+                n.to_string(),
+                Expected::WholeNumber { least: 1, most: 50 },
+            )
+            .into()),
         }
     }
 
@@ -139,8 +143,10 @@ impl CompareQuery {
         text.split(',')
             .map(|id| {
                 id.trim().parse().map_err(|_| {
-                    AppError::Invalid(format!(
-                        "query parameter `pick`: `{id}` is not a submission id"
+                    AppError::from(Refusal::bad_value(
+                        "pick",
+                        id.trim(),
+                        Expected::SubmissionId,
                     ))
                 })
             })
@@ -152,9 +158,12 @@ impl CompareQuery {
             None | Some("" | "overall") => Ok(None),
             Some("forward") => Ok(Some(Direction::Forward)),
             Some("inverse") => Ok(Some(Direction::Inverse)),
-            Some(other) => Err(ApiError(AppError::Invalid(format!(
-                "query parameter `direction`: `{other}` is not overall, forward or inverse"
-            )))),
+            Some(other) => Err(Refusal::bad_value(
+                "direction",
+                other,
+                Expected::OneOf(vec!["overall", "forward", "inverse"]),
+            )
+            .into()),
         }
     }
 }

@@ -22,6 +22,7 @@ use super::pages::verdict_view;
 use super::session::ReaderIsAdmin;
 use super::{AppError, AppState};
 use crate::app::explore::{self, Explored, ExplorerPage};
+use crate::app::refusal::{Expected, Refusal};
 use crate::core::dataset::Direction;
 use crate::core::explorer::{
     DEFAULT_PER_PAGE, Grid, MAX_PER_PAGE, Pattern, RowRef, Sort, ViewText,
@@ -157,8 +158,13 @@ impl ExploreQuery {
                 .ok()
                 .filter(|n| (1..=max).contains(n))
                 .ok_or_else(|| {
-                    AppError::Invalid(format!(
-                        "`{name}` must be a whole number from 1 to {max}, not {s:?}"
+                    AppError::from(Refusal::bad_value(
+                        name,
+                        s,
+                        Expected::WholeNumber {
+                            least: 1,
+                            most: max as u64,
+                        },
                     ))
                 }),
         };
@@ -179,9 +185,9 @@ async fn explore_api(
         "" | "json" => false,
         "csv" => true,
         other => {
-            return Err(ApiError(AppError::Invalid(format!(
-                "`format` must be `json` or `csv`, not {other:?}"
-            ))));
+            return Err(
+                Refusal::bad_value("format", other, Expected::OneOf(vec!["json", "csv"])).into(),
+            );
         }
     };
     let (page, per_page) = query.paging()?;

@@ -24,7 +24,7 @@ use fluent_bundle::{FluentArgs, FluentResource, FluentValue};
 
 use super::AppState;
 use super::cookies::cookie;
-use crate::app::refusal::{Detail, ImportPathProblem, Refusal};
+use crate::app::refusal::{Detail, Expected, ImportPathProblem, Refusal};
 use crate::core::annotation::DraftProblem;
 
 /// The cookie holding the locale a browser chose with the switch.
@@ -570,6 +570,18 @@ pub fn refusal_key(refusal: &Refusal) -> &'static str {
         Refusal::NoRun { .. } => msg("refusal-no-run"),
         Refusal::NoFrame { .. } => msg("refusal-no-frame"),
         Refusal::NoAnswerYet { .. } => msg("refusal-no-answer-yet"),
+        Refusal::NoStudy { .. } => msg("refusal-no-study"),
+        Refusal::NoToken { .. } => msg("refusal-no-token"),
+        Refusal::NoJob { .. } => msg("refusal-no-job"),
+        Refusal::NoReported { .. } => msg("refusal-no-reported"),
+        Refusal::NoCuratorGraphs { .. } => msg("refusal-no-curator-graphs"),
+        Refusal::AnswersHidden { .. } => msg("refusal-answers-hidden"),
+        Refusal::InviteLinkUsed => msg("refusal-invite-link-used"),
+        Refusal::NoModelSubmission { .. } => msg("refusal-no-model-submission"),
+        Refusal::NoPublishedSubmission { .. } => msg("refusal-no-published-submission"),
+        Refusal::NoPublishedModel { .. } => msg("refusal-no-published-model"),
+        Refusal::NoPaperFile { .. } => msg("refusal-no-paper-file"),
+        Refusal::NoApiRoute { .. } => msg("refusal-no-api-route"),
         Refusal::NotLoggedIn => msg("refusal-not-logged-in"),
         Refusal::AdminOnly { .. } => msg("refusal-admin-only"),
         Refusal::StaleForm => msg("refusal-stale-form"),
@@ -603,6 +615,25 @@ pub fn refusal_key(refusal: &Refusal) -> &'static str {
         Refusal::SelectionNotPublished { .. } => msg("refusal-selection-not-published"),
         Refusal::SelectionLimitReached { .. } => msg("refusal-selection-limit-reached"),
         Refusal::PrivatePartHidden { .. } => msg("refusal-private-part-hidden"),
+        Refusal::TokenMissing => msg("refusal-token-missing"),
+        Refusal::AuthorizationMalformed => msg("refusal-authorization-malformed"),
+        Refusal::TokenUnknown => msg("refusal-token-unknown"),
+        Refusal::ScopeMissing { .. } => msg("refusal-scope-missing"),
+        Refusal::NotModelOwner { .. } => msg("refusal-not-model-owner"),
+        Refusal::FieldsRequired { .. } => msg("refusal-fields-required"),
+        Refusal::ExactlyOneOf { .. } => msg("refusal-exactly-one-of"),
+        Refusal::BothOrNeither { .. } => msg("refusal-both-or-neither"),
+        Refusal::NotWith { .. } => msg("refusal-not-with"),
+        Refusal::BadValue { expected, .. } => match expected {
+            Expected::WholeNumber { .. } => msg("refusal-bad-value-whole-number"),
+            Expected::WholeNumberFrom { .. } => msg("refusal-bad-value-whole-number-from"),
+            Expected::Number => msg("refusal-bad-value-number"),
+            Expected::NumberBetween { .. } => msg("refusal-bad-value-number-between"),
+            Expected::Fraction => msg("refusal-bad-value-fraction"),
+            Expected::OneOf(_) => msg("refusal-bad-value-one-of"),
+            Expected::SubmissionId => msg("refusal-bad-value-submission-id"),
+            Expected::ReportedId => msg("refusal-bad-value-reported-id"),
+        },
         Refusal::ImportPath { problem, .. } => match problem {
             ImportPathProblem::NotRelative => msg("refusal-import-path-not-relative"),
             ImportPathProblem::Missing => msg("refusal-import-path-missing"),

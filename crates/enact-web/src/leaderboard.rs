@@ -25,6 +25,7 @@ use super::{AppError, AppState};
 use crate::app::challenge::BoardChallenge;
 use crate::app::leaderboard::{self, Board};
 use crate::app::models::ModelMetadata;
+use crate::app::refusal::{Expected, Refusal};
 use crate::app::reported::ReportedResult;
 use crate::core::challenge::Part;
 use crate::core::dataset::{Direction, StepLength};
@@ -161,16 +162,23 @@ impl BoardRequest {
                 .ok()
                 .filter(|n| (1..=max).contains(n))
                 .ok_or_else(|| {
-                    AppError::Invalid(format!(
-                        "{name} must be a whole number from 1 to {max}, not {text:?}"
+                    AppError::from(Refusal::bad_value(
+                        name,
+                        text,
+                        Expected::WholeNumber {
+                            least: 1,
+                            most: max as u64,
+                        },
                     ))
                 })
         };
         let switch = |name: &str, value: &str| match value {
             "1" | "true" => Ok(true),
             "0" | "false" => Ok(false),
-            other => Err(AppError::Invalid(format!(
-                "{name} must be 1 or 0, not {other:?}"
+            other => Err(AppError::from(Refusal::bad_value(
+                name,
+                other,
+                Expected::OneOf(vec!["1", "0"]),
             ))),
         };
         for (key, value) in &pairs {
@@ -188,9 +196,11 @@ impl BoardRequest {
                 "account" => query.account = Some(value.to_owned()),
                 "provenance" => {
                     let p = Provenance::parse(value).ok_or_else(|| {
-                        AppError::Invalid(format!(
-                            "provenance must be run, submitted or reported, not {value:?}"
-                        ))
+                        Refusal::bad_value(
+                            "provenance",
+                            value,
+                            Expected::OneOf(vec!["run", "submitted", "reported"]),
+                        )
                     })?;
                     // A paper's numbers are the reported rows: asking for them shows them.
                     reported |= p == Provenance::Reported;
@@ -199,7 +209,7 @@ impl BoardRequest {
                 "chart" => {
                     for part in value.split(',').filter(|p| !p.trim().is_empty()) {
                         let id = part.trim().parse().map_err(|_| {
-                            AppError::Invalid(format!("chart: {part:?} is not a submission id"))
+                            Refusal::bad_value("chart", part.trim(), Expected::SubmissionId)
                         })?;
                         chart.get_or_insert_with(Vec::new).push(id);
                     }

@@ -14,6 +14,7 @@ use super::error::PageError;
 use super::i18n::{Locale, locale_cookie};
 use super::session::SESSION_COOKIE;
 use crate::app::annotators;
+use crate::app::refusal::{Expected, Refusal};
 use crate::core::credentials::token_hash;
 
 pub fn router() -> Router<AppState> {
@@ -41,12 +42,8 @@ async fn switch(
     axum::Form(form): axum::Form<SwitchForm>,
 ) -> Result<Response, PageError> {
     let Some(locale) = Locale::from_tag(&form.locale) else {
-        let known: Vec<&str> = Locale::ALL.iter().map(|l| l.tag()).collect();
-        return Err(PageError(crate::app::AppError::Invalid(format!(
-            "form field `locale`: '{}' is not a locale of this hub (one of: {})",
-            form.locale,
-            known.join(", ")
-        ))));
+        let known: Vec<&'static str> = Locale::ALL.iter().map(|l| l.tag()).collect();
+        return Err(Refusal::bad_value("locale", form.locale, Expected::OneOf(known)).into());
     };
     if let Some(token) = cookie(&headers, SESSION_COOKIE) {
         annotators::save_locale(&state.hub, &token_hash(&token), locale.tag()).await?;

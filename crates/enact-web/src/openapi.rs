@@ -354,10 +354,10 @@ pub fn api_router(routes: Vec<ApiRoute>, state: &AppState) -> Router<AppState> {
 
 /// A path under `/api/v1` that no route serves: the JSON error body, like every refusal.
 async fn unknown_route(uri: axum::http::Uri) -> ApiError {
-    ApiError(AppError::NotFound(format!(
-        "no API route {}: the routes are listed at /api/docs",
-        uri.path()
-    )))
+    Refusal::NoApiRoute {
+        path: uri.path().to_owned(),
+    }
+    .into()
 }
 
 /// The HTML docs page, outside `/api/v1`.

@@ -12,11 +12,12 @@ use axum::response::{Html, IntoResponse, Response};
 use axum::routing::get;
 use serde::Deserialize;
 
+use super::AppState;
 use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Path, Query};
 use super::i18n::Tr;
-use super::{AppError, AppState};
 use crate::app::paper::{self, Paper, PaperOptions};
+use crate::app::refusal::{Expected, Refusal};
 use crate::core::dataset::StepLength;
 use crate::core::paper::export::study_heatmap_names;
 use crate::core::paper::hub::ReproducedCell;
@@ -58,9 +59,9 @@ impl PaperQuery {
             "ta" => vec![Metric::TaskAccuracy],
             "pa" => vec![Metric::PairwiseAccuracy],
             other => {
-                return Err(ApiError(AppError::Invalid(format!(
-                    "query parameter `metric`: {other:?} is not `ta`, `pa` or empty"
-                ))));
+                return Err(
+                    Refusal::bad_value("metric", other, Expected::OneOf(vec!["ta", "pa"])).into(),
+                );
             }
         };
         Ok(PaperOptions {
@@ -343,11 +344,12 @@ async fn paper_file(
     let files = paper.files(true)?;
     let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
     let Some(found) = files.iter().find(|f| f.name == file) else {
-        return Err(ApiError(AppError::NotFound(format!(
-            "the paper folder of dataset '{}' has no file '{file}' (it has {})",
-            paper.dataset,
-            names.join(", ")
-        ))));
+        return Err(Refusal::NoPaperFile {
+            dataset: paper.dataset.clone(),
+            file,
+            files: names.join(", "),
+        }
+        .into());
     };
     Ok((
         [(

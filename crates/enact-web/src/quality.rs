@@ -21,6 +21,7 @@ use super::session::{Admin, Protected};
 use super::{AppError, AppState};
 use crate::app::gold::{GoldCleared, GoldQueues, GoldSet};
 use crate::app::quality::QualityReport;
+use crate::app::refusal::{Expected, Refusal};
 use crate::app::{annotators, attention, controls, datasets, gold, quality};
 use crate::core::annotation::Session;
 use crate::core::credentials::Scope;
@@ -220,24 +221,26 @@ pub(super) fn whole_seed<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Optio
 
 impl GoldRequest {
     fn choice(&self) -> Result<(GoldChoice, GoldRate), ApiError> {
-        let rate =
-            GoldRate::new(self.rate).map_err(|e| AppError::Invalid(format!("`rate`: {e}")))?;
+        let rate = GoldRate::new(self.rate).map_err(|_| rate_refused(&self.rate.to_string()))?;
         let choice = match (self.share, &self.items) {
             (Some(share), None) => GoldChoice::share(share, self.seed.unwrap_or(0))
-                .map_err(|e| AppError::Invalid(format!("`share`: {e}")))?,
+                .map_err(|_| Refusal::bad_value("share", share.to_string(), Expected::Fraction))?,
             (None, Some(items)) => {
                 if self.seed.is_some() {
-                    return Err(ApiError(AppError::Invalid(
-                        "`seed` goes with `share`, not with `items`".to_owned(),
-                    )));
+                    return Err(Refusal::NotWith {
+                        field: "seed",
+                        other: "items",
+                    }
+                    .into());
                 }
                 GoldChoice::list(&items.join("\n"))
                     .map_err(|e| AppError::Invalid(format!("`items`: {e}")))?
             }
             _ => {
-                return Err(ApiError(AppError::Invalid(
-                    "give either `share` (with an optional `seed`) or `items`, not both".to_owned(),
-                )));
+                return Err(Refusal::ExactlyOneOf {
+                    fields: vec!["share", "items"],
+                }
+                .into());
             }
         };
         Ok((choice, rate))
@@ -520,9 +523,14 @@ pub(super) async fn render(
         None => 80.0,
         Some(b) if b.is_finite() && (0.0..=100.0).contains(&b) => b,
         Some(b) => {
-            return Err(AppError::Invalid(format!(
-                "bar {b}: give the gold task accuracy bar in percent, from 0 to 100"
-            ))
+            return Err(Refusal::bad_value(
+                "bar",
+                b.to_string(),
+                Expected::NumberBetween {
+                    least: 0,
+                    most: 100,
+                },
+            )
             .into());
         }
     };
@@ -689,6 +697,18 @@ struct GoldForm {
     rate: String,
 }
 
+/// A gold or attention rate that is not one item in every 2 to [`GoldRate::MAX`].
+pub(super) fn rate_refused(rate: &str) -> Refusal {
+    Refusal::bad_value(
+        "rate",
+        rate,
+        Expected::WholeNumber {
+            least: 2,
+            most: GoldRate::MAX.into(),
+        },
+    )
+}
+
 fn form_number<T: std::str::FromStr>(field: &str, text: &str) -> Result<Option<T>, ApiError> {
     let text = text.trim();
     if text.is_empty() {
@@ -696,8 +716,8 @@ fn form_number<T: std::str::FromStr>(field: &str, text: &str) -> Result<Option<T
     }
     text.parse()
         .map(Some)
-        .map_err(|_| AppError::Invalid(format!("{field}: {text:?} is not a number")))
-        .map_err(ApiError)
+        .map_err(|_| Refusal::bad_value(field, text, Expected::Number))
+        .map_err(ApiError::from)
 }
 
 async fn set_gold_page(
@@ -705,8 +725,7 @@ async fn set_gold_page(
     request: Protected<GoldForm>,
 ) -> Result<Html<String>, PageError> {
     let form = request.body;
-    let rate = form_number::<i64>("rate", &form.rate)?
-        .ok_or_else(|| AppError::Invalid("rate: give N for one gold item in every N".to_owned()))?;
+    let rate = form_number::<i64>("rate", &form.rate)?.ok_or_else(|| rate_refused(""))?;
     let share = form_number::<f64>("share", &form.share)?;
     let seed = form_number::<u64>("seed", &form.seed)?;
     let items = Some(form.items.trim())
@@ -791,9 +810,11 @@ async fn exclusion_page(
             gold::include(&state.hub, &actor, &form.dataset, &form.annotator).await?;
         }
         other => {
-            return Err(AppError::Invalid(format!(
-                "form field `action` is {other:?}; expected \"exclude\" or \"include\""
-            ))
+            return Err(Refusal::bad_value(
+                "action",
+                other,
+                Expected::OneOf(vec!["exclude", "include"]),
+            )
             .into());
         }
     }

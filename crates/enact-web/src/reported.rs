@@ -20,6 +20,7 @@ use super::openapi::{ApiRoute, Verb};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
 use crate::app::models::{self, MetadataEditor, ModelMetadata, ModelMetadataEntry};
+use crate::app::refusal::{Expected, Refusal};
 use crate::app::reported::{self, ReportedModelSchema, ReportedResult};
 use crate::core::annotation::Session;
 use crate::core::credentials::Scope;
@@ -366,12 +367,12 @@ async fn admin_remove(
     Path(dataset): Path<String>,
     request: Protected<RemoveForm>,
 ) -> Result<Response, PageError> {
-    let id: i64 = request.body.id.trim().parse().map_err(|_| {
-        AppError::Invalid(format!(
-            "id: {:?} is not a reported result's id",
-            request.body.id
-        ))
-    })?;
+    let id: i64 = request
+        .body
+        .id
+        .trim()
+        .parse()
+        .map_err(|_| Refusal::bad_value("id", request.body.id.trim(), Expected::ReportedId))?;
     let actor = request.session.actor();
     let result = reported::remove(&state.hub, &actor, &dataset, id).await;
     after(

@@ -12,13 +12,14 @@ use axum::response::{Html, IntoResponse, Redirect, Response};
 use axum::routing::{get, post};
 use serde::Deserialize;
 
+use super::AppState;
 use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Path, Query};
-use super::runs::{RunRequest, responses_download};
+use super::runs::{MOST_CONCURRENCY, MOST_U32, MOST_WHOLE, RunRequest, responses_download};
 use super::session::{Admin, Protected};
-use super::{AppError, AppState};
 use crate::app::datasets;
 use crate::app::jobs::JobControl;
+use crate::app::refusal::{Expected, Refusal};
 use crate::app::runs::{self, Audience, ResponsePage, RunItemRow, ServerRunView};
 use crate::core::annotation::Session;
 
@@ -270,16 +271,27 @@ struct StartForm {
 }
 
 /// A form field's number, `None` when left empty.
-fn optional<T: std::str::FromStr>(field: &str, text: &str) -> Result<Option<T>, ApiError> {
+fn optional<T: std::str::FromStr>(
+    field: &str,
+    text: &str,
+    expected: Expected,
+) -> Result<Option<T>, ApiError> {
     let text = text.trim();
     if text.is_empty() {
         return Ok(None);
     }
-    text.parse().map(Some).map_err(|_| {
-        AppError::Invalid(format!(
-            "{field}: '{text}' is not a number of the right kind (leave it empty for the default)"
-        ))
-    }).map_err(ApiError)
+    text.parse()
+        .map(Some)
+        .map_err(|_| Refusal::bad_value(field, text, expected))
+        .map_err(ApiError::from)
+}
+
+/// A whole number from `least` to `most`, as [`super::runs`] checks it.
+fn whole(least: i64, most: i64) -> Expected {
+    Expected::WholeNumber {
+        least: least.unsigned_abs(),
+        most: most.unsigned_abs(),
+    }
 }
 
 fn text(value: &str) -> Option<String> {
@@ -289,14 +301,16 @@ fn text(value: &str) -> Option<String> {
 impl StartForm {
     fn request(self) -> Result<RunRequest, ApiError> {
         Ok(RunRequest {
-            temperature: optional("temperature", &self.temperature)?,
-            max_tokens: optional("max tokens", &self.max_tokens)?,
-            limit: optional("limit", &self.limit)?,
-            price_input: optional("input price", &self.price_input)?.unwrap_or(0.0),
-            price_output: optional("output price", &self.price_output)?.unwrap_or(0.0),
-            concurrency: optional("concurrency", &self.concurrency)?,
-            max_retries: optional("max retries", &self.max_retries)?,
-            timeout_s: optional("timeout", &self.timeout_s)?,
+            temperature: optional("temperature", &self.temperature, Expected::Number)?,
+            max_tokens: optional("max tokens", &self.max_tokens, whole(0, MOST_U32))?,
+            limit: optional("limit", &self.limit, whole(1, MOST_WHOLE))?,
+            price_input: optional("input price", &self.price_input, Expected::Number)?
+                .unwrap_or(0.0),
+            price_output: optional("output price", &self.price_output, Expected::Number)?
+                .unwrap_or(0.0),
+            concurrency: optional("concurrency", &self.concurrency, whole(1, MOST_CONCURRENCY))?,
+            max_retries: optional("max retries", &self.max_retries, whole(0, MOST_U32))?,
+            timeout_s: optional("timeout", &self.timeout_s, Expected::Number)?,
             dataset: self.dataset.trim().to_owned(),
             endpoint: self.endpoint.trim().to_owned(),
             model: self.model.trim().to_owned(),
@@ -382,9 +396,12 @@ async fn control(
         ),
         "cancel" => (JobControl::Cancel, "Cancelled: what was asked stays."),
         other => {
-            return Err(PageError(AppError::Invalid(format!(
-                "{other:?} is not a change of a run: pause, resume or cancel"
-            ))));
+            return Err(Refusal::bad_value(
+                "change",
+                other,
+                Expected::OneOf(vec!["pause", "resume", "cancel"]),
+            )
+            .into());
         }
     };
     runs::control(&state.hub, &request.session.actor(), id, change).await?;

@@ -16,6 +16,7 @@ use super::openapi::{ApiRoute, Verb};
 use super::session::ReaderIsAdmin;
 use super::{AppError, AppState};
 use crate::app::jobs::JobControl;
+use crate::app::refusal::{Expected, Refusal};
 use crate::app::runs::{self, Audience, RunCalls, RunOutput, RunSpec, ServerRunView};
 use crate::core::credentials::Scope;
 use crate::core::model_run::{GenerationParams, Prices};
@@ -259,9 +260,9 @@ pub(super) struct RunRequest {
     pub(super) timeout_s: Option<f64>,
 }
 
-const MOST_U32: i64 = u32::MAX as i64;
-const MOST_WHOLE: i64 = super::extract::MOST_WHOLE_NUMBER;
-const MOST_CONCURRENCY: i64 = runs::MOST_CONCURRENCY as i64;
+pub(super) const MOST_U32: i64 = u32::MAX as i64;
+pub(super) const MOST_WHOLE: i64 = super::extract::MOST_WHOLE_NUMBER;
+pub(super) const MOST_CONCURRENCY: i64 = runs::MOST_CONCURRENCY as i64;
 
 /// `value` as the type a field is used as, or a 400 naming the field and the range.
 fn counted<T: TryFrom<i64>>(
@@ -277,11 +278,19 @@ fn counted<T: TryFrom<i64>>(
                 .then(|| T::try_from(v).ok())
                 .flatten()
                 .ok_or_else(|| {
-                    AppError::Invalid(format!("{field} must be {least} to {most}, not {v}"))
+                    // Every count's range starts at 0 or more.
+                    Refusal::bad_value(
+                        field,
+                        v.to_string(),
+                        Expected::WholeNumber {
+                            least: least.max(0).unsigned_abs(),
+                            most: most.max(0).unsigned_abs(),
+                        },
+                    )
                 })
         })
         .transpose()
-        .map_err(ApiError)
+        .map_err(ApiError::from)
 }
 
 #[derive(Serialize, JsonSchema)]

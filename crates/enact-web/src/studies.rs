@@ -21,6 +21,7 @@ use super::i18n::Tr;
 use super::openapi::{ApiRoute, Verb};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
+use crate::app::refusal::{Expected, Refusal};
 use crate::app::studies::{self, StudyRowChoice, StudyView};
 use crate::app::{datasets, studies::files};
 use crate::core::annotation::Session;
@@ -246,9 +247,10 @@ impl ReportQuery {
             .map(str::trim)
             .filter(|m| !m.is_empty());
         match (model, self.human.unwrap_or(false)) {
-            (Some(_), true) => Err(ApiError(AppError::Invalid(
-                "query: give `model` or `human=true`, not both".to_owned(),
-            ))),
+            (Some(_), true) | (None, false) => Err(Refusal::ExactlyOneOf {
+                fields: vec!["model", "human"],
+            }
+            .into()),
             (None, true) => Ok(StudyRowChoice::Human),
             (Some(model), false) => Ok(StudyRowChoice::Model {
                 model: model.to_owned(),
@@ -259,9 +261,6 @@ impl ReportQuery {
                     .filter(|a| !a.is_empty())
                     .map(str::to_owned),
             }),
-            (None, false) => Err(ApiError(AppError::Invalid(
-                "query: `model` is required (or `human=true` for the Human row)".to_owned(),
-            ))),
         }
     }
 }
@@ -290,11 +289,9 @@ async fn study_report(
 ) -> Result<Response, ApiError> {
     let choice = query.choice()?;
     let format = query.format.as_deref().unwrap_or("json");
-    if !["json", "csv", "tex", "svg", "handedness-svg", "tar"].contains(&format) {
-        return Err(ApiError(AppError::Invalid(format!(
-            "query parameter `format`: {format:?} is not one of json, csv, tex, svg, \
-             handedness-svg, tar"
-        ))));
+    let formats = vec!["json", "csv", "tex", "svg", "handedness-svg", "tar"];
+    if !formats.contains(&format) {
+        return Err(Refusal::bad_value("format", format, Expected::OneOf(formats)).into());
     }
     let report = studies::report(
         &state.hub,
@@ -457,9 +454,11 @@ async fn study_page(
                 account: account.clone(),
             }),
             None => {
-                return Err(AppError::Invalid(format!(
-                    "query parameter `row`: {other:?} is neither `human` nor `model:NAME`"
-                ))
+                return Err(Refusal::bad_value(
+                    "row",
+                    other,
+                    Expected::OneOf(vec!["human", "model:NAME"]),
+                )
                 .into());
             }
         },

@@ -14,6 +14,7 @@ use super::error::ApiError;
 use super::extract::{IdempotencyKey, Json, Path, Query, whole_number};
 use super::openapi::{ApiRoute, Verb};
 use super::{AppError, AppState};
+use crate::app::refusal::{Expected, Refusal};
 use crate::app::submissions::{self, StoredVerdict, SubmissionRow, Submitted};
 use crate::app::tokens::{self, CreatedToken, TokenListing};
 use crate::app::{challenge, datasets};
@@ -455,9 +456,9 @@ async fn create_token(
 pub(super) fn parse_role(text: &str) -> Result<Role, ApiError> {
     Role::parse(text)
         .ok_or_else(|| {
-            AppError::Invalid(format!("role must be 'submitter' or 'admin', not {text:?}"))
+            Refusal::bad_value("role", text, Expected::OneOf(vec!["submitter", "admin"]))
         })
-        .map_err(ApiError)
+        .map_err(ApiError::from)
 }
 
 async fn list_tokens(State(state): State<AppState>) -> Result<Json<Vec<TokenListing>>, ApiError> {
