@@ -121,6 +121,25 @@ refusal-authorization-malformed = the Authorization header must read "Bearer TOK
 refusal-token-unknown = the API token is unknown or has been revoked
 refusal-scope-missing = this token lacks the "{ $scope }" scope
 refusal-not-model-owner = model '{ $model }' on dataset '{ $dataset }' was submitted by another account; only it or an admin may set its metadata
+refusal-empty-list = { $field }: give one at least
+refusal-listed-twice = { $field }: item '{ $item }' is listed twice
+refusal-leaves-no-items = { $field }: the list names every item of dataset '{ $dataset }'; leave some for the Human row
+refusal-too-few-for-gold = dataset '{ $dataset }' has { $items ->
+        [one] { $items } item
+       *[other] { $items } items
+    }; gold items need at least two, so some are left for the Human row
+refusal-gold-and-attention = { $field }: { $items } of dataset '{ $dataset }' { $field ->
+        [checks] are gold items; they cannot be attention checks too
+       *[items] are attention checks; they cannot be gold items too
+    }
+refusal-all-chosen-paused = every annotator chosen for the split has a paused queue: resume one or choose others
+refusal-recipient-paused = annotator '{ $annotator }' has a paused queue; resume it or choose someone else
+refusal-handover-to-self = '{ $annotator }' cannot hand items over to themselves
+refusal-no-recipient = no other active annotator with a running queue to hand '{ $annotator }''s items to: create one, resume one, or name the recipients
+refusal-dataset-exists = a dataset named '{ $dataset }' exists already
+refusal-daily-quota-used = this token has used its { $limit } submissions for today (UTC); try again in { $retry_after } s
+refusal-total-quota-used = this token's total quota is used up: { $used } of { $limit } submissions made; waiting will not help, ask an admin for a new token or a larger total quota
+refusal-idempotency-key-reused = this Idempotency-Key was used for submission { $submission } with a different body
 
 ## Logging in
 login-title = Log in

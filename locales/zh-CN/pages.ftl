@@ -119,6 +119,22 @@ refusal-authorization-malformed = Authorization 请求头的格式须为“Beare
 refusal-token-unknown = 此 API 令牌未知或已被撤销
 refusal-scope-missing = 此令牌缺少“{ $scope }”权限范围
 refusal-not-model-owner = 数据集“{ $dataset }”上的模型“{ $model }”由另一个账户提交；只有该账户或管理员可以设置其元数据
+refusal-empty-list = { $field }：请至少给出一项
+refusal-listed-twice = { $field }：条目“{ $item }”出现了两次
+refusal-leaves-no-items = { $field }：列表包含了数据集“{ $dataset }”的所有条目；请为人类行留下一些
+refusal-too-few-for-gold = 数据集“{ $dataset }”只有 { $items } 个条目；金标准条目至少需要两个，以便为人类行留下一些
+refusal-gold-and-attention = { $field }：数据集“{ $dataset }”的 { $items } { $field ->
+        [checks] 是金标准条目，不能同时作为注意力检查
+       *[items] 是注意力检查，不能同时作为金标准条目
+    }
+refusal-all-chosen-paused = 为划分选中的每位标注者的队列都已暂停：请恢复其中一位，或另选他人
+refusal-recipient-paused = 标注者“{ $annotator }”的队列已暂停；请恢复该队列或另选他人
+refusal-handover-to-self = “{ $annotator }”不能把条目移交给自己
+refusal-no-recipient = 没有其他队列正在运行的活跃标注者可以接收“{ $annotator }”的条目：请新建一位、恢复一位，或指定接收者
+refusal-dataset-exists = 名为“{ $dataset }”的数据集已存在
+refusal-daily-quota-used = 此令牌今天（UTC）的 { $limit } 次提交已用完；请在 { $retry_after } 秒后重试
+refusal-total-quota-used = 此令牌的总配额已用完：已提交 { $used } 次，共 { $limit } 次；等待无济于事，请向管理员申请新令牌或更大的总配额
+refusal-idempotency-key-reused = 此 Idempotency-Key 已用于提交 { $submission }，但请求体不同
 
 ## 登录
 login-title = 登录

@@ -222,7 +222,12 @@ async fn a_paused_queue_refuses_its_annotator_s_work_in_their_language_and_resum
     assert_eq!(queue_ids(&hub, alice).await, items, "alice got nothing new");
     assert_eq!(queue_ids(&hub, bob).await.len() as u64, assigned.added);
     let alone = annotation::assign(&hub, &tester(), "mini", &Assignment::Split(vec![alice])).await;
-    assert!(matches!(alone, Err(enact_hub::app::AppError::Conflict(_))));
+    assert!(matches!(
+        alone,
+        Err(enact_hub::app::AppError::Refused(
+            enact_hub::app::refusal::Refusal::AllChosenPaused
+        ))
+    ));
 
     // The API: already paused changes nothing; DELETE resumes once.
     let path = "/api/v1/admin/annotators/alice/pause";
@@ -358,6 +363,13 @@ async fn a_handover_moves_exactly_the_unfinished_items_evenly_and_keeps_finished
         .expect(400)
         .await;
     assert!(to_self.error().contains("themselves"), "{}", to_self.text);
+    assert_eq!(
+        to_self.json()["code"],
+        "handover_to_self",
+        "{}",
+        to_self.text
+    );
+    assert_eq!(to_self.json()["details"]["annotator"], "alice");
     server
         .call(Method::POST, handover)
         .bearer(&admin)
@@ -371,6 +383,13 @@ async fn a_handover_moves_exactly_the_unfinished_items_evenly_and_keeps_finished
         .expect(409)
         .await;
     assert!(to_paused.error().contains("paused"), "{}", to_paused.text);
+    assert_eq!(
+        to_paused.json()["code"],
+        "recipient_paused",
+        "{}",
+        to_paused.text
+    );
+    assert_eq!(to_paused.json()["details"]["annotator"], "dave");
 
     // Without names: bob and carol (not the admin, not paused dave).
     let done = server
@@ -512,6 +531,20 @@ async fn attention_checks_are_mixed_in_judged_counted_and_kept_out_of_the_human_
         .expect(400)
         .await;
     assert!(unknown.error().contains("nope"), "{}", unknown.text);
+    let twice = server
+        .call(Method::PUT, path)
+        .bearer(&admin)
+        .json(&json!({"rate": 3, "checks": [
+            {"item_id": reverse, "instruction": "keep"},
+            {"item_id": reverse, "instruction": "reverse"}
+        ]}))
+        .expect(400)
+        .await;
+    assert_eq!(twice.json()["code"], "listed_twice", "{}", twice.text);
+    assert_eq!(
+        twice.json()["details"],
+        json!({"field": "checks", "item": reverse})
+    );
     server
         .call(Method::PUT, path)
         .bearer(&admin)

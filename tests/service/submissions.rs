@@ -333,6 +333,10 @@ async fn quotas_count_rejected_attempts_and_answer_429_with_retry_after() {
             .expect("msg")
             .contains("2 submissions for today")
     );
+    // The reason is typed: the Retry-After header's seconds are in its details too.
+    assert_eq!(error["code"], "daily_quota_used", "{error}");
+    assert_eq!(error["details"]["limit"], 2, "{error}");
+    assert_eq!(error["details"]["retry_after"], retry, "{error}");
     assert_eq!(stored_counts(&server.pool).await.0, 1);
     server.stop().await;
 }
@@ -472,6 +476,7 @@ async fn two_submissions_racing_for_the_last_quota_slot_store_one() {
         let refusal = if a.0 == 429 { &a.2 } else { &b.2 };
         let message = refusal["error"].as_str().expect("a message");
         assert!(message.contains("total quota is used up"), "{message}");
+        assert_eq!(refusal["code"], "total_quota_used", "{refusal}");
         let stored = count(
             &server.pool,
             &format!("SELECT count(*) FROM submissions WHERE token = {id}"),

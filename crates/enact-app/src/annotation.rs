@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use super::annotators::now_ms;
 use super::changes::Change;
-use super::refusal::{Refusal, SkipAction};
+use super::refusal::{Expected, Refusal, SkipAction};
 use super::{AppError, Hub, audit, datasets, items};
 use crate::Lane;
 use crate::core::annotation::{
@@ -74,9 +74,7 @@ pub async fn assign(
     let pairs = match how {
         Assignment::Split(annotators) => {
             if annotators.is_empty() {
-                return Err(AppError::Invalid(
-                    "choose at least one annotator to split the dataset over".to_owned(),
-                ));
+                return Err(Refusal::EmptyList { field: "annotator" }.into());
             }
             paused = super::controls::paused_among(&mut conn, annotators).await?;
             let running: Vec<i64> = annotators
@@ -85,11 +83,7 @@ pub async fn assign(
                 .filter(|a| !paused.contains(a))
                 .collect();
             if running.is_empty() {
-                return Err(AppError::Conflict(
-                    "every annotator chosen for the split has a paused queue: resume one or \
-                     choose others"
-                        .to_owned(),
-                ));
+                return Err(Refusal::AllChosenPaused.into());
             }
             let items = store::annotations::unassigned_items(&mut conn, dataset.id).await?;
             balanced_split(&items, &running)
@@ -99,9 +93,7 @@ pub async fn assign(
             item_ids,
         } => {
             if item_ids.is_empty() {
-                return Err(AppError::Invalid(
-                    "items: give at least one item id".to_owned(),
-                ));
+                return Err(Refusal::EmptyList { field: "items" }.into());
             }
             items::listed(&mut conn, &dataset, item_ids)
                 .await?
@@ -454,9 +446,8 @@ pub async fn skip(
         "skip" => SkipAction::Skip,
         "flag" => SkipAction::Flag,
         other => {
-            return Err(AppError::Invalid(format!(
-                "form field `action` is {other:?}; expected \"skip\" or \"flag\""
-            )));
+            let actions = Expected::OneOf(vec!["skip", "flag"]);
+            return Err(Refusal::bad_value("action", other, actions).into());
         }
     };
     let reason = reason.trim().to_owned();

@@ -11,6 +11,7 @@ use std::collections::HashSet;
 use schemars::JsonSchema;
 use serde::Serialize;
 
+use super::refusal::Refusal;
 use super::{AppError, Hub, audit, datasets};
 use crate::Lane;
 use crate::core::attention::{AttentionTally, Instruction, judge};
@@ -85,15 +86,15 @@ pub async fn set(
 ) -> Result<(AttentionSet, AttentionQueues), AppError> {
     let dataset = datasets::by_name(hub, dataset).await?;
     if checks.is_empty() {
-        return Err(AppError::Invalid(
-            "checks: give at least one item id with its instruction".to_owned(),
-        ));
+        return Err(Refusal::EmptyList { field: "checks" }.into());
     }
     let mut seen = HashSet::new();
     if let Some((repeated, _)) = checks.iter().find(|(id, _)| !seen.insert(id.as_str())) {
-        return Err(AppError::Invalid(format!(
-            "checks: item '{repeated}' is listed twice"
-        )));
+        return Err(Refusal::ListedTwice {
+            field: "checks",
+            item: repeated.clone(),
+        }
+        .into());
     }
     let mut conn = hub.conn().await?;
     let ids: Vec<String> = checks.iter().map(|(id, _)| id.clone()).collect();
@@ -102,10 +103,11 @@ pub async fn set(
         .await?
         .len();
     if rows.len() >= all {
-        return Err(AppError::Invalid(format!(
-            "checks: the list names every item of dataset '{}'; leave some for the Human row",
-            dataset.name
-        )));
+        return Err(Refusal::LeavesNoItems {
+            field: "checks",
+            dataset: dataset.name,
+        }
+        .into());
     }
     let gold: HashSet<i64> = store::gold::gold_item_rowids(&mut conn, dataset.id)
         .await?
@@ -119,11 +121,12 @@ pub async fn set(
         .map(|(id, _)| id.as_str())
         .collect();
     if !golden.is_empty() {
-        return Err(AppError::Invalid(format!(
-            "checks: gold items of dataset '{}' cannot be attention checks: {}",
-            dataset.name,
-            golden.join(", ")
-        )));
+        return Err(Refusal::GoldAndAttention {
+            field: "checks",
+            dataset: dataset.name,
+            items: golden.join(", "),
+        }
+        .into());
     }
     let items: Vec<(i64, Instruction)> = rows
         .iter()

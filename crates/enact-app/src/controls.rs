@@ -229,15 +229,16 @@ pub async fn handover(
                 annotator: name.trim().to_owned(),
             })?;
             if account.id == giver.id {
-                return Err(AppError::Invalid(format!(
-                    "to: '{from}' cannot hand items over to themselves"
-                )));
+                return Err(Refusal::HandoverToSelf {
+                    annotator: from.to_owned(),
+                }
+                .into());
             }
             if is_paused(account.id) {
-                return Err(AppError::Conflict(format!(
-                    "to: annotator '{}' has a paused queue; resume it or choose someone else",
-                    account.name
-                )));
+                return Err(Refusal::RecipientPaused {
+                    annotator: account.name.clone(),
+                }
+                .into());
             }
             if !chosen.iter().any(|c| c.id == account.id) {
                 chosen.push(account);
@@ -246,10 +247,10 @@ pub async fn handover(
         chosen
     };
     if recipients.is_empty() {
-        return Err(AppError::Invalid(format!(
-            "no other active annotator with a running queue to hand '{from}''s items to: \
-             create one, resume one, or name the recipients"
-        )));
+        return Err(Refusal::NoRecipient {
+            annotator: from.to_owned(),
+        }
+        .into());
     }
     let recipient_ids: Vec<i64> = recipients.iter().map(|a| a.id).collect();
 

@@ -223,9 +223,7 @@ pub async fn subset(
     let into =
         crate::core::credentials::plain_name(into, "dataset", 64).map_err(AppError::Invalid)?;
     if rule.fields.is_empty() {
-        return Err(AppError::Invalid(
-            "a subset needs at least one stratum field".to_owned(),
-        ));
+        return Err(Refusal::EmptyList { field: "fields" }.into());
     }
     let from = by_name(hub, source).await?;
     let mut conn = hub.conn().await?;
@@ -256,9 +254,10 @@ pub async fn subset(
     );
     let mut tx = hub.write(Lane::Interactive).await?;
     if store::datasets::by_name(&mut tx, into).await?.is_some() {
-        return Err(AppError::Conflict(format!(
-            "a dataset named '{into}' exists already"
-        )));
+        return Err(Refusal::DatasetExists {
+            dataset: into.to_owned(),
+        }
+        .into());
     }
     store::datasets::insert_copy(&mut tx, &from, into, &description, &rows).await?;
     store::bump_content_generation(&mut tx).await?;

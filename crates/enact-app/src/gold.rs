@@ -81,12 +81,11 @@ pub async fn set(
         .map(|i| i.item)
         .collect();
     if all.len() < 2 {
-        return Err(AppError::Invalid(format!(
-            "dataset '{}' has {} item(s); gold items need at least two, so some are left for \
-             the Human row",
-            dataset.name,
-            all.len()
-        )));
+        return Err(Refusal::TooFewForGold {
+            dataset: dataset.name.clone(),
+            items: all.len() as u64,
+        }
+        .into());
     }
     // An item is a gold item or an attention check, never both.
     let checks: HashSet<i64> = store::attention::attention_item_rowids(&mut conn, dataset.id)
@@ -110,20 +109,21 @@ pub async fn set(
                 .find(|(_, row)| checks.contains(row))
                 .map(|(id, _)| id)
             {
-                return Err(AppError::Invalid(format!(
-                    "items: '{check}' is an attention check of dataset '{}'; it cannot be gold \
-                     too",
-                    dataset.name
-                )));
+                return Err(Refusal::GoldAndAttention {
+                    field: "items",
+                    dataset: dataset.name.clone(),
+                    items: check.clone(),
+                }
+                .into());
             }
             rows.sort_unstable();
             rows.dedup();
             if rows.len() >= all.len() {
-                return Err(AppError::Invalid(format!(
-                    "items: the list names every item of dataset '{}'; leave some for the \
-                     Human row",
-                    dataset.name
-                )));
+                return Err(Refusal::LeavesNoItems {
+                    field: "items",
+                    dataset: dataset.name.clone(),
+                }
+                .into());
             }
             rows
         }

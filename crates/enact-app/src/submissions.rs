@@ -8,7 +8,7 @@ use sha2::{Digest, Sha256};
 
 use super::cache::{BoundedCache, CacheLimits};
 use super::changes::Change;
-use super::refusal::Refusal;
+use super::refusal::{Expected, Refusal};
 use super::tokens::Caller;
 use super::{AppError, Hub, audit, datasets, statements};
 use crate::Lane;
@@ -204,25 +204,23 @@ async fn take_attempt(hub: &Hub, caller: &Caller) -> Result<Option<i64>, AppErro
     tx.commit().await?;
     match quota {
         AttemptQuota::Granted => Ok(attempt),
-        AttemptQuota::DailyExhausted { limit } => {
-            let retry_after = seconds_until_utc_midnight();
-            Err(AppError::LimitReached {
-                message: format!(
-                    "this token has used its {limit} submissions for today (UTC); \
-                     try again in {retry_after} s"
-                ),
-                retry_after: Some(retry_after),
-            })
+        AttemptQuota::DailyExhausted { limit } => Err(Refusal::DailyQuotaUsed {
+            limit: count(limit),
+            retry_after: seconds_until_utc_midnight(),
         }
+        .into()),
         // No Retry-After: the total never refills, so waiting would not help.
-        AttemptQuota::TotalExhausted { used, limit } => Err(AppError::LimitReached {
-            message: format!(
-                "this token's total quota is used up: {used} of {limit} submissions made; \
-                 waiting will not help, ask an admin for a new token or a larger total quota"
-            ),
-            retry_after: None,
-        }),
+        AttemptQuota::TotalExhausted { used, limit } => Err(Refusal::TotalQuotaUsed {
+            used: count(used),
+            limit: count(limit),
+        }
+        .into()),
     }
+}
+
+/// A count of submissions as a refusal names it (never negative).
+fn count(n: i64) -> u64 {
+    n.max(0).unsigned_abs()
 }
 
 fn body_sha256(body: &[u8]) -> String {
@@ -466,10 +464,10 @@ fn repeat_of(existing: SubmissionRow, body: &[u8]) -> Result<Submitted, AppError
 /// the same; 409 when it differs.
 fn repeat_of_digest(existing: SubmissionRow, sha256: &str) -> Result<Submitted, AppError> {
     if sha256 != existing.body_sha256 {
-        return Err(AppError::Conflict(format!(
-            "this Idempotency-Key was used for submission {} with a different body",
-            existing.id
-        )));
+        return Err(Refusal::IdempotencyKeyReused {
+            submission: existing.id.to_string(),
+        }
+        .into());
     }
     Ok(Submitted::Repeated(existing))
 }
@@ -534,9 +532,8 @@ pub async fn update_listing(
     let visibility = visibility
         .map(|v| {
             Visibility::parse(v).ok_or_else(|| {
-                AppError::Invalid(format!(
-                    "visibility must be 'published', 'hidden' or 'withdrawn', not {v:?}"
-                ))
+                let visibilities = Expected::OneOf(vec!["published", "hidden", "withdrawn"]);
+                Refusal::bad_value("visibility", v, visibilities)
             })
         })
         .transpose()?;

@@ -22,6 +22,9 @@ pub enum RefusalKind {
     Unauthenticated,
     NotPermitted,
     Conflict,
+    /// A quota is used up: 429, with `Retry-After` when waiting helps
+    /// ([`Refusal::retry_after`]).
+    LimitReached,
 }
 
 /// Skipping an item or flagging it: both finish it without an answer, with a reason.
@@ -275,6 +278,42 @@ pub enum Refusal {
     ScopeMissing { scope: &'static str },
     /// A model's metadata is set by the account that submitted it, or by an admin.
     NotModelOwner { dataset: String, model: String },
+    /// The token has made its `limit` submissions for today (UTC); the day turns in
+    /// `retry_after` seconds.
+    DailyQuotaUsed { limit: u64, retry_after: u64 },
+    /// The token's total quota is used up: `used` of `limit`. Waiting does not help.
+    TotalQuotaUsed { used: u64, limit: u64 },
+    /// An `Idempotency-Key` used before, for `submission`, with another body.
+    IdempotencyKeyReused { submission: String },
+    /// A list (`field`) that must name one thing at least names none.
+    EmptyList { field: &'static str },
+    /// A list (`field`) names an item twice.
+    ListedTwice { field: &'static str, item: String },
+    /// A list (`field`) of gold items or attention checks names every item of the dataset:
+    /// the Human row would be left with none.
+    LeavesNoItems {
+        field: &'static str,
+        dataset: String,
+    },
+    /// A dataset of fewer than two items cannot have gold items.
+    TooFewForGold { dataset: String, items: u64 },
+    /// An item cannot be both a gold item and an attention check; `field` is the list that
+    /// names it, `items` those it names that are already the other.
+    GoldAndAttention {
+        field: &'static str,
+        dataset: String,
+        items: String,
+    },
+    /// Every annotator chosen for a split has a paused queue.
+    AllChosenPaused,
+    /// A handover's recipient has a paused queue.
+    RecipientPaused { annotator: String },
+    /// An annotator cannot hand their items over to themselves.
+    HandoverToSelf { annotator: String },
+    /// No other active annotator with a running queue can take a handover.
+    NoRecipient { annotator: String },
+    /// A dataset of this name exists already.
+    DatasetExists { dataset: String },
     /// A request without fields it needs.
     FieldsRequired { fields: Vec<&'static str> },
     /// A request must give exactly one of these fields: it gave none, or more than one.
@@ -342,6 +381,20 @@ impl Refusal {
             Refusal::ScopeMissing { .. } | Refusal::NotModelOwner { .. } => {
                 RefusalKind::NotPermitted
             }
+            Refusal::DailyQuotaUsed { .. } | Refusal::TotalQuotaUsed { .. } => {
+                RefusalKind::LimitReached
+            }
+            Refusal::IdempotencyKeyReused { .. } => RefusalKind::Conflict,
+            Refusal::EmptyList { .. }
+            | Refusal::ListedTwice { .. }
+            | Refusal::LeavesNoItems { .. }
+            | Refusal::TooFewForGold { .. }
+            | Refusal::GoldAndAttention { .. }
+            | Refusal::HandoverToSelf { .. }
+            | Refusal::NoRecipient { .. } => RefusalKind::Invalid,
+            Refusal::AllChosenPaused
+            | Refusal::RecipientPaused { .. }
+            | Refusal::DatasetExists { .. } => RefusalKind::Conflict,
             Refusal::LoginLinkUsed => RefusalKind::NotFound,
             Refusal::AdminOnly { .. }
             | Refusal::StaleForm
@@ -374,6 +427,14 @@ impl Refusal {
             | Refusal::BothOrNeither { .. }
             | Refusal::NotWith { .. }
             | Refusal::ImportPath { .. } => RefusalKind::Invalid,
+        }
+    }
+
+    /// Seconds after which asking again may succeed, when waiting helps.
+    pub fn retry_after(&self) -> Option<u64> {
+        match self {
+            Refusal::DailyQuotaUsed { retry_after, .. } => Some(*retry_after),
+            _ => None,
         }
     }
 
@@ -440,6 +501,19 @@ impl Refusal {
             Refusal::SelectionNotPublished { .. } => "selection_not_published",
             Refusal::SelectionLimitReached { .. } => "selection_limit_reached",
             Refusal::PrivatePartHidden { .. } => "private_part_hidden",
+            Refusal::DailyQuotaUsed { .. } => "daily_quota_used",
+            Refusal::TotalQuotaUsed { .. } => "total_quota_used",
+            Refusal::IdempotencyKeyReused { .. } => "idempotency_key_reused",
+            Refusal::EmptyList { .. } => "empty_list",
+            Refusal::ListedTwice { .. } => "listed_twice",
+            Refusal::LeavesNoItems { .. } => "leaves_no_items",
+            Refusal::TooFewForGold { .. } => "too_few_for_gold",
+            Refusal::GoldAndAttention { .. } => "gold_and_attention",
+            Refusal::AllChosenPaused => "all_chosen_paused",
+            Refusal::RecipientPaused { .. } => "recipient_paused",
+            Refusal::HandoverToSelf { .. } => "handover_to_self",
+            Refusal::NoRecipient { .. } => "no_recipient",
+            Refusal::DatasetExists { .. } => "dataset_exists",
             Refusal::TokenMissing => "token_missing",
             Refusal::AuthorizationMalformed => "authorization_malformed",
             Refusal::TokenUnknown => "token_unknown",
@@ -532,9 +606,45 @@ impl Refusal {
             ],
             Refusal::NoApiRoute { path } => vec![("path", text(path))],
             Refusal::ScopeMissing { scope } => vec![("scope", text(scope))],
-            Refusal::TokenMissing | Refusal::AuthorizationMalformed | Refusal::TokenUnknown => {
-                Vec::new()
+            Refusal::DailyQuotaUsed { limit, retry_after } => vec![
+                ("limit", Detail::Number(*limit)),
+                ("retry_after", Detail::Number(*retry_after)),
+            ],
+            Refusal::TotalQuotaUsed { used, limit } => vec![
+                ("used", Detail::Number(*used)),
+                ("limit", Detail::Number(*limit)),
+            ],
+            Refusal::IdempotencyKeyReused { submission } => {
+                vec![("submission", text(submission))]
             }
+            Refusal::EmptyList { field } => vec![("field", text(field))],
+            Refusal::ListedTwice { field, item } => {
+                vec![("field", text(field)), ("item", text(item))]
+            }
+            Refusal::LeavesNoItems { field, dataset } => {
+                vec![("field", text(field)), ("dataset", text(dataset))]
+            }
+            Refusal::TooFewForGold { dataset, items } => vec![
+                ("dataset", text(dataset)),
+                ("items", Detail::Number(*items)),
+            ],
+            Refusal::GoldAndAttention {
+                field,
+                dataset,
+                items,
+            } => vec![
+                ("field", text(field)),
+                ("dataset", text(dataset)),
+                ("items", text(items)),
+            ],
+            Refusal::RecipientPaused { annotator }
+            | Refusal::HandoverToSelf { annotator }
+            | Refusal::NoRecipient { annotator } => vec![("annotator", text(annotator))],
+            Refusal::DatasetExists { dataset } => vec![("dataset", text(dataset))],
+            Refusal::TokenMissing
+            | Refusal::AuthorizationMalformed
+            | Refusal::TokenUnknown
+            | Refusal::AllChosenPaused => Vec::new(),
             Refusal::InviteLinkUsed
             | Refusal::NotLoggedIn
             | Refusal::LoginLinkUsed
@@ -886,6 +996,45 @@ impl Refusal {
         ]
         .into_iter()
         .chain([
+            Refusal::DailyQuotaUsed {
+                limit: 2,
+                retry_after: 3600,
+            },
+            Refusal::TotalQuotaUsed { used: 5, limit: 5 },
+            Refusal::IdempotencyKeyReused {
+                submission: "7".to_owned(),
+            },
+            Refusal::EmptyList { field: "checks" },
+            Refusal::ListedTwice {
+                field: "checks",
+                item: "a1".to_owned(),
+            },
+            Refusal::LeavesNoItems {
+                field: "items",
+                dataset: "demo".to_owned(),
+            },
+            Refusal::TooFewForGold {
+                dataset: "demo".to_owned(),
+                items: 1,
+            },
+            Refusal::GoldAndAttention {
+                field: "checks",
+                dataset: "demo".to_owned(),
+                items: "a1, a2".to_owned(),
+            },
+            Refusal::AllChosenPaused,
+            Refusal::RecipientPaused {
+                annotator: "bo".to_owned(),
+            },
+            Refusal::HandoverToSelf {
+                annotator: "ann".to_owned(),
+            },
+            Refusal::NoRecipient {
+                annotator: "ann".to_owned(),
+            },
+            Refusal::DatasetExists {
+                dataset: "demo".to_owned(),
+            },
             Refusal::TokenMissing,
             Refusal::AuthorizationMalformed,
             Refusal::TokenUnknown,
@@ -1216,6 +1365,70 @@ impl fmt::Display for Refusal {
                 value,
                 expected,
             } => write!(f, "{field}: {value:?} is not {expected}"),
+            Refusal::DailyQuotaUsed { limit, retry_after } => write!(
+                f,
+                "this token has used its {limit} submissions for today (UTC); try again in \
+                 {retry_after} s"
+            ),
+            Refusal::TotalQuotaUsed { used, limit } => write!(
+                f,
+                "this token's total quota is used up: {used} of {limit} submissions made; waiting \
+                 will not help, ask an admin for a new token or a larger total quota"
+            ),
+            Refusal::IdempotencyKeyReused { submission } => write!(
+                f,
+                "this Idempotency-Key was used for submission {submission} with a different body"
+            ),
+            Refusal::EmptyList { field } => write!(f, "{field}: give one at least"),
+            Refusal::ListedTwice { field, item } => {
+                write!(f, "{field}: item '{item}' is listed twice")
+            }
+            Refusal::LeavesNoItems { field, dataset } => write!(
+                f,
+                "{field}: the list names every item of dataset '{dataset}'; leave some for the \
+                 Human row"
+            ),
+            Refusal::TooFewForGold { dataset, items } => write!(
+                f,
+                "dataset '{dataset}' has {items} item(s); gold items need at least two, so some \
+                 are left for the Human row"
+            ),
+            Refusal::GoldAndAttention {
+                field,
+                dataset,
+                items,
+            } => {
+                let (these, other) = if *field == "checks" {
+                    ("gold items", "attention checks")
+                } else {
+                    ("attention checks", "gold items")
+                };
+                write!(
+                    f,
+                    "{field}: {items} of dataset '{dataset}' are {these}; they cannot be {other} \
+                     too"
+                )
+            }
+            Refusal::AllChosenPaused => write!(
+                f,
+                "every annotator chosen for the split has a paused queue: resume one or choose \
+                 others"
+            ),
+            Refusal::RecipientPaused { annotator } => write!(
+                f,
+                "to: annotator '{annotator}' has a paused queue; resume it or choose someone else"
+            ),
+            Refusal::HandoverToSelf { annotator } => {
+                write!(f, "to: '{annotator}' cannot hand items over to themselves")
+            }
+            Refusal::NoRecipient { annotator } => write!(
+                f,
+                "no other active annotator with a running queue to hand '{annotator}''s items \
+                 to: create one, resume one, or name the recipients"
+            ),
+            Refusal::DatasetExists { dataset } => {
+                write!(f, "a dataset named '{dataset}' exists already")
+            }
             Refusal::TokenMissing => write!(
                 f,
                 "this endpoint needs an API token: send `Authorization: Bearer TOKEN`"

@@ -23,6 +23,7 @@ pub fn status_of(error: &AppError) -> StatusCode {
             RefusalKind::Unauthenticated => StatusCode::UNAUTHORIZED,
             RefusalKind::NotPermitted => StatusCode::FORBIDDEN,
             RefusalKind::Conflict => StatusCode::CONFLICT,
+            RefusalKind::LimitReached => StatusCode::TOO_MANY_REQUESTS,
         },
         AppError::NotFound(_) => StatusCode::NOT_FOUND,
         AppError::Invalid(_) => StatusCode::BAD_REQUEST,
@@ -129,6 +130,12 @@ impl IntoResponse for ApiError {
                 response
                     .headers_mut()
                     .insert(header::RETRY_AFTER, HeaderValue::from(*retry_after));
+            }
+            AppError::Refused(r) if r.retry_after().is_some() => {
+                let seconds = r.retry_after().unwrap_or_default();
+                response
+                    .headers_mut()
+                    .insert(header::RETRY_AFTER, HeaderValue::from(seconds));
             }
             AppError::Unavailable(_) => retry_soon(&mut response),
             _ => {}
