@@ -140,6 +140,18 @@ refusal-dataset-exists = a dataset named '{ $dataset }' exists already
 refusal-daily-quota-used = this token has used its { $limit } submissions for today (UTC); try again in { $retry_after } s
 refusal-total-quota-used = this token's total quota is used up: { $used } of { $limit } submissions made; waiting will not help, ask an admin for a new token or a larger total quota
 refusal-idempotency-key-reused = this Idempotency-Key was used for submission { $submission } with a different body
+refusal-bad-value-plain-name = { $field }: "{ $value }" is not a name of 1 to { $most } letters, digits, '_' or '-'
+refusal-episode-exists = an episode named '{ $episode }' exists already
+refusal-episode-importing = episode '{ $episode }' is being imported since { $since } (by { $by }); if that import was stopped, its claim on the name lapses in { $lapses_in } s and the next import takes the name over
+refusal-episode-taken-over = the import of episode '{ $episode }' wrote nothing for over { $after } s and another import of the name took it over; this one stopped
+refusal-episode-not-resolved = episode '{ $episode }' has graphs from several curators ({ $curators }): choose the ones to export first, on the episode's page
+refusal-too-few-key-frames = episode '{ $episode }' has { $key_frames } key frames; an export needs at least { $least } (ENACT's shortest step length, 3, orders 4 key frames)
+refusal-too-few-curators = episode '{ $episode }' has graphs from { $curators ->
+        [one] { $curators } curator
+       *[other] { $curators } curators
+    }: a comparison needs two
+refusal-no-key-frame = curator '{ $curator }' marked no key frame at frame { $frame } of episode '{ $episode }'
+refusal-frame-name-unusable = an uploaded frame has no usable file name ("{ $name }"): frames are ordered by name
 
 ## Logging in
 login-title = Log in

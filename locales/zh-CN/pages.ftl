@@ -135,6 +135,15 @@ refusal-dataset-exists = 名为“{ $dataset }”的数据集已存在
 refusal-daily-quota-used = 此令牌今天（UTC）的 { $limit } 次提交已用完；请在 { $retry_after } 秒后重试
 refusal-total-quota-used = 此令牌的总配额已用完：已提交 { $used } 次，共 { $limit } 次；等待无济于事，请向管理员申请新令牌或更大的总配额
 refusal-idempotency-key-reused = 此 Idempotency-Key 已用于提交 { $submission }，但请求体不同
+refusal-bad-value-plain-name = { $field }：“{ $value }”不是由 1 到 { $most } 个字母、数字、“_”或“-”组成的名称
+refusal-episode-exists = 名为“{ $episode }”的片段已存在
+refusal-episode-importing = 片段“{ $episode }”自 { $since } 起正在导入（由 { $by } 发起）；如果那次导入已停止，它对此名称的占用将在 { $lapses_in } 秒后失效，下一次导入将接管此名称
+refusal-episode-taken-over = 片段“{ $episode }”的导入超过 { $after } 秒没有写入，另一次同名导入已将其接管；本次导入已停止
+refusal-episode-not-resolved = 片段“{ $episode }”有多位整理者的场景图（{ $curators }）：请先在片段页面选择要导出的场景图
+refusal-too-few-key-frames = 片段“{ $episode }”有 { $key_frames } 个关键帧；导出至少需要 { $least } 个（ENACT 最短的步长 3 需要排序 4 个关键帧）
+refusal-too-few-curators = 片段“{ $episode }”只有 { $curators } 位整理者的场景图：比较需要两位
+refusal-no-key-frame = 整理者“{ $curator }”没有在片段“{ $episode }”的第 { $frame } 帧标记关键帧
+refusal-frame-name-unusable = 上传的帧没有可用的文件名（“{ $name }”）：帧按名称排序
 
 ## 登录
 login-title = 登录

@@ -8,8 +8,9 @@ use std::process::ExitCode;
 use clap::{Args, Subcommand};
 
 use super::{DbArg, in_database, is_missing_file, open, operator};
-use crate::app;
 use crate::app::episodes::Resolution;
+use crate::app::refusal::Refusal;
+use crate::app::{self, AppError};
 use crate::core::episode::EpisodeGraphs;
 
 #[derive(Subcommand)]
@@ -348,7 +349,25 @@ async fn export(args: ExportArgs) -> anyhow::Result<ExitCode> {
     let hub = open(&args.db.db).await?;
     let result = app::episodes::export(&hub, &args.name, &args.out).await;
     hub.close().await;
-    let report = in_database(result, &args.db.db)?;
+    // What to run next, in this command line's own words.
+    let hint = match &result {
+        Err(AppError::Refused(Refusal::EpisodeNotResolved { .. })) => Some(format!(
+            "choose with: enact-hub episode resolve {} --curator NAME (or --set FILE)",
+            args.name
+        )),
+        Err(AppError::Refused(Refusal::EpisodeHasNoGraphs { .. })) => Some(format!(
+            "set them with: enact-hub episode graphs {} --set FILE",
+            args.name
+        )),
+        _ => None,
+    };
+    let report = match in_database(result, &args.db.db) {
+        Ok(report) => report,
+        Err(e) => match hint {
+            Some(hint) => return Err(anyhow::anyhow!("{e}\n{hint}")),
+            None => return Err(e),
+        },
+    };
     println!(
         "episode '{}': {} frames and {} key frames ({}) written; make items with: enact-hub \
          generate {} --out DIR",

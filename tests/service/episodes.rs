@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use enact_hub::app::refusal::Refusal;
 use enact_hub::core::dataset::{Direction, parse_release_line};
 use enact_hub::core::episode::{EpisodeGraphs, describe};
 use enact_hub::core::scene_graph::parse_action;
@@ -327,7 +328,8 @@ async fn an_episode_becomes_items_whose_actions_are_the_curators_transitions() {
     );
     let (ok, _, err) = episode(db, "export", &["--out", export.to_str().unwrap()]);
     assert!(
-        !ok && err.contains("graphs from 2 curators (bob, curator-ann)"),
+        !ok && err.contains("graphs from several curators (bob, curator-ann)")
+            && err.contains("enact-hub episode resolve kitchen_real --curator NAME"),
         "{err}"
     );
     let (ok, _, err) = episode(db, "resolve", &["--curator", "bob"]);
@@ -377,21 +379,23 @@ async fn an_incomplete_episode_is_hidden_and_the_next_import_of_its_name_replace
     assert!(episodes::list(&hub).await.unwrap().is_empty());
     assert!(matches!(
         episodes::get(&hub, "kitchen_real").await,
-        Err(AppError::Refused(
-            enact_hub::app::refusal::Refusal::NoEpisode { .. }
-        ))
+        Err(AppError::Refused(Refusal::NoEpisode { .. }))
     ));
 
     // While the claim runs, the import that holds it might be alive: the next is refused, and
     // nothing is touched.
     let refused = episodes::import(&hub, &tester(), &frames, "kitchen_real", "kitchen").await;
     match refused {
-        Err(AppError::Conflict(message)) => assert!(
-            message.starts_with("episode 'kitchen_real' is being imported since ")
-                && message.contains("(by killed)")
-                && message.contains("lapses in 60 s"),
-            "{message}"
-        ),
+        Err(AppError::Refused(refusal @ Refusal::EpisodeImporting { .. })) => {
+            let message = refusal.to_string();
+            assert!(
+                message.starts_with("episode 'kitchen_real' is being imported since ")
+                    && message.contains("(by killed)")
+                    && message.contains("lapses in 60 s"),
+                "{message}"
+            );
+            assert_eq!(refusal.code(), "episode_importing");
+        }
         other => panic!("expected a refusal, got {other:?}"),
     }
     assert_eq!(count(&pool, "SELECT count(*) FROM episode_frames").await, 1);
@@ -473,11 +477,14 @@ async fn a_second_import_of_a_name_being_imported_is_refused_and_the_first_finis
     let first = first.await.unwrap();
 
     match second {
-        Err(AppError::Conflict(message)) => assert!(
-            message.starts_with("episode 'kitchen_real' is being imported since ")
-                && message.contains("(by operator tests)"),
-            "{message}"
-        ),
+        Err(AppError::Refused(refusal @ Refusal::EpisodeImporting { .. })) => {
+            let message = refusal.to_string();
+            assert!(
+                message.starts_with("episode 'kitchen_real' is being imported since ")
+                    && message.contains("(by operator tests)"),
+                "{message}"
+            );
+        }
         other => panic!("the second import was not refused: {other:?}"),
     }
     let summary = first.expect("the first import finishes");

@@ -135,9 +135,10 @@ pub struct UploadedFrame {
 fn upload_file_name(sent: &str) -> Result<&str, AppError> {
     let base = sent.rsplit(['/', '\\']).next().unwrap_or_default().trim();
     if base.is_empty() || base == "." || base == ".." {
-        return Err(AppError::Invalid(format!(
-            "an uploaded frame has no usable file name ({sent:?}): frames are ordered by name"
-        )));
+        return Err(Refusal::FrameNameUnusable {
+            name: sent.to_owned(),
+        }
+        .into());
     }
     Ok(base)
 }
@@ -154,18 +155,18 @@ pub async fn import_upload(
     frames: Vec<UploadedFrame>,
 ) -> Result<EpisodeSummary, AppError> {
     if frames.is_empty() {
-        return Err(AppError::Invalid(
-            "no frame was uploaded: choose the episode's PNG or JPEG files".to_owned(),
-        ));
+        return Err(Refusal::EmptyList { field: "frames" }.into());
     }
     let dir = tempfile::tempdir().map_err(AppError::internal)?;
     let mut seen = std::collections::BTreeSet::new();
     for frame in &frames {
         let file = upload_file_name(&frame.file_name)?;
         if !seen.insert(file.to_owned()) {
-            return Err(AppError::Invalid(format!(
-                "two uploaded frames are named {file:?}: frames are ordered by name"
-            )));
+            return Err(Refusal::ListedTwice {
+                field: "frames",
+                item: file.to_owned(),
+            }
+            .into());
         }
         tokio::fs::write(dir.path().join(file), &frame.bytes)
             .await
@@ -233,11 +234,9 @@ pub async fn compare(
         chosen
             .map(str::to_owned)
             .or_else(|| curators.get(index).cloned())
-            .ok_or_else(|| {
-                AppError::Invalid(format!(
-                    "episode '{name}' has graphs from {} curator(s): a comparison needs two",
-                    curators.len()
-                ))
+            .ok_or_else(|| Refusal::TooFewCurators {
+                episode: name.to_owned(),
+                curators: curators.len() as u64,
             })
     };
     let (a, b) = (pick(a, 0)?, pick(b, 1)?);
@@ -299,10 +298,10 @@ pub async fn resolve_by_key_frame(
         let key_frame = drawn
             .get(curator.as_str())
             .and_then(|frames| frames.get(frame))
-            .ok_or_else(|| {
-                AppError::Invalid(format!(
-                    "curator '{curator}' marked no key frame at frame {frame} of episode '{name}'"
-                ))
+            .ok_or_else(|| Refusal::NoKeyFrame {
+                episode: name.to_owned(),
+                curator: curator.clone(),
+                frame: *frame as u64,
             })?;
         key_frames.insert(*frame, key_frame.clone());
     }

@@ -10,7 +10,7 @@ use bytes::Bytes;
 use serde::Serialize;
 use sha2::{Digest, Sha256};
 
-use super::refusal::Refusal;
+use super::refusal::{Expected, Refusal};
 use super::{AppError, Hub, audit};
 use crate::Lane;
 use crate::core::audit::{Actor, AuditAction};
@@ -273,11 +273,11 @@ fn claim_until() -> i64 {
 /// The refusal of an import whose claim another import took over after it had said nothing
 /// for [`IMPORT_CLAIM_LIFE`].
 fn taken_over(name: &str) -> AppError {
-    AppError::Conflict(format!(
-        "the import of episode '{name}' wrote nothing for over {} s and another import of the \
-         name took it over; this one stopped",
-        IMPORT_CLAIM_LIFE.as_secs()
-    ))
+    Refusal::EpisodeTakenOver {
+        episode: name.to_owned(),
+        after: IMPORT_CLAIM_LIFE.as_secs(),
+    }
+    .into()
 }
 
 /// Claims `name` for this import: writes its incomplete episode, in one write transaction
@@ -290,14 +290,13 @@ async fn claim_name(hub: &Hub, actor: &Actor, name: &str, scene: &str) -> Result
     let left = match store::episodes::incomplete(&mut tx, name).await? {
         Some(claim) => match claim.alive_until_ms {
             Some(until) if until > now => {
-                return Err(AppError::Conflict(format!(
-                    "episode '{name}' is being imported since {} (by {}); if that import \
-                     was stopped, its claim on the name lapses in {} s and the next import \
-                     takes the name over",
-                    claim.created_at,
-                    claim.created_by,
-                    (until - now + 999) / 1000
-                )));
+                return Err(Refusal::EpisodeImporting {
+                    episode: name.to_owned(),
+                    since: claim.created_at,
+                    by: claim.created_by,
+                    lapses_in: ((until - now + 999) / 1000).unsigned_abs(),
+                }
+                .into());
             }
             _ => {
                 store::episodes::delete_incomplete(&mut tx, claim.episode).await?;
@@ -311,9 +310,10 @@ async fn claim_name(hub: &Hub, actor: &Actor, name: &str, scene: &str) -> Result
     let episode = match inserted {
         Ok(id) => id,
         Err(e) if UniqueKey::EPISODE_NAME.is_violated_by(&e) => {
-            return Err(AppError::Conflict(format!(
-                "an episode named '{name}' exists already"
-            )));
+            return Err(Refusal::EpisodeExists {
+                episode: name.to_owned(),
+            }
+            .into());
         }
         Err(e) => return Err(e.into()),
     };
@@ -379,10 +379,7 @@ fn check_name(name: &str) -> Result<(), AppError> {
     if ok {
         Ok(())
     } else {
-        Err(AppError::Invalid(format!(
-            "episode name {name:?}: use 1 to 100 letters, digits, '_' or '-' (it names the \
-             task folder of the export)"
-        )))
+        Err(Refusal::bad_value("episode", name, Expected::PlainName { most: 100 }).into())
     }
 }
 
@@ -490,7 +487,10 @@ pub async fn set_graphs(
     graphs: &EpisodeGraphs,
 ) -> Result<(), AppError> {
     if curator.trim().is_empty() {
-        return Err(AppError::Invalid("a curator needs a name".into()));
+        return Err(Refusal::FieldsRequired {
+            fields: vec!["curator"],
+        }
+        .into());
     }
     let mut tx = hub.write(Lane::Interactive).await?;
     let row = row(&mut tx, name).await?;
@@ -592,17 +592,15 @@ async fn export_graphs(
             episode: row.name.clone(),
         }
         .into()),
-        several => Err(AppError::Invalid(format!(
-            "episode '{}' has graphs from {} curators ({}): choose the ones to export first \
-             (episode resolve)",
-            row.name,
-            several.len(),
-            several
+        several => Err(Refusal::EpisodeNotResolved {
+            episode: row.name.clone(),
+            curators: several
                 .iter()
                 .map(|g| g.curator.as_str())
                 .collect::<Vec<_>>()
-                .join(", ")
-        ))),
+                .join(", "),
+        }
+        .into()),
     }
 }
 
@@ -632,12 +630,12 @@ pub async fn export(hub: &Hub, name: &str, out: &Path) -> Result<ExportReport, A
     };
     episode::validate(&graphs, episode.frames.len()).map_err(|p| refusal(name, &p))?;
     if graphs.key_frames.len() < episode::MIN_EXPORT_KEY_FRAMES {
-        return Err(AppError::Invalid(format!(
-            "episode '{name}' has {} key frames; an export needs at least {} (ENACT's shortest \
-             step length, 3, orders 4 key frames)",
-            graphs.key_frames.len(),
-            episode::MIN_EXPORT_KEY_FRAMES
-        )));
+        return Err(Refusal::TooFewKeyFrames {
+            episode: name.to_owned(),
+            key_frames: graphs.key_frames.len() as u64,
+            least: episode::MIN_EXPORT_KEY_FRAMES as u64,
+        }
+        .into());
     }
     let size_of = |frame: usize| {
         episode

@@ -93,6 +93,8 @@ pub enum Expected {
     Fraction,
     /// One of these words.
     OneOf(Vec<&'static str>),
+    /// A name of 1 to `most` letters, digits, `_` or `-` (it names a folder).
+    PlainName { most: u64 },
     /// A submission's id.
     SubmissionId,
     /// A reported result's id.
@@ -112,6 +114,9 @@ impl fmt::Display for Expected {
             }
             Expected::Fraction => write!(f, "a number above 0 and below 1"),
             Expected::OneOf(words) => write!(f, "one of: {}", words.join(", ")),
+            Expected::PlainName { most } => {
+                write!(f, "a name of 1 to {most} letters, digits, '_' or '-'")
+            }
             Expected::SubmissionId => write!(f, "a submission's id"),
             Expected::ReportedId => write!(f, "a reported result's id"),
         }
@@ -285,6 +290,37 @@ pub enum Refusal {
     TotalQuotaUsed { used: u64, limit: u64 },
     /// An `Idempotency-Key` used before, for `submission`, with another body.
     IdempotencyKeyReused { submission: String },
+    /// An episode of this name exists already.
+    EpisodeExists { episode: String },
+    /// Another import holds the episode's name since `since` (by `by`); its claim lapses in
+    /// `lapses_in` seconds unless it writes again.
+    EpisodeImporting {
+        episode: String,
+        since: String,
+        by: String,
+        lapses_in: u64,
+    },
+    /// This import wrote nothing for over `after` seconds and another import of the name took
+    /// it over.
+    EpisodeTakenOver { episode: String, after: u64 },
+    /// Several curators stored graphs of the episode and none are chosen for its export.
+    EpisodeNotResolved { episode: String, curators: String },
+    /// An export needs `least` key frames; the episode's graphs mark `key_frames`.
+    TooFewKeyFrames {
+        episode: String,
+        key_frames: u64,
+        least: u64,
+    },
+    /// A comparison of curators needs two; the episode has graphs from `curators`.
+    TooFewCurators { episode: String, curators: u64 },
+    /// A curator chosen for a frame marked no key frame there.
+    NoKeyFrame {
+        episode: String,
+        curator: String,
+        frame: u64,
+    },
+    /// An uploaded frame whose file name cannot order it.
+    FrameNameUnusable { name: String },
     /// A list (`field`) that must name one thing at least names none.
     EmptyList { field: &'static str },
     /// A list (`field`) names an item twice.
@@ -381,6 +417,14 @@ impl Refusal {
             Refusal::ScopeMissing { .. } | Refusal::NotModelOwner { .. } => {
                 RefusalKind::NotPermitted
             }
+            Refusal::EpisodeExists { .. }
+            | Refusal::EpisodeImporting { .. }
+            | Refusal::EpisodeTakenOver { .. } => RefusalKind::Conflict,
+            Refusal::EpisodeNotResolved { .. }
+            | Refusal::TooFewKeyFrames { .. }
+            | Refusal::TooFewCurators { .. }
+            | Refusal::NoKeyFrame { .. }
+            | Refusal::FrameNameUnusable { .. } => RefusalKind::Invalid,
             Refusal::DailyQuotaUsed { .. } | Refusal::TotalQuotaUsed { .. } => {
                 RefusalKind::LimitReached
             }
@@ -501,6 +545,14 @@ impl Refusal {
             Refusal::SelectionNotPublished { .. } => "selection_not_published",
             Refusal::SelectionLimitReached { .. } => "selection_limit_reached",
             Refusal::PrivatePartHidden { .. } => "private_part_hidden",
+            Refusal::EpisodeExists { .. } => "episode_exists",
+            Refusal::EpisodeImporting { .. } => "episode_importing",
+            Refusal::EpisodeTakenOver { .. } => "episode_taken_over",
+            Refusal::EpisodeNotResolved { .. } => "episode_not_resolved",
+            Refusal::TooFewKeyFrames { .. } => "too_few_key_frames",
+            Refusal::TooFewCurators { .. } => "too_few_curators",
+            Refusal::NoKeyFrame { .. } => "no_key_frame",
+            Refusal::FrameNameUnusable { .. } => "frame_name_unusable",
             Refusal::DailyQuotaUsed { .. } => "daily_quota_used",
             Refusal::TotalQuotaUsed { .. } => "total_quota_used",
             Refusal::IdempotencyKeyReused { .. } => "idempotency_key_reused",
@@ -530,6 +582,7 @@ impl Refusal {
                 Expected::NumberBetween { .. } => "bad_value_number_between",
                 Expected::Fraction => "bad_value_fraction",
                 Expected::OneOf(_) => "bad_value_one_of",
+                Expected::PlainName { .. } => "bad_value_plain_name",
                 Expected::SubmissionId => "bad_value_submission_id",
                 Expected::ReportedId => "bad_value_reported_id",
             },
@@ -606,6 +659,48 @@ impl Refusal {
             ],
             Refusal::NoApiRoute { path } => vec![("path", text(path))],
             Refusal::ScopeMissing { scope } => vec![("scope", text(scope))],
+            Refusal::EpisodeExists { episode } => vec![("episode", text(episode))],
+            Refusal::EpisodeImporting {
+                episode,
+                since,
+                by,
+                lapses_in,
+            } => vec![
+                ("episode", text(episode)),
+                ("since", Detail::Time(since.clone())),
+                ("by", text(by)),
+                ("lapses_in", Detail::Number(*lapses_in)),
+            ],
+            Refusal::EpisodeTakenOver { episode, after } => vec![
+                ("episode", text(episode)),
+                ("after", Detail::Number(*after)),
+            ],
+            Refusal::EpisodeNotResolved { episode, curators } => {
+                vec![("episode", text(episode)), ("curators", text(curators))]
+            }
+            Refusal::TooFewKeyFrames {
+                episode,
+                key_frames,
+                least,
+            } => vec![
+                ("episode", text(episode)),
+                ("key_frames", Detail::Number(*key_frames)),
+                ("least", Detail::Number(*least)),
+            ],
+            Refusal::TooFewCurators { episode, curators } => vec![
+                ("episode", text(episode)),
+                ("curators", Detail::Number(*curators)),
+            ],
+            Refusal::NoKeyFrame {
+                episode,
+                curator,
+                frame,
+            } => vec![
+                ("episode", text(episode)),
+                ("curator", text(curator)),
+                ("frame", Detail::Number(*frame)),
+            ],
+            Refusal::FrameNameUnusable { name } => vec![("name", text(name))],
             Refusal::DailyQuotaUsed { limit, retry_after } => vec![
                 ("limit", Detail::Number(*limit)),
                 ("retry_after", Detail::Number(*retry_after)),
@@ -811,6 +906,7 @@ impl Refusal {
                     Expected::WholeNumberFrom { least } => {
                         details.push(("least", Detail::Number(*least)));
                     }
+                    Expected::PlainName { most } => details.push(("most", Detail::Number(*most))),
                     Expected::OneOf(words) => details.push(("choices", text(&words.join(", ")))),
                     Expected::Number
                     | Expected::Fraction
@@ -996,6 +1092,40 @@ impl Refusal {
         ]
         .into_iter()
         .chain([
+            Refusal::EpisodeExists {
+                episode: "kitchen".to_owned(),
+            },
+            Refusal::EpisodeImporting {
+                episode: "kitchen".to_owned(),
+                since: "2026-11-29T12:00:00Z".to_owned(),
+                by: "root".to_owned(),
+                lapses_in: 60,
+            },
+            Refusal::EpisodeTakenOver {
+                episode: "kitchen".to_owned(),
+                after: 120,
+            },
+            Refusal::EpisodeNotResolved {
+                episode: "kitchen".to_owned(),
+                curators: "ann, bo".to_owned(),
+            },
+            Refusal::TooFewKeyFrames {
+                episode: "kitchen".to_owned(),
+                key_frames: 2,
+                least: 4,
+            },
+            Refusal::TooFewCurators {
+                episode: "kitchen".to_owned(),
+                curators: 1,
+            },
+            Refusal::NoKeyFrame {
+                episode: "kitchen".to_owned(),
+                curator: "ann".to_owned(),
+                frame: 7,
+            },
+            Refusal::FrameNameUnusable {
+                name: "..".to_owned(),
+            },
             Refusal::DailyQuotaUsed {
                 limit: 2,
                 retry_after: 3600,
@@ -1069,6 +1199,7 @@ impl Refusal {
                 },
                 Expected::Fraction,
                 Expected::OneOf(vec!["json", "csv"]),
+                Expected::PlainName { most: 100 },
                 Expected::SubmissionId,
                 Expected::ReportedId,
             ]
@@ -1365,6 +1496,55 @@ impl fmt::Display for Refusal {
                 value,
                 expected,
             } => write!(f, "{field}: {value:?} is not {expected}"),
+            Refusal::EpisodeExists { episode } => {
+                write!(f, "an episode named '{episode}' exists already")
+            }
+            Refusal::EpisodeImporting {
+                episode,
+                since,
+                by,
+                lapses_in,
+            } => write!(
+                f,
+                "episode '{episode}' is being imported since {since} (by {by}); if that import \
+                 was stopped, its claim on the name lapses in {lapses_in} s and the next import \
+                 takes the name over"
+            ),
+            Refusal::EpisodeTakenOver { episode, after } => write!(
+                f,
+                "the import of episode '{episode}' wrote nothing for over {after} s and another \
+                 import of the name took it over; this one stopped"
+            ),
+            Refusal::EpisodeNotResolved { episode, curators } => write!(
+                f,
+                "episode '{episode}' has graphs from several curators ({curators}): choose the \
+                 ones to export first"
+            ),
+            Refusal::TooFewKeyFrames {
+                episode,
+                key_frames,
+                least,
+            } => write!(
+                f,
+                "episode '{episode}' has {key_frames} key frames; an export needs at least \
+                 {least} (ENACT's shortest step length, 3, orders 4 key frames)"
+            ),
+            Refusal::TooFewCurators { episode, curators } => write!(
+                f,
+                "episode '{episode}' has graphs from {curators} curator(s): a comparison needs two"
+            ),
+            Refusal::NoKeyFrame {
+                episode,
+                curator,
+                frame,
+            } => write!(
+                f,
+                "curator '{curator}' marked no key frame at frame {frame} of episode '{episode}'"
+            ),
+            Refusal::FrameNameUnusable { name } => write!(
+                f,
+                "an uploaded frame has no usable file name ({name:?}): frames are ordered by name"
+            ),
             Refusal::DailyQuotaUsed { limit, retry_after } => write!(
                 f,
                 "this token has used its {limit} submissions for today (UTC); try again in \
