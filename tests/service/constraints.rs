@@ -2,6 +2,7 @@
 //! message, on whichever database the suite runs against; and the use cases' answers when a
 //! duplicate gets past their own checks (a twin request racing its first).
 
+use enact_hub::app::refusal::Refusal;
 use enact_hub::app::{self, AppError, Hub};
 use enact_hub::core::agreement::protocol::ProtocolPlan;
 use enact_hub::core::credentials::{Role, Scope, random_token, token_hash};
@@ -293,9 +294,10 @@ async fn a_twin_request_that_stores_first_is_answered_as_a_repeat() {
         },
     )
     .await;
-    let Err(AppError::Conflict(message)) = raced else {
+    let Err(AppError::Refused(refusal @ Refusal::IdempotencyKeyReused { .. })) = raced else {
         panic!("a different body under a used key is a conflict: {raced:?}");
     };
+    let message = refusal.to_string();
     assert!(message.contains("with a different body"), "{message}");
     assert_eq!(
         count(&server.pool, "SELECT count(*) FROM submissions").await,
