@@ -11,7 +11,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::error::ApiError;
-use super::extract::{Json, Path, Query};
+use super::extract::{Json, Path, Query, whole_number_between};
 use super::openapi::{ApiRoute, Verb};
 use super::session::ReaderIsAdmin;
 use super::{AppError, AppState};
@@ -270,20 +270,7 @@ impl ItemQuery {
         };
         let number = |name: &str, v: &Option<String>, default: u32, max: u32| match blank(v) {
             None => Ok(default),
-            Some(s) => s
-                .parse::<u32>()
-                .ok()
-                .filter(|n| (1..=max).contains(n))
-                .ok_or_else(|| {
-                    AppError::from(Refusal::bad_value(
-                        name,
-                        s,
-                        Expected::WholeNumber {
-                            least: 1,
-                            most: max.into(),
-                        },
-                    ))
-                }),
+            Some(s) => whole_number_between(name, &s, 1, max.into()).map(|n| n as u32),
         };
         Ok(ItemSelection {
             filter: ItemFilter {

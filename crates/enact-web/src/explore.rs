@@ -15,7 +15,7 @@ use serde_json::json;
 
 use super::annotate::direction_key;
 use super::error::{ApiError, PageError, RenderPage};
-use super::extract::{Path, Query};
+use super::extract::{Path, Query, whole_number_between};
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
 use super::pages::verdict_view;
@@ -153,20 +153,7 @@ impl ExploreQuery {
             .filter(|s| !s.is_empty())
         {
             None => Ok(default),
-            Some(s) => s
-                .parse::<usize>()
-                .ok()
-                .filter(|n| (1..=max).contains(n))
-                .ok_or_else(|| {
-                    AppError::from(Refusal::bad_value(
-                        name,
-                        s,
-                        Expected::WholeNumber {
-                            least: 1,
-                            most: max as u64,
-                        },
-                    ))
-                }),
+            Some(s) => whole_number_between(name, s, 1, max as u64).map(|n| n as usize),
         };
         Ok((
             number("page", &self.page, 1, 1_000_000)?,

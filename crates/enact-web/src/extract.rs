@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use super::AppError;
 use super::error::ApiError;
+use crate::app::refusal::{Expected, Refusal};
 
 /// A JSON body in, or a JSON body out.
 pub struct Json<T>(pub T);
@@ -130,6 +131,21 @@ pub fn whole_number<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<i64
         })
         .map(Some)
         .ok_or_else(|| serde::de::Error::custom(format!("{number} is not a whole number")))
+}
+
+/// A query parameter's or form field's `text` (trimmed) as a whole number from `least` to
+/// `most`, or the refusal that names `field` and the range.
+pub fn whole_number_between(
+    field: &str,
+    text: &str,
+    least: u64,
+    most: u64,
+) -> Result<u64, Refusal> {
+    let text = text.trim();
+    text.parse::<u64>()
+        .ok()
+        .filter(|n| (least..=most).contains(n))
+        .ok_or_else(|| Refusal::bad_value(field, text, Expected::WholeNumber { least, most }))
 }
 
 /// A required [`whole_number`].

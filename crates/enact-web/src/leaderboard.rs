@@ -17,7 +17,7 @@ use serde::Serialize;
 
 use super::api::matches_etag;
 use super::error::{ApiError, PageError, RenderPage};
-use super::extract::Path;
+use super::extract::{Path, whole_number_between};
 use super::i18n::{Tr, msg};
 use super::openapi::{ApiRoute, Verb};
 use super::session::ReaderIsAdmin;
@@ -157,20 +157,7 @@ impl BoardRequest {
         let mut reported = false;
         let mut part = None;
         let number = |name: &str, text: &str, max: usize| {
-            text.trim()
-                .parse::<usize>()
-                .ok()
-                .filter(|n| (1..=max).contains(n))
-                .ok_or_else(|| {
-                    AppError::from(Refusal::bad_value(
-                        name,
-                        text,
-                        Expected::WholeNumber {
-                            least: 1,
-                            most: max as u64,
-                        },
-                    ))
-                })
+            whole_number_between(name, text, 1, max as u64).map(|n| n as usize)
         };
         let switch = |name: &str, value: &str| match value {
             "1" | "true" => Ok(true),
