@@ -105,6 +105,20 @@ async fn admins_create_tokens_that_work_and_revoke_them_at_once() {
             .expect("body")
             .contains("daily quota: &#34;lots&#34; is not a whole number of 0 or more")
     );
+    // A negative number is refused by the use case, as on the API.
+    let r = admin
+        .post_form(
+            "/admin/tokens",
+            &[("csrf", &csrf), ("name", "team-c"), ("total_quota", "-3")],
+        )
+        .await;
+    assert_eq!(r.status(), StatusCode::BAD_REQUEST);
+    assert!(
+        r.text()
+            .await
+            .expect("body")
+            .contains("total_quota: &#34;-3&#34; is not a whole number of 0 or more")
+    );
     server.stop().await;
 }
 

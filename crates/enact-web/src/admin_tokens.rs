@@ -83,11 +83,10 @@ fn optional_quota(field: &str, text: &str) -> Result<Option<i64>, ApiError> {
     if text.is_empty() {
         return Ok(None);
     }
+    // A negative number is the use case's to refuse (`tokens::create`), as for the API.
     text.parse::<i64>()
-        .ok()
-        .filter(|q| *q >= 0)
         .map(Some)
-        .ok_or_else(|| Refusal::bad_value(field, text, Expected::WholeNumberFrom { least: 0 }))
+        .map_err(|_| Refusal::bad_value(field, text, Expected::WholeNumberFrom { least: 0 }))
         .map_err(ApiError::from)
 }
 

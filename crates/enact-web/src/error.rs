@@ -124,18 +124,13 @@ impl IntoResponse for ApiError {
                 );
             }
             AppError::LimitReached {
-                retry_after: Some(retry_after),
+                retry_after: Some(seconds),
                 ..
-            } => {
-                response
-                    .headers_mut()
-                    .insert(header::RETRY_AFTER, HeaderValue::from(*retry_after));
-            }
-            AppError::Refused(r) if r.retry_after().is_some() => {
-                let seconds = r.retry_after().unwrap_or_default();
-                response
-                    .headers_mut()
-                    .insert(header::RETRY_AFTER, HeaderValue::from(seconds));
+            } => retry_after(&mut response, *seconds),
+            AppError::Refused(r) => {
+                if let Some(seconds) = r.retry_after() {
+                    retry_after(&mut response, seconds);
+                }
             }
             AppError::Unavailable(_) => retry_soon(&mut response),
             _ => {}
@@ -146,13 +141,17 @@ impl IntoResponse for ApiError {
 
 /// Seconds a client is asked to wait before retrying a `503`: a busy database is free again
 /// once the write holding its lock (one batch of an import, at most) commits.
-const UNAVAILABLE_RETRY_AFTER: u32 = 1;
+const UNAVAILABLE_RETRY_AFTER: u64 = 1;
 
 fn retry_soon(response: &mut Response) {
-    response.headers_mut().insert(
-        header::RETRY_AFTER,
-        HeaderValue::from(UNAVAILABLE_RETRY_AFTER),
-    );
+    retry_after(response, UNAVAILABLE_RETRY_AFTER);
+}
+
+/// `Retry-After: seconds`: when asking again may succeed.
+fn retry_after(response: &mut Response, seconds: u64) {
+    response
+        .headers_mut()
+        .insert(header::RETRY_AFTER, HeaderValue::from(seconds));
 }
 
 /// The same errors, shown as a page to people browsing the site.
