@@ -275,12 +275,17 @@ impl Pool {
     }
 }
 
+/// How a PostgreSQL pool of `max_connections` is built ([`open_postgres`]).
+pub(crate) fn postgres_pool_options(max_connections: u32) -> PgPoolOptions {
+    super::without_maintenance(PgPoolOptions::new())
+        .max_connections(max_connections)
+        .acquire_timeout(Duration::from_secs(15))
+}
+
 /// Connects to the PostgreSQL database at `url` and applies its migrations.
 pub async fn open_postgres(url: &str, max_connections: u32) -> Result<PgPool, sqlx::Error> {
     let options: PgConnectOptions = url.parse()?;
-    let pool = super::without_maintenance(PgPoolOptions::new())
-        .max_connections(max_connections)
-        .acquire_timeout(Duration::from_secs(15))
+    let pool = postgres_pool_options(max_connections)
         .connect_with(options)
         .await?;
     super::migrations::POSTGRES

@@ -589,13 +589,14 @@ mod tests {
         let (pool, writer) = open_serving_pools(&path, 1024).await.unwrap();
         let (command_pool, command_writer) = open_command_pools(&path, 1024).await.unwrap();
         for pool in [pool, writer, command_pool, command_writer] {
-            assert_eq!(pool.options().get_idle_timeout(), None);
-            assert_eq!(pool.options().get_max_lifetime(), None);
-            assert_eq!(pool.options().get_min_connections(), 0);
+            assert_maintains_nothing(pool.options());
             // The first connection, opened with the pool, stays.
             assert!(pool.size() >= 1);
         }
-        let options = without_maintenance(sqlx::postgres::PgPoolOptions::new());
+        assert_maintains_nothing(&db::postgres_pool_options(8));
+    }
+
+    fn assert_maintains_nothing<DB: sqlx::Database>(options: &sqlx::pool::PoolOptions<DB>) {
         assert_eq!(options.get_idle_timeout(), None);
         assert_eq!(options.get_max_lifetime(), None);
         assert_eq!(options.get_min_connections(), 0);
