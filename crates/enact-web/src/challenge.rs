@@ -25,8 +25,7 @@ use crate::app::challenge::{
 };
 use crate::app::datasets;
 use crate::app::leaderboard::Board;
-use crate::app::refusal::Expected;
-use crate::app::refusal::Refusal;
+use crate::app::refusal::{Expected, Refusal};
 use crate::core::challenge::{Part, Standing};
 use crate::core::credentials::Scope;
 use crate::core::dataset::AnswerVisibility;

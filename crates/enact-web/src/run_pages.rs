@@ -15,7 +15,7 @@ use serde::Deserialize;
 use super::AppState;
 use super::error::{ApiError, PageError, RenderPage};
 use super::extract::{Path, Query};
-use super::runs::{MOST_CONCURRENCY, MOST_U32, MOST_WHOLE, RunRequest, responses_download};
+use super::runs::{MOST_CONCURRENCY, MOST_U32, MOST_WHOLE, RunRequest, responses_download, whole};
 use super::session::{Admin, Protected};
 use crate::app::datasets;
 use crate::app::jobs::JobControl;
@@ -284,14 +284,6 @@ fn optional<T: std::str::FromStr>(
         .map(Some)
         .map_err(|_| Refusal::bad_value(field, text, expected))
         .map_err(ApiError::from)
-}
-
-/// A whole number from `least` to `most`, as [`super::runs`] checks it.
-fn whole(least: i64, most: i64) -> Expected {
-    Expected::WholeNumber {
-        least: least.unsigned_abs(),
-        most: most.unsigned_abs(),
-    }
 }
 
 fn text(value: &str) -> Option<String> {

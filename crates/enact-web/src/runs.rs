@@ -264,6 +264,15 @@ pub(super) const MOST_U32: i64 = u32::MAX as i64;
 pub(super) const MOST_WHOLE: i64 = super::extract::MOST_WHOLE_NUMBER;
 pub(super) const MOST_CONCURRENCY: i64 = runs::MOST_CONCURRENCY as i64;
 
+/// What a count from `least` to `most` must be, as a refusal says it (every count's range
+/// starts at 0 or more).
+pub(super) fn whole(least: i64, most: i64) -> Expected {
+    Expected::WholeNumber {
+        least: least.max(0).unsigned_abs(),
+        most: most.max(0).unsigned_abs(),
+    }
+}
+
 /// `value` as the type a field is used as, or a 400 naming the field and the range.
 fn counted<T: TryFrom<i64>>(
     field: &str,
@@ -277,17 +286,7 @@ fn counted<T: TryFrom<i64>>(
                 .contains(&v)
                 .then(|| T::try_from(v).ok())
                 .flatten()
-                .ok_or_else(|| {
-                    // Every count's range starts at 0 or more.
-                    Refusal::bad_value(
-                        field,
-                        v.to_string(),
-                        Expected::WholeNumber {
-                            least: least.max(0).unsigned_abs(),
-                            most: most.max(0).unsigned_abs(),
-                        },
-                    )
-                })
+                .ok_or_else(|| Refusal::bad_value(field, v.to_string(), whole(least, most)))
         })
         .transpose()
         .map_err(ApiError::from)
