@@ -485,6 +485,19 @@ async fn end_to_end_primary_split_protocol_answers_and_report() {
         );
     }
 
+    // A page's bootstrap stays bounded, and the refusal names the parameter and its range.
+    let (status, body) = admin_json(
+        &mut admin,
+        "/admin/datasets/mini/report.json?bootstrap=20001",
+    )
+    .await;
+    assert_eq!(status, 400);
+    assert_eq!(body["code"], "bad_value_whole_number", "{body}");
+    assert_eq!(
+        body["details"],
+        serde_json::json!({"field": "bootstrap", "value": "20001", "least": 0, "most": 20000})
+    );
+
     // Before the protocol there is nothing to agree on, and the report says so.
     let (status, body) =
         admin_json(&mut admin, "/admin/datasets/mini/report.json?bootstrap=50").await;

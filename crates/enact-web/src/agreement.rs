@@ -10,7 +10,7 @@ use serde::Deserialize;
 
 use super::admin::render_admin;
 use super::error::{ApiError, PageError, RenderPage};
-use super::extract::{Json, Path};
+use super::extract::{Json, Path, whole_number_between};
 use super::session::{Admin, Protected};
 use super::{AppError, AppState};
 use crate::app::agreement::{self, ReportSettings};
@@ -165,21 +165,10 @@ impl ReportQuery {
             .into());
         }
         // A page request must stay bounded; the command line has no such limit.
-        let replicates_allowed = Expected::WholeNumber {
-            least: 0,
-            most: MOST_REPLICATES as u64,
+        let replicates = match self.bootstrap.trim() {
+            "" => DEFAULT_REPLICATES,
+            text => whole_number_between("bootstrap", text, 0, MOST_REPLICATES as u64)? as usize,
         };
-        let replicates =
-            optional::<usize>("bootstrap", &self.bootstrap, replicates_allowed.clone())?
-                .unwrap_or(DEFAULT_REPLICATES);
-        if replicates > MOST_REPLICATES {
-            return Err(Refusal::bad_value(
-                "bootstrap",
-                replicates.to_string(),
-                replicates_allowed,
-            )
-            .into());
-        }
         Ok(ReportSettings {
             encoding: optional::<OrderingEncoding>(
                 "encoding",
